@@ -1,0 +1,1 @@
+//! Bounding volume hierarchy: binned SAH build on the CPU, GPU node layout.

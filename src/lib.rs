@@ -1,0 +1,11 @@
+//! vkvcm: a light-transport renderer running in Vulkan compute shaders.
+//!
+//! Layout (see ../shared/DESIGN.md): `gpu` is the Vulkan core, `scene` the glTF import
+//! and built-in scenes, `bvh` the acceleration structure, `render` the estimators,
+//! `image` file output and error metrics.
+
+pub mod bvh;
+pub mod gpu;
+pub mod image;
+pub mod render;
+pub mod scene;

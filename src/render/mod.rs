@@ -1,0 +1,1 @@
+//! Estimators: each is a sequence of kernel dispatches per iteration.
