@@ -1,0 +1,28 @@
+//! Shared test helpers: a validated GPU, and the rule that any validation message fails.
+#![allow(dead_code)]
+
+use std::sync::Arc;
+
+use vkvcm::gpu::{Gpu, GpuOptions};
+
+/// Runs `f` with a validation-enabled GPU; fails if the layer said anything, including
+/// at device destruction (leaked objects).
+pub fn with_gpu<R>(f: impl FnOnce(&Arc<Gpu>) -> R) -> R {
+    let gpu = Gpu::new(&GpuOptions::for_tests()).expect("cannot open a Vulkan device for tests");
+    assert!(gpu.validation_enabled());
+    let messages = gpu.validation_messages();
+    let r = f(&gpu);
+    assert_eq!(
+        Arc::strong_count(&gpu),
+        1,
+        "a GPU object outlived the test body"
+    );
+    drop(gpu);
+    let list = messages.list();
+    assert!(
+        list.is_empty(),
+        "Vulkan validation messages:\n{}",
+        list.join("\n")
+    );
+    r
+}
