@@ -73,6 +73,11 @@ fn resolve_include(requested: &str, requester: &str) -> Result<shaderc::Resolved
 
 /// Compiles a compute shader. `name` is used for error messages and include lookup.
 pub fn compile_glsl(name: &str, source: &str, defines: &[(&str, &str)]) -> Result<Vec<u32>> {
+    compile_glsl_opt(name, source, defines, true)
+}
+
+/// As [`compile_glsl`]; `optimize: false` keeps every name in the SPIR-V (for reflection).
+pub fn compile_glsl_opt(name: &str, source: &str, defines: &[(&str, &str)], optimize: bool) -> Result<Vec<u32>> {
     let compiler = shaderc::Compiler::new().map_err(|e| anyhow!("shaderc init failed: {e}"))?;
     let mut opts = shaderc::CompileOptions::new().map_err(|e| anyhow!("shaderc options: {e}"))?;
     // SPIR-V 1.5 (Vulkan 1.2): 1.6 would emit LocalSizeId and need maintenance4.
@@ -81,7 +86,11 @@ pub fn compile_glsl(name: &str, source: &str, defines: &[(&str, &str)]) -> Resul
         shaderc::EnvVersion::Vulkan1_2 as u32,
     );
     opts.set_target_spirv(shaderc::SpirvVersion::V1_5);
-    opts.set_optimization_level(shaderc::OptimizationLevel::Performance);
+    if optimize {
+        opts.set_optimization_level(shaderc::OptimizationLevel::Performance);
+    } else {
+        opts.set_optimization_level(shaderc::OptimizationLevel::Zero);
+    }
     for (k, v) in defines {
         opts.add_macro_definition(k, Some(v));
     }

@@ -1,1 +1,208 @@
-//! Estimators: each is a sequence of kernel dispatches per iteration.
+//! Estimators: each is a sequence of kernel dispatches per iteration over shared buffers
+//! (../shared/DESIGN.md). One iteration = one sample per pixel.
+
+pub mod film;
+pub mod gpu_types;
+pub mod pt;
+pub mod scene_gpu;
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{bail, Result};
+
+use crate::gpu::{Batch, Gpu, Kernel, Profile};
+use crate::scene::Scene;
+pub use film::Film;
+pub use scene_gpu::{FrameSettings, SceneGpu};
+
+/// The estimators vkvcm implements.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Algorithm {
+    /// Eye light: |cos| at the first hit (a preview, not radiance).
+    El,
+    /// Path tracing with next-event estimation and MIS.
+    Pt,
+}
+
+impl Algorithm {
+    pub fn name(self) -> &'static str {
+        match self {
+            Algorithm::El => "el",
+            Algorithm::Pt => "pt",
+        }
+    }
+}
+
+/// When a render stops.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Budget {
+    Iterations(u64),
+    /// Wall-clock seconds (at least one iteration runs).
+    Seconds(f64),
+}
+
+#[derive(Clone, Debug)]
+pub struct RenderSettings {
+    pub algorithm: Algorithm,
+    pub frame: FrameSettings,
+    pub budget: Budget,
+    /// Path tracing only: `false` disables next-event estimation (BSDF sampling only).
+    pub nee: bool,
+}
+
+impl RenderSettings {
+    pub fn new(algorithm: Algorithm, width: u32, height: u32, budget: Budget) -> Self {
+        RenderSettings {
+            algorithm,
+            frame: FrameSettings { width, height, seed: 1234, max_path_length: 10, min_path_length: 0 },
+            budget,
+            nee: true,
+        }
+    }
+}
+
+/// Progress of a running render.
+#[derive(Clone, Debug)]
+pub struct Progress {
+    pub iterations: u64,
+    pub seconds: f64,
+    /// Fraction done in [0, 1].
+    pub fraction: f64,
+}
+
+/// What a render produced.
+pub struct RenderOutput {
+    pub width: u32,
+    pub height: u32,
+    /// Mean linear RGB per pixel, row 0 at the top.
+    pub pixels: Vec<[f32; 3]>,
+    pub iterations: u64,
+    pub seconds: f64,
+    pub rejected_samples: u64,
+    pub profile: Profile,
+    /// True when stopped early by the cancel flag.
+    pub interrupted: bool,
+}
+
+enum Estimator {
+    Pt(pt::PathTracer),
+    El(Kernel, u32),
+}
+
+impl Estimator {
+    fn record(&self, batch: &mut Batch, iteration: u32) -> Result<()> {
+        match self {
+            Estimator::Pt(p) => p.record(batch, iteration),
+            Estimator::El(k, pixels) => {
+                let push = gpu_types::GpuPush { iteration, count: *pixels, pad: [0; 2] };
+                batch.dispatch(k, [crate::gpu::groups_for(*pixels, 64), 1, 1], bytemuck::bytes_of(&push))
+            }
+        }
+    }
+}
+
+/// Checks that the frame fits the device before anything is allocated.
+fn check_frame(gpu: &Gpu, s: &RenderSettings) -> Result<()> {
+    let (w, h) = (s.frame.width as u64, s.frame.height as u64);
+    if w == 0 || h == 0 {
+        bail!("image size {w}x{h}: width and height must be at least 1");
+    }
+    let film_bytes = w * h * 32;
+    let max = gpu.limits.max_storage_buffer_range as u64;
+    if film_bytes > max {
+        bail!(
+            "image {w}x{h} needs a {film_bytes}-byte film buffer but this device binds at most {max} bytes (maxStorageBufferRange)"
+        );
+    }
+    if s.frame.max_path_length == 0 {
+        bail!("max path length must be at least 1");
+    }
+    if let Budget::Iterations(0) = s.budget {
+        bail!("iterations must be at least 1");
+    }
+    Ok(())
+}
+
+/// Renders `scene`. `progress` is called after every batch of iterations; `cancel`
+/// stops the render after the current batch (the image so far is returned).
+pub fn render(
+    gpu: &Arc<Gpu>,
+    scene: &Scene,
+    settings: &RenderSettings,
+    cancel: Option<&AtomicBool>,
+    progress: &mut dyn FnMut(&Progress),
+) -> Result<RenderOutput> {
+    check_frame(gpu, settings)?;
+    let frame = &settings.frame;
+    let scene_gpu = SceneGpu::new(gpu, scene, frame)?;
+    let film = Film::new(gpu, frame.width, frame.height)?;
+    let pixels = frame.width * frame.height;
+    let est = match settings.algorithm {
+        Algorithm::Pt => Estimator::Pt(pt::PathTracer::new(gpu, &scene_gpu, &film, settings.nee)?),
+        Algorithm::El => {
+            let defines = scene_gpu::define_refs(&scene_gpu.defines);
+            let k = gpu.kernel("el.comp", &defines, &scene_gpu.bindings(&[&film.accum, &film.stats]))?;
+            Estimator::El(k, pixels)
+        }
+    };
+    let mut batch = gpu.batch()?;
+    let mut profile = Profile::default();
+    let start = Instant::now();
+    let mut done: u64 = 0;
+    let mut per_batch: u64 = 1;
+    let mut interrupted = false;
+    // Aim for batches of about a quarter second: few submits, responsive progress.
+    const TARGET_BATCH_SECONDS: f64 = 0.25;
+    loop {
+        let remaining = match settings.budget {
+            Budget::Iterations(n) => n - done,
+            Budget::Seconds(t) => {
+                if done > 0 && start.elapsed().as_secs_f64() >= t {
+                    0
+                } else {
+                    per_batch
+                }
+            }
+        };
+        if remaining == 0 {
+            break;
+        }
+        if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+            interrupted = true;
+            break;
+        }
+        let n = remaining.min(per_batch);
+        let t0 = Instant::now();
+        for i in 0..n {
+            est.record(&mut batch, (done + i) as u32)?;
+        }
+        batch.submit_wait(Some(&mut profile))?;
+        done += n;
+        let dt = t0.elapsed().as_secs_f64().max(1e-6);
+        let per_iter = dt / n as f64;
+        per_batch = ((TARGET_BATCH_SECONDS / per_iter) as u64).clamp(1, 256);
+        if let Budget::Seconds(t) = settings.budget {
+            let left = t - start.elapsed().as_secs_f64();
+            per_batch = per_batch.min(((left / per_iter).ceil() as u64).max(1));
+        }
+        let seconds = start.elapsed().as_secs_f64();
+        let fraction = match settings.budget {
+            Budget::Iterations(n) => done as f64 / n as f64,
+            Budget::Seconds(t) => (seconds / t).min(1.0),
+        };
+        progress(&Progress { iterations: done, seconds, fraction });
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    Ok(RenderOutput {
+        width: frame.width,
+        height: frame.height,
+        pixels: film.mean(done)?,
+        iterations: done,
+        seconds,
+        rejected_samples: film.rejected()?,
+        profile,
+        interrupted,
+    })
+}

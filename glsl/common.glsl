@@ -1,0 +1,91 @@
+// Constants, random numbers, frames and the ray-offset rule shared by every kernel.
+#ifndef COMMON_GLSL
+#define COMMON_GLSL
+
+#define PI 3.14159265358979
+#define INV_PI 0.318309886183791
+#define INV_4PI 0.0795774715459477
+
+float luminance(vec3 c) { return dot(c, vec3(0.212671, 0.715160, 0.072169)); }
+float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
+
+// ---- Random numbers: a PCG-style hash (O'Neill, "PCG", 2014; Jarzynski & Olano,
+// "Hash Functions for GPU Rendering", JCGT 2020) seeds a 32-bit PCG stream per
+// (seed, iteration, path). Same inputs -> same numbers on every device.
+uint pcg_hash(uint v) {
+    uint state = v * 747796405u + 2891336453u;
+    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+uint rng_init(uint seed, uint iteration, uint index, uint stream) {
+    return pcg_hash(seed ^ pcg_hash(iteration ^ pcg_hash(index ^ pcg_hash(stream))));
+}
+
+// Uniform in [0, 1) with 24 random bits.
+float rnd(inout uint state) {
+    state = state * 747796405u + 2891336453u;
+    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    word = (word >> 22u) ^ word;
+    return float(word >> 8) * (1.0 / 16777216.0);
+}
+
+vec2 rnd2(inout uint s) { float a = rnd(s); return vec2(a, rnd(s)); }
+
+// ---- Orthonormal basis around a unit vector (Duff et al., "Building an Orthonormal
+// Basis, Revisited", JCGT 2017).
+void make_frame(vec3 n, out vec3 t, out vec3 b) {
+    float s = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (s + n.z);
+    float c = n.x * n.y * a;
+    t = vec3(1.0 + s * n.x * n.x * a, s * c, -s * n.x);
+    b = vec3(c, s + n.y * n.y * a, -n.y);
+}
+
+vec3 to_world(vec3 l, vec3 n) {
+    vec3 t, b;
+    make_frame(n, t, b);
+    return l.x * t + l.y * b + l.z * n;
+}
+
+// ---- Sampling.
+vec3 sample_cosine_hemisphere(vec2 u) {  // local, z up; pdf = cos / pi
+    float r = sqrt(u.x);
+    float phi = 2.0 * PI * u.y;
+    return vec3(r * cos(phi), r * sin(phi), sqrt(max(0.0, 1.0 - u.x)));
+}
+
+vec3 sample_uniform_sphere(vec2 u) {  // pdf = 1 / (4 pi)
+    float z = 1.0 - 2.0 * u.x;
+    float r = sqrt(max(0.0, 1.0 - z * z));
+    float phi = 2.0 * PI * u.y;
+    return vec3(r * cos(phi), r * sin(phi), z);
+}
+
+vec2 sample_concentric_disc(vec2 u) {  // unit disc, pdf = 1 / pi (Shirley & Chiu 1997)
+    vec2 o = 2.0 * u - 1.0;
+    if (o.x == 0.0 && o.y == 0.0) return vec2(0.0);
+    float r, theta;
+    if (abs(o.x) > abs(o.y)) { r = o.x; theta = (PI / 4.0) * (o.y / o.x); }
+    else { r = o.y; theta = (PI / 2.0) - (PI / 4.0) * (o.x / o.y); }
+    return r * vec2(cos(theta), sin(theta));
+}
+
+vec2 sample_triangle(vec2 u) {  // barycentrics (b1, b2), uniform in area
+    float su = sqrt(u.x);
+    return vec2(1.0 - su, u.y * su);
+}
+
+// ---- Ray origins. A new ray leaves p along the side of the geometric normal `n`
+// that `dir` points to, offset by a distance proportional to the magnitude of the
+// coordinates (a fixed number of float ulps) plus a fraction of the scene's size, so the
+// rule holds at any scale (docs/numerics.md). RAY_EPS is relative.
+#define RAY_EPS 1.0e-5
+vec3 offset_ray(vec3 p, vec3 n, vec3 dir, float scene_radius) {
+    float eps = (max3(abs(p)) + 0.01 * scene_radius) * RAY_EPS;
+    return p + (dot(n, dir) >= 0.0 ? eps : -eps) * n;
+}
+
+bool finite3(vec3 v) { return !any(isnan(v)) && !any(isinf(v)); }
+
+#endif

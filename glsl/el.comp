@@ -1,0 +1,26 @@
+#version 460
+// Eye light (`el`): |cos(normal, view ray)| of the first hit, a preview and not a
+// radiance estimate (as SmallVCM's EyeLight). Back faces are not distinguished.
+#extension GL_GOOGLE_include_directive : require
+layout(local_size_x = 64) in;
+#include "scene.glsl"
+layout(std430, binding = 8) buffer FilmBuf { vec4 film[]; };
+layout(std430, binding = 9) buffer StatsBuf { uint stats[]; };
+layout(push_constant) uniform PushBlock { GpuPush push; };
+#include "film.glsl"
+
+void main() {
+    uint pixel = gl_GlobalInvocationID.x;
+    if (pixel >= push.count) return;
+    uint w = image_width();
+    uint rng = rng_init(params.misc.x, push.iteration, pixel, 0u);
+    vec2 raster = vec2(float(pixel % w), float(pixel / w)) + rnd2(rng);
+    vec3 d = camera_direction(raster);
+    Hit h;
+    vec3 v = vec3(0.0);
+    if (trace_closest(params.cam_pos.xyz, d, 0.0, 1e30, h)) {
+        Surface s = surface_at(h, params.cam_pos.xyz, d);
+        v = vec3(abs(dot(s.ns, d)));
+    }
+    film_add(pixel, v);
+}

@@ -1,0 +1,115 @@
+// Light sources, written once for every estimator: direct-illumination sampling (next-
+// event estimation) and the pdfs of hitting an emitter, with the quantities the MIS of
+// ../shared/SCENES.md 4.4 needs. Lights are picked uniformly (1 / #lights).
+//
+// Requires: `lights[]` (GpuLight), `params` (GpuParams), common.glsl, types.glsl.
+#ifndef LIGHTS_GLSL
+#define LIGHTS_GLSL
+
+#define EPS_COSINE_LIGHT 1e-6
+
+uint light_kind(GpuLight l) { return floatBitsToUint(l.radiance.w); }
+bool light_is_delta(uint kind) { return kind == LIGHT_POINT || kind == LIGHT_SPOT || kind == LIGHT_DIRECTIONAL; }
+bool light_is_infinite(uint kind) { return kind == LIGHT_DIRECTIONAL || kind == LIGHT_BACKGROUND; }
+
+// Spot falloff between the outer and inner cone (smoothstep in cos, as glTF suggests).
+float spot_falloff(GpuLight l, vec3 dir_from_light) {
+    float c = dot(dir_from_light, l.b.xyz);
+    float ci = l.b.w, co = l.c.w;
+    if (c <= co) return 0.0;
+    if (c >= ci) return 1.0;
+    float t = (c - co) / max(ci - co, 1e-12);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+struct LightSample {
+    vec3 wi;            // unit direction from the shading point to the light
+    float dist;         // distance to the light point (infinite lights: a huge value)
+    vec3 radiance;      // Le (area, background), I (point, spot) or E (directional)
+    float pdf_w;        // solid-angle pdf of this direction (delta: the factor that
+                        // turns radiance into incident radiance: d^2 or 1), no pick prob
+    float emission_pdf_w;  // pdf of emitting this ray from the light (SmallVCM's emissionPdfW)
+    float cos_light;    // cosine at the light (1 for point-like and infinite lights)
+    vec3 light_point;   // the sampled point on the light (finite lights)
+    vec3 light_normal;  // its normal (area lights), for the shadow-ray offset
+    bool delta;
+    bool ok;
+};
+
+LightSample light_illuminate(uint index, vec3 x, vec2 u) {
+    GpuLight l = lights[index];
+    uint kind = light_kind(l);
+    LightSample s;
+    s.ok = false;
+    s.delta = light_is_delta(kind);
+    s.cos_light = 1.0;
+    s.light_normal = vec3(0.0);
+    s.radiance = l.radiance.rgb;
+    float r_scene = params.scene_sphere.w;
+    if (kind == LIGHT_AREA) {
+        vec2 bc = sample_triangle(u);
+        vec3 p = l.a.xyz + bc.x * l.b.xyz + bc.y * l.c.xyz;
+        vec3 nl = normalize(cross(l.b.xyz, l.c.xyz));
+        vec3 d = p - x;
+        float d2 = dot(d, d);
+        s.dist = sqrt(d2);
+        s.wi = d / s.dist;
+        s.cos_light = dot(nl, -s.wi);
+        if (s.cos_light <= EPS_COSINE_LIGHT) return s;
+        float area = l.d.w;
+        s.pdf_w = d2 / (s.cos_light * area);
+        s.emission_pdf_w = s.cos_light * INV_PI / area;
+        s.light_point = p;
+        s.light_normal = nl;
+    } else if (kind == LIGHT_POINT || kind == LIGHT_SPOT) {
+        vec3 d = l.a.xyz - x;
+        float d2 = dot(d, d);
+        s.dist = sqrt(d2);
+        s.wi = d / s.dist;
+        s.pdf_w = d2;
+        if (kind == LIGHT_POINT) {
+            s.emission_pdf_w = INV_4PI;
+        } else {
+            s.radiance *= spot_falloff(l, -s.wi);
+            s.emission_pdf_w = 1.0 / (2.0 * PI * (1.0 - l.c.w));
+        }
+        s.light_point = l.a.xyz;
+    } else if (kind == LIGHT_DIRECTIONAL) {
+        s.wi = -l.b.xyz;
+        s.dist = 1e30;
+        s.pdf_w = 1.0;
+        s.emission_pdf_w = 1.0 / (PI * r_scene * r_scene);
+    } else {  // background
+        s.wi = sample_uniform_sphere(u);
+        s.dist = 1e30;
+        s.pdf_w = INV_4PI;
+        s.emission_pdf_w = INV_4PI / (PI * r_scene * r_scene);
+    }
+    s.ok = max3(s.radiance) > 0.0;
+    return s;
+}
+
+// Radiance leaving an area light at a point towards `-dir` (the ray direction that hit
+// it), with the pdfs of producing that point by direct sampling (area measure, no pick
+// probability) and by emission sampling (solid angle).
+vec3 area_light_radiance(uint index, vec3 dir, out float direct_pdf_a, out float emission_pdf_w) {
+    GpuLight l = lights[index];
+    vec3 nl = normalize(cross(l.b.xyz, l.c.xyz));
+    float c = dot(nl, -dir);
+    direct_pdf_a = 0.0;
+    emission_pdf_w = 0.0;
+    if (c <= EPS_COSINE_LIGHT) return vec3(0.0);
+    direct_pdf_a = 1.0 / l.d.w;
+    emission_pdf_w = c * INV_PI / l.d.w;
+    return l.radiance.rgb;
+}
+
+// The background seen along `dir`, with its direct (solid angle) and emission pdfs.
+vec3 background_radiance(uint index, out float direct_pdf_w, out float emission_pdf_w) {
+    float r = params.scene_sphere.w;
+    direct_pdf_w = INV_4PI;
+    emission_pdf_w = INV_4PI / (PI * r * r);
+    return lights[index].radiance.rgb;
+}
+
+#endif

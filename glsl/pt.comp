@@ -1,0 +1,95 @@
+#version 460
+// Path tracing (one invocation per pixel sample): BSDF sampling with next-event
+// estimation, combined by the balance heuristic; Russian roulette as bsdf.glsl says.
+// Variants: NEE=0 gives pure BSDF sampling (emitter hits only, weight 1), for tests.
+#extension GL_GOOGLE_include_directive : require
+
+#ifndef NEE
+#define NEE 1
+#endif
+
+layout(local_size_x = 64) in;
+
+#include "scene.glsl"
+layout(std430, binding = 8) buffer FilmBuf { vec4 film[]; };
+layout(std430, binding = 9) buffer StatsBuf { uint stats[]; };
+layout(push_constant) uniform PushBlock { GpuPush push; };
+#include "film.glsl"
+
+// Balance-heuristic weight of a technique with pdf a against one with pdf b.
+float balance(float a, float b) { return a / (a + b); }
+
+void main() {
+    uint pixel = gl_GlobalInvocationID.x;
+    uint w = image_width();
+    if (pixel >= push.count) return;
+    uint rng = rng_init(params.misc.x, push.iteration, pixel, 0u);
+    vec2 raster = vec2(float(pixel % w), float(pixel / w)) + rnd2(rng);
+    vec3 o = params.cam_pos.xyz;
+    vec3 d = camera_direction(raster);
+    vec3 thr = vec3(1.0);
+    vec3 L = vec3(0.0);
+    float last_pdf = 1.0;
+    bool last_specular = true;
+    float pick = 1.0 / float(light_count());
+    uint max_len = max_path_length();
+    uint min_len = min_path_length();
+    for (uint len = 1u; ; ++len) {
+        Hit h;
+        if (!trace_closest(o, d, 0.0, 1e30, h)) {
+            uint bg = background_light();
+            if (bg != NO_LIGHT && len >= min_len) {
+                float dpdf, epdf;
+                vec3 Le = background_radiance(bg, dpdf, epdf);
+                float wgt = (NEE == 0 || last_specular) ? 1.0 : balance(last_pdf, pick * dpdf);
+                L += thr * Le * wgt;
+            }
+            break;
+        }
+        Surface s = surface_at(h, o, d);
+        if (s.light != NO_LIGHT && len >= min_len) {
+            float dpdf_a, epdf;
+            vec3 Le = area_light_radiance(s.light, d, dpdf_a, epdf);
+            if (max3(Le) > 0.0) {
+                float cos_l = abs(dot(s.ng, d));
+                float dpdf_w = dpdf_a * h.t * h.t / cos_l;
+                float wgt = (NEE == 0 || last_specular) ? 1.0 : balance(last_pdf, pick * dpdf_w);
+                L += thr * Le * wgt;
+            }
+        }
+        if (len >= max_len) break;
+        Bsdf b = bsdf_init(s.material, s.ng, -d, false);
+        if (!b.valid) break;
+#if NEE
+        if (!b.delta && len + 1u >= min_len) {
+            uint li = min(uint(rnd(rng) * float(light_count())), light_count() - 1u);
+            LightSample ls = light_illuminate(li, s.p, rnd2(rng));
+            if (ls.ok) {
+                float pf, pr;
+                vec3 f = bsdf_eval(b, ls.wi, pf, pr);
+                if (max3(f) > 0.0) {
+                    bool vis = ls.dist >= 1e29 ? visible_dir(s.p, s.ng, ls.wi)
+                                               : visible(s.p, s.ng, ls.light_point, ls.light_normal);
+                    if (vis) {
+                        float wgt = ls.delta ? 1.0 : balance(pick * ls.pdf_w, pf * b.cont_prob);
+                        float cos_x = dot(b.n, ls.wi);
+                        L += thr * f * ls.radiance * (wgt * cos_x / (pick * ls.pdf_w));
+                    }
+                }
+            }
+        } else {
+            rnd(rng); rnd(rng); rnd(rng);
+        }
+#endif
+        BsdfSample bs = bsdf_sample(b, vec3(rnd2(rng), rnd(rng)));
+        if (!bs.ok) break;
+        if (rnd(rng) >= b.cont_prob) break;
+        thr *= bs.weight / b.cont_prob;
+        last_pdf = bs.pdf * b.cont_prob;
+        last_specular = bs.specular;
+        o = offset_ray(s.p, s.ng, bs.wi, scene_radius());
+        d = bs.wi;
+        if (max3(thr) <= 0.0) break;
+    }
+    film_add(pixel, L);
+}

@@ -1,0 +1,104 @@
+// Scene buffers shared by every render kernel (fixed bindings 0-7), the camera, and the
+// conversion of a BVH hit into a shading point. Kernel-specific buffers use bindings 8+.
+#ifndef SCENE_GLSL
+#define SCENE_GLSL
+
+#include "types.glsl"
+#include "common.glsl"
+
+layout(std430, binding = 0) readonly buffer ParamsBuf { GpuParams params; };
+layout(std430, binding = 1) readonly buffer BvhNodesBuf { vec4 bvh_nodes[]; };
+layout(std430, binding = 2) readonly buffer BvhPrimsBuf { vec4 bvh_prims[]; };
+layout(std430, binding = 3) readonly buffer TrianglesBuf { GpuTriangle triangles[]; };
+layout(std430, binding = 4) readonly buffer SpheresBuf { GpuSphere spheres[]; };
+layout(std430, binding = 5) readonly buffer MaterialsBuf { GpuMaterial materials[]; };
+layout(std430, binding = 6) readonly buffer LightsBuf { GpuLight lights[]; };
+layout(std430, binding = 7) readonly buffer NormalsBuf { vec4 shading_normals[]; };
+
+#include "bvh.glsl"
+#include "bsdf.glsl"
+#include "lights.glsl"
+
+uint image_width() { return params.dims.x; }
+uint image_height() { return params.dims.y; }
+uint light_count() { return params.dims.z; }
+uint max_path_length() { return params.dims.w; }
+uint min_path_length() { return params.misc.y; }
+uint background_light() { return params.misc.z; }
+float scene_radius() { return params.scene_sphere.w; }
+
+// ---- Pinhole camera: the image plane lies at `cam_pos.w` pixels, so a pixel has unit
+// area; raster (0, 0) is the top-left corner.
+vec3 camera_direction(vec2 raster) {
+    vec3 d = params.cam_forward.xyz * params.cam_pos.w
+           + params.cam_right.xyz * (raster.x - 0.5 * float(image_width()))
+           + params.cam_up.xyz * (0.5 * float(image_height()) - raster.y);
+    return normalize(d);
+}
+
+// Solid-angle pdf of the camera generating direction `d` (pixel area 1): dist^2 / cos^3.
+float camera_pdf_w(vec3 d) {
+    float c = dot(d, params.cam_forward.xyz);
+    return params.cam_pos.w * params.cam_pos.w / (c * c * c);
+}
+
+// ---- Shading point of a hit.
+struct Surface {
+    vec3 p;
+    vec3 ng;        // geometric normal (triangles: (p1-p0)x(p2-p0); spheres: outward)
+    vec3 ns;        // shading normal (== ng unless the mesh has normals), same side as ng
+    uint material;
+    uint light;     // light index or NO_LIGHT
+};
+
+Surface surface_at(Hit h, vec3 o, vec3 d) {
+    Surface s;
+    if (h.is_sphere) {
+        GpuSphere sp = spheres[h.prim];
+        vec3 c = sp.center_radius.xyz;
+        float r = sp.center_radius.w;
+        vec3 n = normalize(o + h.t * d - c);
+        s.p = c + r * n;  // re-projected onto the surface
+        s.ng = n;
+        s.ns = n;
+        s.material = sp.info.x;
+        s.light = sp.info.y;
+    } else {
+        GpuTriangle tri = triangles[h.prim];
+        vec3 e1 = tri.p1.xyz - tri.p0.xyz;
+        vec3 e2 = tri.p2.xyz - tri.p0.xyz;
+        s.p = tri.p0.xyz + h.u * e1 + h.v * e2;
+        s.ng = normalize(cross(e1, e2));
+        s.ns = s.ng;
+        uint first_normal = floatBitsToUint(tri.p2.w);
+        if (first_normal != 0xffffffffu) {
+            vec3 n = (1.0 - h.u - h.v) * shading_normals[first_normal].xyz
+                   + h.u * shading_normals[first_normal + 1u].xyz
+                   + h.v * shading_normals[first_normal + 2u].xyz;
+            float len = length(n);
+            if (len > 0.0) s.ns = (dot(n, s.ng) < 0.0 ? -n : n) / len;
+        }
+        s.material = floatBitsToUint(tri.p0.w);
+        s.light = floatBitsToUint(tri.p1.w);
+    }
+    return s;
+}
+
+// Shadow ray between two points, each offset off its surface (`na`, `nb` may be zero
+// for point-like ends). True when nothing blocks it.
+bool visible(vec3 a, vec3 na, vec3 b, vec3 nb) {
+    vec3 d = b - a;
+    vec3 o = dot(na, na) > 0.0 ? offset_ray(a, na, d, scene_radius()) : a;
+    vec3 e = dot(nb, nb) > 0.0 ? offset_ray(b, nb, -d, scene_radius()) : b;
+    vec3 de = e - o;
+    float len = length(de);
+    if (len <= 0.0) return true;
+    return !trace_any(o, de / len, 0.0, len);
+}
+
+// Shadow ray towards an infinite light in direction `w`.
+bool visible_dir(vec3 a, vec3 na, vec3 w) {
+    return !trace_any(offset_ray(a, na, w, scene_radius()), w, 0.0, 1e30);
+}
+
+#endif

@@ -1,0 +1,21 @@
+#version 460
+// Layout probe for tests/layout.rs: declares a runtime array of every shared struct so
+// that their std430 member offsets and array strides appear in the SPIR-V.
+#extension GL_GOOGLE_include_directive : require
+layout(local_size_x = 1) in;
+#include "types.glsl"
+layout(std430, binding = 0) buffer A { GpuMaterial a_materials[]; };
+layout(std430, binding = 1) buffer B { GpuTriangle a_triangles[]; };
+layout(std430, binding = 2) buffer C { GpuSphere a_spheres[]; };
+layout(std430, binding = 3) buffer D { GpuLight a_lights[]; };
+layout(std430, binding = 4) buffer E { GpuParams a_params[]; };
+layout(std430, binding = 5) buffer F { GpuPush a_push[]; };
+void main() {
+    // Touch every struct so none is optimised away.
+    a_materials[1] = a_materials[0];
+    a_triangles[1] = a_triangles[0];
+    a_spheres[1] = a_spheres[0];
+    a_lights[1] = a_lights[0];
+    a_params[1] = a_params[0];
+    a_push[1] = a_push[0];
+}

@@ -1,0 +1,55 @@
+// Shared data layouts; mirrors src/render/gpu_types.rs field for field (checked by
+// tests/layout.rs through SPIR-V reflection).
+#ifndef TYPES_GLSL
+#define TYPES_GLSL
+
+#define LIGHT_AREA 0u
+#define LIGHT_POINT 1u
+#define LIGHT_SPOT 2u
+#define LIGHT_DIRECTIONAL 3u
+#define LIGHT_BACKGROUND 4u
+#define NO_LIGHT 0xffffffffu
+
+struct GpuMaterial {
+    vec4 diffuse;   // rgb, w: Phong exponent
+    vec4 phong;     // rgb, w: IOR (< 0: not a dielectric)
+    vec4 mirror;    // rgb
+    vec4 emission;  // rgb radiance
+};
+
+struct GpuTriangle {
+    vec4 p0;  // w: material (bits)
+    vec4 p1;  // w: light index (bits)
+    vec4 p2;  // w: first shading normal index or 0xffffffff (bits)
+};
+
+struct GpuSphere {
+    vec4 center_radius;
+    uvec4 info;  // x: material, y: light
+};
+
+struct GpuLight {
+    vec4 a;
+    vec4 b;
+    vec4 c;
+    vec4 d;
+    vec4 radiance;  // w: kind (bits)
+};
+
+struct GpuParams {
+    vec4 cam_pos;       // w: image-plane distance (pixels)
+    vec4 cam_forward;
+    vec4 cam_right;
+    vec4 cam_up;
+    vec4 scene_sphere;  // centre, radius
+    uvec4 dims;         // width, height, light count, max path length
+    uvec4 misc;         // seed, min path length, background light, flags
+};
+
+struct GpuPush {
+    uint iteration;
+    uint count;
+    uvec2 pad;
+};
+
+#endif

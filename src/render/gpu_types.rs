@@ -1,0 +1,99 @@
+//! Scene and frame data as the kernels read it. Each struct here is mirrored, field for
+//! field, in glsl/types.glsl; `tests/layout.rs` checks the byte offsets of both sides
+//! against each other through the SPIR-V the GLSL compiles to.
+
+use bytemuck::{Pod, Zeroable};
+
+/// Light kinds (`GpuLight::kind`).
+pub const LIGHT_AREA: u32 = 0;
+pub const LIGHT_POINT: u32 = 1;
+pub const LIGHT_SPOT: u32 = 2;
+pub const LIGHT_DIRECTIONAL: u32 = 3;
+pub const LIGHT_BACKGROUND: u32 = 4;
+
+/// No light attached to a primitive.
+pub const NO_LIGHT: u32 = u32::MAX;
+
+/// A material (see `scene::Material`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    /// rgb: Lambertian reflectance; w: Phong exponent.
+    pub diffuse: [f32; 4],
+    /// rgb: Phong reflectance; w: index of refraction (< 0: not a dielectric).
+    pub phong: [f32; 4],
+    /// rgb: specular (mirror) reflectance; w: unused.
+    pub mirror: [f32; 4],
+    /// rgb: emitted radiance; w: unused.
+    pub emission: [f32; 4],
+}
+
+/// A triangle in original scene order, for shading a hit.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTriangle {
+    /// xyz: vertex 0; w: material index (bits).
+    pub p0: [f32; 4],
+    /// xyz: vertex 1; w: light index or `NO_LIGHT` (bits).
+    pub p1: [f32; 4],
+    /// xyz: vertex 2; w: index of its first shading normal in the normal array, or
+    /// `u32::MAX` when it has none (bits).
+    pub p2: [f32; 4],
+}
+
+/// An analytic sphere in original scene order.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuSphere {
+    /// xyz: centre; w: radius.
+    pub center_radius: [f32; 4],
+    /// x: material index (bits); y: light index (bits, always `NO_LIGHT`).
+    pub info: [u32; 4],
+}
+
+/// A light (see `scene::Light`). Fields by kind:
+/// area: `a` = p0 (w: triangle index bits), `b` = edge p1-p0, `c` = edge p2-p0,
+/// `d.w` = area; point: `a` = position; spot: `a` = position, `b` = direction (w: cos
+/// inner), `c.w` = cos outer; directional: `b` = propagation direction; background:
+/// nothing. `radiance`: rgb radiance (area, background), intensity (point, spot) or
+/// irradiance (directional); w: kind (bits).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLight {
+    pub a: [f32; 4],
+    pub b: [f32; 4],
+    pub c: [f32; 4],
+    pub d: [f32; 4],
+    pub radiance: [f32; 4],
+}
+
+/// Per-render constants (one small buffer, written once per render).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuParams {
+    /// xyz: camera position; w: distance of the image plane in pixels.
+    pub cam_pos: [f32; 4],
+    /// xyz: unit forward; w: unused.
+    pub cam_forward: [f32; 4],
+    /// xyz: unit right; w: unused.
+    pub cam_right: [f32; 4],
+    /// xyz: unit up; w: unused.
+    pub cam_up: [f32; 4],
+    /// xyz: scene bounding-sphere centre; w: radius.
+    pub scene_sphere: [f32; 4],
+    /// width, height, number of lights, max path length (segments).
+    pub dims: [u32; 4],
+    /// base seed, min path length, index of the background light or `NO_LIGHT`, flags.
+    pub misc: [u32; 4],
+}
+
+/// Per-dispatch push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuPush {
+    /// 0-based iteration index (selects random numbers and the merge radius).
+    pub iteration: u32,
+    /// Invocations in this dispatch.
+    pub count: u32,
+    pub pad: [u32; 2],
+}

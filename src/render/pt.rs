@@ -1,0 +1,30 @@
+//! Path tracing (`pt`): one kernel, one invocation per pixel sample (glsl/pt.comp).
+
+use std::sync::Arc;
+
+use anyhow::Result;
+
+use super::film::Film;
+use super::gpu_types::GpuPush;
+use super::scene_gpu::{define_refs, SceneGpu};
+use crate::gpu::{groups_for, Batch, Gpu, Kernel};
+
+pub struct PathTracer {
+    kernel: Kernel,
+    pixels: u32,
+}
+
+impl PathTracer {
+    /// `nee: false` builds the BSDF-sampling-only variant (a test reference).
+    pub fn new(gpu: &Arc<Gpu>, scene: &SceneGpu, film: &Film, nee: bool) -> Result<PathTracer> {
+        let mut defines = scene.defines.clone();
+        defines.push(("NEE".into(), if nee { "1" } else { "0" }.into()));
+        let kernel = gpu.kernel("pt.comp", &define_refs(&defines), &scene.bindings(&[&film.accum, &film.stats]))?;
+        Ok(PathTracer { kernel, pixels: film.width * film.height })
+    }
+
+    pub fn record(&self, batch: &mut Batch, iteration: u32) -> Result<()> {
+        let push = GpuPush { iteration, count: self.pixels, pad: [0; 2] };
+        batch.dispatch(&self.kernel, [groups_for(self.pixels, 64), 1, 1], bytemuck::bytes_of(&push))
+    }
+}

@@ -1,0 +1,194 @@
+//! A scene uploaded to the GPU: BVH, shading data, materials, lights and per-render
+//! parameters, in the fixed bindings 0-7 every render kernel declares (glsl/scene.glsl).
+
+use std::sync::Arc;
+
+use anyhow::{bail, Result};
+use glam::Vec3;
+
+use super::gpu_types::*;
+use crate::bvh;
+use crate::gpu::{Buffer, Gpu};
+use crate::scene::{Light, Scene};
+
+/// Settings that shape the kernels' per-render constants.
+#[derive(Clone, Debug)]
+pub struct FrameSettings {
+    pub width: u32,
+    pub height: u32,
+    pub seed: u32,
+    /// Longest path in segments (SmallVCM default 10).
+    pub max_path_length: u32,
+    pub min_path_length: u32,
+}
+
+/// Buffers for bindings 0-7.
+pub struct SceneGpu {
+    pub params: GpuParams,
+    pub buffers: Vec<Buffer>,
+    pub light_count: u32,
+    pub bvh_stats: bvh::BuildStats,
+    /// Defines every kernel that traces rays must be compiled with (BVH layout).
+    pub defines: Vec<(String, String)>,
+}
+
+fn v4(v: Vec3, w: f32) -> [f32; 4] {
+    [v.x, v.y, v.z, w]
+}
+
+fn bits(u: u32) -> f32 {
+    f32::from_bits(u)
+}
+
+/// The lights in GPU form, and the index of the background light if any.
+pub fn gpu_lights(scene: &Scene) -> Result<(Vec<GpuLight>, u32)> {
+    let mut out = Vec::with_capacity(scene.lights.len());
+    let mut background = NO_LIGHT;
+    for (i, l) in scene.lights.iter().enumerate() {
+        let g = match *l {
+            Light::Area { triangle, radiance } => {
+                let t = scene
+                    .triangles
+                    .get(triangle as usize)
+                    .ok_or_else(|| anyhow::anyhow!("area light {i} names missing triangle {triangle}"))?;
+                let e1 = t.p[1] - t.p[0];
+                let e2 = t.p[2] - t.p[0];
+                let area = 0.5 * e1.cross(e2).length();
+                GpuLight {
+                    a: v4(t.p[0], bits(triangle)),
+                    b: v4(e1, 0.0),
+                    c: v4(e2, 0.0),
+                    d: [0.0, 0.0, 0.0, area],
+                    radiance: v4(radiance, bits(LIGHT_AREA)),
+                }
+            }
+            Light::Point { position, intensity } => GpuLight {
+                a: v4(position, 0.0),
+                radiance: v4(intensity, bits(LIGHT_POINT)),
+                ..Default::default()
+            },
+            Light::Spot { position, direction, intensity, cos_inner, cos_outer } => GpuLight {
+                a: v4(position, 0.0),
+                b: v4(direction.normalize(), cos_inner),
+                c: [0.0, 0.0, 0.0, cos_outer],
+                radiance: v4(intensity, bits(LIGHT_SPOT)),
+                ..Default::default()
+            },
+            Light::Directional { direction, irradiance } => GpuLight {
+                b: v4(direction.normalize(), 0.0),
+                radiance: v4(irradiance, bits(LIGHT_DIRECTIONAL)),
+                ..Default::default()
+            },
+            Light::Background { radiance } => {
+                if background != NO_LIGHT {
+                    bail!("the scene has more than one background light");
+                }
+                background = i as u32;
+                GpuLight { radiance: v4(radiance, bits(LIGHT_BACKGROUND)), ..Default::default() }
+            }
+        };
+        out.push(g);
+    }
+    Ok((out, background))
+}
+
+/// Per-render constants from the scene's camera and the frame settings.
+pub fn gpu_params(scene: &Scene, frame: &FrameSettings, background: u32) -> GpuParams {
+    let cam = &scene.camera;
+    let forward = cam.forward.normalize();
+    let right = forward.cross(cam.up).normalize();
+    let up = right.cross(forward);
+    // Pixels have unit area: the image plane is H / (2 tan(yfov/2)) pixels away.
+    let plane = frame.height as f32 / (2.0 * (0.5 * cam.yfov).tan());
+    let (center, radius) = scene.bounding_sphere();
+    GpuParams {
+        cam_pos: v4(cam.position, plane),
+        cam_forward: v4(forward, 0.0),
+        cam_right: v4(right, 0.0),
+        cam_up: v4(up, 0.0),
+        scene_sphere: v4(center, radius),
+        dims: [frame.width, frame.height, scene.lights.len() as u32, frame.max_path_length],
+        misc: [frame.seed, frame.min_path_length, background, 0],
+    }
+}
+
+impl SceneGpu {
+    pub fn new(gpu: &Arc<Gpu>, scene: &Scene, frame: &FrameSettings) -> Result<SceneGpu> {
+        if scene.lights.is_empty() {
+            bail!("scene {:?} has no light source (no emissive material, punctual light or background)", scene.name);
+        }
+        if scene.triangles.is_empty() && scene.spheres.is_empty() {
+            bail!("scene {:?} has no geometry", scene.name);
+        }
+        let tree = bvh::build(&scene.triangles, &scene.spheres);
+        let bvh_stats = tree.stats.clone();
+        let gb = tree.into_gpu();
+        let defines = gb.glsl_defines().into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+        let (lights, background) = gpu_lights(scene)?;
+        let params = gpu_params(scene, frame, background);
+
+        let mut light_of_triangle = vec![NO_LIGHT; scene.triangles.len()];
+        for (i, l) in scene.lights.iter().enumerate() {
+            if let Light::Area { triangle, .. } = l {
+                light_of_triangle[*triangle as usize] = i as u32;
+            }
+        }
+        let mut normals: Vec<[f32; 4]> = Vec::new();
+        let triangles: Vec<GpuTriangle> = scene
+            .triangles
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let first = match &t.n {
+                    Some(n) => {
+                        let first = normals.len() as u32;
+                        normals.extend(n.iter().map(|v| v4(*v, 0.0)));
+                        first
+                    }
+                    None => u32::MAX,
+                };
+                GpuTriangle {
+                    p0: v4(t.p[0], bits(t.material)),
+                    p1: v4(t.p[1], bits(light_of_triangle[i])),
+                    p2: v4(t.p[2], bits(first)),
+                }
+            })
+            .collect();
+        let spheres: Vec<GpuSphere> = scene
+            .spheres
+            .iter()
+            .map(|s| GpuSphere { center_radius: v4(s.center, s.radius), info: [s.material, NO_LIGHT, 0, 0] })
+            .collect();
+        let materials: Vec<GpuMaterial> = scene
+            .materials
+            .iter()
+            .map(|m| GpuMaterial {
+                diffuse: v4(m.diffuse, m.phong_exponent),
+                phong: v4(m.phong, m.ior),
+                mirror: v4(m.mirror, 0.0),
+                emission: v4(m.emission, 0.0),
+            })
+            .collect();
+        let buffers = vec![
+            gpu.buffer_from_slice("params", &[params])?,
+            gpu.buffer_from_slice("bvh_nodes", &gb.nodes)?,
+            gpu.buffer_from_slice("bvh_prims", &gb.prims)?,
+            gpu.buffer_from_slice("triangles", &triangles)?,
+            gpu.buffer_from_slice("spheres", &spheres)?,
+            gpu.buffer_from_slice("materials", &materials)?,
+            gpu.buffer_from_slice("lights", &lights)?,
+            gpu.buffer_from_slice("shading_normals", &normals)?,
+        ];
+        Ok(SceneGpu { params, buffers, light_count: lights.len() as u32, bvh_stats, defines })
+    }
+
+    /// Bindings 0-7 followed by `extra` (bindings 8, 9, ...).
+    pub fn bindings<'a>(&'a self, extra: &[&'a Buffer]) -> Vec<&'a Buffer> {
+        self.buffers.iter().chain(extra.iter().copied()).collect()
+    }
+}
+
+/// Borrowed `(name, value)` pairs for `Gpu::kernel`.
+pub fn define_refs(d: &[(String, String)]) -> Vec<(&str, &str)> {
+    d.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect()
+}
