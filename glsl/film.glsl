@@ -20,4 +20,42 @@ void film_add(uint pixel, vec3 v) {
     film[2u * pixel] = t;
 }
 
+
+// ---- Splats (light tracing's camera connections land on any pixel from any invocation):
+// per pixel three uint64 fixed-point sums with SPLAT_SCALE = 2^24 units per 1.0, added by
+// integer atomics, so the sum is exact and independent of order (deterministic). Each
+// splat is rounded to the nearest unit (error <= 3e-8). A splat above SPLAT_MAX would
+// risk overflowing the 64-bit sum within one iteration (2^64 / 2^24 / 2^27 = 4096 such
+// splats): it is rejected and counted in stats[1]. The camera kernel (or accumulate.comp)
+// takes the sums into the film once per iteration and zeroes them.
+#ifdef HAS_SPLAT
+#define SPLAT_SCALE 16777216.0
+#define SPLAT_MAX 134217728.0
+
+void splat_add(uint pixel, vec3 v) {
+    if (!finite3(v) || any(lessThan(v, vec3(0.0)))) {
+        atomicAdd(stats[0], 1u);
+        return;
+    }
+    if (max3(v) > SPLAT_MAX) {
+        atomicAdd(stats[1], 1u);
+        return;
+    }
+    for (int c = 0; c < 3; ++c) {
+        uint64_t q = uint64_t(v[c] * SPLAT_SCALE + 0.5);
+        if (q != 0ul) atomicAdd(splat[3u * pixel + uint(c)], q);
+    }
+}
+
+// The pixel's splat sum of this iteration, zeroing it.
+vec3 splat_take(uint pixel) {
+    vec3 v;
+    for (int c = 0; c < 3; ++c) {
+        v[c] = float(splat[3u * pixel + uint(c)]) * (1.0 / SPLAT_SCALE);
+        splat[3u * pixel + uint(c)] = 0ul;
+    }
+    return v;
+}
+#endif
+
 #endif

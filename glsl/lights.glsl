@@ -112,4 +112,79 @@ vec3 background_radiance(uint index, out float direct_pdf_w, out float emission_
     return lights[index].radiance.rgb;
 }
 
+// ---- Emission: a ray leaving a light (light subpaths). Pdfs exclude the pick
+// probability. `direct_pdf` is the pdf of choosing the start point by direct sampling
+// (area measure for area lights, 1 for delta lights, solid angle for the background),
+// as SmallVCM's directPdfA.
+struct LightEmission {
+    vec3 pos;
+    vec3 dir;
+    vec3 energy;        // emitted radiance/intensity times cos (area lights)
+    float emission_pdf_w;
+    float direct_pdf;
+    float cos_light;
+    vec3 normal;        // area lights: the emitting side's normal; else 0
+    bool delta;
+    bool finite;
+};
+
+LightEmission light_emit(uint index, vec2 u_pos, vec2 u_dir) {
+    GpuLight l = lights[index];
+    uint kind = light_kind(l);
+    LightEmission e;
+    e.delta = light_is_delta(kind);
+    e.finite = !light_is_infinite(kind);
+    e.cos_light = 1.0;
+    e.normal = vec3(0.0);
+    e.energy = l.radiance.rgb;
+    vec3 c = params.scene_sphere.xyz;
+    float r = params.scene_sphere.w;
+    if (kind == LIGHT_AREA) {
+        vec2 bc = sample_triangle(u_pos);
+        e.pos = l.a.xyz + bc.x * l.b.xyz + bc.y * l.c.xyz;
+        e.normal = normalize(cross(l.b.xyz, l.c.xyz));
+        vec3 local = sample_cosine_hemisphere(u_dir);
+        local.z = max(local.z, EPS_COSINE_LIGHT);
+        e.dir = to_world(local, e.normal);
+        e.cos_light = local.z;
+        float pdf_a = 1.0 / l.d.w;
+        e.emission_pdf_w = pdf_a * e.cos_light * INV_PI;
+        e.direct_pdf = pdf_a;
+        e.energy *= e.cos_light;
+    } else if (kind == LIGHT_POINT) {
+        e.pos = l.a.xyz;
+        e.dir = sample_uniform_sphere(u_dir);
+        e.emission_pdf_w = INV_4PI;
+        e.direct_pdf = 1.0;
+    } else if (kind == LIGHT_SPOT) {
+        // Uniform in the outer cone.
+        float co = l.c.w;
+        float ct = 1.0 - u_dir.x * (1.0 - co);
+        float st = sqrt(max(0.0, 1.0 - ct * ct));
+        float phi = 2.0 * PI * u_dir.y;
+        e.pos = l.a.xyz;
+        e.dir = to_world(vec3(st * cos(phi), st * sin(phi), ct), l.b.xyz);
+        e.emission_pdf_w = 1.0 / (2.0 * PI * (1.0 - co));
+        e.direct_pdf = 1.0;
+        e.energy *= spot_falloff(l, e.dir);
+    } else {
+        // Directional and background: a disc of the scene's bounding-sphere radius,
+        // perpendicular to the direction, placed before the scene.
+        if (kind == LIGHT_DIRECTIONAL) {
+            e.dir = l.b.xyz;
+            e.emission_pdf_w = 1.0 / (PI * r * r);
+            e.direct_pdf = 1.0;
+        } else {
+            e.dir = sample_uniform_sphere(u_dir);
+            e.emission_pdf_w = INV_4PI / (PI * r * r);
+            e.direct_pdf = INV_4PI;
+        }
+        vec2 disc = sample_concentric_disc(u_pos);
+        vec3 t, b;
+        make_frame(e.dir, t, b);
+        e.pos = c + r * (disc.x * t + disc.y * b) - r * e.dir;
+    }
+    return e;
+}
+
 #endif

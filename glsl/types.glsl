@@ -47,8 +47,12 @@ struct GpuParams {
 };
 
 struct GpuPush {
-    uint iteration;
-    uint count;
+    uint iteration;    // 0-based iteration index
+    uint count;        // invocations in this dispatch
+    float mis_vm;      // VM weight factor: eta = pi r^2 N_L when merging, else 0
+    float mis_vc;      // VC weight factor: 1 / eta when connecting, else 0
+    float radius;      // merge radius of this iteration
+    uint light_paths;  // N_L, light subpaths per iteration
     uvec2 pad;
 };
 

@@ -95,5 +95,20 @@ pub struct GpuPush {
     pub iteration: u32,
     /// Invocations in this dispatch.
     pub count: u32,
+    /// MIS weight factor of merging, eta = pi r^2 N_L (0 when the estimator does not merge).
+    pub mis_vm: f32,
+    /// MIS weight factor of connections, 1 / eta (0 when the estimator does not connect).
+    pub mis_vc: f32,
+    /// Merge radius of this iteration.
+    pub radius: f32,
+    /// Light subpaths per iteration (N_L).
+    pub light_paths: u32,
     pub pad: [u32; 2],
+}
+
+impl GpuPush {
+    /// Push constants of an estimator without merging or light subpaths.
+    pub fn simple(iteration: u32, count: u32) -> GpuPush {
+        GpuPush { iteration, count, ..Default::default() }
+    }
 }

@@ -1,6 +1,7 @@
 //! Estimators: each is a sequence of kernel dispatches per iteration over shared buffers
 //! (../shared/DESIGN.md). One iteration = one sample per pixel.
 
+pub mod bidir;
 pub mod film;
 pub mod gpu_types;
 pub mod pt;
@@ -24,6 +25,10 @@ pub enum Algorithm {
     El,
     /// Path tracing with next-event estimation and MIS.
     Pt,
+    /// Light tracing: light subpaths connected to the camera.
+    Lt,
+    /// Bidirectional path tracing (vertex connection), SmallVCM's MIS.
+    Bpt,
 }
 
 impl Algorithm {
@@ -31,6 +36,8 @@ impl Algorithm {
         match self {
             Algorithm::El => "el",
             Algorithm::Pt => "pt",
+            Algorithm::Lt => "lt",
+            Algorithm::Bpt => "bpt",
         }
     }
 }
@@ -88,6 +95,7 @@ pub struct RenderOutput {
 
 enum Estimator {
     Pt(pt::PathTracer),
+    Bidir(bidir::Bidir),
     El(Kernel, u32),
 }
 
@@ -95,8 +103,9 @@ impl Estimator {
     fn record(&self, batch: &mut Batch, iteration: u32) -> Result<()> {
         match self {
             Estimator::Pt(p) => p.record(batch, iteration),
+            Estimator::Bidir(b) => b.record(batch, iteration),
             Estimator::El(k, pixels) => {
-                let push = gpu_types::GpuPush { iteration, count: *pixels, pad: [0; 2] };
+                let push = gpu_types::GpuPush::simple(iteration, *pixels);
                 batch.dispatch(k, [crate::gpu::groups_for(*pixels, 64), 1, 1], bytemuck::bytes_of(&push))
             }
         }
@@ -109,7 +118,7 @@ fn check_frame(gpu: &Gpu, s: &RenderSettings) -> Result<()> {
     if w == 0 || h == 0 {
         bail!("image size {w}x{h}: width and height must be at least 1");
     }
-    let film_bytes = w * h * 32;
+    let film_bytes = w * h * 32; // two vec4 per pixel
     let max = gpu.limits.max_storage_buffer_range as u64;
     if film_bytes > max {
         bail!(
@@ -141,6 +150,10 @@ pub fn render(
     let pixels = frame.width * frame.height;
     let est = match settings.algorithm {
         Algorithm::Pt => Estimator::Pt(pt::PathTracer::new(gpu, &scene_gpu, &film, settings.nee)?),
+        Algorithm::Lt | Algorithm::Bpt => {
+            let mode = if settings.algorithm == Algorithm::Lt { bidir::BidirMode::LightTracing } else { bidir::BidirMode::Bpt };
+            Estimator::Bidir(bidir::Bidir::new(gpu, &scene_gpu, &film, mode, frame.max_path_length)?)
+        }
         Algorithm::El => {
             let defines = scene_gpu::define_refs(&scene_gpu.defines);
             let k = gpu.kernel("el.comp", &defines, &scene_gpu.bindings(&[&film.accum, &film.stats]))?;

@@ -24,7 +24,7 @@ impl PathTracer {
     }
 
     pub fn record(&self, batch: &mut Batch, iteration: u32) -> Result<()> {
-        let push = GpuPush { iteration, count: self.pixels, pad: [0; 2] };
+        let push = GpuPush::simple(iteration, self.pixels);
         batch.dispatch(&self.kernel, [groups_for(self.pixels, 64), 1, 1], bytemuck::bytes_of(&push))
     }
 }

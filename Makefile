@@ -1,0 +1,28 @@
+# vkvcm: the two set-up commands of README.md.
+#   make render  - install what is missing (Debian 12, as root), build, render the default scene
+#   make test    - install what is missing, build, run the whole test suite (validation on)
+# Tests run on lavapipe unless VKVCM_TEST_DEVICE names another device.
+
+LVP_ICD := $(firstword $(wildcard /usr/share/vulkan/icd.d/lvp_icd.x86_64.json /usr/share/vulkan/icd.d/lvp_icd.json))
+
+.PHONY: setup build render test clippy fmt
+
+setup:
+	bash scripts/setup-debian.sh
+
+build: setup
+	cargo build --release
+
+render: build
+	mkdir -p out
+	./target/release/vkvcm render --width 512 --height 512 --iterations 64 -o out/default.exr --png out/default.png
+
+# Tests force lavapipe so results do not depend on the machine's GPU.
+test: setup
+	VK_DRIVER_FILES=$(LVP_ICD) VK_ICD_FILENAMES=$(LVP_ICD) cargo test -- --test-threads=2
+
+clippy:
+	cargo clippy --all-targets -- -D warnings
+
+fmt:
+	cargo fmt --check

@@ -1,0 +1,128 @@
+#version 460
+// Stage 3 (../shared/DESIGN.md): one invocation per pixel sample. Traces a camera
+// subpath; at each vertex adds emitter hits, next-event estimation and connections to
+// the vertices of light subpath p = this pixel (USE_VC), each weighted by the recursive
+// MIS of ../shared/SCENES.md 4.4. Then takes this pixel's splats (light-to-camera
+// connections of stage 1) and adds the sum to the film (stage 4).
+#extension GL_GOOGLE_include_directive : require
+
+#ifndef USE_VC
+#define USE_VC 1
+#endif
+
+layout(local_size_x = 64) in;
+#include "scene.glsl"
+#include "vcm_bindings.glsl"
+
+// Emitter hit by the camera subpath: weight 1 / (1 + w_camera).
+float emitter_hit_weight(SubpathState st, float direct_pdf, float emission_pdf, float pick) {
+    if (st.len == 1u) return 1.0;
+    float w_camera = direct_pdf * pick * st.dvcm + emission_pdf * pick * st.dvc;
+    return 1.0 / (1.0 + w_camera);
+}
+
+vec3 direct_illumination(SubpathState st, Surface s, Bsdf b, inout uint rng) {
+    uint nl = light_count();
+    uint li = min(uint(rnd(rng) * float(nl)), nl - 1u);
+    float pick = 1.0 / float(nl);
+    LightSample ls = light_illuminate(li, s.p, rnd2(rng));
+    if (!ls.ok) return vec3(0.0);
+    float pf, pr;
+    vec3 f = bsdf_eval(b, ls.wi, pf, pr);
+    if (max3(f) <= 0.0) return vec3(0.0);
+    pf = ls.delta ? 0.0 : pf * b.cont_prob;
+    pr *= b.cont_prob;
+    float cos_x = dot(b.n, ls.wi);
+    float w_light = pf / (pick * ls.pdf_w);
+    float w_camera = (ls.emission_pdf_w * cos_x / (ls.pdf_w * ls.cos_light)) * (push.mis_vm + st.dvcm + st.dvc * pr);
+    float w = 1.0 / (w_light + 1.0 + w_camera);
+    bool vis = ls.dist >= 1e29 ? visible_dir(s.p, s.ng, ls.wi) : visible(s.p, s.ng, ls.light_point, ls.light_normal);
+    if (!vis) return vec3(0.0);
+    return (w * cos_x / (pick * ls.pdf_w)) * ls.radiance * f;
+}
+
+vec3 connect_vertices(SubpathState st, Surface s, Bsdf b, LightVertex v) {
+    vec3 dir = v.p - s.p;
+    float dist2 = dot(dir, dir);
+    float dist = sqrt(dist2);
+    dir /= dist;
+    float cpf, cpr;
+    vec3 fc = bsdf_eval(b, dir, cpf, cpr);
+    if (max3(fc) <= 0.0) return vec3(0.0);
+    Bsdf lb = bsdf_init(v.material, v.n, v.wo, true);
+    float lpf, lpr;
+    vec3 fl = bsdf_eval(lb, -dir, lpf, lpr);
+    if (max3(fl) <= 0.0) return vec3(0.0);
+    cpf *= b.cont_prob; cpr *= b.cont_prob;
+    lpf *= lb.cont_prob; lpr *= lb.cont_prob;
+    float cos_c = abs(dot(b.n, dir));
+    float cos_l = abs(dot(lb.n, dir));
+    float g = cos_c * cos_l / dist2;
+    float camera_pdf_a = cpf * cos_l / dist2;  // camera BSDF sampling the light vertex
+    float light_pdf_a = lpf * cos_c / dist2;   // light BSDF sampling the camera vertex
+    float w_light = camera_pdf_a * (push.mis_vm + v.dvcm + v.dvc * lpr);
+    float w_camera = light_pdf_a * (push.mis_vm + st.dvcm + st.dvc * cpr);
+    float w = 1.0 / (w_light + 1.0 + w_camera);
+    if (!visible(s.p, s.ng, v.p, v.n)) return vec3(0.0);
+    return (w * g) * fc * fl;
+}
+
+void main() {
+    uint pixel = gl_GlobalInvocationID.x;
+    if (pixel >= push.count) return;
+    uint w = image_width();
+    uint rng = rng_init(params.misc.x, push.iteration, pixel, 0u);
+    vec2 raster = vec2(float(pixel % w), float(pixel / w)) + rnd2(rng);
+    SubpathState st;
+    st.o = params.cam_pos.xyz;
+    st.d = camera_direction(raster);
+    st.thr = vec3(1.0);
+    st.len = 1u;
+    st.specular = true;
+    st.finite_light = true;
+    st.dvcm = float(push.light_paths) / camera_pdf_w(st.d);
+    st.dvc = 0.0;
+    st.dvm = 0.0;
+    float pick = 1.0 / float(light_count());
+    uint max_len = max_path_length();
+    uint min_len = min_path_length();
+    vec3 L = vec3(0.0);
+    for (;; ++st.len) {
+        Hit h;
+        if (!trace_closest(st.o, st.d, 0.0, 1e30, h)) {
+            uint bg = background_light();
+            if (bg != NO_LIGHT && st.len >= min_len) {
+                float dpdf, epdf;
+                vec3 le = background_radiance(bg, dpdf, epdf);
+                L += st.thr * le * emitter_hit_weight(st, dpdf, epdf, pick);
+            }
+            break;
+        }
+        Surface s = surface_at(h, st.o, st.d);
+        mis_on_hit(st, h.t, abs(dot(s.ng, st.d)), false);
+        if (s.light != NO_LIGHT && st.len >= min_len) {
+            float dpdf_a, epdf;
+            vec3 le = area_light_radiance(s.light, st.d, dpdf_a, epdf);
+            if (max3(le) > 0.0) L += st.thr * le * emitter_hit_weight(st, dpdf_a, epdf, pick);
+        }
+        if (st.len >= max_len) break;
+        Bsdf b = bsdf_init(s.material, s.ng, -st.d, false);
+        if (!b.valid) break;
+#if USE_VC
+        if (!b.delta) {
+            if (st.len + 1u >= min_len) L += st.thr * direct_illumination(st, s, b, rng);
+            uint n = lv_count[pixel];
+            uint base = pixel * lv_slots();
+            for (uint k = 0u; k < n; ++k) {
+                LightVertex v = lv_load(base + k);
+                uint total = v.len + 1u + st.len;
+                if (total < min_len) continue;
+                if (total > max_len) break;
+                L += st.thr * v.thr * connect_vertices(st, s, b, v);
+            }
+        }
+#endif
+        if (!scatter(st, b, s.p, s.ng, rng)) break;
+    }
+    film_add(pixel, L + splat_take(pixel));
+}

@@ -1,0 +1,97 @@
+#version 460
+// Stage 1 (../shared/DESIGN.md): one invocation per light subpath. Samples an emitter,
+// traces, stores every non-delta vertex in the light-vertex store (STORE_VERTICES) and
+// connects it to the camera (CONNECT_CAMERA), as SmallVCM's VertexCM light pass.
+// LIGHT_TRACE_ONLY: pure light tracing (weight 1), which also connects the emitting
+// point of area lights to the camera so that directly visible emitters are rendered.
+#extension GL_GOOGLE_include_directive : require
+
+#ifndef STORE_VERTICES
+#define STORE_VERTICES 1
+#endif
+#ifndef CONNECT_CAMERA
+#define CONNECT_CAMERA 1
+#endif
+#ifndef LIGHT_TRACE_ONLY
+#define LIGHT_TRACE_ONLY 0
+#endif
+
+layout(local_size_x = 64) in;
+#include "scene.glsl"
+#include "vcm_bindings.glsl"
+
+void main() {
+    uint path = gl_GlobalInvocationID.x;
+    if (path >= push.count) return;
+    uint rng = rng_init(params.misc.x, push.iteration, path, 1u);
+    uint nl = light_count();
+    uint li = min(uint(rnd(rng) * float(nl)), nl - 1u);
+    float pick = 1.0 / float(nl);
+    vec2 u_pos = rnd2(rng);
+    vec2 u_dir = rnd2(rng);
+    LightEmission e = light_emit(li, u_pos, u_dir);
+    uint stored = 0u;
+    float emission_pdf = e.emission_pdf_w * pick;
+    float direct_pdf = e.direct_pdf * pick;
+    if (max3(e.energy) > 0.0 && emission_pdf > 0.0) {
+#if LIGHT_TRACE_ONLY
+        // The emitting point itself, seen by the camera (area lights only; the others
+        // cannot be seen). Estimator: Le W_e G / (pick pdf_A) / N_L.
+        if (nl > 0u && e.finite && !e.delta && dot(e.normal, e.normal) > 0.0) {
+            vec2 raster;
+            if (camera_raster(e.pos, raster)) {
+                vec3 to_cam = params.cam_pos.xyz - e.pos;
+                float dist = length(to_cam);
+                to_cam /= dist;
+                float cos_l = dot(e.normal, to_cam);
+                if (cos_l > EPS_COSINE_LIGHT && visible(e.pos, e.normal, params.cam_pos.xyz, vec3(0.0))) {
+                    float cos_cam = dot(params.cam_forward.xyz, -to_cam);
+                    float plane = params.cam_pos.w;
+                    float we_g = plane * plane / (cos_cam * cos_cam * cos_cam) * cos_l / (dist * dist);
+                    vec3 le = e.energy / e.cos_light;  // radiance
+                    splat_add(uint(raster.y) * image_width() + uint(raster.x),
+                              le * we_g / (direct_pdf * float(push.light_paths)));
+                }
+            }
+        }
+#endif
+        SubpathState st;
+        st.o = e.normal != vec3(0.0) ? offset_ray(e.pos, e.normal, e.dir, scene_radius()) : e.pos;
+        st.d = e.dir;
+        st.thr = e.energy / emission_pdf;
+        st.len = 1u;
+        st.finite_light = e.finite;
+        st.specular = true;
+        st.dvcm = direct_pdf / emission_pdf;
+        st.dvc = e.delta ? 0.0 : (e.finite ? e.cos_light : 1.0) / emission_pdf;
+        st.dvm = st.dvc * push.mis_vc;
+        uint max_len = max_path_length();
+        for (;; ++st.len) {
+            Hit h;
+            if (!trace_closest(st.o, st.d, 0.0, 1e30, h)) break;
+            Surface s = surface_at(h, st.o, st.d);
+            Bsdf b = bsdf_init(s.material, s.ng, -st.d, true);
+            if (!b.valid) break;
+            mis_on_hit(st, h.t, abs(dot(s.ng, st.d)), st.len == 1u && !st.finite_light);
+            if (!b.delta) {
+#if STORE_VERTICES
+                LightVertex v;
+                v.p = s.p; v.thr = st.thr; v.wo = -st.d; v.n = s.ng;
+                v.material = s.material; v.len = st.len;
+                v.dvcm = st.dvcm; v.dvc = st.dvc; v.dvm = st.dvm;
+                lv_store(path * lv_slots() + stored, v);
+                stored += 1u;
+#endif
+#if CONNECT_CAMERA
+                if (st.len + 1u >= min_path_length())
+                    connect_to_camera(st, s.p, s.ng, b, LIGHT_TRACE_ONLY != 0);
+#endif
+            }
+            if (st.len + 2u > max_len) break;
+            if (!scatter(st, b, s.p, s.ng, rng)) break;
+        }
+    }
+#if STORE_VERTICES
+    lv_count[path] = stored;
+#endif
+}
