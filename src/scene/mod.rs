@@ -109,3 +109,115 @@ pub struct Scene {
     pub camera: Camera,
     pub report: LoadReport,
 }
+
+pub mod gltf_import;
+pub mod reference;
+
+pub use gltf_import::{encode_data_uri, LoadOptions};
+
+use std::path::{Path, PathBuf};
+
+/// Names of the four built-in reference scenes (`../shared/SCENES.md` section 2), in
+/// SmallVCM's scene-id order 0..3. `"default"` is an alias of `gbs_s`.
+pub const BUILTIN_SCENES: [&str; 4] = ["gbs_s", "glm_c", "gbs_p", "gbs_b"];
+
+/// Loads a glTF 2.0 scene (`.gltf` or `.glb`) with the first perspective camera.
+pub fn load(path: &Path) -> anyhow::Result<Scene> {
+    load_with(path, &LoadOptions::default())
+}
+
+/// Loads a glTF 2.0 scene (`.gltf` or `.glb`); `options.camera` selects a camera by node
+/// or camera name.
+pub fn load_with(path: &Path, options: &LoadOptions) -> anyhow::Result<Scene> {
+    gltf_import::load_gltf(path, options)
+}
+
+/// Loads a built-in scene by name (`gbs_s`, `glm_c`, `gbs_p`, `gbs_b`, `default` = `gbs_s`,
+/// or SmallVCM's ids `0`..`3`), or else treats the argument as a path to a glTF file.
+pub fn load_named(name_or_path: &str) -> anyhow::Result<Scene> {
+    load_named_with(name_or_path, &LoadOptions::default())
+}
+
+/// [`load_named`] with load options.
+pub fn load_named_with(name_or_path: &str, options: &LoadOptions) -> anyhow::Result<Scene> {
+    if let Some(name) = builtin_name(name_or_path) {
+        let path = builtin_path(name).ok_or_else(|| {
+            anyhow::anyhow!(
+                "built-in scene '{name}': scenes/{name}.gltf was found neither in {} nor next to the executable",
+                env!("CARGO_MANIFEST_DIR")
+            )
+        })?;
+        let mut scene = load_with(&path, options)?;
+        scene.name = name.to_string();
+        return Ok(scene);
+    }
+    let path = Path::new(name_or_path);
+    if !path.exists() {
+        anyhow::bail!(
+            "unknown scene '{name_or_path}': not a built-in name ({}, default) and no such file",
+            BUILTIN_SCENES.join(", ")
+        );
+    }
+    load_with(path, options)
+}
+
+/// Canonical built-in name for `name` (`"default"` and `"0"`..`"3"` are aliases).
+pub fn builtin_name(name: &str) -> Option<&'static str> {
+    match name {
+        "default" | "0" => Some(BUILTIN_SCENES[0]),
+        "1" => Some(BUILTIN_SCENES[1]),
+        "2" => Some(BUILTIN_SCENES[2]),
+        "3" => Some(BUILTIN_SCENES[3]),
+        _ => BUILTIN_SCENES.iter().copied().find(|n| *n == name),
+    }
+}
+
+/// Where the file of a built-in scene lives: `<crate>/scenes/<name>.gltf` when the source
+/// tree is present, else `scenes/<name>.gltf` or `<name>.gltf` next to the executable (or
+/// in its parent folders, for `target/<profile>/` layouts).
+pub fn builtin_path(name: &str) -> Option<PathBuf> {
+    let name = builtin_name(name)?;
+    let file = format!("{name}.gltf");
+    let mut candidates = vec![Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(&file)];
+    if let Ok(exe) = std::env::current_exe() {
+        let mut dir = exe.parent().map(Path::to_path_buf);
+        for _ in 0..3 {
+            let Some(d) = dir else { break };
+            candidates.push(d.join("scenes").join(&file));
+            candidates.push(d.join(&file));
+            dir = d.parent().map(Path::to_path_buf);
+        }
+    }
+    candidates.into_iter().find(|p| p.is_file())
+}
+
+impl Scene {
+    /// Axis-aligned bounds (min, max) of all triangles and spheres; `(0, 0)` when the
+    /// scene has no geometry.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for t in &self.triangles {
+            for p in t.p {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+        for s in &self.spheres {
+            lo = lo.min(s.center - Vec3::splat(s.radius));
+            hi = hi.max(s.center + Vec3::splat(s.radius));
+        }
+        if lo.x > hi.x {
+            (Vec3::ZERO, Vec3::ZERO)
+        } else {
+            (lo, hi)
+        }
+    }
+
+    /// Scene bounding sphere as SmallVCM's `BuildSceneSphere`: centre of [`Scene::bounds`]
+    /// and half the length of its diagonal.
+    pub fn bounding_sphere(&self) -> (Vec3, f32) {
+        let (lo, hi) = self.bounds();
+        ((lo + hi) * 0.5, (hi - lo).length_squared().sqrt() * 0.5)
+    }
+}

@@ -1,0 +1,595 @@
+//! glTF importer tests on small hand-written files.
+
+use glam::Vec3;
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use vkvcm::scene::{self, Light, LoadOptions, Scene};
+
+const S: f32 = std::f32::consts::FRAC_1_SQRT_2;
+
+/// A small glTF: node 0 holds mesh 0 (one primitive), node 1 a perspective camera.
+/// Buffer 0 is `data.bin`: positions, then normals (if any), then indices (if any).
+struct Doc {
+    json: Value,
+    bin: Vec<u8>,
+}
+
+impl Doc {
+    fn new(positions: &[[f32; 3]], normals: Option<&[[f32; 3]]>, indices: Option<(&[u32], u32)>) -> Doc {
+        let mut bin = Vec::new();
+        let mut accessors = Vec::new();
+        let mut views = Vec::new();
+        let mut push_f32 = |data: &[[f32; 3]], bin: &mut Vec<u8>| {
+            let offset = bin.len();
+            for p in data {
+                for x in p {
+                    bin.extend_from_slice(&x.to_le_bytes());
+                }
+            }
+            // min/max over the finite coordinates (JSON has no NaN/Inf).
+            let mut lo = [f32::MAX; 3];
+            let mut hi = [f32::MIN; 3];
+            for p in data {
+                for k in 0..3 {
+                    if p[k].is_finite() {
+                        lo[k] = lo[k].min(p[k]);
+                        hi[k] = hi[k].max(p[k]);
+                    }
+                }
+            }
+            views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": bin.len() - offset}));
+            accessors.push(json!({"bufferView": views.len() - 1, "componentType": 5126, "count": data.len(), "type": "VEC3", "min": lo, "max": hi}));
+            accessors.len() - 1
+        };
+        let pos = push_f32(positions, &mut bin);
+        let mut attributes = json!({ "POSITION": pos });
+        if let Some(n) = normals {
+            attributes["NORMAL"] = json!(push_f32(n, &mut bin));
+        }
+        let mut prim = json!({ "attributes": attributes });
+        if let Some((idx, ctype)) = indices {
+            let offset = bin.len();
+            for &i in idx {
+                match ctype {
+                    5121 => bin.push(i as u8),
+                    5123 => bin.extend_from_slice(&(i as u16).to_le_bytes()),
+                    _ => bin.extend_from_slice(&i.to_le_bytes()),
+                }
+            }
+            let len = bin.len() - offset;
+            while !bin.len().is_multiple_of(4) {
+                bin.push(0);
+            }
+            views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": len}));
+            accessors.push(
+                json!({"bufferView": views.len() - 1, "componentType": ctype, "count": idx.len(), "type": "SCALAR"}),
+            );
+            prim["indices"] = json!(accessors.len() - 1);
+        }
+        let json = json!({
+            "asset": {"version": "2.0"},
+            "scene": 0,
+            "scenes": [{"nodes": [0, 1]}],
+            "nodes": [
+                {"name": "geometry", "mesh": 0},
+                {"name": "cam", "camera": 0, "translation": [0.0, 0.0, 5.0]},
+            ],
+            "cameras": [{"name": "main", "type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.01}}],
+            "meshes": [{"primitives": [prim]}],
+            "accessors": accessors,
+            "bufferViews": views,
+            "buffers": [{"byteLength": bin.len(), "uri": "data.bin"}],
+        });
+        Doc { json, bin }
+    }
+
+    fn triangle() -> Doc {
+        Doc::new(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], None, None)
+    }
+
+    /// Writes `scene.gltf` and `data.bin` into `dir`.
+    fn write(&self, dir: &Path) -> PathBuf {
+        std::fs::write(dir.join("data.bin"), &self.bin).unwrap();
+        let path = dir.join("scene.gltf");
+        std::fs::write(&path, serde_json::to_vec_pretty(&self.json).unwrap()).unwrap();
+        path
+    }
+
+    fn load(&self) -> anyhow::Result<Scene> {
+        let dir = tempfile::tempdir().unwrap();
+        scene::load(&self.write(dir.path()))
+    }
+
+    /// The same document as a GLB: buffer 0 becomes the BIN chunk.
+    fn glb(&self) -> Vec<u8> {
+        let mut j = self.json.clone();
+        j["buffers"][0].as_object_mut().unwrap().remove("uri");
+        let mut js = serde_json::to_vec(&j).unwrap();
+        while !js.len().is_multiple_of(4) {
+            js.push(b' ');
+        }
+        let mut bin = self.bin.clone();
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        let total = 12 + 8 + js.len() + 8 + bin.len();
+        let mut out = Vec::new();
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&(total as u32).to_le_bytes());
+        out.extend_from_slice(&(js.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&js);
+        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&bin);
+        out
+    }
+}
+
+fn close(a: Vec3, b: Vec3) -> bool {
+    (a - b).abs().max_element() < 1e-5
+}
+
+fn assert_close(a: Vec3, b: Vec3) {
+    assert!(close(a, b), "{a} != {b}");
+}
+
+fn err_of(r: anyhow::Result<Scene>) -> String {
+    match r {
+        Ok(_) => panic!("expected an error"),
+        Err(e) => format!("{e:#}"),
+    }
+}
+
+#[test]
+fn node_transform_hierarchy() {
+    let mut d = Doc::triangle();
+    // Parent node 2: T(1,2,3) R_y(90 deg) S(2) with the mesh node as child, which adds T(0,0,1).
+    d.json["nodes"][0]["translation"] = json!([0.0, 0.0, 1.0]);
+    d.json["nodes"].as_array_mut().unwrap().push(json!({
+        "translation": [1.0, 2.0, 3.0], "rotation": [0.0, S, 0.0, S], "scale": [2.0, 2.0, 2.0], "children": [0]
+    }));
+    d.json["scenes"][0]["nodes"] = json!([2, 1]);
+    // Camera by matrix (column-major): R_y(90 deg), then translation (5, 0, 0).
+    d.json["nodes"][1] = json!({"camera": 0, "matrix": [0.0, 0.0, -1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 5.0, 0.0, 0.0, 1.0]});
+    let s = d.load().unwrap();
+    assert_eq!(s.triangles.len(), 1);
+    let p = s.triangles[0].p;
+    assert_close(p[0], Vec3::new(3.0, 2.0, 3.0));
+    assert_close(p[1], Vec3::new(3.0, 2.0, 1.0));
+    assert_close(p[2], Vec3::new(3.0, 4.0, 3.0));
+    assert_close(s.camera.position, Vec3::new(5.0, 0.0, 0.0));
+    assert_close(s.camera.forward, Vec3::new(-1.0, 0.0, 0.0));
+    assert_close(s.camera.up, Vec3::Y);
+    assert_eq!(s.camera.yfov, 0.5);
+    assert!(s.report.warnings.iter().all(|w| w.contains("no light")), "{:?}", s.report.warnings);
+}
+
+#[test]
+fn indexed_and_non_indexed_agree() {
+    let quad = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+    let idx = [0u32, 1, 2, 2, 3, 0];
+    let flat: Vec<[f32; 3]> = idx.iter().map(|&i| quad[i as usize]).collect();
+    let reference = Doc::new(&flat, None, None).load().unwrap();
+    assert_eq!(reference.triangles.len(), 2);
+    assert_eq!(reference.triangles[1].p[1], Vec3::new(0.0, 1.0, 0.0));
+    for ctype in [5121, 5123, 5125] {
+        let s = Doc::new(&quad, None, Some((&idx, ctype))).load().unwrap();
+        assert_eq!(s.triangles, reference.triangles, "component type {ctype}");
+    }
+}
+
+#[test]
+fn strips_and_fans() {
+    let quad = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+    let mut d = Doc::new(&quad, None, None);
+    d.json["meshes"][0]["primitives"][0]["mode"] = json!(5); // TRIANGLE_STRIP
+    let s = d.load().unwrap();
+    assert_eq!(s.triangles.len(), 2);
+    for t in &s.triangles {
+        let n = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]);
+        assert!(n.z > 0.0, "strip keeps the winding: {n}");
+    }
+    let fan = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+    let mut d = Doc::new(&fan, None, None);
+    d.json["meshes"][0]["primitives"][0]["mode"] = json!(6); // TRIANGLE_FAN
+    let s = d.load().unwrap();
+    assert_eq!(s.triangles.len(), 2);
+    assert_eq!(s.triangles[1].p, [Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 0.0), Vec3::ZERO]);
+}
+
+#[test]
+fn normals_use_the_inverse_transpose() {
+    let n = [S, S, 0.0];
+    let mut d = Doc::new(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], Some(&[n, n, n]), None);
+    d.json["nodes"][0]["scale"] = json!([2.0, 1.0, 1.0]);
+    let s = d.load().unwrap();
+    let ns = s.triangles[0].n.expect("normals");
+    let want = Vec3::new(0.5, 1.0, 0.0).normalize();
+    for v in ns {
+        assert_close(v, want);
+    }
+    assert_close(s.triangles[0].p[1], Vec3::new(2.0, 0.0, 0.0));
+    // Without NORMAL there are no shading normals.
+    assert!(Doc::triangle().load().unwrap().triangles[0].n.is_none());
+}
+
+#[test]
+fn mirroring_transform_keeps_the_facing_side() {
+    let mut d = Doc::triangle();
+    d.json["nodes"][0]["scale"] = json!([-1.0, 1.0, 1.0]);
+    let s = d.load().unwrap();
+    let t = &s.triangles[0];
+    let n = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]).normalize();
+    assert_close(n, Vec3::Z);
+    assert!(t.p.contains(&Vec3::new(-1.0, 0.0, 0.0)));
+}
+
+#[test]
+fn degenerate_triangles_are_counted_and_skipped() {
+    let nan = f32::NAN;
+    let inf = f32::INFINITY;
+    let pos = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0], // good
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [2.0, 0.0, 0.0], // collinear
+        [0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0], // repeated vertex
+        [nan, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0], // NaN
+        [0.0, 0.0, 0.0],
+        [inf, 0.0, 0.0],
+        [0.0, 1.0, 0.0], // Inf
+    ];
+    let d = Doc::new(&pos, None, None);
+    let s = d.load().unwrap();
+    assert_eq!(s.triangles.len(), 1);
+    assert_eq!(s.report.degenerate_triangles, 4);
+    assert_eq!(s.triangles[0].p[2], Vec3::Y);
+}
+
+#[test]
+fn out_of_range_index_names_the_accessor() {
+    let d = Doc::new(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], None, Some((&[0, 1, 7], 5123)));
+    let e = err_of(d.load());
+    assert!(e.contains("scene.gltf"), "{e}");
+    assert!(e.contains("index accessor 1") && e.contains("7") && e.contains("mesh 0 primitive 0"), "{e}");
+
+    // An accessor that reaches past its buffer view.
+    let mut d = Doc::triangle();
+    d.json["accessors"][0]["count"] = json!(4);
+    let e = err_of(d.load());
+    assert!(e.contains("accessor 0") && e.contains("buffer view 0"), "{e}");
+
+    // A primitive that refers to an accessor that does not exist.
+    let mut d = Doc::triangle();
+    d.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(9);
+    let e = err_of(d.load());
+    assert!(e.contains("meshes[0].primitives[0].attributes") && e.contains("POSITION"), "{e}");
+
+    // A buffer view past the end of the buffer file.
+    let mut d = Doc::triangle();
+    d.json["bufferViews"][0]["byteOffset"] = json!(4);
+    let e = err_of(d.load());
+    assert!(e.contains("buffer view 0") && e.contains("exceeds buffer 0"), "{e}");
+}
+
+#[test]
+fn missing_buffer_file_is_named() {
+    let mut d = Doc::triangle();
+    d.json["buffers"][0]["uri"] = json!("nothere.bin");
+    let e = err_of(d.load());
+    assert!(e.contains("nothere.bin") && e.contains("scene.gltf") && e.contains("buffer 0"), "{e}");
+
+    let mut d = Doc::triangle();
+    d.json["buffers"][0]["byteLength"] = json!(1000);
+    let e = err_of(d.load());
+    assert!(e.contains("buffer 0") && e.contains("1000"), "{e}");
+}
+
+#[test]
+fn uris_must_stay_inside_the_scene_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let sub = dir.path().join("sub");
+    std::fs::create_dir(&sub).unwrap();
+    let d = Doc::triangle();
+    // The buffer exists outside the folder, so a refusal is not just "file missing".
+    std::fs::write(dir.path().join("data.bin"), &d.bin).unwrap();
+    let outside = dir.path().join("data.bin").canonicalize().unwrap();
+    for (uri, why) in [
+        ("../data.bin".to_string(), ".."),
+        ("./x/../../data.bin".to_string(), ".."),
+        ("%2E%2E/data.bin".to_string(), ".."),
+        (outside.to_string_lossy().into_owned(), "absolute"),
+        (format!("file://{}", outside.display()), "scheme"),
+    ] {
+        let mut d = Doc::triangle();
+        d.json["buffers"][0]["uri"] = json!(uri);
+        let path = sub.join("scene.gltf");
+        std::fs::write(&path, serde_json::to_vec(&d.json).unwrap()).unwrap();
+        let e = err_of(scene::load(&path));
+        assert!(e.contains(why) && e.contains("buffer 0"), "{uri}: {e}");
+    }
+    // A subfolder of the scene's folder is fine.
+    let mut d = Doc::triangle();
+    d.json["buffers"][0]["uri"] = json!("bufs/my%20data.bin");
+    std::fs::create_dir(sub.join("bufs")).unwrap();
+    std::fs::write(sub.join("bufs/my data.bin"), &d.bin).unwrap();
+    let path = sub.join("scene.gltf");
+    std::fs::write(&path, serde_json::to_vec(&d.json).unwrap()).unwrap();
+    assert_eq!(scene::load(&path).unwrap().triangles.len(), 1);
+}
+
+#[test]
+fn embedded_data_uri() {
+    let mut d = Doc::triangle();
+    d.json["buffers"][0]["uri"] = json!(scene::encode_data_uri(&d.bin));
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("embedded.gltf");
+    std::fs::write(&path, serde_json::to_vec(&d.json).unwrap()).unwrap();
+    let s = scene::load(&path).unwrap();
+    assert_eq!(s.triangles, Doc::triangle().load().unwrap().triangles);
+    assert_eq!(s.name, "embedded");
+    d.json["buffers"][0]["uri"] = json!("data:application/octet-stream;base64,@@@@");
+    std::fs::write(&path, serde_json::to_vec(&d.json).unwrap()).unwrap();
+    assert!(err_of(scene::load(&path)).contains("base64"));
+}
+
+#[test]
+fn glb_round_trip() {
+    let n = [0.0, 0.0, 1.0];
+    let d = Doc::new(
+        &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]],
+        Some(&[n, n, n, n]),
+        Some((&[0, 1, 2, 2, 1, 3], 5123)),
+    );
+    let from_gltf = d.load().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.glb");
+    std::fs::write(&path, d.glb()).unwrap();
+    let from_glb = scene::load(&path).unwrap();
+    assert_eq!(from_glb.triangles.len(), 2);
+    assert_eq!(from_glb.triangles, from_gltf.triangles);
+    assert_eq!(from_glb.camera, from_gltf.camera);
+
+    // A truncated GLB is an error, not a panic.
+    let glb = d.glb();
+    std::fs::write(&path, &glb[..glb.len() - 10]).unwrap();
+    let e = err_of(scene::load(&path));
+    assert!(e.contains("scene.glb") && e.contains("GLB"), "{e}");
+}
+
+#[test]
+fn unsupported_features_warn_once_per_kind() {
+    let mut d = Doc::triangle();
+    d.json["extensionsUsed"] = json!(["KHR_materials_clearcoat", "VKVCM_spheres", "KHR_lights_punctual"]);
+    d.json["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
+    d.json["images"] = json!([{"uri": "never_loaded.png"}]);
+    d.json["textures"] = json!([{"source": 0}]);
+    d.json["materials"] = json!([
+        {"name": "a", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},
+        {"name": "b", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},
+    ]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let mut lines = d.json["meshes"][0]["primitives"][0].clone();
+    lines["mode"] = json!(1);
+    d.json["meshes"][0]["primitives"].as_array_mut().unwrap().push(lines);
+    let s = d.load().unwrap();
+    let w = &s.report.warnings;
+    let count = |needle: &str| w.iter().filter(|x| x.contains(needle)).count();
+    assert_eq!(count("KHR_materials_clearcoat"), 1, "{w:?}");
+    assert_eq!(count("KHR_draco_mesh_compression"), 1, "{w:?}");
+    assert!(w.iter().any(|x| x.contains("KHR_draco_mesh_compression") && x.contains("required")), "{w:?}");
+    assert_eq!(count("VKVCM_spheres"), 0, "{w:?}");
+    assert_eq!(count("KHR_lights_punctual"), 0, "{w:?}");
+    assert_eq!(count("textures are not supported"), 1, "{w:?}");
+    assert!(w.iter().any(|x| x.contains("textures") && x.contains("2 occurrences")), "{w:?}");
+    assert_eq!(count("LINES"), 1, "{w:?}");
+    assert_eq!(s.triangles.len(), 1, "the LINES primitive is skipped");
+}
+
+#[test]
+fn missing_camera_is_an_error() {
+    let mut d = Doc::triangle();
+    d.json["scenes"][0]["nodes"] = json!([0]);
+    let e = err_of(d.load());
+    assert!(e.contains("no perspective camera") && e.contains("scene.gltf"), "{e}");
+
+    // An orthographic camera does not count.
+    let mut d = Doc::triangle();
+    d.json["cameras"][0] =
+        json!({"type": "orthographic", "orthographic": {"xmag": 1.0, "ymag": 1.0, "znear": 0.1, "zfar": 10.0}});
+    assert!(err_of(d.load()).contains("no perspective camera"));
+}
+
+#[test]
+fn camera_selected_by_name() {
+    let mut d = Doc::triangle();
+    d.json["cameras"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"name": "wide", "type": "perspective", "perspective": {"yfov": 1.2, "znear": 0.01}}));
+    d.json["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"name": "second", "camera": 1, "translation": [0.0, 7.0, 0.0]}));
+    d.json["scenes"][0]["nodes"] = json!([0, 1, 2]);
+    let dir = tempfile::tempdir().unwrap();
+    let path = d.write(dir.path());
+    let first = scene::load(&path).unwrap();
+    assert_eq!(first.camera.position, Vec3::new(0.0, 0.0, 5.0));
+    for name in ["second", "wide"] {
+        let s = scene::load_with(&path, &LoadOptions { camera: Some(name.into()) }).unwrap();
+        assert_eq!(s.camera.position, Vec3::new(0.0, 7.0, 0.0));
+        assert_eq!(s.camera.yfov, 1.2);
+    }
+    let e = err_of(scene::load_with(&path, &LoadOptions { camera: Some("nope".into()) }));
+    assert!(e.contains("nope") && e.contains("cam") && e.contains("second"), "{e}");
+}
+
+#[test]
+fn material_mapping_and_emission() {
+    let tri = |x: f32| [[x, 0.0, 0.0], [x + 1.0, 0.0, 0.0], [x, 1.0, 0.0]];
+    let pos: Vec<[f32; 3]> = (0..5).flat_map(|k| tri(k as f32 * 2.0)).collect();
+    let mut d = Doc::new(&pos, None, None);
+    // Split the 5 triangles into 5 primitives with materials 0..4, plus one without.
+    let prim0 = d.json["meshes"][0]["primitives"][0].clone();
+    let mut prims = Vec::new();
+    for k in 0..6 {
+        let mut acc = d.json["accessors"][0].clone();
+        acc["byteOffset"] = json!((k % 5) * 36);
+        acc["count"] = json!(3);
+        d.json["accessors"].as_array_mut().unwrap().push(acc);
+        let mut p = prim0.clone();
+        p["attributes"]["POSITION"] = json!(d.json["accessors"].as_array().unwrap().len() - 1);
+        if k < 5 {
+            p["material"] = json!(k);
+        }
+        prims.push(p);
+    }
+    d.json["meshes"][0]["primitives"] = json!(prims);
+    d.json["materials"] = json!([
+        {"name": "plastic", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0}},
+        {"name": "mirror", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 0.5, 0.25, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.0}},
+        {"name": "glass", "pbrMetallicRoughness": {"roughnessFactor": 0.0, "metallicFactor": 0.0},
+         "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}, "KHR_materials_ior": {"ior": 1.33}}},
+        {"name": "lamp", "emissiveFactor": [1.0, 0.5, 0.0], "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}}},
+        {"name": "exact", "pbrMetallicRoughness": {"metallicFactor": 1.0},
+         "extensions": {"VKVCM_materials_phong": {"diffuse": [0.1, 0.2, 0.3], "phong": [0.4, 0.4, 0.4], "exponent": 90, "mirror": [0, 0, 0], "ior": -1}}},
+    ]);
+    let s = d.load().unwrap();
+    assert_eq!(s.triangles.len(), 6);
+    let m = &s.materials;
+    assert_eq!(m.len(), 6, "5 + the glTF default material");
+    assert_eq!(m[0].name, "plastic");
+    assert_close(m[0].diffuse, Vec3::splat(0.48));
+    assert_close(m[0].phong, Vec3::splat(0.04));
+    assert_eq!(m[0].phong_exponent, 1.0);
+    assert_eq!(m[0].mirror, Vec3::ZERO);
+    assert_eq!(m[1].mirror, Vec3::new(1.0, 0.5, 0.25));
+    assert_eq!(m[1].diffuse + m[1].phong, Vec3::ZERO);
+    assert_eq!(m[1].ior, -1.0);
+    assert_eq!((m[2].mirror, m[2].ior, m[2].diffuse), (Vec3::ONE, 1.33, Vec3::ZERO));
+    assert_eq!(m[3].emission, Vec3::new(4.0, 2.0, 0.0));
+    assert_eq!(m[4].diffuse, Vec3::new(0.1, 0.2, 0.3));
+    assert_eq!(m[4].phong, Vec3::splat(0.4));
+    assert_eq!(m[4].phong_exponent, 90.0);
+    assert_eq!(m[4].mirror, Vec3::ZERO);
+    assert_eq!(s.triangles[5].material, 5);
+    assert_eq!(m[5].name, "gltf-default");
+    assert_eq!(s.lights, vec![Light::Area { triangle: 3, radiance: Vec3::new(4.0, 2.0, 0.0) }]);
+}
+
+#[test]
+fn punctual_lights() {
+    let mut d = Doc::triangle();
+    d.json["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+    d.json["extensions"] = json!({"KHR_lights_punctual": {"lights": [
+        {"type": "point", "color": [1.0, 0.5, 0.25], "intensity": 8.0},
+        {"type": "spot", "intensity": 2.0, "spot": {"innerConeAngle": 0.25, "outerConeAngle": 0.5}},
+        {"type": "directional", "color": [0.5, 1.0, 1.0], "intensity": 3.0},
+    ]}});
+    let nodes = d.json["nodes"].as_array_mut().unwrap();
+    nodes.push(json!({"translation": [1.0, 2.0, 3.0], "extensions": {"KHR_lights_punctual": {"light": 0}}}));
+    // Rotated -90 deg about X: local -Z points to -Y.
+    nodes.push(json!({"translation": [0.0, 4.0, 0.0], "rotation": [-S, 0.0, 0.0, S], "extensions": {"KHR_lights_punctual": {"light": 1}}}));
+    // Rotated 90 deg about Y: local -Z points to -X.
+    nodes.push(json!({"rotation": [0.0, S, 0.0, S], "extensions": {"KHR_lights_punctual": {"light": 2}}}));
+    d.json["scenes"][0]["nodes"] = json!([0, 1, 2, 3, 4]);
+    let s = d.load().unwrap();
+    assert_eq!(s.lights.len(), 3);
+    assert_eq!(s.lights[0], Light::Point { position: Vec3::new(1.0, 2.0, 3.0), intensity: Vec3::new(8.0, 4.0, 2.0) });
+    let Light::Spot { position, direction, intensity, cos_inner, cos_outer } = s.lights[1] else { panic!() };
+    assert_close(position, Vec3::new(0.0, 4.0, 0.0));
+    assert_close(direction, Vec3::NEG_Y);
+    assert_eq!(intensity, Vec3::splat(2.0));
+    assert!((cos_inner - 0.25f32.cos()).abs() < 1e-6 && (cos_outer - 0.5f32.cos()).abs() < 1e-6);
+    let Light::Directional { direction, irradiance } = s.lights[2] else { panic!() };
+    assert_close(direction, Vec3::NEG_X);
+    assert_eq!(irradiance, Vec3::new(1.5, 3.0, 3.0));
+    assert!(s.report.warnings.is_empty(), "{:?}", s.report.warnings);
+}
+
+#[test]
+fn spheres_extension() {
+    let mut d = Doc::triangle();
+    d.json["materials"] = json!([{"name": "a"}, {"name": "b"}]);
+    d.json["nodes"].as_array_mut().unwrap().push(json!({
+        "translation": [1.0, 2.0, 3.0], "scale": [2.0, 2.0, 2.0],
+        "extensions": {"VKVCM_spheres": {"spheres": [
+            {"center": [1.0, 0.0, 0.0], "radius": 0.5, "material": 1},
+            {"center": [0.0, 0.0, 0.0], "radius": 1.0, "material": 0},
+        ]}}
+    }));
+    d.json["scenes"][0]["nodes"] = json!([0, 1, 2]);
+    let s = d.load().unwrap();
+    assert_eq!(s.spheres.len(), 2);
+    assert_close(s.spheres[0].center, Vec3::new(3.0, 2.0, 3.0));
+    assert_eq!((s.spheres[0].radius, s.spheres[0].material), (1.0, 1));
+    assert_close(s.spheres[1].center, Vec3::new(1.0, 2.0, 3.0));
+    assert_eq!((s.spheres[1].radius, s.spheres[1].material), (2.0, 0));
+    // bounds include the spheres: x from -1 (sphere 1) to 4 (sphere 0)
+    let (lo, hi) = s.bounds();
+    assert_close(lo, Vec3::new(-1.0, 0.0, 0.0));
+    assert_close(hi, Vec3::new(4.0, 4.0, 5.0));
+    let (c, r) = s.bounding_sphere();
+    assert_close(c, (lo + hi) * 0.5);
+    assert!((r - (hi - lo).length() * 0.5).abs() < 1e-6);
+
+    let mut bad = d.json.clone();
+    bad["nodes"][2]["scale"] = json!([1.0, 2.0, 1.0]);
+    let e = err_of(Doc { json: bad, bin: d.bin.clone() }.load());
+    assert!(e.contains("uniform") && e.contains("nodes[2]"), "{e}");
+    let mut bad = d.json.clone();
+    bad["nodes"][2]["extensions"]["VKVCM_spheres"]["spheres"][0]["material"] = json!(5);
+    let e = err_of(Doc { json: bad, bin: d.bin.clone() }.load());
+    assert!(e.contains("material") && e.contains("out of range"), "{e}");
+    let mut bad = d.json.clone();
+    bad["nodes"][2]["extensions"]["VKVCM_spheres"]["spheres"][1]["radius"] = json!(-1.0);
+    assert!(err_of(Doc { json: bad, bin: d.bin.clone() }.load()).contains("radius"));
+}
+
+#[test]
+fn background_extension() {
+    let mut d = Doc::triangle();
+    d.json["extensionsUsed"] = json!(["VKVCM_background"]);
+    d.json["extensions"] = json!({"VKVCM_background": {"radiance": [0.25, 0.5, 1.0]}});
+    let s = d.load().unwrap();
+    assert_eq!(s.lights, vec![Light::Background { radiance: Vec3::new(0.25, 0.5, 1.0) }]);
+    d.json["extensions"] = json!({"VKVCM_background": {"radiance": [0.25, "x", 1.0]}});
+    assert!(err_of(d.load()).contains("VKVCM_background.radiance[1]"));
+}
+
+#[test]
+fn malformed_files_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("broken.gltf");
+    std::fs::write(&path, b"{ \"asset\": { \"version\": \"2.0\" }, ").unwrap();
+    let e = err_of(scene::load(&path));
+    assert!(e.contains("broken.gltf") && e.contains("JSON"), "{e}");
+    let e = err_of(scene::load(&dir.path().join("absent.gltf")));
+    assert!(e.contains("absent.gltf"), "{e}");
+    // A node hierarchy with a cycle.
+    let mut d = Doc::triangle();
+    d.json["nodes"][0]["children"] = json!([1]);
+    d.json["nodes"][1]["children"] = json!([0]);
+    d.json["scenes"][0]["nodes"] = json!([0]);
+    assert!(err_of(d.load()).contains("not a tree"));
+}
+
+#[test]
+fn missing_position_bounds_are_tolerated_with_a_warning() {
+    let mut d = Doc::triangle();
+    d.json["accessors"][0].as_object_mut().unwrap().remove("min");
+    let s = d.load().unwrap();
+    assert_eq!(s.triangles.len(), 1);
+    assert!(s.report.warnings.iter().any(|w| w.contains("min/max")), "{:?}", s.report.warnings);
+    // Present bounds give no such warning.
+    assert!(!Doc::triangle().load().unwrap().report.warnings.iter().any(|w| w.contains("min/max")));
+}
