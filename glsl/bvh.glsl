@@ -46,11 +46,12 @@ struct Hit {
     uint material;
 };
 
-// 1/d with components below 1e-20 in magnitude clamped to +-1e-20 (no 0 * inf NaNs).
+// 1/d with components below 1e-30 in magnitude clamped to +-1e-30 (no 0 * inf NaNs; the
+// builder pads node boxes so a ray on a box plane and parallel to it still enters).
 vec3 bvh_safe_inv(vec3 d) {
-    vec3 s = vec3(d.x < 0.0 ? -1e-20 : 1e-20, d.y < 0.0 ? -1e-20 : 1e-20,
-                  d.z < 0.0 ? -1e-20 : 1e-20);
-    return vec3(1.0) / mix(d, s, lessThan(abs(d), vec3(1e-20)));
+    vec3 s = vec3(d.x < 0.0 ? -1e-30 : 1e-30, d.y < 0.0 ? -1e-30 : 1e-30,
+                  d.z < 0.0 ? -1e-30 : 1e-30);
+    return vec3(1.0) / mix(d, s, lessThan(abs(d), vec3(1e-30)));
 }
 
 // Slab test: true when [tmin, tmax] overlaps the box; tn = entry distance.

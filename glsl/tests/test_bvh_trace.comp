@@ -1,0 +1,49 @@
+#version 460
+// Test kernel for tests/bvh_gpu.rs: one ray per invocation, closest hit and any hit.
+layout(local_size_x = 64) in;
+
+layout(std430, binding = 0) readonly buffer BvhNodes { vec4 bvh_nodes[]; };
+layout(std430, binding = 1) readonly buffer BvhPrims { vec4 bvh_prims[]; };
+
+struct TestRay {
+    vec4 o;  // w = tmin
+    vec4 d;  // w = tmax
+};
+layout(std430, binding = 2) readonly buffer Rays { TestRay rays[]; };
+
+struct TestHit {
+    float t;
+    uint prim;
+    float u;
+    float v;
+    uint flags;  // bit 0: closest hit found, bit 1: sphere, bit 2: any hit found
+    uint material;
+    uint pad0;
+    uint pad1;
+};
+layout(std430, binding = 3) writeonly buffer Hits { TestHit hits[]; };
+
+layout(push_constant) uniform Push { uint count; } pc;
+
+#include "bvh.glsl"
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.count) {
+        return;
+    }
+    TestRay r = rays[i];
+    Hit h;
+    bool found = trace_closest(r.o.xyz, r.d.xyz, r.o.w, r.d.w, h);
+    bool any_found = trace_any(r.o.xyz, r.d.xyz, r.o.w, r.d.w);
+    TestHit o;
+    o.t = h.t;
+    o.prim = h.prim;
+    o.u = h.u;
+    o.v = h.v;
+    o.flags = (found ? 1u : 0u) | (h.is_sphere ? 2u : 0u) | (any_found ? 4u : 0u);
+    o.material = h.material;
+    o.pad0 = 0u;
+    o.pad1 = 0u;
+    hits[i] = o;
+}

@@ -1,0 +1,35 @@
+//! The traversal benchmark as an ignored test (the same code as `vkvcm bench traverse`):
+//!
+//! ```text
+//! VKVCM_BENCH_SCENES=cornell,spheres,displaced \
+//!     cargo test --release --test bvh_bench -- --ignored --nocapture
+//! ```
+//!
+//! `VKVCM_BENCH_LAYOUT=0|1` picks the node layout, `VKVCM_BENCH_LOCAL_SIZE` the
+//! workgroup size. Validation is off (it would time the layer, not the traversal).
+
+use vkvcm::bvh::bench::{bench_scene, bench_traverse, TraverseBenchOptions};
+use vkvcm::bvh::layout::NodeLayout;
+use vkvcm::gpu::{Gpu, GpuOptions};
+
+#[test]
+#[ignore = "benchmark: run explicitly with --ignored --release"]
+fn bench_traverse_scenes() {
+    let scenes = std::env::var("VKVCM_BENCH_SCENES").unwrap_or_else(|_| "cornell".into());
+    let mut opts = TraverseBenchOptions::default();
+    if let Ok(l) = std::env::var("VKVCM_BENCH_LAYOUT") {
+        opts.build.layout = if l == "1" { NodeLayout::Interleaved } else { NodeLayout::Boxes };
+    }
+    if let Ok(s) = std::env::var("VKVCM_BENCH_LOCAL_SIZE") {
+        opts.local_size = s.parse().expect("VKVCM_BENCH_LOCAL_SIZE");
+    }
+    let gpu = Gpu::new(&GpuOptions::from_env(std::env::var("VKVCM_TEST_DEVICE").ok())).unwrap();
+    for name in scenes.split(',') {
+        let scene = bench_scene(name).unwrap_or_else(|| panic!("unknown scene {name}"));
+        let report = bench_traverse(&gpu, &scene, &opts).unwrap();
+        println!("{report}");
+        for s in &report.sets {
+            assert_eq!(s.mismatches, 0, "GPU and CPU traversal disagree on {name}");
+        }
+    }
+}

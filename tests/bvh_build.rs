@@ -1,0 +1,266 @@
+//! CPU tests of the BVH build and of the CPU traversal (the GPU traversal's reference).
+
+mod bvh_common;
+
+use bvh_common::*;
+use glam::Vec3;
+use rand::Rng;
+use vkvcm::bvh::build::tree_stats;
+use vkvcm::bvh::layout::{decode_ref, NodeLayout};
+use vkvcm::bvh::{
+    brute_force_any, brute_force_closest, build, build_with, Aabb, BuildOptions, Bvh, Ray, SplitMethod, MAX_DEPTH,
+    MAX_LEAF_PRIMS,
+};
+use vkvcm::scene::{Sphere, Triangle};
+
+fn prim_box(bvh: &Bvh, slot: usize) -> Aabb {
+    let p = &bvh.prims[slot];
+    if p.is_sphere() {
+        let c = Vec3::new(p.a[0], p.a[1], p.a[2]);
+        Aabb { min: c - p.b[0], max: c + p.b[0] }
+    } else {
+        let v = p.vertices();
+        Aabb { min: v[0].min(v[1]).min(v[2]), max: v[0].max(v[1]).max(v[2]) }
+    }
+}
+
+/// Structural invariants: every prim in exactly one leaf, boxes contain their contents,
+/// leaf sizes and depth bounded, node 0 is the root, every node reached once.
+fn check_structure(bvh: &Bvh) {
+    let l = bvh.layout;
+    let mut prim_seen = vec![0u32; bvh.prims.len()];
+    let mut node_seen = vec![0u32; bvh.nodes.len()];
+    let mut stack = vec![(0u32, 1u32)];
+    let mut max_level = 0;
+    while let Some((ni, level)) = stack.pop() {
+        assert!(level <= MAX_DEPTH);
+        max_level = max_level.max(level);
+        node_seen[ni as usize] += 1;
+        let n = &bvh.nodes[ni as usize];
+        for i in 0..2 {
+            let b = n.bounds(l, i);
+            match decode_ref(n.child(l, i)) {
+                Ok(c) => {
+                    let cn = &bvh.nodes[c as usize];
+                    for j in 0..2 {
+                        assert!(b.contains(&cn.bounds(l, j)), "child box escapes parent");
+                    }
+                    stack.push((c, level + 1));
+                }
+                Err((first, count)) => {
+                    assert!(count as usize <= MAX_LEAF_PRIMS);
+                    for s in first..first + count {
+                        prim_seen[s as usize] += 1;
+                        assert!(b.contains(&prim_box(bvh, s as usize)), "prim escapes leaf box");
+                    }
+                }
+            }
+        }
+    }
+    assert!(prim_seen.iter().all(|&c| c == 1), "a prim is not in exactly one leaf");
+    assert!(node_seen.iter().all(|&c| c == 1), "a node is not reached exactly once");
+    assert_eq!(max_level, bvh.stats.max_depth);
+}
+
+/// Each original triangle and sphere appears exactly once among the prims.
+fn check_ids(bvh: &Bvh, tris: &[Triangle], spheres: &[Sphere], skipped: usize) {
+    let mut t = vec![0u32; tris.len()];
+    let mut s = vec![0u32; spheres.len()];
+    for p in &bvh.prims {
+        if p.is_sphere() {
+            s[p.id() as usize] += 1;
+            assert_eq!(p.material(), spheres[p.id() as usize].material);
+        } else {
+            t[p.id() as usize] += 1;
+            assert_eq!(p.vertices(), tris[p.id() as usize].p);
+            assert_eq!(p.material(), tris[p.id() as usize].material);
+        }
+    }
+    let missing = t.iter().chain(&s).filter(|&&c| c == 0).count();
+    assert!(t.iter().chain(&s).all(|&c| c <= 1));
+    assert_eq!(missing, skipped);
+    assert_eq!(bvh.stats.skipped_non_finite, skipped);
+}
+
+#[test]
+fn structure_of_random_scene() {
+    let s = test_scene(1, 20_000, 500);
+    for layout in [NodeLayout::Boxes, NodeLayout::Interleaved] {
+        let opts = BuildOptions { layout, ..Default::default() };
+        let bvh = build_with(&s.triangles, &s.spheres, &opts);
+        check_structure(&bvh);
+        check_ids(&bvh, &s.triangles, &s.spheres, 0);
+    }
+}
+
+#[test]
+fn tiny_scenes() {
+    let mut r = rng(2);
+    for nt in 0..7 {
+        for ns in 0..3 {
+            let tris = triangle_soup(&mut r, nt);
+            let spheres = random_spheres(&mut r, ns);
+            let bvh = build(&tris, &spheres);
+            check_structure(&bvh);
+            check_ids(&bvh, &tris, &spheres, 0);
+            let gpu = bvh.to_gpu();
+            for _ in 0..200 {
+                let ray = Ray { o: rand_vec(&mut r, -2.0, 2.0), d: rand_dir(&mut r) };
+                let want = brute_force_closest(&tris, &spheres, &ray, 0.0, f32::INFINITY);
+                let got = gpu.closest_hit(&ray, 0.0, f32::INFINITY);
+                assert_eq!(got.is_some(), want.is_some());
+                if let (Some(g), Some(w)) = (got, want) {
+                    assert_eq!((g.prim, g.is_sphere, g.t), (w.prim, w.is_sphere, w.t));
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn non_finite_prims_are_skipped() {
+    let mut r = rng(3);
+    let mut tris = triangle_soup(&mut r, 3000);
+    let mut spheres = random_spheres(&mut r, 100);
+    let nan = f32::NAN;
+    for k in (0..3000).step_by(97) {
+        tris[k].p[k % 3].y = if k % 2 == 0 { nan } else { f32::INFINITY };
+    }
+    spheres[5].radius = nan;
+    spheres[17].center.x = f32::NEG_INFINITY;
+    // Finite, but the centroid sum overflows.
+    tris[1].p = [Vec3::splat(f32::MAX), Vec3::splat(f32::MAX * 0.99), Vec3::new(f32::MAX, f32::MAX * 0.98, f32::MAX)];
+    let skipped = 3000usize.div_ceil(97) + 2 + 1;
+    let bvh = build(&tris, &spheres);
+    check_structure(&bvh);
+    check_ids(&bvh, &tris, &spheres, skipped);
+    assert!(bvh.bounds().min.is_finite() && bvh.bounds().max.is_finite());
+    assert!(bvh.stats.sah_cost.is_finite());
+    let gpu = bvh.to_gpu();
+    let mut finite_tris = tris.clone();
+    finite_tris[1].p[0] = Vec3::NAN; // the brute force skips only non-finite prims
+    for _ in 0..2000 {
+        let ray = Ray { o: rand_vec(&mut r, -2.0, 2.0), d: rand_dir(&mut r) };
+        let want = brute_force_closest(&finite_tris, &spheres, &ray, 0.0, f32::INFINITY);
+        let got = gpu.closest_hit(&ray, 0.0, f32::INFINITY);
+        assert_eq!(got.map(|h| (h.prim, h.is_sphere)), want.map(|h| (h.prim, h.is_sphere)));
+    }
+}
+
+#[test]
+fn coincident_prims_and_depth_bound() {
+    // Many identical triangles (no SAH split possible) and a geometric sequence of
+    // positions (SAH would peel one prim per level): depth must stay within MAX_DEPTH.
+    let t = Triangle { p: [Vec3::ZERO, Vec3::X, Vec3::Y], n: None, material: 0 };
+    let mut tris = vec![t; 5000];
+    for i in 0..20_000 {
+        let x = 1.5f32.powi(i % 200) * 1e-20;
+        let s = x * 0.01;
+        tris.push(Triangle {
+            p: [Vec3::new(x, 0.0, 0.0), Vec3::new(x + s, 0.0, 0.0), Vec3::new(x, s, (i / 200) as f32)],
+            n: None,
+            material: 1,
+        });
+    }
+    let bvh = build(&tris, &[]);
+    check_structure(&bvh);
+    check_ids(&bvh, &tris, &[], 0);
+    assert!(bvh.stats.max_depth <= MAX_DEPTH);
+}
+
+#[test]
+fn sah_beats_median_split() {
+    let mut r = rng(4);
+    // A clustered scene: SAH matters most when density varies.
+    let mut tris = triangle_soup(&mut r, 20_000);
+    for t in tris.iter_mut().take(15_000) {
+        for p in t.p.iter_mut() {
+            *p = *p * 0.1 + Vec3::new(0.7, 0.7, 0.0);
+        }
+    }
+    let spheres = random_spheres(&mut r, 200);
+    let sah = build(&tris, &spheres);
+    let median = build_with(&tris, &spheres, &BuildOptions { method: SplitMethod::Median, ..Default::default() });
+    check_structure(&median);
+    let (_, _, median_cost) = tree_stats(&median, 1.0, 1.0);
+    println!(
+        "SAH cost {:.2} (depth {}), median {:.2} (depth {})",
+        sah.stats.sah_cost, sah.stats.max_depth, median_cost, median.stats.max_depth
+    );
+    assert!(sah.stats.sah_cost < median_cost * 0.95);
+}
+
+#[test]
+fn parallel_build_matches_serial() {
+    let s = test_scene(5, 100_000, 1000);
+    let one = build_with(&s.triangles, &s.spheres, &BuildOptions { threads: 1, ..Default::default() });
+    let four = build_with(&s.triangles, &s.spheres, &BuildOptions { threads: 4, ..Default::default() });
+    check_structure(&four);
+    assert_eq!(one.prims, four.prims);
+    assert_eq!(one.nodes.len(), four.nodes.len());
+    assert!((one.stats.sah_cost - four.stats.sah_cost).abs() < 1e-9 * one.stats.sah_cost);
+}
+
+#[test]
+fn cpu_traversal_matches_brute_force() {
+    let s = test_scene(6, 3000, 300);
+    let bvh = build(&s.triangles, &s.spheres);
+    let gpu = bvh.to_gpu();
+    let rays = test_rays(&s, 7, 3000);
+    let mut errors = Vec::new();
+    let mut hits = 0;
+    for (ray, tmin, tmax) in &rays {
+        let want = brute_force_closest(&s.triangles, &s.spheres, ray, *tmin, *tmax);
+        let got = gpu.closest_hit(ray, *tmin, *tmax);
+        hits += want.is_some() as usize;
+        if let Err(e) = check_hit(&s, "cpu bvh", ray, got, want) {
+            errors.push(e);
+        }
+        let any = gpu.any_hit(ray, *tmin, *tmax);
+        let any_bf = brute_force_any(&s.triangles, &s.spheres, ray, *tmin, *tmax);
+        if any != want.is_some() || any_bf != want.is_some() {
+            errors.push(format!("any-hit disagrees {ray:?}: {any} {any_bf} {want:?}"));
+        }
+    }
+    assert!(errors.is_empty(), "{} of {} rays: {:#?}", errors.len(), rays.len(), &errors[..errors.len().min(10)]);
+    assert!(hits > rays.len() / 3, "too few hits: {hits}");
+}
+
+#[test]
+fn icosphere_is_watertight_on_cpu() {
+    let s = test_scene(8, 0, 0);
+    let bvh = build(&s.triangles, &s.spheres);
+    let mut r = rng(9);
+    let ico = &s.triangles[s.ico.clone()];
+    let mut dirs: Vec<Vec3> = Vec::new();
+    for t in ico {
+        for e in 0..3 {
+            dirs.push(t.p[e] - s.ico_center);
+            dirs.push(0.5 * (t.p[e] + t.p[(e + 1) % 3]) - s.ico_center);
+            let f = r.random_range(0.0f32..1.0);
+            dirs.push(t.p[e].lerp(t.p[(e + 1) % 3], f) - s.ico_center);
+        }
+    }
+    for _ in 0..20_000 {
+        dirs.push(rand_dir(&mut r));
+    }
+    for d in dirs {
+        let ray = Ray { o: s.ico_center, d };
+        let h = bvh.closest_hit(&ray, 0.0, f32::INFINITY);
+        let h = h.unwrap_or_else(|| panic!("ray escaped the icosphere: {ray:?}"));
+        assert!(s.ico.contains(&(h.prim as usize)));
+    }
+}
+
+#[test]
+fn build_one_million_triangles() {
+    let scene = vkvcm::bvh::bench::scene_spheres();
+    assert_eq!(scene.triangles.len(), 1 << 20);
+    let bvh = build(&scene.triangles, &scene.spheres);
+    println!(
+        "1M triangles: {:.2} s, {} nodes, depth {}, SAH {:.1}",
+        bvh.stats.build_seconds, bvh.stats.nodes, bvh.stats.max_depth, bvh.stats.sah_cost
+    );
+    check_structure(&bvh);
+    assert_eq!(bvh.prims.len(), 1 << 20);
+}

@@ -1,0 +1,163 @@
+//! GPU traversal (glsl/bvh.glsl) against the CPU brute force and the CPU traversal, on
+//! lavapipe (or VKVCM_TEST_DEVICE) with validation on.
+
+mod bvh_common;
+mod common;
+
+use std::sync::Arc;
+
+use bvh_common::*;
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use rand::Rng;
+use vkvcm::bvh::layout::NodeLayout;
+use vkvcm::bvh::{brute_force_closest, build, build_with, BuildOptions, GpuBvh, Hit, Ray};
+use vkvcm::gpu::{groups_for, Gpu};
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct TestRay {
+    o: [f32; 4], // w = tmin
+    d: [f32; 4], // w = tmax
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct TestHit {
+    t: f32,
+    prim: u32,
+    u: f32,
+    v: f32,
+    flags: u32,
+    material: u32,
+    pad: [u32; 2],
+}
+
+struct GpuResult {
+    closest: Option<Hit>,
+    any: bool,
+}
+
+/// Runs glsl/tests/test_bvh_trace.comp over `rays`.
+fn trace_on_gpu(gpu: &Arc<Gpu>, bvh: &GpuBvh, rays: &[(Ray, f32, f32)]) -> Vec<GpuResult> {
+    let data: Vec<TestRay> = rays
+        .iter()
+        .map(|(r, tmin, tmax)| TestRay { o: [r.o.x, r.o.y, r.o.z, *tmin], d: [r.d.x, r.d.y, r.d.z, *tmax] })
+        .collect();
+    let nodes = gpu.buffer_from_slice("bvh_nodes", &bvh.nodes).unwrap();
+    let prims = gpu.buffer_from_slice("bvh_prims", &bvh.prims).unwrap();
+    let ray_buf = gpu.buffer_from_slice("rays", &data).unwrap();
+    let out = gpu.buffer_zeroed::<TestHit>("hits", data.len()).unwrap();
+    let defines = bvh.glsl_defines();
+    let defines: Vec<(&str, &str)> = defines.iter().map(|(k, v)| (*k, v.as_str())).collect();
+    let k = gpu.kernel("tests/test_bvh_trace.comp", &defines, &[&nodes, &prims, &ray_buf, &out]).unwrap();
+    let n = data.len() as u32;
+    let mut batch = gpu.batch().unwrap();
+    batch.dispatch(&k, [groups_for(n, 64), 1, 1], bytemuck::bytes_of(&n)).unwrap();
+    batch.submit_wait(None).unwrap();
+    out.read::<TestHit>()
+        .unwrap()
+        .into_iter()
+        .map(|h| GpuResult {
+            closest: (h.flags & 1 != 0).then_some(Hit {
+                t: h.t,
+                prim: h.prim,
+                u: h.u,
+                v: h.v,
+                is_sphere: h.flags & 2 != 0,
+                material: h.material,
+            }),
+            any: h.flags & 4 != 0,
+        })
+        .collect()
+}
+
+fn check_against_brute_force(layout: NodeLayout) {
+    let s = test_scene(11, 4000, 400);
+    let bvh = build_with(&s.triangles, &s.spheres, &BuildOptions { layout, ..Default::default() }).into_gpu();
+    let rays = test_rays(&s, 12, 6000);
+    let results = common::with_gpu(|gpu| trace_on_gpu(gpu, &bvh, &rays));
+    let mut errors = Vec::new();
+    let mut hits = 0;
+    let mut same_as_cpu = 0;
+    for ((ray, tmin, tmax), r) in rays.iter().zip(&results) {
+        let want = brute_force_closest(&s.triangles, &s.spheres, ray, *tmin, *tmax);
+        hits += want.is_some() as usize;
+        if let Err(e) = check_hit(&s, "gpu", ray, r.closest, want) {
+            errors.push(e);
+        }
+        if r.any != r.closest.is_some() {
+            errors.push(format!("any-hit {} but closest {:?} for {ray:?}", r.any, r.closest));
+        }
+        let cpu = bvh.closest_hit(ray, *tmin, *tmax);
+        same_as_cpu += (cpu.map(|h| (h.prim, h.is_sphere)) == r.closest.map(|h| (h.prim, h.is_sphere))) as usize;
+    }
+    println!("{layout:?}: {} rays, {hits} hits, {same_as_cpu} identical to the CPU traversal", rays.len());
+    assert!(errors.is_empty(), "{} of {} rays: {:#?}", errors.len(), rays.len(), &errors[..errors.len().min(10)]);
+    assert!(hits > rays.len() / 5);
+}
+
+#[test]
+fn gpu_matches_brute_force_boxes_layout() {
+    check_against_brute_force(NodeLayout::Boxes);
+}
+
+#[test]
+fn gpu_matches_brute_force_interleaved_layout() {
+    check_against_brute_force(NodeLayout::Interleaved);
+}
+
+#[test]
+fn gpu_icosphere_is_watertight() {
+    let s = test_scene(13, 0, 0);
+    let bvh = build(&s.triangles, &s.spheres).into_gpu();
+    let mut r = rng(14);
+    let mut dirs: Vec<Vec3> = Vec::new();
+    for t in &s.triangles[s.ico.clone()] {
+        for e in 0..3 {
+            let (a, b) = (t.p[e], t.p[(e + 1) % 3]);
+            dirs.push(a - s.ico_center);
+            dirs.push(0.5 * (a + b) - s.ico_center);
+            dirs.push(a.lerp(b, r.random_range(0.0f32..1.0)) - s.ico_center);
+        }
+    }
+    for _ in 0..100_000 {
+        dirs.push(rand_dir(&mut r));
+    }
+    let rays: Vec<(Ray, f32, f32)> = dirs.iter().map(|&d| (Ray { o: s.ico_center, d }, 0.0, f32::INFINITY)).collect();
+    let results = common::with_gpu(|gpu| trace_on_gpu(gpu, &bvh, &rays));
+    let escaped: Vec<_> = rays
+        .iter()
+        .zip(&results)
+        .filter(|(_, r)| !r.closest.is_some_and(|h| s.ico.contains(&(h.prim as usize))) || !r.any)
+        .map(|(ray, _)| ray.0)
+        .collect();
+    assert!(
+        escaped.is_empty(),
+        "{} of {} rays escaped: {:?}",
+        escaped.len(),
+        rays.len(),
+        &escaped[..escaped.len().min(5)]
+    );
+}
+
+#[test]
+fn gpu_matches_cpu_traversal_on_large_scene() {
+    // 200k triangles + 5k spheres: the GPU must agree with the CPU traversal (itself
+    // checked against the brute force) on the primitive hit and t.
+    let s = test_scene(15, 200_000, 5000);
+    let bvh = build(&s.triangles, &s.spheres).into_gpu();
+    let rays = test_rays(&s, 16, 30_000);
+    let results = common::with_gpu(|gpu| trace_on_gpu(gpu, &bvh, &rays));
+    let mut errors = Vec::new();
+    for ((ray, tmin, tmax), r) in rays.iter().zip(&results) {
+        let want = bvh.closest_hit(ray, *tmin, *tmax);
+        if let Err(e) = check_hit(&s, "gpu vs cpu bvh", ray, r.closest, want) {
+            errors.push(e);
+        }
+        if r.any != bvh.any_hit(ray, *tmin, *tmax) {
+            errors.push(format!("any-hit differs for {ray:?}"));
+        }
+    }
+    assert!(errors.is_empty(), "{} of {} rays: {:#?}", errors.len(), rays.len(), &errors[..errors.len().min(10)]);
+}
