@@ -1,0 +1,283 @@
+//! OpenEXR output and input.
+//!
+//! The writer is ours (not the `exr` crate's high-level writer) because the file must be a
+//! pure function of the image and the metadata: the `exr` crate keeps custom attributes in
+//! a `HashMap` whose iteration order changes from process to process, which would reorder
+//! the header. Here the header is laid out by hand (required attributes in alphabetical
+//! order, then the metadata sorted by key), pixels are scan-line blocks in increasing y,
+//! and ZIP blocks are compressed with the `exr` crate's own (deterministic) ZIP encoder.
+//! Reading uses the `exr` crate and accepts any file with R, G and B channels of any
+//! sample type.
+
+use super::atomic::write_atomic;
+use super::Image;
+use anyhow::{anyhow, bail, Result};
+use std::path::Path;
+
+/// Pixel compression of written EXR files. Both are lossless and deterministic.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ExrCompression {
+    /// No compression: largest files, fastest to write.
+    None,
+    /// ZIP (zlib) over blocks of 16 scan lines, OpenEXR's usual default. Blocks that would
+    /// not get smaller are stored raw, as the format allows.
+    #[default]
+    Zip,
+}
+
+impl ExrCompression {
+    fn code(self) -> u8 {
+        match self {
+            ExrCompression::None => 0, // NO_COMPRESSION
+            ExrCompression::Zip => 3,  // ZIP_COMPRESSION (16 lines)
+        }
+    }
+
+    fn lines_per_block(self) -> usize {
+        match self {
+            ExrCompression::None => 1,
+            ExrCompression::Zip => 16,
+        }
+    }
+}
+
+/// Writes `img` as a linear float32 RGB EXR with ZIP compression (see [`write_exr_with`]).
+pub fn write_exr(path: &Path, img: &Image, meta: &[(String, String)]) -> Result<()> {
+    write_exr_with(path, img, meta, ExrCompression::Zip)
+}
+
+/// Writes `img` as a single-part scan-line EXR with float32 channels R, G, B and each
+/// `(key, value)` of `meta` as a header attribute of type `string`.
+///
+/// - Keys are written sorted (the order of `meta` does not matter) and must be unique,
+///   non-empty, at most 255 bytes, without NUL, and not a standard EXR attribute name
+///   (`owner`, `comments`, `channels`, ...); namespace them, e.g. `vkvcm:seed`.
+/// - The bytes depend only on the image, the metadata and the compression: no time stamps,
+///   no random data. The same input always gives the same file.
+/// - The write is atomic: a temporary file in the same directory is filled, synced and
+///   renamed over `path`.
+///
+/// Errors (one line, naming `path`) when the directory does not exist or is not
+/// writable, the image is empty, or the metadata is invalid.
+pub fn write_exr_with(path: &Path, img: &Image, meta: &[(String, String)], compression: ExrCompression) -> Result<()> {
+    let bytes =
+        encode_exr(img, meta, compression).map_err(|e| anyhow!("cannot write EXR {}: {e:#}", path.display()))?;
+    write_atomic(path, "EXR", |w| Ok(w.write_all(&bytes)?))
+}
+
+/// Reads the R, G and B channels (any of half, float or uint samples) of the first layer
+/// that has all three, and every `string` attribute of the file that is not a standard EXR
+/// attribute, sorted by key. Other attribute types are ignored.
+///
+/// Errors name the file: missing file, not an EXR, no layer with R, G and B.
+pub fn read_exr(path: &Path) -> Result<(Image, Vec<(String, String)>)> {
+    use ::exr::prelude::{ReadChannels, ReadLayers};
+    let shown = path.display();
+    let image = ::exr::image::read::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| anyhow!("cannot read EXR {shown}: {e}"))?;
+
+    let mut meta: Vec<(String, String)> = Vec::new();
+    let mut collect =
+        |other: &std::collections::HashMap<::exr::meta::attribute::Text, ::exr::meta::attribute::AttributeValue>| {
+            for (name, value) in other {
+                if let ::exr::meta::attribute::AttributeValue::Text(text) = value {
+                    meta.push((
+                        String::from_utf8_lossy(name.bytes()).into_owned(),
+                        String::from_utf8_lossy(text.bytes()).into_owned(),
+                    ));
+                }
+            }
+        };
+    collect(&image.attributes.other);
+    for layer in &image.layer_data {
+        collect(&layer.attributes.other);
+    }
+    meta.sort();
+    meta.dedup_by(|a, b| a.0 == b.0);
+
+    let mut found = Vec::new();
+    for layer in &image.layer_data {
+        let list = &layer.channel_data.list;
+        let find = |name: &str| list.iter().find(|c| c.name.eq(name));
+        let (Some(r), Some(g), Some(b)) = (find("R"), find("G"), find("B")) else {
+            found.extend(list.iter().map(|c| c.name.to_string()));
+            continue;
+        };
+        let (w, h) = (layer.size.0, layer.size.1);
+        let n = w * h;
+        let planes = [r, g, b].map(|c| c.sample_data.values_as_f32().collect::<Vec<f32>>());
+        if planes.iter().any(|p| p.len() != n) {
+            bail!("cannot read EXR {shown}: subsampled R, G or B channels are not supported");
+        }
+        let data = (0..n).map(|i| [planes[0][i], planes[1][i], planes[2][i]]).collect();
+        let width = u32::try_from(w).map_err(|_| anyhow!("cannot read EXR {shown}: too wide"))?;
+        let height = u32::try_from(h).map_err(|_| anyhow!("cannot read EXR {shown}: too tall"))?;
+        return Ok((Image { width, height, data }, meta));
+    }
+    bail!("cannot read EXR {shown}: no layer has channels R, G and B (channels found: {})", found.join(", "))
+}
+
+/// Encodes `img` and `meta` into the bytes of an EXR file (what [`write_exr_with`] writes).
+pub(crate) fn encode_exr(img: &Image, meta: &[(String, String)], compression: ExrCompression) -> Result<Vec<u8>> {
+    let (w, h) = (img.width as usize, img.height as usize);
+    if w == 0 || h == 0 {
+        bail!("image is empty ({}x{})", img.width, img.height);
+    }
+    if img.width > i32::MAX as u32 || img.height > i32::MAX as u32 {
+        bail!("image is too large for EXR ({}x{})", img.width, img.height);
+    }
+    if img.data.len() != w * h {
+        bail!("image data has {} pixels, expected {}x{}", img.data.len(), img.width, img.height);
+    }
+
+    let mut meta: Vec<&(String, String)> = meta.iter().collect();
+    meta.sort();
+    for (i, (key, value)) in meta.iter().map(|kv| (&kv.0, &kv.1)).enumerate() {
+        if key.is_empty() || key.len() > 255 || key.contains('\0') {
+            bail!("invalid metadata key {key:?}: must be 1 to 255 bytes without NUL");
+        }
+        if ::exr::meta::header::standard_names::ALL.contains(&key.as_bytes()) {
+            bail!("invalid metadata key {key:?}: it is a standard EXR attribute; use a prefix such as \"vkvcm:\"");
+        }
+        if i > 0 && meta[i - 1].0 == *key {
+            bail!("duplicate metadata key {key:?}");
+        }
+        if value.len() > i32::MAX as usize {
+            bail!("metadata value of {key:?} is too long");
+        }
+    }
+    let long_names = meta.iter().any(|kv| kv.0.len() > 31);
+
+    let mut out = Vec::with_capacity(4096);
+    out.extend_from_slice(&20000630i32.to_le_bytes()); // magic number
+    let version: u32 = 2 | if long_names { 0x400 } else { 0 };
+    out.extend_from_slice(&version.to_le_bytes());
+
+    let mut chlist = Vec::new();
+    for name in ["B", "G", "R"] {
+        chlist.extend_from_slice(name.as_bytes());
+        chlist.push(0);
+        chlist.extend_from_slice(&2i32.to_le_bytes()); // pixel type FLOAT
+        chlist.extend_from_slice(&[0, 0, 0, 0]); // pLinear, reserved
+        chlist.extend_from_slice(&1i32.to_le_bytes()); // x sampling
+        chlist.extend_from_slice(&1i32.to_le_bytes()); // y sampling
+    }
+    chlist.push(0);
+    let mut window = Vec::new();
+    for v in [0, 0, img.width as i32 - 1, img.height as i32 - 1] {
+        window.extend_from_slice(&v.to_le_bytes());
+    }
+    let one = 1.0f32.to_le_bytes();
+    let zero2 = [0u8; 8];
+
+    attribute(&mut out, "channels", "chlist", &chlist);
+    attribute(&mut out, "compression", "compression", &[compression.code()]);
+    attribute(&mut out, "dataWindow", "box2i", &window);
+    attribute(&mut out, "displayWindow", "box2i", &window);
+    attribute(&mut out, "lineOrder", "lineOrder", &[0]); // INCREASING_Y
+    attribute(&mut out, "pixelAspectRatio", "float", &one);
+    attribute(&mut out, "screenWindowCenter", "v2f", &zero2);
+    attribute(&mut out, "screenWindowWidth", "float", &one);
+    for (key, value) in meta.iter().map(|kv| (&kv.0, &kv.1)) {
+        attribute(&mut out, key, "string", value.as_bytes());
+    }
+    out.push(0); // end of header
+
+    let lines = compression.lines_per_block();
+    let chunks = h.div_ceil(lines);
+    let table = out.len();
+    out.resize(table + 8 * chunks, 0);
+
+    // Chunk payloads, compressed in parallel (ZIP is the slow part); assembled in order, so
+    // the bytes do not depend on the thread count.
+    let encode_chunk = |chunk: usize, header: Option<&::exr::meta::header::Header>| -> Result<Vec<u8>> {
+        let y0 = chunk * lines;
+        let n = lines.min(h - y0);
+        let mut raw = Vec::with_capacity(w * 12 * n);
+        for y in y0..y0 + n {
+            let row = &img.data[y * w..(y + 1) * w];
+            for c in [2, 1, 0] {
+                for p in row {
+                    raw.extend_from_slice(&p[c].to_le_bytes());
+                }
+            }
+        }
+        match header {
+            None => Ok(raw),
+            Some(header) => {
+                let bounds = ::exr::meta::attribute::IntegerBounds::new((0, y0 as i32), (w, n));
+                ::exr::compression::Compression::ZIP16
+                    .compress_image_section_to_le(header, raw, bounds)
+                    .map_err(|e| anyhow!("ZIP compression failed: {e}"))
+            }
+        }
+    };
+    let zip_header = match compression {
+        ExrCompression::Zip => Some(zip_header(w, h)),
+        ExrCompression::None => None,
+    };
+    let threads = match compression {
+        ExrCompression::None => 1,
+        ExrCompression::Zip => std::thread::available_parallelism().map_or(1, |n| n.get()).min(chunks).min(16),
+    };
+    let payloads: Vec<Vec<u8>> = if threads <= 1 {
+        (0..chunks).map(|c| encode_chunk(c, zip_header.as_ref())).collect::<Result<_>>()?
+    } else {
+        let per = chunks.div_ceil(threads);
+        let parts: Vec<Result<Vec<Vec<u8>>>> = std::thread::scope(|scope| {
+            let handles: Vec<_> = (0..threads)
+                .map(|t| {
+                    let (encode_chunk, header) = (&encode_chunk, zip_header.as_ref());
+                    scope.spawn(move || {
+                        (t * per..((t + 1) * per).min(chunks)).map(|c| encode_chunk(c, header)).collect()
+                    })
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().expect("EXR compression thread panicked")).collect()
+        });
+        let mut all = Vec::with_capacity(chunks);
+        for part in parts {
+            all.extend(part?);
+        }
+        all
+    };
+
+    for (chunk, payload) in payloads.iter().enumerate() {
+        let offset = out.len() as u64;
+        out[table + 8 * chunk..table + 8 * chunk + 8].copy_from_slice(&offset.to_le_bytes());
+        out.extend_from_slice(&((chunk * lines) as i32).to_le_bytes());
+        out.extend_from_slice(&(payload.len() as i32).to_le_bytes());
+        out.extend_from_slice(payload);
+    }
+    Ok(out)
+}
+
+/// Appends one header attribute: name, NUL, type name, NUL, i32 size, value.
+fn attribute(out: &mut Vec<u8>, name: &str, ty: &str, value: &[u8]) {
+    out.extend_from_slice(name.as_bytes());
+    out.push(0);
+    out.extend_from_slice(ty.as_bytes());
+    out.push(0);
+    out.extend_from_slice(&(value.len() as i32).to_le_bytes());
+    out.extend_from_slice(value);
+}
+
+/// The `exr` crate header its ZIP encoder needs: channel list and block size only.
+fn zip_header(w: usize, h: usize) -> ::exr::meta::header::Header {
+    use ::exr::meta::attribute::{ChannelDescription, LineOrder, SampleType, Text};
+    let channels = ["B", "G", "R"]
+        .into_iter()
+        .map(|n| ChannelDescription::named(Text::new_or_panic(n), SampleType::F32))
+        .collect();
+    ::exr::meta::header::Header::new(Text::new_or_panic("rgb"), (w, h), channels).with_encoding(
+        ::exr::compression::Compression::ZIP16,
+        ::exr::meta::BlockDescription::ScanLines,
+        LineOrder::Increasing,
+    )
+}
