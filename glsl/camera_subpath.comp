@@ -1,22 +1,39 @@
 #version 460
 // Stage 3 (../shared/DESIGN.md): one invocation per pixel sample. Traces a camera
 // subpath; at each vertex adds emitter hits, next-event estimation and connections to
-// the vertices of light subpath p = this pixel (USE_VC), each weighted by the recursive
-// MIS of ../shared/SCENES.md 4.4. Then takes this pixel's splats (light-to-camera
-// connections of stage 1) and adds the sum to the film (stage 4).
+// the vertices of light subpath p = this pixel (USE_VC), and merges with the light
+// vertices within the radius found in the hash grid (USE_VM), each weighted by the
+// recursive MIS of ../shared/SCENES.md 4.4. Then takes this pixel's splats (light-to-
+// camera connections of stage 1) and adds the sum to the film (stage 4).
+// USE_VC=1 USE_VM=0: bpt; 0 1: bpm; 1 1: vcm; PPM=1 (with USE_VM=1, USE_VC=0): merge at
+// the first non-specular vertex only, without MIS.
 #extension GL_GOOGLE_include_directive : require
 
 #ifndef USE_VC
 #define USE_VC 1
+#endif
+#ifndef USE_VM
+#define USE_VM 0
+#endif
+#ifndef PPM
+#define PPM 0
 #endif
 
 layout(local_size_x = 64) in;
 #include "scene.glsl"
 #include "vcm_bindings.glsl"
 
-// Emitter hit by the camera subpath: weight 1 / (1 + w_camera).
+#if USE_VM
+layout(std430, binding = 14) readonly buffer GridStartBuf { uint grid_start[]; };
+layout(std430, binding = 15) readonly buffer GridIndicesBuf { uint grid_indices[]; };
+#include "hash_grid.glsl"
+#endif
+
+// Emitter hit by the camera subpath: weight 1 / (1 + w_camera). Without connections
+// (ppm, bpm) only purely specular camera paths may see emitters, with weight 1.
 float emitter_hit_weight(SubpathState st, float direct_pdf, float emission_pdf, float pick) {
     if (st.len == 1u) return 1.0;
+    if (USE_VC == 0) return st.specular ? 1.0 : 0.0;
     float w_camera = direct_pdf * pick * st.dvcm + emission_pdf * pick * st.dvc;
     return 1.0 / (1.0 + w_camera);
 }
@@ -66,6 +83,48 @@ vec3 connect_vertices(SubpathState st, Surface s, Bsdf b, LightVertex v) {
     if (!visible(s.p, s.ng, v.p, v.n)) return vec3(0.0);
     return (w * g) * fc * fl;
 }
+
+#if USE_VM
+// Merging (vertex merging / photon density estimation) at camera vertex `s` with every
+// light vertex within the radius: sum of w * f_camera * throughput_light; the caller
+// scales by 1 / (pi r^2 N_L). Buckets are visited once each and hold ascending slot
+// indices, so the sum's order, and hence the image, is deterministic.
+vec3 merge(SubpathState st, Surface s, Bsdf b) {
+    float r = push.radius;
+    float r2 = r * r;
+    vec3 origin = params.scene_sphere.xyz - vec3(params.scene_sphere.w);
+    uint buckets[8];
+    uint nb = hash_grid_query_cells(s.p, origin, r, push.light_paths, buckets);
+    vec3 sum = vec3(0.0);
+    uint max_len = max_path_length();
+    uint min_len = min_path_length();
+    for (uint i = 0u; i < nb; ++i) {
+        uint bucket = buckets[i];
+        for (uint j = grid_start[bucket]; j < grid_start[bucket + 1u]; ++j) {
+            uint slot = grid_indices[j];
+            vec3 p = lv_a[2u * slot].xyz;
+            vec3 d = p - s.p;
+            if (dot(d, d) > r2) continue;
+            LightVertex v = lv_load(slot);
+            uint total = v.len + st.len;
+            if (total > max_len || total < min_len) continue;
+            float pf, pr;
+            vec3 f = bsdf_eval(b, v.wo, pf, pr);
+            if (max3(f) <= 0.0) continue;
+            pf *= b.cont_prob;
+            pr *= b.cont_prob;
+            float w = 1.0;
+            if (PPM == 0) {
+                float w_light = v.dvcm * push.mis_vc + v.dvm * pf;
+                float w_camera = st.dvcm * push.mis_vc + st.dvm * pr;
+                w = 1.0 / (w_light + 1.0 + w_camera);
+            }
+            sum += w * f * v.thr;
+        }
+    }
+    return sum;
+}
+#endif
 
 void main() {
     uint pixel = gl_GlobalInvocationID.x;
@@ -120,6 +179,13 @@ void main() {
                 if (total > max_len) break;
                 L += st.thr * v.thr * connect_vertices(st, s, b, v);
             }
+        }
+#endif
+#if USE_VM
+        if (!b.delta) {
+            float norm = 1.0 / (PI * push.radius * push.radius * float(push.light_paths));
+            L += st.thr * merge(st, s, b) * norm;
+            if (PPM != 0) break;
         }
 #endif
         if (!scatter(st, b, s.p, s.ng, rng)) break;

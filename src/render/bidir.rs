@@ -1,7 +1,9 @@
-//! The light-subpath estimators: light tracing (`lt`) and bidirectional path tracing
-//! (`bpt`). Per iteration: glsl/light_subpath.comp (one invocation per light subpath),
-//! then glsl/camera_subpath.comp (one per pixel; it also takes the splats into the film)
-//! or, for `lt`, glsl/accumulate.comp.
+//! The light-subpath estimators: light tracing (`lt`), bidirectional path tracing
+//! (`bpt`), progressive and bidirectional photon mapping (`ppm`, `bpm`) and vertex
+//! connection and merging (`vcm`). Per iteration: glsl/light_subpath.comp (one invocation
+//! per light subpath), the hash-grid build over the light vertices when merging, then
+//! glsl/camera_subpath.comp (one per pixel; it also takes the splats into the film) or,
+//! for `lt`, glsl/accumulate.comp.
 //!
 //! Light vertices use SmallVCM's layout: the camera subpath of pixel p connects to the
 //! vertices of light subpath p, which live in fixed slots (see glsl/vcm.glsl).
@@ -12,6 +14,8 @@ use anyhow::{bail, Result};
 
 use super::film::Film;
 use super::gpu_types::GpuPush;
+use super::hash_grid::HashGrid;
+use super::radius::RadiusSchedule;
 use super::scene_gpu::{define_refs, SceneGpu};
 use crate::gpu::{groups_for, Batch, Buffer, Gpu, Kernel};
 
@@ -20,11 +24,35 @@ use crate::gpu::{groups_for, Batch, Buffer, Gpu, Kernel};
 pub enum BidirMode {
     LightTracing,
     Bpt,
+    Ppm,
+    Bpm,
+    Vcm,
+}
+
+impl BidirMode {
+    /// Vertex connection: next-event estimation, light-vertex connections, and light
+    /// vertices connected to the camera (with MIS).
+    pub fn use_vc(self) -> bool {
+        matches!(self, BidirMode::Bpt | BidirMode::Vcm)
+    }
+
+    /// Vertex merging through the hash grid.
+    pub fn use_vm(self) -> bool {
+        matches!(self, BidirMode::Ppm | BidirMode::Bpm | BidirMode::Vcm)
+    }
+
+    fn stores_vertices(self) -> bool {
+        self != BidirMode::LightTracing
+    }
 }
 
 pub struct Bidir {
+    mode: BidirMode,
     light: Kernel,
     resolve: Kernel,
+    grid: Option<HashGrid>,
+    radius: RadiusSchedule,
+    grid_origin: [f32; 3],
     pixels: u32,
     light_paths: u32,
     // Owned so they outlive the kernels' descriptor sets.
@@ -35,10 +63,17 @@ pub struct Bidir {
 const LV_HALF_BYTES: u64 = 32;
 
 impl Bidir {
-    pub fn new(gpu: &Arc<Gpu>, scene: &SceneGpu, film: &Film, mode: BidirMode, max_path_length: u32) -> Result<Bidir> {
+    pub fn new(
+        gpu: &Arc<Gpu>,
+        scene: &SceneGpu,
+        film: &Film,
+        mode: BidirMode,
+        max_path_length: u32,
+        radius: RadiusSchedule,
+    ) -> Result<Bidir> {
         let pixels = film.width * film.height;
         let light_paths = pixels;
-        let store = mode == BidirMode::Bpt;
+        let store = mode.stores_vertices();
         let slots = max_path_length.saturating_sub(1).max(1) as u64;
         let lv_vertices = if store { light_paths as u64 * slots } else { 1 };
         let max = gpu.limits.max_storage_buffer_range as u64;
@@ -57,26 +92,56 @@ impl Bidir {
             gpu.buffer_zeroed::<[f32; 4]>("light_vertices_b", 2 * lv_vertices as usize)?,
             gpu.buffer_zeroed::<u32>("light_vertex_counts", if store { light_paths as usize } else { 1 })?,
         ];
+        let grid = if mode.use_vm() {
+            Some(HashGrid::new(gpu, &buffers[1], &buffers[3], light_paths, slots as u32, light_paths)?)
+        } else {
+            None
+        };
         let mut bind = scene.bindings(&[&film.accum, &film.stats]);
         bind.extend(buffers.iter());
-        let mut defines = scene.defines.clone();
         let lt = mode == BidirMode::LightTracing;
-        defines.push(("STORE_VERTICES".into(), (store as u32).to_string()));
-        defines.push(("LIGHT_TRACE_ONLY".into(), (lt as u32).to_string()));
-        let light = gpu.kernel("light_subpath.comp", &define_refs(&defines), &bind)?;
+        let flag = |b: bool| (b as u32).to_string();
+        let mut light_defines = scene.defines.clone();
+        light_defines.push(("STORE_VERTICES".into(), flag(store)));
+        light_defines.push(("LIGHT_TRACE_ONLY".into(), flag(lt)));
+        light_defines.push(("CONNECT_CAMERA".into(), flag(lt || mode.use_vc())));
+        let light = gpu.kernel("light_subpath.comp", &define_refs(&light_defines), &bind)?;
         let resolve = if lt {
             gpu.kernel("accumulate.comp", &define_refs(&scene.defines), &bind)?
         } else {
             let mut d = scene.defines.clone();
-            d.push(("USE_VC".into(), "1".into()));
-            gpu.kernel("camera_subpath.comp", &define_refs(&d), &bind)?
+            d.push(("USE_VC".into(), flag(mode.use_vc())));
+            d.push(("USE_VM".into(), flag(mode.use_vm())));
+            d.push(("PPM".into(), flag(mode == BidirMode::Ppm)));
+            let mut cam_bind = bind.clone();
+            if let Some(g) = &grid {
+                cam_bind.push(&g.cell_start);
+                cam_bind.push(&g.cell_indices);
+            }
+            gpu.kernel("camera_subpath.comp", &define_refs(&d), &cam_bind)?
         };
-        Ok(Bidir { light, resolve, pixels, light_paths, _buffers: buffers })
+        let s = scene.params.scene_sphere;
+        let grid_origin = [s[0] - s[3], s[1] - s[3], s[2] - s[3]];
+        Ok(Bidir { mode, light, resolve, grid, radius, grid_origin, pixels, light_paths, _buffers: buffers })
     }
 
     pub fn record(&self, batch: &mut Batch, iteration: u32) -> Result<()> {
-        let mut push = GpuPush { iteration, count: self.light_paths, light_paths: self.light_paths, ..Default::default() };
+        let i = iteration as u64;
+        let (mis_vm, mis_vc) = self.radius.mis_factors(i, self.light_paths, self.mode.use_vc(), self.mode.use_vm());
+        let radius = self.radius.radius(i);
+        let mut push = GpuPush {
+            iteration,
+            count: self.light_paths,
+            mis_vm,
+            mis_vc,
+            radius,
+            light_paths: self.light_paths,
+            ..Default::default()
+        };
         batch.dispatch(&self.light, [groups_for(self.light_paths, 64), 1, 1], bytemuck::bytes_of(&push))?;
+        if let Some(g) = &self.grid {
+            g.record_build(batch, radius, self.grid_origin)?;
+        }
         push.count = self.pixels;
         batch.dispatch(&self.resolve, [groups_for(self.pixels, 64), 1, 1], bytemuck::bytes_of(&push))
     }

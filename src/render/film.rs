@@ -31,7 +31,10 @@ impl Film {
     pub fn mean(&self, iterations: u64) -> Result<Vec<[f32; 3]>> {
         let raw: Vec<[f32; 4]> = self.accum.read()?;
         let k = 1.0 / iterations.max(1) as f64;
-        Ok(raw.chunks_exact(2).map(|p| [(p[0][0] as f64 * k) as f32, (p[0][1] as f64 * k) as f32, (p[0][2] as f64 * k) as f32]).collect())
+        Ok(raw
+            .chunks_exact(2)
+            .map(|p| [(p[0][0] as f64 * k) as f32, (p[0][1] as f64 * k) as f32, (p[0][2] as f64 * k) as f32])
+            .collect())
     }
 
     /// Samples rejected so far because they were NaN, infinite or negative.

@@ -4,7 +4,9 @@
 pub mod bidir;
 pub mod film;
 pub mod gpu_types;
+pub mod hash_grid;
 pub mod pt;
+pub mod radius;
 pub mod scene_gpu;
 
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -29,6 +31,12 @@ pub enum Algorithm {
     Lt,
     /// Bidirectional path tracing (vertex connection), SmallVCM's MIS.
     Bpt,
+    /// Progressive photon mapping: merging at the first non-specular camera vertex.
+    Ppm,
+    /// Bidirectional photon mapping: merging at every camera vertex, with MIS.
+    Bpm,
+    /// Vertex connection and merging: all of the above, with MIS.
+    Vcm,
 }
 
 impl Algorithm {
@@ -38,6 +46,9 @@ impl Algorithm {
             Algorithm::Pt => "pt",
             Algorithm::Lt => "lt",
             Algorithm::Bpt => "bpt",
+            Algorithm::Ppm => "ppm",
+            Algorithm::Bpm => "bpm",
+            Algorithm::Vcm => "vcm",
         }
     }
 }
@@ -57,6 +68,10 @@ pub struct RenderSettings {
     pub budget: Budget,
     /// Path tracing only: `false` disables next-event estimation (BSDF sampling only).
     pub nee: bool,
+    /// Initial merge radius as a fraction of the scene's bounding-sphere radius.
+    pub radius_factor: f32,
+    /// Radius reduction exponent alpha of r_i = r_0 (i+1)^((alpha-1)/2).
+    pub alpha: f32,
 }
 
 impl RenderSettings {
@@ -66,6 +81,8 @@ impl RenderSettings {
             frame: FrameSettings { width, height, seed: 1234, max_path_length: 10, min_path_length: 0 },
             budget,
             nee: true,
+            radius_factor: radius::DEFAULT_RADIUS_FACTOR,
+            alpha: radius::DEFAULT_ALPHA,
         }
     }
 }
@@ -150,9 +167,17 @@ pub fn render(
     let pixels = frame.width * frame.height;
     let est = match settings.algorithm {
         Algorithm::Pt => Estimator::Pt(pt::PathTracer::new(gpu, &scene_gpu, &film, settings.nee)?),
-        Algorithm::Lt | Algorithm::Bpt => {
-            let mode = if settings.algorithm == Algorithm::Lt { bidir::BidirMode::LightTracing } else { bidir::BidirMode::Bpt };
-            Estimator::Bidir(bidir::Bidir::new(gpu, &scene_gpu, &film, mode, frame.max_path_length)?)
+        Algorithm::Lt | Algorithm::Bpt | Algorithm::Ppm | Algorithm::Bpm | Algorithm::Vcm => {
+            let mode = match settings.algorithm {
+                Algorithm::Lt => bidir::BidirMode::LightTracing,
+                Algorithm::Bpt => bidir::BidirMode::Bpt,
+                Algorithm::Ppm => bidir::BidirMode::Ppm,
+                Algorithm::Bpm => bidir::BidirMode::Bpm,
+                _ => bidir::BidirMode::Vcm,
+            };
+            let schedule =
+                radius::RadiusSchedule::new(settings.radius_factor, scene_gpu.params.scene_sphere[3], settings.alpha);
+            Estimator::Bidir(bidir::Bidir::new(gpu, &scene_gpu, &film, mode, frame.max_path_length, schedule)?)
         }
         Algorithm::El => {
             let defines = scene_gpu::define_refs(&scene_gpu.defines);

@@ -62,11 +62,9 @@ pub fn gpu_lights(scene: &Scene) -> Result<(Vec<GpuLight>, u32)> {
                     radiance: v4(radiance, bits(LIGHT_AREA)),
                 }
             }
-            Light::Point { position, intensity } => GpuLight {
-                a: v4(position, 0.0),
-                radiance: v4(intensity, bits(LIGHT_POINT)),
-                ..Default::default()
-            },
+            Light::Point { position, intensity } => {
+                GpuLight { a: v4(position, 0.0), radiance: v4(intensity, bits(LIGHT_POINT)), ..Default::default() }
+            }
             Light::Spot { position, direction, intensity, cos_inner, cos_outer } => GpuLight {
                 a: v4(position, 0.0),
                 b: v4(direction.normalize(), cos_inner),

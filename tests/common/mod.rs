@@ -1,5 +1,7 @@
-//! Shared test helpers: a validated GPU, and the rule that any validation message fails.
+//! Shared test helpers: a validated GPU (any validation message fails), small scenes.
 #![allow(dead_code)]
+
+pub mod scenes;
 
 use std::sync::Arc;
 
@@ -12,17 +14,9 @@ pub fn with_gpu<R>(f: impl FnOnce(&Arc<Gpu>) -> R) -> R {
     assert!(gpu.validation_enabled());
     let messages = gpu.validation_messages();
     let r = f(&gpu);
-    assert_eq!(
-        Arc::strong_count(&gpu),
-        1,
-        "a GPU object outlived the test body"
-    );
+    assert_eq!(Arc::strong_count(&gpu), 1, "a GPU object outlived the test body");
     drop(gpu);
     let list = messages.list();
-    assert!(
-        list.is_empty(),
-        "Vulkan validation messages:\n{}",
-        list.join("\n")
-    );
+    assert!(list.is_empty(), "Vulkan validation messages:\n{}", list.join("\n"));
     r
 }

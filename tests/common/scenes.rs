@@ -1,0 +1,56 @@
+//! Small procedural scenes for analytic render tests.
+#![allow(dead_code)]
+
+use glam::Vec3;
+use vkvcm::scene::{Camera, Light, LoadReport, Material, Scene, Triangle};
+
+/// Axis-aligned box [-h, h]^3 as 12 triangles whose geometric normals point inwards.
+pub fn inward_box(h: f32, material: u32) -> Vec<Triangle> {
+    let c = |x: f32, y: f32, z: f32| Vec3::new(x * h, y * h, z * h);
+    // Each face: four corners counter-clockwise as seen from inside.
+    let faces = [
+        [c(-1., -1., -1.), c(1., -1., -1.), c(1., 1., -1.), c(-1., 1., -1.)], // z = -h, normal +z
+        [c(-1., -1., 1.), c(-1., 1., 1.), c(1., 1., 1.), c(1., -1., 1.)],     // z = +h, normal -z
+        [c(-1., -1., -1.), c(-1., 1., -1.), c(-1., 1., 1.), c(-1., -1., 1.)], // x = -h, normal +x
+        [c(1., -1., -1.), c(1., -1., 1.), c(1., 1., 1.), c(1., 1., -1.)],     // x = +h, normal -x
+        [c(-1., -1., -1.), c(-1., -1., 1.), c(1., -1., 1.), c(1., -1., -1.)], // y = -h, normal +y
+        [c(-1., 1., -1.), c(1., 1., -1.), c(1., 1., 1.), c(-1., 1., 1.)],     // y = +h, normal -y
+    ];
+    let mut out = Vec::new();
+    for f in faces {
+        out.push(Triangle { p: [f[0], f[1], f[2]], n: None, material });
+        out.push(Triangle { p: [f[0], f[2], f[3]], n: None, material });
+    }
+    for t in &out {
+        let n = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]);
+        let centroid = (t.p[0] + t.p[1] + t.p[2]) / 3.0;
+        assert!(n.dot(-centroid) > 0.0, "box triangle does not face inwards");
+    }
+    out
+}
+
+pub fn camera(position: Vec3, forward: Vec3, up: Vec3, yfov_deg: f32) -> Camera {
+    Camera { position, forward: forward.normalize(), up: up.normalize(), yfov: yfov_deg.to_radians() }
+}
+
+pub fn scene(name: &str, triangles: Vec<Triangle>, materials: Vec<Material>, lights: Vec<Light>, cam: Camera) -> Scene {
+    Scene {
+        name: name.into(),
+        triangles,
+        spheres: vec![],
+        materials,
+        lights,
+        camera: cam,
+        report: LoadReport::default(),
+    }
+}
+
+/// Every emissive triangle becomes an area light, as the importer does.
+pub fn area_lights(triangles: &[Triangle], materials: &[Material]) -> Vec<Light> {
+    triangles
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| materials[t.material as usize].emission.max_element() > 0.0)
+        .map(|(i, t)| Light::Area { triangle: i as u32, radiance: materials[t.material as usize].emission })
+        .collect()
+}
