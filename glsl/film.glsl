@@ -1,29 +1,36 @@
-// The film: per pixel a running sum of sample values in float32 with Kahan compensation
-// (Kahan 1965), so that long renders lose no precision, without requiring float64.
+// The film: per pixel a running sum of each iteration's value and a running sum of its
+// square (for per-pixel variance: error estimates and statistical tests), both float32
+// with Kahan compensation (Kahan 1965), so long renders lose no precision without float64.
 // Each pixel has one writer per dispatch, so the result is deterministic.
-// Requires `film[]` (vec4, two entries per pixel: sum, compensation) and `stats[]`
-// (uint: [0] rejected samples) declared by the kernel.
+// Requires `film[]` (vec4, four per pixel: sum, its compensation, sum of squares, its
+// compensation) and `stats[]` (uint: [0] rejected samples, [1] overflowing splats).
 #ifndef FILM_GLSL
 #define FILM_GLSL
 
-// Adds `v`; rejects (and counts) NaN, Inf and negative values instead of adding them.
+// Kahan step: adds `v` to the sum at film[i] with compensation at film[i + 1].
+// `precise` forbids the compiler from reassociating these operations, which would cancel
+// the compensation to zero (seen on lavapipe: 2048 iterations of a constant 0.5294118
+// summed to 0.5294181 without it; tests/render_pt.rs catches this).
+void film_kahan_add(uint i, vec4 v) {
+    vec4 sum = film[i];
+    vec4 c = film[i + 1u];
+    precise vec4 y = v - c;
+    precise vec4 t = sum + y;
+    precise vec4 comp = (t - sum) - y;
+    film[i + 1u] = comp;
+    film[i] = t;
+}
+
+// Adds this iteration's value `v` of `pixel`; rejects (and counts) NaN, Inf and negative
+// values instead of adding them.
 void film_add(uint pixel, vec3 v) {
     if (!finite3(v) || any(lessThan(v, vec3(0.0)))) {
         atomicAdd(stats[0], 1u);
         return;
     }
-    // `precise` forbids the compiler from reassociating these operations, which would
-    // cancel the compensation to zero (seen on lavapipe: 2048 iterations of a constant
-    // 0.5294118 summed to 0.5294181 without it; tests/render_pt.rs catches this).
-    vec4 sum = film[2u * pixel];
-    vec4 c = film[2u * pixel + 1u];
-    precise vec4 y = vec4(v, 0.0) - c;
-    precise vec4 t = sum + y;
-    precise vec4 comp = (t - sum) - y;
-    film[2u * pixel + 1u] = comp;
-    film[2u * pixel] = t;
+    film_kahan_add(4u * pixel, vec4(v, 0.0));
+    film_kahan_add(4u * pixel + 2u, vec4(v * v, 0.0));
 }
-
 
 // ---- Splats (light tracing's camera connections land on any pixel from any invocation):
 // per pixel three uint64 fixed-point sums with SPLAT_SCALE = 2^24 units per 1.0, added by

@@ -1,5 +1,6 @@
-//! The film: per-pixel sums kept on the GPU across iterations (Kahan-compensated
-//! float32, see glsl/film.glsl) and a counter of rejected (NaN/Inf/negative) samples.
+//! The film: per-pixel sums of each iteration's value and of its square, kept on the GPU
+//! across iterations (Kahan-compensated float32, see glsl/film.glsl), and counters of
+//! rejected (NaN/Inf/negative) samples and overflowing splats.
 
 use std::sync::Arc;
 
@@ -7,12 +8,15 @@ use anyhow::Result;
 
 use crate::gpu::{Buffer, Gpu};
 
+/// vec4 entries per pixel in `Film::accum`.
+pub const FILM_VEC4_PER_PIXEL: usize = 4;
+
 pub struct Film {
     pub width: u32,
     pub height: u32,
-    /// Two vec4 per pixel: sum and Kahan compensation.
+    /// Four vec4 per pixel: sum, its Kahan compensation, sum of squares, its compensation.
     pub accum: Buffer,
-    /// `[0]`: rejected samples.
+    /// `[0]`: rejected samples; `[1]`: splats rejected for overflow.
     pub stats: Buffer,
 }
 
@@ -22,23 +26,25 @@ impl Film {
         Ok(Film {
             width,
             height,
-            accum: gpu.buffer_zeroed::<[f32; 4]>("film", 2 * n)?,
+            accum: gpu.buffer_zeroed::<[f32; 4]>("film", FILM_VEC4_PER_PIXEL * n)?,
             stats: gpu.buffer_zeroed::<u32>("film_stats", 4)?,
         })
     }
 
-    /// The mean image after `iterations` iterations (linear RGB, row 0 at the top).
-    pub fn mean(&self, iterations: u64) -> Result<Vec<[f32; 3]>> {
+    /// Per-pixel sums of the iterations' values and of their squares (linear RGB, row 0
+    /// at the top).
+    pub fn sums(&self) -> Result<(Vec<[f64; 3]>, Vec<[f64; 3]>)> {
         let raw: Vec<[f32; 4]> = self.accum.read()?;
-        let k = 1.0 / iterations.max(1) as f64;
-        Ok(raw
-            .chunks_exact(2)
-            .map(|p| [(p[0][0] as f64 * k) as f32, (p[0][1] as f64 * k) as f32, (p[0][2] as f64 * k) as f32])
-            .collect())
+        let rgb = |v: [f32; 4]| [v[0] as f64, v[1] as f64, v[2] as f64];
+        let sum = raw.chunks_exact(FILM_VEC4_PER_PIXEL).map(|p| rgb(p[0])).collect();
+        let sum_sq = raw.chunks_exact(FILM_VEC4_PER_PIXEL).map(|p| rgb(p[2])).collect();
+        Ok((sum, sum_sq))
     }
 
-    /// Samples rejected so far because they were NaN, infinite or negative.
-    pub fn rejected(&self) -> Result<u64> {
-        Ok(self.stats.read::<u32>()?[0] as u64)
+    /// Samples rejected so far because they were NaN, infinite or negative, and splats
+    /// rejected because they could overflow the fixed-point sum.
+    pub fn rejected(&self) -> Result<(u64, u64)> {
+        let s = self.stats.read::<u32>()?;
+        Ok((s[0] as u64, s[1] as u64))
     }
 }

@@ -102,9 +102,16 @@ pub struct RenderOutput {
     pub height: u32,
     /// Mean linear RGB per pixel, row 0 at the top.
     pub pixels: Vec<[f32; 3]>,
+    /// Per-pixel sums of the iterations' values and of their squares: the mean is
+    /// `sum / iterations`, the variance of one iteration's value follows from both.
+    pub sum: Vec<[f64; 3]>,
+    pub sum_sq: Vec<[f64; 3]>,
     pub iterations: u64,
     pub seconds: f64,
+    /// Samples that were NaN, infinite or negative (rejected, never added).
     pub rejected_samples: u64,
+    /// Light-tracing splats rejected because they could overflow the fixed-point sum.
+    pub overflow_splats: u64,
     pub profile: Profile,
     /// True when stopped early by the cancel flag.
     pub interrupted: bool,
@@ -112,7 +119,7 @@ pub struct RenderOutput {
 
 enum Estimator {
     Pt(pt::PathTracer),
-    Bidir(bidir::Bidir),
+    Bidir(Box<bidir::Bidir>),
     El(Kernel, u32),
 }
 
@@ -135,7 +142,7 @@ fn check_frame(gpu: &Gpu, s: &RenderSettings) -> Result<()> {
     if w == 0 || h == 0 {
         bail!("image size {w}x{h}: width and height must be at least 1");
     }
-    let film_bytes = w * h * 32; // two vec4 per pixel
+    let film_bytes = w * h * 16 * film::FILM_VEC4_PER_PIXEL as u64;
     let max = gpu.limits.max_storage_buffer_range as u64;
     if film_bytes > max {
         bail!(
@@ -177,7 +184,7 @@ pub fn render(
             };
             let schedule =
                 radius::RadiusSchedule::new(settings.radius_factor, scene_gpu.params.scene_sphere[3], settings.alpha);
-            Estimator::Bidir(bidir::Bidir::new(gpu, &scene_gpu, &film, mode, frame.max_path_length, schedule)?)
+            Estimator::Bidir(Box::new(bidir::Bidir::new(gpu, &scene_gpu, &film, mode, frame.max_path_length, schedule)?))
         }
         Algorithm::El => {
             let defines = scene_gpu::define_refs(&scene_gpu.defines);
@@ -233,13 +240,20 @@ pub fn render(
         progress(&Progress { iterations: done, seconds, fraction });
     }
     let seconds = start.elapsed().as_secs_f64();
+    let (sum, sum_sq) = film.sums()?;
+    let k = 1.0 / done.max(1) as f64;
+    let pixels = sum.iter().map(|p| p.map(|v| (v * k) as f32)).collect();
+    let (rejected_samples, overflow_splats) = film.rejected()?;
     Ok(RenderOutput {
         width: frame.width,
         height: frame.height,
-        pixels: film.mean(done)?,
+        pixels,
+        sum,
+        sum_sq,
         iterations: done,
         seconds,
-        rejected_samples: film.rejected()?,
+        rejected_samples,
+        overflow_splats,
         profile,
         interrupted,
     })

@@ -20,3 +20,19 @@ pub fn with_gpu<R>(f: impl FnOnce(&Arc<Gpu>) -> R) -> R {
     assert!(list.is_empty(), "Vulkan validation messages:\n{}", list.join("\n"));
     r
 }
+
+/// Per-pixel statistics of one render, from its per-iteration sums (K = iterations).
+/// Pixels where `mask` is false are zeroed (equal means, zero variance: they pass).
+pub fn render_stats(out: &vkvcm::render::RenderOutput, mask: Option<&[bool]>) -> vkvcm::image::stats::PixelStats {
+    let (mut sum, mut sum_sq) = (out.sum.clone(), out.sum_sq.clone());
+    if let Some(m) = mask {
+        for i in 0..sum.len() {
+            if !m[i] {
+                sum[i] = [0.0; 3];
+                sum_sq[i] = [0.0; 3];
+            }
+        }
+    }
+    vkvcm::image::stats::PixelStats::from_sums(out.width, out.height, out.iterations as usize, &sum, &sum_sq)
+        .expect("render statistics")
+}
