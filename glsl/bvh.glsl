@@ -1,41 +1,83 @@
 // BVH traversal: closest hit and any hit over the BVH built by src/bvh (binned SAH, BVH2
 // nodes holding both children's boxes as in Aila & Laine, "Understanding the Efficiency
-// of Ray Traversal on GPUs", HPG 2009). Mirrored on the CPU by src/bvh/traverse.rs.
+// of Ray Traversal on GPUs", HPG 2009, quantised to 8 bits). Mirrored on the CPU by
+// src/bvh/traverse.rs; layout in src/bvh/layout.rs; measurements in docs/bvh.md.
 //
-// The including kernel declares the two buffers, as vec4 arrays with these names, before
-// `#include "bvh.glsl"` (bindings and set are the kernel's choice):
+// The including kernel provides the two buffers in one of two ways, before
+// `#include "bvh.glsl"`:
 //
-//   layout(std430, binding = 0) readonly buffer BvhNodes { vec4 bvh_nodes[]; };
-//   layout(std430, binding = 1) readonly buffer BvhPrims { vec4 bvh_prims[]; };
+// 1. (fast) define the bindings and let this file declare the buffers, as arrays of
+//    u64vec2 (64-bit loads: on lavapipe a 64-bit gather moves twice the data of a 32-bit
+//    one per instruction; the device must have shaderInt64, which vkvcm requires):
 //
-// and compiles with the defines GpuBvh::glsl_defines() returns (BVH_NODE_LAYOUT; the
-// default below matches NodeLayout::DEFAULT).
+//      #define BVH_NODES_BINDING 1
+//      #define BVH_PRIMS_BINDING 2
+//      // optional: #define BVH_SET 0
 //
-// Node i = bvh_nodes[4i .. 4i+3] (64 bytes). Child references are uints stored bit-cast:
+// 2. (compatible) declare them itself as vec4 arrays with these names:
+//
+//      layout(std430, binding = 1) readonly buffer BvhNodes { vec4 bvh_nodes[]; };
+//      layout(std430, binding = 2) readonly buffer BvhPrims { vec4 bvh_prims[]; };
+//
+// Optional: `#define BVH_NO_SPHERES` when the scene has no spheres (GpuBvh::glsl_defines
+// says so): the sphere test is compiled out.
+//
+// Provides: struct Hit, trace_closest(o, d, tmin, tmax, out Hit), trace_any(o, d, tmin,
+// tmax), and the ray/primitive tests of intersect.glsl.
+//
+// Node i = elements 2i, 2i+1 (32 bytes): (grid.x, grid.y, grid.z, ref0) (q0, q1, q2,
+// ref1). Per axis a grid word holds an origin (the float with its low 8 bits cleared) and
+// a power-of-two step (biased exponent in the low 8 bits); q0..q2 hold the children's box
+// coordinates as bytes: (c0.lo.xyz, c1.lo.x) (c0.hi.xyz, c1.hi.x) (c1.lo.yz, c1.hi.yz),
+// each decoding to origin + q * step (the builder rounds them outwards). Child refs:
 // bit 31 clear = internal node index; bit 31 set = leaf (first prim << 3 | count).
-//   BVH_NODE_LAYOUT 0: (c0.min, ref0) (c0.max, ref1) (c1.min, 0) (c1.max, 0)
-//   BVH_NODE_LAYOUT 1: (c0.lo.x, c0.hi.x, c0.lo.y, c0.hi.y) (c1.lo.x, c1.hi.x, c1.lo.y,
-//                      c1.hi.y) (c0.lo.z, c0.hi.z, c1.lo.z, c1.hi.z) (ref0, ref1, 0, 0)
-// Prim i = bvh_prims[3i .. 3i+2] (48 bytes), in leaf order:
+// Prim i = elements 3i .. 3i+2 (48 bytes), in leaf order:
 //   triangle: (v0, id) (v1, material) (v2, 0)
 //   sphere:   (center, id | BVH_SPHERE_FLAG) (radius, 0, 0, material) (0)
 // id = original index in the scene's triangle list, or sphere list for spheres.
 //
 // Stack: BVH_STACK_SIZE entries; the traversal pushes at most one per internal level and
 // the builder guarantees at most MAX_DEPTH = 32 levels (src/bvh/layout.rs).
-// Ray/box test: Ize, "Robust BVH Ray Traversal", JCGT 2013 (exit distance widened).
+// Ray/box test: Ize, "Robust BVH Ray Traversal", JCGT 2013 (exit distance widened), on
+// boxes the builder padded and quantised outwards.
 #ifndef VKVCM_BVH_GLSL
 #define VKVCM_BVH_GLSL
 
 #include "intersect.glsl"
 
-#ifndef BVH_NODE_LAYOUT
-#define BVH_NODE_LAYOUT 0
-#endif
 #define BVH_STACK_SIZE 32
 #define BVH_LEAF_FLAG 0x80000000u
 #define BVH_SPHERE_FLAG 0x80000000u
+#define BVH_DONE 0xffffffffu
 #define BVH_ROBUST_SCALE 1.000002
+
+#ifdef BVH_NODES_BINDING
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#ifndef BVH_SET
+#define BVH_SET 0
+#endif
+layout(std430, set = BVH_SET, binding = BVH_NODES_BINDING) readonly buffer BvhNodes {
+    u64vec2 bvh_nodes[];
+};
+layout(std430, set = BVH_SET, binding = BVH_PRIMS_BINDING) readonly buffer BvhPrims {
+    u64vec2 bvh_prims[];
+};
+uvec4 bvh_node_elem(uint i) {
+    u64vec2 v = bvh_nodes[i];
+    return uvec4(unpackUint2x32(v.x), unpackUint2x32(v.y));
+}
+uvec4 bvh_prim_elem(uint i) {
+    u64vec2 v = bvh_prims[i];
+    return uvec4(unpackUint2x32(v.x), unpackUint2x32(v.y));
+}
+#else
+uvec4 bvh_node_elem(uint i) {
+    return floatBitsToUint(bvh_nodes[i]);
+}
+uvec4 bvh_prim_elem(uint i) {
+    return floatBitsToUint(bvh_prims[i]);
+}
+#endif
 
 struct Hit {
     float t;          // distance in units of |d|
@@ -66,43 +108,57 @@ bool bvh_ray_box(vec3 lo, vec3 hi, vec3 o, vec3 inv_d, float tmin, float tmax,
     return tn <= tf * BVH_ROBUST_SCALE;
 }
 
+// Decodes node n: both children's boxes and references.
 void bvh_load_node(uint n, out vec3 lo0, out vec3 hi0, out vec3 lo1, out vec3 hi1,
                    out uint c0, out uint c1) {
-    vec4 a = bvh_nodes[4u * n];
-    vec4 b = bvh_nodes[4u * n + 1u];
-    vec4 c = bvh_nodes[4u * n + 2u];
-    vec4 d = bvh_nodes[4u * n + 3u];
-#if BVH_NODE_LAYOUT == 0
-    lo0 = a.xyz;
-    hi0 = b.xyz;
-    lo1 = c.xyz;
-    hi1 = d.xyz;
-    c0 = floatBitsToUint(a.w);
-    c1 = floatBitsToUint(b.w);
-#else
-    lo0 = vec3(a.x, a.z, c.x);
-    hi0 = vec3(a.y, a.w, c.y);
-    lo1 = vec3(b.x, b.z, c.z);
-    hi1 = vec3(b.y, b.w, c.w);
-    c0 = floatBitsToUint(d.x);
-    c1 = floatBitsToUint(d.y);
-#endif
+    uvec4 a = bvh_node_elem(2u * n);
+    uvec4 b = bvh_node_elem(2u * n + 1u);
+    vec3 o = uintBitsToFloat(a.xyz & 0xffffff00u);
+    vec3 s = uintBitsToFloat((a.xyz & 0xffu) << 23);
+    const uvec4 shifts = uvec4(0u, 8u, 16u, 24u);
+    vec4 q0 = vec4(ivec4((uvec4(b.x) >> shifts) & 0xffu));
+    vec4 q1 = vec4(ivec4((uvec4(b.y) >> shifts) & 0xffu));
+    vec4 q2 = vec4(ivec4((uvec4(b.z) >> shifts) & 0xffu));
+    // q * s is exact (8-bit integer times a power of two): one rounding, as on the CPU.
+    lo0 = o + q0.xyz * s;
+    hi0 = o + q1.xyz * s;
+    lo1 = o + vec3(q0.w, q2.xy) * s;
+    hi1 = o + vec3(q1.w, q2.zw) * s;
+    c0 = a.w;
+    c1 = b.w;
 }
 
+// Pops the next entry whose entry distance is not beyond tmax (or BVH_DONE).
+#define BVH_POP()                                \
+    {                                            \
+        cur = BVH_DONE;                          \
+        while (sp > 0u) {                        \
+            sp--;                                \
+            if (stack_t[sp] <= tmax) {           \
+                cur = stack[sp];                 \
+                break;                           \
+            }                                    \
+        }                                        \
+    }
+
 // Shared traversal. Returns the primitive slot of the closest hit (or of the first hit
-// when `any_hit`), -1 for none; tmax becomes the hit distance.
+// found when `any_hit`), -1 for none; tmax becomes the hit distance. Descends through
+// internal nodes (nearer child first, the farther one pushed with its entry distance)
+// until a leaf, tests the leaf, and pops. The inner node loop runs until every lane of
+// a SIMD group has reached a leaf, so the leaf tests of the group run together.
 int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hit,
                  out float hu, out float hv) {
     vec3 inv_d = bvh_safe_inv(d);
     RayShear sh = ray_shear(d);
     uint stack[BVH_STACK_SIZE];
+    float stack_t[BVH_STACK_SIZE];
     uint sp = 0u;
     uint cur = 0u;
     int best = -1;
     hu = 0.0;
     hv = 0.0;
     while (true) {
-        if ((cur & BVH_LEAF_FLAG) == 0u) {
+        while ((cur & BVH_LEAF_FLAG) == 0u) {
             vec3 lo0, hi0, lo1, hi1;
             uint c0, c1;
             bvh_load_node(cur, lo0, hi0, lo1, hi1, c0, c1);
@@ -112,51 +168,52 @@ int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hi
             if (h0 && h1) {
                 bool swap = tn1 < tn0;
                 stack[sp] = swap ? c0 : c1;
+                stack_t[sp] = swap ? tn0 : tn1;
                 sp++;
                 cur = swap ? c1 : c0;
-                continue;
-            }
-            if (h0) {
-                cur = c0;
-                continue;
-            }
-            if (h1) {
-                cur = c1;
-                continue;
-            }
-        } else {
-            uint first = (cur & ~BVH_LEAF_FLAG) >> 3;
-            uint end = first + (cur & 7u);
-            for (uint i = first; i < end; i++) {
-                vec4 pa = bvh_prims[3u * i];
-                vec4 pb = bvh_prims[3u * i + 1u];
-                float t, u, v;
-                bool hit;
-                if ((floatBitsToUint(pa.w) & BVH_SPHERE_FLAG) != 0u) {
-                    hit = intersect_sphere(o, d, pa.xyz, pb.x, tmin, tmax, t);
-                    u = 0.0;
-                    v = 0.0;
-                } else {
-                    vec4 pc = bvh_prims[3u * i + 2u];
-                    hit = intersect_triangle(o, sh, pa.xyz, pb.xyz, pc.xyz, tmin, tmax, t,
-                                             u, v);
-                }
-                if (hit) {
-                    tmax = t;
-                    best = int(i);
-                    hu = u;
-                    hv = v;
-                    if (any_hit) {
-                        return best;
-                    }
-                }
+            } else if (h0 || h1) {
+                cur = h0 ? c0 : c1;
+            } else {
+                BVH_POP();
             }
         }
-        if (sp == 0u) {
+        if (cur == BVH_DONE) {
             break;
         }
-        sp--;
-        cur = stack[sp];
+        uint first = (cur & ~BVH_LEAF_FLAG) >> 3;
+        uint end = first + (cur & 7u);
+        for (uint i = first; i < end; i++) {
+            uvec4 pa = bvh_prim_elem(3u * i);
+            uvec4 pb = bvh_prim_elem(3u * i + 1u);
+            float t, u, v;
+            bool hit;
+#ifndef BVH_NO_SPHERES
+            if ((pa.w & BVH_SPHERE_FLAG) != 0u) {
+                hit = intersect_sphere(o, d, uintBitsToFloat(pa.xyz), uintBitsToFloat(pb.x),
+                                       tmin, tmax, t);
+                u = 0.0;
+                v = 0.0;
+            } else
+#endif
+            {
+                vec3 v2 = uintBitsToFloat(bvh_prim_elem(3u * i + 2u).xyz);
+                hit = intersect_triangle(o, sh, uintBitsToFloat(pa.xyz), uintBitsToFloat(pb.xyz),
+                                         v2, tmin, tmax, t, u, v);
+            }
+            if (hit) {
+                tmax = t;
+                best = int(i);
+                hu = u;
+                hv = v;
+                if (any_hit) {
+                    return best;
+                }
+            }
+        }
+        BVH_POP();
+        if (cur == BVH_DONE) {
+            break;
+        }
     }
     return best;
 }
@@ -176,10 +233,10 @@ bool trace_closest(vec3 o, vec3 d, float tmin, float tmax, out Hit h) {
         h.material = 0u;
         return false;
     }
-    uint id = floatBitsToUint(bvh_prims[3u * uint(slot)].w);
+    uint id = bvh_prim_elem(3u * uint(slot)).w;
     h.prim = id & ~BVH_SPHERE_FLAG;
     h.is_sphere = (id & BVH_SPHERE_FLAG) != 0u;
-    h.material = floatBitsToUint(bvh_prims[3u * uint(slot) + 1u].w);
+    h.material = bvh_prim_elem(3u * uint(slot) + 1u).w;
     return true;
 }
 

@@ -6,8 +6,8 @@
 #endif
 layout(local_size_x = LOCAL_SIZE) in;
 
-layout(std430, binding = 0) readonly buffer BvhNodes { vec4 bvh_nodes[]; };
-layout(std430, binding = 1) readonly buffer BvhPrims { vec4 bvh_prims[]; };
+#define BVH_NODES_BINDING 0
+#define BVH_PRIMS_BINDING 1
 
 struct BenchRay {
     vec4 o;  // w unused

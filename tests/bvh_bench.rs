@@ -5,11 +5,10 @@
 //!     cargo test --release --test bvh_bench -- --ignored --nocapture
 //! ```
 //!
-//! `VKVCM_BENCH_LAYOUT=0|1` picks the node layout, `VKVCM_BENCH_LOCAL_SIZE` the
-//! workgroup size. Validation is off (it would time the layer, not the traversal).
+//! `VKVCM_BENCH_LOCAL_SIZE` sets the workgroup size, `VKVCM_BENCH_REPEATS` the timed
+//! dispatches, `VKVCM_BENCH_CT` / `_BINS` / `_LEAF` the SAH build options. Validation is off (it would time the layer, not the traversal).
 
 use vkvcm::bvh::bench::{bench_scene, bench_traverse, TraverseBenchOptions};
-use vkvcm::bvh::layout::NodeLayout;
 use vkvcm::gpu::{Gpu, GpuOptions};
 
 #[test]
@@ -17,8 +16,18 @@ use vkvcm::gpu::{Gpu, GpuOptions};
 fn bench_traverse_scenes() {
     let scenes = std::env::var("VKVCM_BENCH_SCENES").unwrap_or_else(|_| "cornell".into());
     let mut opts = TraverseBenchOptions::default();
-    if let Ok(l) = std::env::var("VKVCM_BENCH_LAYOUT") {
-        opts.build.layout = if l == "1" { NodeLayout::Interleaved } else { NodeLayout::Boxes };
+    // SAH experiments: traversal cost (intersection cost is 1), bins, largest leaf.
+    if let Ok(s) = std::env::var("VKVCM_BENCH_CT") {
+        opts.build.traversal_cost = s.parse().expect("VKVCM_BENCH_CT");
+    }
+    if let Ok(s) = std::env::var("VKVCM_BENCH_BINS") {
+        opts.build.bins = s.parse().expect("VKVCM_BENCH_BINS");
+    }
+    if let Ok(s) = std::env::var("VKVCM_BENCH_LEAF") {
+        opts.build.max_leaf = s.parse().expect("VKVCM_BENCH_LEAF");
+    }
+    if let Ok(s) = std::env::var("VKVCM_BENCH_REPEATS") {
+        opts.repeats = s.parse().expect("VKVCM_BENCH_REPEATS");
     }
     if let Ok(s) = std::env::var("VKVCM_BENCH_LOCAL_SIZE") {
         opts.local_size = s.parse().expect("VKVCM_BENCH_LOCAL_SIZE");

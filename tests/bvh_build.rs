@@ -6,7 +6,7 @@ use bvh_common::*;
 use glam::Vec3;
 use rand::Rng;
 use vkvcm::bvh::build::tree_stats;
-use vkvcm::bvh::layout::{decode_ref, NodeLayout};
+use vkvcm::bvh::layout::{decode_ref, dequantize_boxes, quantize_boxes};
 use vkvcm::bvh::{
     brute_force_any, brute_force_closest, build, build_with, Aabb, BuildOptions, Bvh, Ray, SplitMethod, MAX_DEPTH,
     MAX_LEAF_PRIMS,
@@ -24,34 +24,31 @@ fn prim_box(bvh: &Bvh, slot: usize) -> Aabb {
     }
 }
 
-/// Structural invariants: every prim in exactly one leaf, boxes contain their contents,
-/// leaf sizes and depth bounded, node 0 is the root, every node reached once.
+/// Structural invariants: every prim in exactly one leaf and inside every (decoded) box
+/// on its root-to-leaf path, leaf sizes and depth bounded, node 0 is the root, every node
+/// reached once.
 fn check_structure(bvh: &Bvh) {
-    let l = bvh.layout;
     let mut prim_seen = vec![0u32; bvh.prims.len()];
     let mut node_seen = vec![0u32; bvh.nodes.len()];
-    let mut stack = vec![(0u32, 1u32)];
+    let all = Aabb { min: Vec3::NEG_INFINITY, max: Vec3::INFINITY };
+    // (node, level, intersection of the boxes on the path)
+    let mut stack = vec![(0u32, 1u32, all)];
     let mut max_level = 0;
-    while let Some((ni, level)) = stack.pop() {
+    while let Some((ni, level, path)) = stack.pop() {
         assert!(level <= MAX_DEPTH);
         max_level = max_level.max(level);
         node_seen[ni as usize] += 1;
         let n = &bvh.nodes[ni as usize];
         for i in 0..2 {
-            let b = n.bounds(l, i);
-            match decode_ref(n.child(l, i)) {
-                Ok(c) => {
-                    let cn = &bvh.nodes[c as usize];
-                    for j in 0..2 {
-                        assert!(b.contains(&cn.bounds(l, j)), "child box escapes parent");
-                    }
-                    stack.push((c, level + 1));
-                }
+            let b = n.bounds(i);
+            let path = Aabb { min: path.min.max(b.min), max: path.max.min(b.max) };
+            match decode_ref(n.child(i)) {
+                Ok(c) => stack.push((c, level + 1, path)),
                 Err((first, count)) => {
                     assert!(count as usize <= MAX_LEAF_PRIMS);
                     for s in first..first + count {
                         prim_seen[s as usize] += 1;
-                        assert!(b.contains(&prim_box(bvh, s as usize)), "prim escapes leaf box");
+                        assert!(path.contains(&prim_box(bvh, s as usize)), "prim escapes a box on its path");
                     }
                 }
             }
@@ -85,12 +82,41 @@ fn check_ids(bvh: &Bvh, tris: &[Triangle], spheres: &[Sphere], skipped: usize) {
 #[test]
 fn structure_of_random_scene() {
     let s = test_scene(1, 20_000, 500);
-    for layout in [NodeLayout::Boxes, NodeLayout::Interleaved] {
-        let opts = BuildOptions { layout, ..Default::default() };
-        let bvh = build_with(&s.triangles, &s.spheres, &opts);
-        check_structure(&bvh);
-        check_ids(&bvh, &s.triangles, &s.spheres, 0);
+    let bvh = build(&s.triangles, &s.spheres);
+    check_structure(&bvh);
+    check_ids(&bvh, &s.triangles, &s.spheres, 0);
+}
+
+/// Quantised node boxes contain the input boxes, are not much larger, and decode the
+/// same way as the builder checked them, for boxes of all scales and signs.
+#[test]
+fn quantised_boxes_are_conservative_and_tight() {
+    let mut r = rng(20);
+    let mut worst = 0.0f32;
+    for k in 0..200_000 {
+        let scale = 10f32.powi(r.random_range(-30..30));
+        let offset = 10f32.powi(r.random_range(-30..30)) * if k % 2 == 0 { 1.0 } else { -1.0 };
+        let mut boxes = [Aabb::EMPTY; 2];
+        for b in boxes.iter_mut() {
+            let p = rand_vec(&mut r, -1.0, 1.0) * scale + Vec3::splat(offset);
+            let q = rand_vec(&mut r, -1.0, 1.0) * scale + Vec3::splat(offset);
+            *b = Aabb { min: p.min(q), max: p.max(q) };
+            if k % 7 == 0 {
+                b.max = b.min; // flat or point boxes
+            }
+        }
+        let dec = dequantize_boxes(quantize_boxes(boxes));
+        let node = boxes[0].union(&boxes[1]);
+        for i in 0..2 {
+            assert!(dec[i].contains(&boxes[i]), "{boxes:?} -> {dec:?}");
+            // Looser than the input by at most a few grid steps (1/255 of the node, plus
+            // the origin's 16-bit rounding).
+            let slack = (dec[i].extent() - boxes[i].extent()) / (node.extent() + node.min.abs() * 1e-4 + 1e-37);
+            worst = worst.max(slack.max_element());
+        }
     }
+    println!("worst loosening: {worst} of the node extent");
+    assert!(worst < 0.03);
 }
 
 #[test]

@@ -10,8 +10,7 @@ use bvh_common::*;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use rand::Rng;
-use vkvcm::bvh::layout::NodeLayout;
-use vkvcm::bvh::{brute_force_closest, build, build_with, BuildOptions, GpuBvh, Hit, Ray};
+use vkvcm::bvh::{brute_force_closest, build, GpuBvh, Hit, Ray};
 use vkvcm::gpu::{groups_for, Gpu};
 
 #[repr(C)]
@@ -40,6 +39,10 @@ struct GpuResult {
 
 /// Runs glsl/tests/test_bvh_trace.comp over `rays`.
 fn trace_on_gpu(gpu: &Arc<Gpu>, bvh: &GpuBvh, rays: &[(Ray, f32, f32)]) -> Vec<GpuResult> {
+    trace_on_gpu_with(gpu, bvh, rays, false)
+}
+
+fn trace_on_gpu_with(gpu: &Arc<Gpu>, bvh: &GpuBvh, rays: &[(Ray, f32, f32)], vec4: bool) -> Vec<GpuResult> {
     let data: Vec<TestRay> = rays
         .iter()
         .map(|(r, tmin, tmax)| TestRay { o: [r.o.x, r.o.y, r.o.z, *tmin], d: [r.d.x, r.d.y, r.d.z, *tmax] })
@@ -49,7 +52,10 @@ fn trace_on_gpu(gpu: &Arc<Gpu>, bvh: &GpuBvh, rays: &[(Ray, f32, f32)]) -> Vec<G
     let ray_buf = gpu.buffer_from_slice("rays", &data).unwrap();
     let out = gpu.buffer_zeroed::<TestHit>("hits", data.len()).unwrap();
     let defines = bvh.glsl_defines();
-    let defines: Vec<(&str, &str)> = defines.iter().map(|(k, v)| (*k, v.as_str())).collect();
+    let mut defines: Vec<(&str, &str)> = defines.iter().map(|(k, v)| (*k, v.as_str())).collect();
+    if vec4 {
+        defines.push(("BVH_VEC4", "1"));
+    }
     let k = gpu.kernel("tests/test_bvh_trace.comp", &defines, &[&nodes, &prims, &ray_buf, &out]).unwrap();
     let n = data.len() as u32;
     let mut batch = gpu.batch().unwrap();
@@ -72,11 +78,14 @@ fn trace_on_gpu(gpu: &Arc<Gpu>, bvh: &GpuBvh, rays: &[(Ray, f32, f32)]) -> Vec<G
         .collect()
 }
 
-fn check_against_brute_force(layout: NodeLayout) {
-    let s = test_scene(11, 4000, 400);
-    let bvh = build_with(&s.triangles, &s.spheres, &BuildOptions { layout, ..Default::default() }).into_gpu();
+/// `vec4`: the kernel declares the buffers as vec4 arrays (compatible path); otherwise
+/// bvh.glsl declares them as u64vec2 arrays. `spheres`: with spheres, else with
+/// BVH_NO_SPHERES.
+fn check_against_brute_force(vec4: bool, spheres: bool) {
+    let s = test_scene(11, 4000, if spheres { 400 } else { 0 });
+    let bvh = build(&s.triangles, &s.spheres).into_gpu();
     let rays = test_rays(&s, 12, 6000);
-    let results = common::with_gpu(|gpu| trace_on_gpu(gpu, &bvh, &rays));
+    let results = common::with_gpu(|gpu| trace_on_gpu_with(gpu, &bvh, &rays, vec4));
     let mut errors = Vec::new();
     let mut hits = 0;
     let mut same_as_cpu = 0;
@@ -92,19 +101,27 @@ fn check_against_brute_force(layout: NodeLayout) {
         let cpu = bvh.closest_hit(ray, *tmin, *tmax);
         same_as_cpu += (cpu.map(|h| (h.prim, h.is_sphere)) == r.closest.map(|h| (h.prim, h.is_sphere))) as usize;
     }
-    println!("{layout:?}: {} rays, {hits} hits, {same_as_cpu} identical to the CPU traversal", rays.len());
+    println!(
+        "vec4 {vec4}, spheres {spheres}: {} rays, {hits} hits, {same_as_cpu} same prim as the CPU traversal",
+        rays.len()
+    );
     assert!(errors.is_empty(), "{} of {} rays: {:#?}", errors.len(), rays.len(), &errors[..errors.len().min(10)]);
     assert!(hits > rays.len() / 5);
 }
 
 #[test]
-fn gpu_matches_brute_force_boxes_layout() {
-    check_against_brute_force(NodeLayout::Boxes);
+fn gpu_matches_brute_force() {
+    check_against_brute_force(false, true);
 }
 
 #[test]
-fn gpu_matches_brute_force_interleaved_layout() {
-    check_against_brute_force(NodeLayout::Interleaved);
+fn gpu_matches_brute_force_vec4_buffers() {
+    check_against_brute_force(true, true);
+}
+
+#[test]
+fn gpu_matches_brute_force_without_spheres() {
+    check_against_brute_force(false, false);
 }
 
 #[test]

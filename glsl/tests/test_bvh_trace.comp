@@ -1,9 +1,16 @@
 #version 460
 // Test kernel for tests/bvh_gpu.rs: one ray per invocation, closest hit and any hit.
+// BVH_VEC4 selects the compatible buffer declaration (vec4 arrays declared here) instead
+// of letting bvh.glsl declare them.
 layout(local_size_x = 64) in;
 
+#ifdef BVH_VEC4
 layout(std430, binding = 0) readonly buffer BvhNodes { vec4 bvh_nodes[]; };
 layout(std430, binding = 1) readonly buffer BvhPrims { vec4 bvh_prims[]; };
+#else
+#define BVH_NODES_BINDING 0
+#define BVH_PRIMS_BINDING 1
+#endif
 
 struct TestRay {
     vec4 o;  // w = tmin

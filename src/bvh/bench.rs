@@ -17,8 +17,9 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use serde::Serialize;
 
-use super::build::{build_with, BuildOptions};
+use super::build::{build_with, Aabb, BuildOptions};
 use super::intersect::Ray;
+use super::traverse::{any_hit_counted, closest_hit_counted};
 use crate::gpu::{groups_for, Gpu, Profile};
 use crate::scene::{Sphere, Triangle};
 
@@ -384,10 +385,20 @@ pub struct RaySetResult {
     /// Fastest timed dispatch, any hit (shadow-ray mode) over the same rays.
     pub any_ms: f64,
     pub any_mrays_per_s: f64,
+    /// Process CPU time (user + sys) per dispatch, closest and any hit, on a CPU device
+    /// such as lavapipe: `rays / cpu_ms` is robust against other load on the machine.
+    pub closest_cpu_ms: f64,
+    pub any_cpu_ms: f64,
     /// Share of rays that hit something.
     pub hit_fraction: f64,
     /// Verified rays whose GPU closest hit differs from the CPU traversal's.
     pub mismatches: u32,
+    /// Mean internal nodes visited and primitives tested per ray, closest and any hit
+    /// (CPU mirror of the traversal, over the verified rays).
+    pub closest_nodes_per_ray: f64,
+    pub closest_prims_per_ray: f64,
+    pub any_nodes_per_ray: f64,
+    pub any_prims_per_ray: f64,
 }
 
 /// What [`bench_traverse`] measured.
@@ -403,7 +414,6 @@ pub struct TraverseBenchReport {
     pub max_depth: u32,
     pub sah_cost: f64,
     pub bvh_bytes: usize,
-    pub layout: String,
     pub local_size: u32,
     pub sets: Vec<RaySetResult>,
 }
@@ -417,31 +427,46 @@ impl std::fmt::Display for TraverseBenchReport {
         )?;
         writeln!(
             f,
-            "BVH build {:.3} s: {} nodes, depth {}, SAH cost {:.1}, {:.1} MiB, layout {}, local size {}",
+            "BVH build {:.3} s: {} nodes, depth {}, SAH cost {:.1}, {:.1} MiB; kernel local size {}",
             self.build_seconds,
             self.nodes,
             self.max_depth,
             self.sah_cost,
             self.bvh_bytes as f64 / (1 << 20) as f64,
-            self.layout,
             self.local_size
         )?;
         for s in &self.sets {
             writeln!(
                 f,
-                "{:>7} rays x{}: closest {:8.2} Mrays/s ({:.1} ms), any {:8.2} Mrays/s ({:.1} ms), hit {:.1}%, mismatches {}",
+                "{:>7} rays x{}: closest {:6.2} Mrays/s ({:.1} ms; {:.2} Mrays/CPU-s), any {:6.2} Mrays/s ({:.1} ms; {:.2} Mrays/CPU-s), hit {:.1}%, nodes/prims per ray {:.1}/{:.1} (any {:.1}/{:.1}), mismatches {}",
                 s.rays,
                 s.count,
                 s.closest_mrays_per_s,
                 s.closest_ms,
+                s.count as f64 / s.closest_cpu_ms * 1e-3,
                 s.any_mrays_per_s,
                 s.any_ms,
+                s.count as f64 / s.any_cpu_ms * 1e-3,
                 100.0 * s.hit_fraction,
+                s.closest_nodes_per_ray,
+                s.closest_prims_per_ray,
+                s.any_nodes_per_ray,
+                s.any_prims_per_ray,
                 s.mismatches
             )?;
         }
         Ok(())
     }
+}
+
+/// User + system CPU time of this process (all threads), from /proc/self/stat (Linux).
+fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0) // USER_HZ is 100 on Linux
 }
 
 #[repr(C)]
@@ -460,16 +485,22 @@ pub fn bench_traverse(gpu: &Arc<Gpu>, scene: &BenchScene, opts: &TraverseBenchOp
     let g = bvh.into_gpu();
     let nodes = gpu.buffer_from_slice("bvh_nodes", &g.nodes)?;
     let prims = gpu.buffer_from_slice("bvh_prims", &g.prims)?;
-    let bounds = {
-        let r = &g.nodes[0];
-        r.bounds(g.layout, 0).union(&r.bounds(g.layout, 1))
-    };
+    // Random ray origins fill the scene's exact box (not the quantised node boxes).
+    let mut bounds = Aabb::EMPTY;
+    for t in &scene.triangles {
+        for p in t.p {
+            bounds.grow_point(p);
+        }
+    }
+    for s in &scene.spheres {
+        bounds.grow(&Aabb { min: s.center - s.radius.abs(), max: s.center + s.radius.abs() });
+    }
     let side = (opts.rays as f64).sqrt().round() as u32;
     let camera = camera_rays(&scene.camera, side, opts.rays.div_ceil(side));
     let random = random_rays(bounds.min, bounds.max, opts.rays as usize, 12345);
     let mut sets = Vec::new();
     let ls = opts.local_size.to_string();
-    let layout = (g.layout as u32).to_string();
+    let bvh_defines = g.glsl_defines();
     for (label, rays) in [("camera", &camera[..opts.rays as usize]), ("random", &random[..])] {
         let data: Vec<BenchRay> =
             rays.iter().map(|(o, d)| BenchRay { o: [o.x, o.y, o.z, 0.0], d: [d.x, d.y, d.z, 0.0] }).collect();
@@ -477,11 +508,15 @@ pub fn bench_traverse(gpu: &Arc<Gpu>, scene: &BenchScene, opts: &TraverseBenchOp
         let ray_buf = gpu.buffer_from_slice("bench_rays", &data)?;
         let out = gpu.buffer_zeroed::<u32>("bench_results", data.len())?;
         let mut times = [0.0f64; 2];
+        let mut cpu_ms = [f64::NAN; 2];
         let mut hit_fraction = 0.0;
         let mut mismatches = 0;
+        let mut work = [[0u64; 2]; 2];
+        let mut verified = [0u64; 2];
         for mode in 0..2u32 {
             let m = mode.to_string();
-            let defines = [("MODE", m.as_str()), ("LOCAL_SIZE", ls.as_str()), ("BVH_NODE_LAYOUT", layout.as_str())];
+            let mut defines = vec![("MODE", m.as_str()), ("LOCAL_SIZE", ls.as_str())];
+            defines.extend(bvh_defines.iter().map(|(k, v)| (*k, v.as_str())));
             let k = gpu.kernel("bvh_bench.comp", &defines, &[&nodes, &prims, &ray_buf, &out])?;
             let groups = [groups_for(n, opts.local_size), 1, 1];
             let mut batch = gpu.batch()?;
@@ -489,6 +524,7 @@ pub fn bench_traverse(gpu: &Arc<Gpu>, scene: &BenchScene, opts: &TraverseBenchOp
             batch.dispatch(&k, groups, bytemuck::bytes_of(&n))?;
             batch.submit_wait(None)?;
             let mut best = f64::INFINITY;
+            let cpu_start = process_cpu_seconds();
             for _ in 0..opts.repeats.max(1) {
                 let mut profile = Profile::default();
                 batch.dispatch(&k, groups, bytemuck::bytes_of(&n))?;
@@ -498,6 +534,9 @@ pub fn bench_traverse(gpu: &Arc<Gpu>, scene: &BenchScene, opts: &TraverseBenchOp
                 // GPU timestamps when the device has them, else wall clock.
                 let ms = if profile.kernels.is_empty() { wall_ms } else { profile.total_ms() };
                 best = best.min(ms);
+            }
+            if let (Some(a), Some(b)) = (cpu_start, process_cpu_seconds()) {
+                cpu_ms[mode as usize] = (b - a) * 1e3 / opts.repeats.max(1) as f64;
             }
             times[mode as usize] = best;
             let res: Vec<u32> = out.read()?;
@@ -513,13 +552,17 @@ pub fn bench_traverse(gpu: &Arc<Gpu>, scene: &BenchScene, opts: &TraverseBenchOp
             for i in (0..n as usize).step_by(step) {
                 let (o, d) = rays[i];
                 let ray = Ray { o, d };
-                let ok = if mode == 0 {
-                    let h = g.closest_hit(&ray, 0.0, 1e30);
-                    res[i] == h.map_or(u32::MAX, |h| h.prim)
+                let (ok, c) = if mode == 0 {
+                    let (h, c) = closest_hit_counted(&g.nodes, &g.prims, &ray, 0.0, 1e30);
+                    (res[i] == h.map_or(u32::MAX, |h| h.prim), c)
                 } else {
-                    (res[i] != 0) == g.any_hit(&ray, 0.0, 1e30)
+                    let (h, c) = any_hit_counted(&g.nodes, &g.prims, &ray, 0.0, 1e30);
+                    ((res[i] != 0) == h, c)
                 };
                 mismatches += u32::from(!ok);
+                work[mode as usize][0] += c.nodes as u64;
+                work[mode as usize][1] += c.prims as u64;
+                verified[mode as usize] += 1;
             }
         }
         sets.push(RaySetResult {
@@ -529,8 +572,14 @@ pub fn bench_traverse(gpu: &Arc<Gpu>, scene: &BenchScene, opts: &TraverseBenchOp
             closest_mrays_per_s: n as f64 / times[0] * 1e-3,
             any_ms: times[1],
             any_mrays_per_s: n as f64 / times[1] * 1e-3,
+            closest_cpu_ms: cpu_ms[0],
+            any_cpu_ms: cpu_ms[1],
             hit_fraction,
             mismatches,
+            closest_nodes_per_ray: work[0][0] as f64 / verified[0].max(1) as f64,
+            closest_prims_per_ray: work[0][1] as f64 / verified[0].max(1) as f64,
+            any_nodes_per_ray: work[1][0] as f64 / verified[1].max(1) as f64,
+            any_prims_per_ray: work[1][1] as f64 / verified[1].max(1) as f64,
         });
     }
     Ok(TraverseBenchReport {
@@ -544,7 +593,6 @@ pub fn bench_traverse(gpu: &Arc<Gpu>, scene: &BenchScene, opts: &TraverseBenchOp
         max_depth: stats.max_depth,
         sah_cost: stats.sah_cost,
         bvh_bytes: g.size_bytes(),
-        layout: format!("{:?}", g.layout),
         local_size: opts.local_size,
         sets,
     })

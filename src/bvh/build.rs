@@ -12,17 +12,20 @@
 //!   by centroid on the widest axis, halve), which needs `ceil(log2(n / max_leaf))`
 //!   levels for `n` primitives. So no path exceeds [`MAX_DEPTH`] levels and the GLSL
 //!   traversal stack cannot overflow.
-//! * Primitives with non-finite bounds (NaN or infinite coordinates or radius) are left
-//!   out and counted in [`BuildStats::skipped_non_finite`].
+//! * Primitives with non-finite bounds (NaN or infinite coordinates or radius, or
+//!   coordinates so close to `f32::MAX` that the centroid or the padded box overflows) are
+//!   left out and counted in [`BuildStats::skipped_non_finite`].
 //! * The two subtrees of large nodes are built on separate threads
-//!   (`std::thread::scope`) up to [`BuildOptions::threads`].
+//!   (`std::thread::scope`) up to [`BuildOptions::threads`]; so is the final flattening.
+//! * Flattening pads every box ([`Aabb::padded`]) and quantises it outwards to 8 bits per
+//!   coordinate ([`super::layout::quantize_boxes`]).
 
 use std::time::Instant;
 
 use glam::Vec3;
 
 use super::intersect::{sphere_is_finite, triangle_is_finite};
-use super::layout::{decode_ref, leaf_ref, GpuNode, GpuPrim, NodeLayout, MAX_DEPTH, MAX_LEAF_PRIMS, MAX_PRIMS};
+use super::layout::{decode_ref, leaf_ref, GpuNode, GpuPrim, MAX_DEPTH, MAX_LEAF_PRIMS, MAX_PRIMS};
 use crate::scene::{Sphere, Triangle};
 
 /// Axis-aligned box. The empty box has `min = +inf`, `max = -inf`.
@@ -104,7 +107,6 @@ pub struct BuildOptions {
     pub intersection_cost: f32,
     /// Worker threads; 0 = `std::thread::available_parallelism()`.
     pub threads: usize,
-    pub layout: NodeLayout,
 }
 
 impl Default for BuildOptions {
@@ -116,7 +118,6 @@ impl Default for BuildOptions {
             traversal_cost: 1.0,
             intersection_cost: 1.0,
             threads: 0,
-            layout: NodeLayout::DEFAULT,
         }
     }
 }
@@ -144,7 +145,6 @@ pub struct Bvh {
     pub nodes: Vec<GpuNode>,
     /// Primitives in leaf order.
     pub prims: Vec<GpuPrim>,
-    pub layout: NodeLayout,
     pub stats: BuildStats,
 }
 
@@ -154,7 +154,6 @@ impl Bvh {
         super::GpuBvh {
             nodes: self.nodes.clone(),
             prims: self.prims.clone(),
-            layout: self.layout,
             num_triangles: self.stats.triangles as u32,
             num_spheres: self.stats.spheres as u32,
         }
@@ -164,16 +163,16 @@ impl Bvh {
         super::GpuBvh {
             nodes: self.nodes,
             prims: self.prims,
-            layout: self.layout,
             num_triangles: self.stats.triangles as u32,
             num_spheres: self.stats.spheres as u32,
         }
     }
 
-    /// Box of everything in the BVH (union of the root's children).
+    /// A box around everything in the BVH: the union of the root's (padded, quantised)
+    /// child boxes.
     pub fn bounds(&self) -> Aabb {
-        let r = &self.nodes[0];
-        r.bounds(self.layout, 0).union(&r.bounds(self.layout, 1))
+        let [a, b] = self.nodes[0].boxes();
+        a.union(&b)
     }
 }
 
@@ -232,8 +231,10 @@ pub fn build_with(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOption
     let mut skipped = 0usize;
     let mut push = |min: Vec3, max: Vec3, id: usize| {
         let r = PrimRef { min, id: id as u32, max, _pad: 0 };
-        // The centroid sum can overflow for coordinates near f32::MAX: skip those too.
-        if !r.c2().is_finite() {
+        // The centroid sum or the padded box (see Aabb::padded) can overflow for
+        // coordinates near f32::MAX: skip those too.
+        let padded = r.aabb().padded();
+        if !(r.c2().is_finite() && padded.min.is_finite() && padded.max.is_finite()) {
             return false;
         }
         bounds.grow(&r.aabb());
@@ -280,15 +281,23 @@ pub fn build_with(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOption
         })
         .collect();
     drop(refs);
-    let layout = opts.layout;
-    let gpu_nodes: Vec<GpuNode> =
-        nodes.iter().map(|n| GpuNode::new(layout, n.boxes.map(|b| b.padded()), n.children)).collect();
+    // Pad and quantise the boxes (in parallel: it is a sizeable part of the build).
+    let mut gpu_nodes = vec![GpuNode::default(); nodes.len()];
+    let chunk = nodes.len().div_ceil(threads).max(1024);
+    std::thread::scope(|s| {
+        for (dst, src) in gpu_nodes.chunks_mut(chunk).zip(nodes.chunks(chunk)) {
+            s.spawn(move || {
+                for (d, n) in dst.iter_mut().zip(src) {
+                    *d = GpuNode::new(n.boxes.map(|b| b.padded()), n.children);
+                }
+            });
+        }
+    });
     drop(nodes);
 
     let mut bvh = Bvh {
         nodes: gpu_nodes,
         prims,
-        layout,
         stats: BuildStats {
             triangles: triangles.len(),
             spheres: spheres.len(),
@@ -309,9 +318,7 @@ pub fn build_with(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOption
 /// Leaves, most internal levels on a path, and the SAH cost (relative to the root box)
 /// of a flattened BVH.
 pub fn tree_stats(bvh: &Bvh, c_trav: f64, c_isect: f64) -> (usize, u32, f64) {
-    let root = &bvh.nodes[0];
-    let l = bvh.layout;
-    let root_area = root.bounds(l, 0).union(&root.bounds(l, 1)).half_area();
+    let root_area = bvh.bounds().half_area();
     let inv = if root_area > 0.0 { 1.0 / root_area } else { 0.0 };
     let mut leaves = 0;
     let mut max_depth = 0;
@@ -320,9 +327,10 @@ pub fn tree_stats(bvh: &Bvh, c_trav: f64, c_isect: f64) -> (usize, u32, f64) {
     while let Some((ni, level)) = stack.pop() {
         max_depth = max_depth.max(level);
         let n = &bvh.nodes[ni as usize];
-        for i in 0..2 {
-            let area = n.bounds(l, i).half_area() * inv;
-            match decode_ref(n.child(l, i)) {
+        let boxes = n.boxes();
+        for (i, b) in boxes.iter().enumerate() {
+            let area = b.half_area() * inv;
+            match decode_ref(n.child(i)) {
                 Ok(c) => {
                     cost += c_trav * area;
                     stack.push((c, level + 1));

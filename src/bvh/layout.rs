@@ -1,10 +1,14 @@
-//! GPU layout of the BVH: 64-byte BVH2 nodes that hold both children's boxes (Aila &
-//! Laine, "Understanding the Efficiency of Ray Traversal on GPUs", HPG 2009) and 48-byte
-//! primitives in leaf order. Mirrored by `glsl/bvh.glsl`, which reads both buffers as
-//! `vec4` arrays (std430: a `vec4[]` has a 16-byte stride, so the Rust structs below, made
-//! of `[f32; 4]` members only, have exactly the GLSL byte layout).
+//! GPU layout of the BVH: BVH2 nodes that hold both children's boxes (Aila & Laine,
+//! "Understanding the Efficiency of Ray Traversal on GPUs", HPG 2009), with the boxes
+//! quantised to 8 bits per coordinate on a per-node grid (32 bytes per node), and 48-byte
+//! primitives in leaf order. Mirrored by `glsl/bvh.glsl`.
 //!
-//! Child references (`u32`, stored bit-cast in a float lane of the node):
+//! Both arrays are sequences of 16-byte elements (`uvec4`/`vec4`/`u64vec2` in GLSL,
+//! std430 stride 16); the Rust structs below are made of 4-word members only, so they
+//! have exactly the GLSL byte layout. docs/bvh.md compares this layout with a 64-byte node
+//! of float boxes on lavapipe.
+//!
+//! Child references (`u32`):
 //! * bit 31 clear: index of an internal node in the node array;
 //! * bit 31 set: a leaf, `LEAF_FLAG | first << 3 | count`, covering
 //!   `prims[first .. first + count]`, `count <= MAX_LEAF_PRIMS` (0 only for the empty
@@ -45,77 +49,139 @@ pub fn decode_ref(r: u32) -> Result<u32, (u32, u32)> {
     }
 }
 
-/// How a node's 64 bytes are arranged (both layouts hold the same data). The GLSL side
-/// selects with `#define BVH_NODE_LAYOUT` (0 or 1; default [`NodeLayout::DEFAULT`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum NodeLayout {
-    /// `BVH_NODE_LAYOUT 0`: child 0 min (w = child 0 ref), child 0 max (w = child 1 ref),
-    /// child 1 min (w = 0), child 1 max (w = 0).
-    Boxes = 0,
-    /// `BVH_NODE_LAYOUT 1`: Aila & Laine's arrangement: (c0.lo.x, c0.hi.x, c0.lo.y,
-    /// c0.hi.y), (c1.lo.x, c1.hi.x, c1.lo.y, c1.hi.y), (c0.lo.z, c0.hi.z, c1.lo.z,
-    /// c1.hi.z), (child 0 ref, child 1 ref, 0, 0).
-    Interleaved = 1,
-}
-
-impl NodeLayout {
-    /// The layout `glsl/bvh.glsl` uses when `BVH_NODE_LAYOUT` is not defined.
-    pub const DEFAULT: NodeLayout = NodeLayout::Boxes;
-}
-
-/// One BVH2 node: the boxes of both children and the two child references (64 bytes,
-/// arrangement given by [`NodeLayout`]).
+/// One BVH2 node, 32 bytes:
+///
+/// * `a = (grid.x, grid.y, grid.z, child ref 0)`,
+/// * `b = (q0, q1, q2, child ref 1)`,
+///
+/// where `grid` and `q` are [`quantize_boxes`]'s words: per axis a grid origin and a
+/// power-of-two step, and the two children's boxes as 8-bit grid coordinates.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
 pub struct GpuNode {
-    pub a: [f32; 4],
-    pub b: [f32; 4],
-    pub c: [f32; 4],
-    pub d: [f32; 4],
+    pub a: [u32; 4],
+    pub b: [u32; 4],
 }
 
 impl GpuNode {
-    pub fn new(layout: NodeLayout, boxes: [Aabb; 2], children: [u32; 2]) -> GpuNode {
-        let [l, r] = boxes;
-        let bits = |x: u32| f32::from_bits(x);
-        match layout {
-            NodeLayout::Boxes => GpuNode {
-                a: [l.min.x, l.min.y, l.min.z, bits(children[0])],
-                b: [l.max.x, l.max.y, l.max.z, bits(children[1])],
-                c: [r.min.x, r.min.y, r.min.z, 0.0],
-                d: [r.max.x, r.max.y, r.max.z, 0.0],
-            },
-            NodeLayout::Interleaved => GpuNode {
-                a: [l.min.x, l.max.x, l.min.y, l.max.y],
-                b: [r.min.x, r.max.x, r.min.y, r.max.y],
-                c: [l.min.z, l.max.z, r.min.z, r.max.z],
-                d: [bits(children[0]), bits(children[1]), 0.0, 0.0],
-            },
-        }
+    /// A node over two child boxes (quantised conservatively) and child references.
+    pub fn new(boxes: [Aabb; 2], children: [u32; 2]) -> GpuNode {
+        let w = quantize_boxes(boxes);
+        GpuNode { a: [w[0], w[1], w[2], children[0]], b: [w[3], w[4], w[5], children[1]] }
     }
 
-    /// Box of child `i` (0 or 1).
-    pub fn bounds(&self, layout: NodeLayout, i: usize) -> Aabb {
-        match layout {
-            NodeLayout::Boxes => {
-                let (lo, hi) = if i == 0 { (self.a, self.b) } else { (self.c, self.d) };
-                Aabb { min: Vec3::new(lo[0], lo[1], lo[2]), max: Vec3::new(hi[0], hi[1], hi[2]) }
-            }
-            NodeLayout::Interleaved => {
-                let xy = if i == 0 { self.a } else { self.b };
-                let z = if i == 0 { [self.c[0], self.c[1]] } else { [self.c[2], self.c[3]] };
-                Aabb { min: Vec3::new(xy[0], xy[2], z[0]), max: Vec3::new(xy[1], xy[3], z[1]) }
-            }
-        }
+    /// Decoded box of child `i` (0 or 1), exactly as the GPU decodes it.
+    pub fn bounds(&self, i: usize) -> Aabb {
+        self.boxes()[i]
+    }
+
+    /// Both decoded child boxes.
+    pub fn boxes(&self) -> [Aabb; 2] {
+        dequantize_boxes([self.a[0], self.a[1], self.a[2], self.b[0], self.b[1], self.b[2]])
     }
 
     /// Child reference `i` (0 or 1), see [`decode_ref`].
-    pub fn child(&self, layout: NodeLayout, i: usize) -> u32 {
-        match layout {
-            NodeLayout::Boxes => [self.a[3], self.b[3]][i].to_bits(),
-            NodeLayout::Interleaved => self.d[i].to_bits(),
-        }
+    pub fn child(&self, i: usize) -> u32 {
+        [self.a[3], self.b[3]][i]
     }
+}
+
+/// Decoded value of grid coordinate `q`: `origin + q * step`. `step` is a power of two and
+/// `q < 256`, so the product is exact and only the addition rounds, identically on the CPU
+/// and the GPU (with or without a fused multiply-add).
+#[inline]
+fn dequant(origin: f32, step: f32, q: u32) -> f32 {
+    origin + q as f32 * step
+}
+
+/// A grid word: the origin is the word with its low 8 bits cleared (a float), the step
+/// is `2^(e - 127)` with the biased exponent `e` in the low 8 bits.
+#[inline]
+fn grid_of(word: u32) -> (f32, f32) {
+    (f32::from_bits(word & !0xff), f32::from_bits((word & 0xff) << 23))
+}
+
+/// Quantises two child boxes conservatively to 8 bits per coordinate.
+///
+/// Per axis the node has a grid: an origin `o <= min(lo0, lo1)` (the minimum rounded
+/// towards -inf to 16 mantissa bits, freeing the low 8 bits of its float for the step's
+/// biased exponent) and a power-of-two step chosen so that 255 steps cover the node.
+/// Each box coordinate becomes `q` in 0..=255 with `o + q * step` (decoded in f32 exactly
+/// as the GPU does) `<=` the lower and `>=` the upper bound, so decoded boxes contain the
+/// input boxes. Returns six words: the x, y, z grid words, then the bytes (low byte first)
+/// `(c0.lo.x, c0.lo.y, c0.lo.z, c1.lo.x)`, `(c0.hi.x, c0.hi.y, c0.hi.z, c1.hi.x)`,
+/// `(c1.lo.y, c1.lo.z, c1.hi.y, c1.hi.z)`.
+///
+/// The boxes must be finite (the builder guarantees it).
+pub fn quantize_boxes(boxes: [Aabb; 2]) -> [u32; 6] {
+    let mut grid = [0u32; 3];
+    let mut q = [[[0u32; 3]; 2]; 2]; // [child][lo, hi][axis]
+    for a in 0..3 {
+        let lo = boxes[0].min[a].min(boxes[1].min[a]);
+        let hi = boxes[0].max[a].max(boxes[1].max[a]);
+        let bits = lo.to_bits();
+        let obits = if lo >= 0.0 || bits & 0xff == 0 {
+            bits & !0xff // towards zero = towards -inf
+        } else {
+            (bits | 0xff) + 1 // negative: away from zero
+        };
+        let origin = f32::from_bits(obits);
+        // Smallest step with 255 steps covering the node, with slack for the rounding of
+        // the decode; grown below if a bound still does not fit.
+        let need = ((hi as f64 - origin as f64) + hi.abs() as f64 * 1e-6 + 1e-38) / 255.0;
+        let mut biased = (need.log2().ceil() as i32 + 127).clamp(1, 254) as u32;
+        'grid: loop {
+            let step = f32::from_bits(biased << 23);
+            for c in 0..2 {
+                let (blo, bhi) = (boxes[c].min[a], boxes[c].max[a]);
+                let ql = ((blo as f64 - origin as f64) / step as f64).floor();
+                let mut ql = ql.clamp(0.0, 255.0) as u32;
+                while ql > 0 && dequant(origin, step, ql) > blo {
+                    ql -= 1;
+                }
+                let qh = ((bhi as f64 - origin as f64) / step as f64).ceil();
+                let mut qh = qh.clamp(0.0, 255.0) as u32;
+                while dequant(origin, step, qh) < bhi {
+                    if qh == 255 {
+                        assert!(biased < 254, "box not representable: {boxes:?}");
+                        biased += 1;
+                        continue 'grid;
+                    }
+                    qh += 1;
+                }
+                q[c][0][a] = ql;
+                q[c][1][a] = qh;
+            }
+            break;
+        }
+        grid[a] = obits | biased;
+    }
+    let pack = |b: [u32; 4]| b[0] | b[1] << 8 | b[2] << 16 | b[3] << 24;
+    [
+        grid[0],
+        grid[1],
+        grid[2],
+        pack([q[0][0][0], q[0][0][1], q[0][0][2], q[1][0][0]]),
+        pack([q[0][1][0], q[0][1][1], q[0][1][2], q[1][1][0]]),
+        pack([q[1][0][1], q[1][0][2], q[1][1][1], q[1][1][2]]),
+    ]
+}
+
+/// Decodes [`quantize_boxes`]'s words (as `bvh_load_node` in glsl/bvh.glsl does).
+pub fn dequantize_boxes(w: [u32; 6]) -> [Aabb; 2] {
+    let g = [grid_of(w[0]), grid_of(w[1]), grid_of(w[2])];
+    let byte = |word: u32, k: u32| (word >> (8 * k)) & 0xff;
+    let d = |a: usize, q: u32| dequant(g[a].0, g[a].1, q);
+    [
+        Aabb {
+            min: Vec3::new(d(0, byte(w[3], 0)), d(1, byte(w[3], 1)), d(2, byte(w[3], 2))),
+            max: Vec3::new(d(0, byte(w[4], 0)), d(1, byte(w[4], 1)), d(2, byte(w[4], 2))),
+        },
+        Aabb {
+            min: Vec3::new(d(0, byte(w[3], 3)), d(1, byte(w[5], 0)), d(2, byte(w[5], 1))),
+            max: Vec3::new(d(0, byte(w[4], 3)), d(1, byte(w[5], 2)), d(2, byte(w[5], 3))),
+        },
+    ]
 }
 
 /// One primitive, 48 bytes, in leaf order.
@@ -180,22 +246,20 @@ impl GpuPrim {
 pub struct GpuBvh {
     pub nodes: Vec<GpuNode>,
     pub prims: Vec<GpuPrim>,
-    pub layout: NodeLayout,
     /// Triangles and spheres of the input (including skipped ones).
     pub num_triangles: u32,
     pub num_spheres: u32,
 }
 
-impl Default for NodeLayout {
-    fn default() -> Self {
-        NodeLayout::DEFAULT
-    }
-}
-
 impl GpuBvh {
-    /// Defines a kernel including glsl/bvh.glsl must be compiled with for this layout.
+    /// Optional defines for kernels including glsl/bvh.glsl: `BVH_NO_SPHERES` when the
+    /// BVH holds no sphere (the sphere test is then compiled out).
     pub fn glsl_defines(&self) -> Vec<(&'static str, String)> {
-        vec![("BVH_NODE_LAYOUT", (self.layout as u32).to_string())]
+        if self.prims.iter().any(|p| p.is_sphere()) {
+            Vec::new()
+        } else {
+            vec![("BVH_NO_SPHERES", "1".to_string())]
+        }
     }
 
     /// Bytes of the two buffers.

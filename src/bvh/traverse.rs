@@ -14,7 +14,7 @@ use glam::Vec3;
 
 use super::build::Bvh;
 use super::intersect::{intersect_sphere, intersect_triangle, Hit, Ray, RayShear};
-use super::layout::{decode_ref, GpuBvh, GpuNode, GpuPrim, NodeLayout, MAX_DEPTH};
+use super::layout::{decode_ref, GpuBvh, GpuNode, GpuPrim, LEAF_FLAG, MAX_DEPTH};
 
 /// Factor applied to a box's exit distance (`BVH_ROBUST_SCALE` in glsl/bvh.glsl).
 pub const BOX_ROBUST_SCALE: f32 = 1.000002;
@@ -54,122 +54,160 @@ struct Best {
     v: f32,
 }
 
+/// Work done by one traversal (CPU mirror; the GPU does the same).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraversalCounts {
+    /// Internal nodes visited (each tests two boxes).
+    pub nodes: u32,
+    /// Primitive tests.
+    pub prims: u32,
+}
+
+/// "Stack empty" (`BVH_DONE` in GLSL; has the leaf bit set, so it ends the node loop).
+const DONE: u32 = 0xffff_ffff;
+
+/// Pops the next stack entry whose entry distance is not beyond `tmax` (`BVH_POP`).
+#[inline]
+fn pop(stack: &[u32], stack_t: &[f32], sp: &mut usize, tmax: f32) -> u32 {
+    while *sp > 0 {
+        *sp -= 1;
+        if stack_t[*sp] <= tmax {
+            return stack[*sp];
+        }
+    }
+    DONE
+}
+
+/// The traversal of `bvh_traverse` in glsl/bvh.glsl: descend through internal nodes
+/// (nearer child first, the farther one pushed with its entry distance) until a leaf,
+/// test the leaf, pop the next entry whose entry distance is not beyond the closest hit.
 fn traverse(
     nodes: &[GpuNode],
     prims: &[GpuPrim],
-    layout: NodeLayout,
     ray: &Ray,
     tmin: f32,
     tmax: &mut f32,
     any: bool,
+    counts: &mut TraversalCounts,
 ) -> Option<Best> {
     let o = ray.o;
     let d = ray.d;
     let inv_d = safe_inv(d);
     let sh = RayShear::new(d);
     let mut stack = [0u32; MAX_DEPTH as usize];
+    let mut stack_t = [0f32; MAX_DEPTH as usize];
     let mut sp = 0usize;
     let mut cur = 0u32;
     let mut best = None;
     loop {
-        match decode_ref(cur) {
-            Ok(ni) => {
-                let n = &nodes[ni as usize];
-                let b0 = n.bounds(layout, 0);
-                let b1 = n.bounds(layout, 1);
-                let h0 = ray_box(b0.min, b0.max, o, inv_d, tmin, *tmax);
-                let h1 = ray_box(b1.min, b1.max, o, inv_d, tmin, *tmax);
-                let (c0, c1) = (n.child(layout, 0), n.child(layout, 1));
-                match (h0, h1) {
-                    (Some(t0), Some(t1)) => {
-                        let (near, far) = if t1 < t0 { (c1, c0) } else { (c0, c1) };
-                        stack[sp] = far;
-                        sp += 1;
-                        cur = near;
-                        continue;
-                    }
-                    (Some(_), None) => {
-                        cur = c0;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        cur = c1;
-                        continue;
-                    }
-                    (None, None) => {}
+        while cur & LEAF_FLAG == 0 {
+            counts.nodes += 1;
+            let n = &nodes[cur as usize];
+            let [b0, b1] = n.boxes();
+            let h0 = ray_box(b0.min, b0.max, o, inv_d, tmin, *tmax);
+            let h1 = ray_box(b1.min, b1.max, o, inv_d, tmin, *tmax);
+            cur = match (h0, h1) {
+                (Some(t0), Some(t1)) => {
+                    let swap = t1 < t0;
+                    stack[sp] = n.child(usize::from(!swap));
+                    stack_t[sp] = if swap { t0 } else { t1 };
+                    sp += 1;
+                    n.child(usize::from(swap))
                 }
-            }
-            Err((first, count)) => {
-                let leaf = prims.iter().enumerate().skip(first as usize);
-                for (slot, p) in leaf.take(count as usize) {
-                    if p.is_sphere() {
-                        let c = Vec3::new(p.a[0], p.a[1], p.a[2]);
-                        if let Some(t) = intersect_sphere(o, d, c, p.b[0], tmin, *tmax) {
-                            *tmax = t;
-                            best = Some(Best { slot, u: 0.0, v: 0.0 });
-                            if any {
-                                return best;
-                            }
-                        }
-                    } else if let Some((t, u, v)) = intersect_triangle(o, &sh, &p.vertices(), tmin, *tmax) {
-                        *tmax = t;
-                        best = Some(Best { slot, u, v });
-                        if any {
-                            return best;
-                        }
-                    }
-                }
-            }
+                (Some(_), None) => n.child(0),
+                (None, Some(_)) => n.child(1),
+                (None, None) => pop(&stack, &stack_t, &mut sp, *tmax),
+            };
         }
-        if sp == 0 {
+        if cur == DONE {
             break;
         }
-        sp -= 1;
-        cur = stack[sp];
+        let Err((first, count)) = decode_ref(cur) else { unreachable!() };
+        let leaf = prims.iter().enumerate().skip(first as usize);
+        for (slot, p) in leaf.take(count as usize) {
+            counts.prims += 1;
+            let hit = if p.is_sphere() {
+                let c = Vec3::new(p.a[0], p.a[1], p.a[2]);
+                intersect_sphere(o, d, c, p.b[0], tmin, *tmax).map(|t| (t, 0.0, 0.0))
+            } else {
+                intersect_triangle(o, &sh, &p.vertices(), tmin, *tmax)
+            };
+            if let Some((t, u, v)) = hit {
+                *tmax = t;
+                best = Some(Best { slot, u, v });
+                if any {
+                    return best;
+                }
+            }
+        }
+        cur = pop(&stack, &stack_t, &mut sp, *tmax);
+        if cur == DONE {
+            break;
+        }
     }
     best
 }
 
 /// Closest hit in `[tmin, tmax]` over flattened BVH arrays.
-pub fn closest_hit(
+pub fn closest_hit(nodes: &[GpuNode], prims: &[GpuPrim], ray: &Ray, tmin: f32, tmax: f32) -> Option<Hit> {
+    closest_hit_counted(nodes, prims, ray, tmin, tmax).0
+}
+
+/// [`closest_hit`] and the work it took.
+pub fn closest_hit_counted(
     nodes: &[GpuNode],
     prims: &[GpuPrim],
-    layout: NodeLayout,
     ray: &Ray,
     tmin: f32,
     tmax: f32,
-) -> Option<Hit> {
+) -> (Option<Hit>, TraversalCounts) {
     let mut t = tmax;
-    let b = traverse(nodes, prims, layout, ray, tmin, &mut t, false)?;
-    let p = &prims[b.slot];
-    Some(Hit { t, prim: p.id(), u: b.u, v: b.v, is_sphere: p.is_sphere(), material: p.material() })
+    let mut counts = TraversalCounts::default();
+    let hit = traverse(nodes, prims, ray, tmin, &mut t, false, &mut counts).map(|b| {
+        let p = &prims[b.slot];
+        Hit { t, prim: p.id(), u: b.u, v: b.v, is_sphere: p.is_sphere(), material: p.material() }
+    });
+    (hit, counts)
 }
 
 /// Whether anything is hit in `[tmin, tmax]` (shadow rays).
-pub fn any_hit(nodes: &[GpuNode], prims: &[GpuPrim], layout: NodeLayout, ray: &Ray, tmin: f32, tmax: f32) -> bool {
+pub fn any_hit(nodes: &[GpuNode], prims: &[GpuPrim], ray: &Ray, tmin: f32, tmax: f32) -> bool {
+    any_hit_counted(nodes, prims, ray, tmin, tmax).0
+}
+
+/// [`any_hit`] and the work it took.
+pub fn any_hit_counted(
+    nodes: &[GpuNode],
+    prims: &[GpuPrim],
+    ray: &Ray,
+    tmin: f32,
+    tmax: f32,
+) -> (bool, TraversalCounts) {
     let mut t = tmax;
-    traverse(nodes, prims, layout, ray, tmin, &mut t, true).is_some()
+    let mut counts = TraversalCounts::default();
+    let hit = traverse(nodes, prims, ray, tmin, &mut t, true, &mut counts).is_some();
+    (hit, counts)
 }
 
 impl GpuBvh {
     /// CPU mirror of `trace_closest` in glsl/bvh.glsl.
     pub fn closest_hit(&self, ray: &Ray, tmin: f32, tmax: f32) -> Option<Hit> {
-        closest_hit(&self.nodes, &self.prims, self.layout, ray, tmin, tmax)
+        closest_hit(&self.nodes, &self.prims, ray, tmin, tmax)
     }
 
     /// CPU mirror of `trace_any` in glsl/bvh.glsl.
     pub fn any_hit(&self, ray: &Ray, tmin: f32, tmax: f32) -> bool {
-        any_hit(&self.nodes, &self.prims, self.layout, ray, tmin, tmax)
+        any_hit(&self.nodes, &self.prims, ray, tmin, tmax)
     }
 }
 
 impl Bvh {
     /// Same as [`GpuBvh::closest_hit`] (the arrays are the same).
     pub fn closest_hit(&self, ray: &Ray, tmin: f32, tmax: f32) -> Option<Hit> {
-        closest_hit(&self.nodes, &self.prims, self.layout, ray, tmin, tmax)
+        closest_hit(&self.nodes, &self.prims, ray, tmin, tmax)
     }
 
     pub fn any_hit(&self, ray: &Ray, tmin: f32, tmax: f32) -> bool {
-        any_hit(&self.nodes, &self.prims, self.layout, ray, tmin, tmax)
+        any_hit(&self.nodes, &self.prims, ray, tmin, tmax)
     }
 }
