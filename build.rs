@@ -52,15 +52,8 @@ fn collect(root: &std::path::Path, dir: &std::path::Path, out: &mut Vec<(String,
         if path.is_dir() {
             println!("cargo:rerun-if-changed={}", path.display());
             collect(root, &path, out);
-        } else if matches!(
-            path.extension().and_then(|x| x.to_str()),
-            Some("glsl" | "comp")
-        ) {
-            let rel = path
-                .strip_prefix(root)
-                .unwrap()
-                .to_string_lossy()
-                .replace('\\', "/");
+        } else if matches!(path.extension().and_then(|x| x.to_str()), Some("glsl" | "comp")) {
+            let rel = path.strip_prefix(root).unwrap().to_string_lossy().replace('\\', "/");
             out.push((rel, path.to_string_lossy().into_owned()));
         }
     }

@@ -19,17 +19,9 @@ fn roundtrip_matches_cpu_on_random_data() {
         let out = gpu.buffer_zeroed::<f32>("out", n + 5).unwrap();
         for scale in [3, -2] {
             let s = scale.to_string();
-            let k = gpu
-                .kernel("tests/roundtrip.comp", &[("SCALE", &s)], &[&ba, &bb, &out])
-                .unwrap();
+            let k = gpu.kernel("tests/roundtrip.comp", &[("SCALE", &s)], &[&ba, &bb, &out]).unwrap();
             let mut batch = gpu.batch().unwrap();
-            batch
-                .dispatch(
-                    &k,
-                    [groups_for(n as u32, 64), 1, 1],
-                    bytemuck::bytes_of(&(n as u32)),
-                )
-                .unwrap();
+            batch.dispatch(&k, [groups_for(n as u32, 64), 1, 1], bytemuck::bytes_of(&(n as u32))).unwrap();
             batch.submit_wait(None).unwrap();
             let o: Vec<f32> = out.read().unwrap();
             for i in 0..n {
@@ -52,17 +44,9 @@ fn atomics_count_exactly() {
         let bk = gpu.buffer_from_slice("keys", &keys).unwrap();
         let hist = gpu.buffer_zeroed::<u32>("hist", bins as usize).unwrap();
         let sum = gpu.buffer_zeroed::<u64>("sum", 1).unwrap();
-        let k = gpu
-            .kernel("tests/atomics.comp", &[], &[&bk, &hist, &sum])
-            .unwrap();
+        let k = gpu.kernel("tests/atomics.comp", &[], &[&bk, &hist, &sum]).unwrap();
         let mut batch = gpu.batch().unwrap();
-        batch
-            .dispatch(
-                &k,
-                [groups_for(n, 64), 1, 1],
-                bytemuck::cast_slice(&[n, bins]),
-            )
-            .unwrap();
+        batch.dispatch(&k, [groups_for(n, 64), 1, 1], bytemuck::cast_slice(&[n, bins])).unwrap();
         batch.submit_wait(None).unwrap();
         let mut want = vec![0u32; bins as usize];
         let mut want_sum = 0u64;
@@ -81,35 +65,21 @@ fn timestamps_are_monotonic_and_profiled() {
         let n = 1 << 16;
         let a = gpu.buffer_from_slice("a", &vec![1.0f32; n]).unwrap();
         let out = gpu.buffer_zeroed::<f32>("out", n).unwrap();
-        let k = gpu
-            .kernel("tests/roundtrip.comp", &[("SCALE", "2")], &[&a, &a, &out])
-            .unwrap();
+        let k = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "2")], &[&a, &a, &out]).unwrap();
         let mut batch = gpu.batch().unwrap();
         let mut profile = Profile::default();
         for _ in 0..5 {
-            batch
-                .dispatch(
-                    &k,
-                    [groups_for(n as u32, 64), 1, 1],
-                    bytemuck::bytes_of(&(n as u32)),
-                )
-                .unwrap();
+            batch.dispatch(&k, [groups_for(n as u32, 64), 1, 1], bytemuck::bytes_of(&(n as u32))).unwrap();
         }
         batch.submit_wait(Some(&mut profile)).unwrap();
         let ts = batch.last_timestamps().unwrap();
         assert_eq!(ts.len(), 10);
-        assert!(
-            ts.windows(2).all(|w| w[0] <= w[1]),
-            "timestamps not monotonic: {ts:?}"
-        );
+        assert!(ts.windows(2).all(|w| w[0] <= w[1]), "timestamps not monotonic: {ts:?}");
         assert_eq!(profile.kernels.len(), 1);
         assert_eq!(profile.kernels[0].calls, 5);
         assert!(profile.kernels[0].total_ms > 0.0);
         let table = profile.table();
-        assert!(
-            table.contains("tests/roundtrip.comp") && table.contains("share"),
-            "{table}"
-        );
+        assert!(table.contains("tests/roundtrip.comp") && table.contains("share"), "{table}");
     });
 }
 
@@ -118,16 +88,10 @@ fn kernels_are_compiled_once_per_variant() {
     with_gpu(|gpu| {
         let a = gpu.buffer_zeroed::<f32>("a", 64).unwrap();
         let before = shader::compile_count();
-        let _k1 = gpu
-            .kernel("tests/roundtrip.comp", &[("SCALE", "5")], &[&a, &a, &a])
-            .unwrap();
-        let _k2 = gpu
-            .kernel("tests/roundtrip.comp", &[("SCALE", "5")], &[&a, &a, &a])
-            .unwrap();
+        let _k1 = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "5")], &[&a, &a, &a]).unwrap();
+        let _k2 = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "5")], &[&a, &a, &a]).unwrap();
         let after_same = shader::compile_count();
-        let _k3 = gpu
-            .kernel("tests/roundtrip.comp", &[("SCALE", "6")], &[&a, &a, &a])
-            .unwrap();
+        let _k3 = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "6")], &[&a, &a, &a]).unwrap();
         // Other tests may compile concurrently, so count at least, and compare deltas.
         assert!(after_same - before >= 1);
         assert!(shader::compile_count() > after_same);
@@ -140,12 +104,13 @@ fn compile_error_names_file_and_line() {
     let err = shader::compile_glsl("broken.comp", src, &[]).unwrap_err();
     let msg = format!("{err:#}");
     assert!(msg.contains("broken.comp:4"), "no file:line in {msg}");
-    assert!(
-        msg.contains("undefined_thing"),
-        "no glslang message in {msg}"
-    );
-    let err = shader::compile_glsl("inc.comp", "#version 460\n#extension GL_GOOGLE_include_directive : require\n#include \"nope.glsl\"\nvoid main(){}\n", &[])
-        .unwrap_err();
+    assert!(msg.contains("undefined_thing"), "no glslang message in {msg}");
+    let err = shader::compile_glsl(
+        "inc.comp",
+        "#version 460\n#extension GL_GOOGLE_include_directive : require\n#include \"nope.glsl\"\nvoid main(){}\n",
+        &[],
+    )
+    .unwrap_err();
     assert!(format!("{err:#}").contains("nope.glsl"), "{err:#}");
 }
 
@@ -165,25 +130,16 @@ fn device_listing_names_features() {
     assert!(!devices.is_empty());
     for d in &devices {
         assert!(!d.name.is_empty());
-        assert!(d
-            .features
-            .iter()
-            .any(|f| f.name == "shaderBufferInt64Atomics"));
+        assert!(d.features.iter().any(|f| f.name == "shaderBufferInt64Atomics"));
     }
 }
 
 #[test]
 fn unknown_device_is_a_clear_error() {
-    let opts = vkvcm::gpu::GpuOptions {
-        device: Some("no-such-gpu-xyz".into()),
-        validation: false,
-    };
+    let opts = vkvcm::gpu::GpuOptions { device: Some("no-such-gpu-xyz".into()), validation: false };
     let err = vkvcm::gpu::Gpu::new(&opts).err().expect("must fail");
     assert!(format!("{err}").contains("no-such-gpu-xyz"), "{err}");
-    let opts = vkvcm::gpu::GpuOptions {
-        device: Some("99".into()),
-        validation: false,
-    };
+    let opts = vkvcm::gpu::GpuOptions { device: Some("99".into()), validation: false };
     let err = vkvcm::gpu::Gpu::new(&opts).err().expect("must fail");
     assert!(format!("{err}").contains("99"), "{err}");
 }
@@ -198,8 +154,5 @@ fn validation_layer_reports_misuse() {
     let k = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "1")], &[]);
     drop(k);
     drop(gpu);
-    assert!(
-        !messages.list().is_empty(),
-        "the validation layer reported nothing"
-    );
+    assert!(!messages.list().is_empty(), "the validation layer reported nothing");
 }

@@ -53,7 +53,7 @@ fn white_furnace_matches_analytic_radiance() {
         let t = z_test_analytic(&runs, &reference, ALPHA);
         assert!(t.passed(), "furnace: expected {expected}: {t}");
         // Energy: the mean over the image is close to the analytic value too.
-        let mean = runs.iter().map(|i| i.mean()[0] as f64).sum::<f64>() / runs.len() as f64;
+        let mean = runs.iter().map(|i| i.mean()[0]).sum::<f64>() / runs.len() as f64;
         assert!((mean - expected as f64).abs() < 0.02 * expected as f64, "mean {mean} vs {expected}");
     });
 }

@@ -44,16 +44,12 @@ impl Gpu {
                 None,
             )?;
             b.cmd = dev.allocate_command_buffers(
-                &vk::CommandBufferAllocateInfo::default()
-                    .command_pool(b.pool)
-                    .command_buffer_count(1),
+                &vk::CommandBufferAllocateInfo::default().command_pool(b.pool).command_buffer_count(1),
             )?[0];
             b.fence = dev.create_fence(&vk::FenceCreateInfo::default(), None)?;
             if self.timestamps {
                 b.queries = dev.create_query_pool(
-                    &vk::QueryPoolCreateInfo::default()
-                        .query_type(vk::QueryType::TIMESTAMP)
-                        .query_count(2 * MAX_TIMED),
+                    &vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(2 * MAX_TIMED),
                     None,
                 )?;
             }
@@ -73,8 +69,7 @@ impl Batch {
             dev.reset_command_buffer(self.cmd, vk::CommandBufferResetFlags::empty())?;
             dev.begin_command_buffer(
                 self.cmd,
-                &vk::CommandBufferBeginInfo::default()
-                    .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
             )?;
             if self.queries != vk::QueryPool::null() {
                 dev.cmd_reset_query_pool(self.cmd, self.queries, 0, 2 * MAX_TIMED);
@@ -111,11 +106,7 @@ impl Batch {
     /// Records `kernel` over `groups` workgroups with `push` as push constants.
     pub fn dispatch(&mut self, kernel: &Kernel, groups: [u32; 3], push: &[u8]) -> Result<()> {
         if push.len() as u32 > PUSH_CONSTANT_BYTES {
-            bail!(
-                "kernel {}: {} push-constant bytes, at most {PUSH_CONSTANT_BYTES}",
-                kernel.name(),
-                push.len()
-            );
+            bail!("kernel {}: {} push-constant bytes, at most {PUSH_CONSTANT_BYTES}", kernel.name(), push.len());
         }
         if groups.contains(&0) {
             return Ok(());
@@ -128,12 +119,7 @@ impl Batch {
         // SAFETY: recording; the kernel's objects outlive the submission (caller keeps it).
         unsafe {
             if timed {
-                dev.cmd_write_timestamp(
-                    self.cmd,
-                    vk::PipelineStageFlags::TOP_OF_PIPE,
-                    self.queries,
-                    q,
-                );
+                dev.cmd_write_timestamp(self.cmd, vk::PipelineStageFlags::TOP_OF_PIPE, self.queries, q);
             }
             dev.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, kernel.pipeline);
             if kernel.set != vk::DescriptorSet::null() {
@@ -149,22 +135,11 @@ impl Batch {
             if !push.is_empty() {
                 let mut padded = [0u8; PUSH_CONSTANT_BYTES as usize];
                 padded[..push.len()].copy_from_slice(push);
-                dev.cmd_push_constants(
-                    self.cmd,
-                    kernel.layout,
-                    vk::ShaderStageFlags::COMPUTE,
-                    0,
-                    &padded,
-                );
+                dev.cmd_push_constants(self.cmd, kernel.layout, vk::ShaderStageFlags::COMPUTE, 0, &padded);
             }
             dev.cmd_dispatch(self.cmd, groups[0], groups[1], groups[2]);
             if timed {
-                dev.cmd_write_timestamp(
-                    self.cmd,
-                    vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                    self.queries,
-                    q + 1,
-                );
+                dev.cmd_write_timestamp(self.cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, self.queries, q + 1);
             }
         }
         if timed {
@@ -178,11 +153,7 @@ impl Batch {
         self.begin()?;
         self.barrier();
         // SAFETY: recording; the buffer has TRANSFER_DST usage.
-        unsafe {
-            self.gpu
-                .device
-                .cmd_fill_buffer(self.cmd, buffer.raw, 0, vk::WHOLE_SIZE, value)
-        };
+        unsafe { self.gpu.device.cmd_fill_buffer(self.cmd, buffer.raw, 0, vk::WHOLE_SIZE, value) };
         Ok(())
     }
 
@@ -198,10 +169,8 @@ impl Batch {
             dev.end_command_buffer(self.cmd)?;
             let cmds = [self.cmd];
             let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
-            dev.queue_submit(self.gpu.queue, &submit, self.fence)
-                .context("vkQueueSubmit failed")?;
-            dev.wait_for_fences(&[self.fence], true, u64::MAX)
-                .context("waiting for the GPU failed (device lost?)")?;
+            dev.queue_submit(self.gpu.queue, &submit, self.fence).context("vkQueueSubmit failed")?;
+            dev.wait_for_fences(&[self.fence], true, u64::MAX).context("waiting for the GPU failed (device lost?)")?;
             dev.reset_fences(&[self.fence])?;
         }
         if let Some(p) = profile {
@@ -218,8 +187,7 @@ impl Batch {
                 }
                 .context("reading timestamps failed")?;
                 for (i, name) in self.timed.iter().enumerate() {
-                    let ns = ts[2 * i + 1].saturating_sub(ts[2 * i]) as f64
-                        * self.gpu.timestamp_period_ns;
+                    let ns = ts[2 * i + 1].saturating_sub(ts[2 * i]) as f64 * self.gpu.timestamp_period_ns;
                     p.add(name, ns);
                 }
             }

@@ -21,12 +21,7 @@ pub struct Buffer {
 }
 
 impl Gpu {
-    fn raw_buffer(
-        self: &Arc<Self>,
-        name: &str,
-        size: u64,
-        location: MemoryLocation,
-    ) -> Result<Buffer> {
+    fn raw_buffer(self: &Arc<Self>, name: &str, size: u64, location: MemoryLocation) -> Result<Buffer> {
         let alloc_size = size.max(16);
         let info = vk::BufferCreateInfo::default()
             .size(alloc_size)
@@ -41,17 +36,13 @@ impl Gpu {
             .with_context(|| format!("cannot create buffer {name:?} ({size} bytes)"))?;
         // SAFETY: `raw` was just created.
         let requirements = unsafe { self.device.get_buffer_memory_requirements(raw) };
-        let alloc = self
-            .allocator
-            .lock()
-            .map_err(|_| anyhow!("allocator poisoned"))?
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location,
-                linear: true,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            });
+        let alloc = self.allocator.lock().map_err(|_| anyhow!("allocator poisoned"))?.allocate(&AllocationCreateDesc {
+            name,
+            requirements,
+            location,
+            linear: true,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        });
         let allocation = match alloc {
             Ok(a) => a,
             Err(e) => {
@@ -61,17 +52,8 @@ impl Gpu {
             }
         };
         // SAFETY: memory from the allocator matches the requirements.
-        unsafe {
-            self.device
-                .bind_buffer_memory(raw, allocation.memory(), allocation.offset())
-        }?;
-        Ok(Buffer {
-            gpu: self.clone(),
-            raw,
-            allocation: Some(allocation),
-            size,
-            name: name.to_string(),
-        })
+        unsafe { self.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }?;
+        Ok(Buffer { gpu: self.clone(), raw, allocation: Some(allocation), size, name: name.to_string() })
     }
 
     /// A zero-filled storage buffer of `count` elements of `T`.
@@ -84,11 +66,7 @@ impl Gpu {
 
     /// A storage buffer holding `data`.
     pub fn buffer_from_slice<T: Pod>(self: &Arc<Self>, name: &str, data: &[T]) -> Result<Buffer> {
-        let b = self.raw_buffer(
-            name,
-            std::mem::size_of_val(data) as u64,
-            MemoryLocation::GpuOnly,
-        )?;
+        let b = self.raw_buffer(name, std::mem::size_of_val(data) as u64, MemoryLocation::GpuOnly)?;
         b.write(data)?;
         Ok(b)
     }
@@ -104,22 +82,18 @@ impl Gpu {
             let pool = dev.create_command_pool(&pool_info, None)?;
             let result = (|| -> Result<()> {
                 let cmd = dev.allocate_command_buffers(
-                    &vk::CommandBufferAllocateInfo::default()
-                        .command_pool(pool)
-                        .command_buffer_count(1),
+                    &vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1),
                 )?[0];
                 dev.begin_command_buffer(
                     cmd,
-                    &vk::CommandBufferBeginInfo::default()
-                        .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                    &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
                 )?;
                 f(cmd);
                 dev.end_command_buffer(cmd)?;
                 let cmds = [cmd];
                 let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
                 dev.queue_submit(self.queue, &submit, vk::Fence::null())?;
-                dev.queue_wait_idle(self.queue)
-                    .context("queue wait failed (device lost?)")?;
+                dev.queue_wait_idle(self.queue).context("queue wait failed (device lost?)")?;
                 Ok(())
             })();
             dev.destroy_command_pool(pool, None);
@@ -138,10 +112,7 @@ impl Buffer {
     }
 
     fn mapped(&self) -> Option<*mut u8> {
-        self.allocation
-            .as_ref()?
-            .mapped_ptr()
-            .map(|p| p.as_ptr() as *mut u8)
+        self.allocation.as_ref()?.mapped_ptr().map(|p| p.as_ptr() as *mut u8)
     }
 
     /// Sets every byte to zero.
@@ -158,12 +129,7 @@ impl Buffer {
     pub fn write<T: Pod>(&self, data: &[T]) -> Result<()> {
         let bytes: &[u8] = bytemuck::cast_slice(data);
         if bytes.len() as u64 > self.size {
-            bail!(
-                "write of {} bytes into buffer {:?} of {} bytes",
-                bytes.len(),
-                self.name,
-                self.size
-            );
+            bail!("write of {} bytes into buffer {:?} of {} bytes", bytes.len(), self.name, self.size);
         }
         if bytes.is_empty() {
             return Ok(());
@@ -174,22 +140,11 @@ impl Buffer {
             unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), p, bytes.len()) };
             return Ok(());
         }
-        let staging = self.gpu.raw_buffer(
-            "staging-upload",
-            bytes.len() as u64,
-            MemoryLocation::CpuToGpu,
-        )?;
-        let p = staging
-            .mapped()
-            .ok_or_else(|| anyhow!("staging buffer not mapped"))?;
+        let staging = self.gpu.raw_buffer("staging-upload", bytes.len() as u64, MemoryLocation::CpuToGpu)?;
+        let p = staging.mapped().ok_or_else(|| anyhow!("staging buffer not mapped"))?;
         // SAFETY: as above, for the staging buffer.
         unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), p, bytes.len()) };
-        let (dev, src, dst, n) = (
-            self.gpu.device.clone(),
-            staging.raw,
-            self.raw,
-            bytes.len() as u64,
-        );
+        let (dev, src, dst, n) = (self.gpu.device.clone(), staging.raw, self.raw, bytes.len() as u64);
         self.gpu.one_shot(|cmd| {
             // SAFETY: both buffers are valid for `n` bytes.
             unsafe { dev.cmd_copy_buffer(cmd, src, dst, &[vk::BufferCopy::default().size(n)]) }
@@ -209,24 +164,13 @@ impl Buffer {
             unsafe { std::ptr::copy_nonoverlapping(p, bytes.as_mut_ptr(), bytes.len()) };
             return Ok(out);
         }
-        let staging = self.gpu.raw_buffer(
-            "staging-download",
-            bytes.len() as u64,
-            MemoryLocation::GpuToCpu,
-        )?;
-        let (dev, src, dst, len) = (
-            self.gpu.device.clone(),
-            self.raw,
-            staging.raw,
-            bytes.len() as u64,
-        );
+        let staging = self.gpu.raw_buffer("staging-download", bytes.len() as u64, MemoryLocation::GpuToCpu)?;
+        let (dev, src, dst, len) = (self.gpu.device.clone(), self.raw, staging.raw, bytes.len() as u64);
         self.gpu.one_shot(|cmd| {
             // SAFETY: both buffers are valid for `len` bytes.
             unsafe { dev.cmd_copy_buffer(cmd, src, dst, &[vk::BufferCopy::default().size(len)]) }
         })?;
-        let p = staging
-            .mapped()
-            .ok_or_else(|| anyhow!("staging buffer not mapped"))?;
+        let p = staging.mapped().ok_or_else(|| anyhow!("staging buffer not mapped"))?;
         // SAFETY: the copy completed (one_shot waits).
         unsafe { std::ptr::copy_nonoverlapping(p, bytes.as_mut_ptr(), bytes.len()) };
         Ok(out)

@@ -30,10 +30,7 @@ impl GpuOptions {
 
     /// Tests always run with validation; `VKVCM_TEST_DEVICE` may choose the device.
     pub fn for_tests() -> Self {
-        GpuOptions {
-            device: std::env::var("VKVCM_TEST_DEVICE").ok(),
-            validation: true,
-        }
+        GpuOptions { device: std::env::var("VKVCM_TEST_DEVICE").ok(), validation: true }
     }
 }
 
@@ -68,11 +65,7 @@ impl DeviceInfo {
     }
 
     pub fn missing_required(&self) -> Vec<&'static str> {
-        self.features
-            .iter()
-            .filter(|f| f.required && !f.present)
-            .map(|f| f.name)
-            .collect()
+        self.features.iter().filter(|f| f.required && !f.present).map(|f| f.name).collect()
     }
 }
 
@@ -100,18 +93,11 @@ const API_VERSION: u32 = vk::API_VERSION_1_2;
 
 fn cstr(chars: &[c_char]) -> String {
     // SAFETY: Vulkan guarantees NUL-terminated fixed-size strings.
-    unsafe { CStr::from_ptr(chars.as_ptr()) }
-        .to_string_lossy()
-        .into_owned()
+    unsafe { CStr::from_ptr(chars.as_ptr()) }.to_string_lossy().into_owned()
 }
 
 fn version_string(v: u32) -> String {
-    format!(
-        "{}.{}.{}",
-        vk::api_version_major(v),
-        vk::api_version_minor(v),
-        vk::api_version_patch(v)
-    )
+    format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v))
 }
 
 fn load_entry() -> Result<ash::Entry> {
@@ -122,20 +108,14 @@ fn load_entry() -> Result<ash::Entry> {
 }
 
 fn create_instance(entry: &ash::Entry, validation: bool) -> Result<ash::Instance> {
-    let app = vk::ApplicationInfo::default()
-        .application_name(c"vkvcm")
-        .engine_name(c"vkvcm")
-        .api_version(API_VERSION);
+    let app = vk::ApplicationInfo::default().application_name(c"vkvcm").engine_name(c"vkvcm").api_version(API_VERSION);
     let mut layers: Vec<*const c_char> = Vec::new();
     let mut exts: Vec<*const c_char> = Vec::new();
     if validation {
         // SAFETY: plain enumeration call.
         let available = unsafe { entry.enumerate_instance_layer_properties() }?;
         let name = c"VK_LAYER_KHRONOS_validation";
-        if !available
-            .iter()
-            .any(|l| l.layer_name_as_c_str().ok() == Some(name))
-        {
+        if !available.iter().any(|l| l.layer_name_as_c_str().ok() == Some(name)) {
             bail!("validation requested but VK_LAYER_KHRONOS_validation is not installed (apt-get install vulkan-validationlayers)");
         }
         layers.push(name.as_ptr());
@@ -160,16 +140,8 @@ fn feature_status(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Vec<Featu
     // SAFETY: valid handle.
     let props = unsafe { instance.get_physical_device_properties(pd) };
     vec![
-        FeatureStatus {
-            name: "Vulkan 1.2",
-            required: true,
-            present: props.api_version >= API_VERSION,
-        },
-        FeatureStatus {
-            name: "shaderInt64",
-            required: true,
-            present: base.shader_int64 == vk::TRUE,
-        },
+        FeatureStatus { name: "Vulkan 1.2", required: true, present: props.api_version >= API_VERSION },
+        FeatureStatus { name: "shaderInt64", required: true, present: base.shader_int64 == vk::TRUE },
         FeatureStatus {
             name: "shaderBufferInt64Atomics",
             required: true,
@@ -196,11 +168,7 @@ fn describe(instance: &ash::Instance, index: usize, pd: vk::PhysicalDevice) -> D
         index,
         name: cstr(&props.device_name),
         device_type: props.device_type,
-        driver: if driver_info.is_empty() {
-            driver_name
-        } else {
-            format!("{driver_name} {driver_info}")
-        },
+        driver: if driver_info.is_empty() { driver_name } else { format!("{driver_name} {driver_info}") },
         api_version: version_string(props.api_version),
         features: feature_status(instance, pd),
     }
@@ -222,12 +190,7 @@ pub fn list_devices() -> Result<Vec<DeviceInfo>> {
     let instance = create_instance(&entry, false)?;
     // SAFETY: instance is valid until destroyed below.
     let pds = unsafe { instance.enumerate_physical_devices() };
-    let out = pds.map(|pds| {
-        pds.iter()
-            .enumerate()
-            .map(|(i, &pd)| describe(&instance, i, pd))
-            .collect()
-    });
+    let out = pds.map(|pds| pds.iter().enumerate().map(|(i, &pd)| describe(&instance, i, pd)).collect());
     // SAFETY: nothing created from the instance survives.
     unsafe { instance.destroy_instance(None) };
     Ok(out?)
@@ -239,13 +202,7 @@ fn choose(infos: &[DeviceInfo], wanted: Option<&str>) -> Result<usize> {
     if infos.is_empty() {
         bail!("no Vulkan device found (is a driver installed? lavapipe: apt-get install mesa-vulkan-drivers)");
     }
-    let names = || {
-        infos
-            .iter()
-            .map(|d| format!("{}: {}", d.index, d.name))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
+    let names = || infos.iter().map(|d| format!("{}: {}", d.index, d.name)).collect::<Vec<_>>().join(", ");
     let idx = match wanted {
         Some(w) => {
             if let Ok(i) = w.parse::<usize>() {
@@ -258,9 +215,7 @@ fn choose(infos: &[DeviceInfo], wanted: Option<&str>) -> Result<usize> {
                 infos
                     .iter()
                     .position(|d| d.name.to_lowercase().contains(&lw))
-                    .ok_or_else(|| {
-                        anyhow!("no Vulkan device named like {w:?} (devices: {})", names())
-                    })?
+                    .ok_or_else(|| anyhow!("no Vulkan device named like {w:?} (devices: {})", names()))?
             }
         }
         None => {
@@ -273,11 +228,7 @@ fn choose(infos: &[DeviceInfo], wanted: Option<&str>) -> Result<usize> {
     };
     let missing = infos[idx].missing_required();
     if !missing.is_empty() {
-        bail!(
-            "Vulkan device {:?} lacks required feature(s): {}",
-            infos[idx].name,
-            missing.join(", ")
-        );
+        bail!("Vulkan device {:?} lacks required feature(s): {}", infos[idx].name, missing.join(", "));
     }
     Ok(idx)
 }
@@ -287,11 +238,7 @@ impl Gpu {
     pub fn new(opts: &GpuOptions) -> Result<Arc<Gpu>> {
         let entry = load_entry()?;
         let instance = create_instance(&entry, opts.validation)?;
-        let validation = if opts.validation {
-            Some(Validation::new(&entry, &instance)?)
-        } else {
-            None
-        };
+        let validation = if opts.validation { Some(Validation::new(&entry, &instance)?) } else { None };
         match Self::open(entry.clone(), instance.clone(), opts, validation) {
             Ok(g) => Ok(Arc::new(g)),
             Err((e, validation)) => {
@@ -313,40 +260,26 @@ impl Gpu {
         let step = || -> Result<_> {
             // SAFETY: valid instance.
             let pds = unsafe { instance.enumerate_physical_devices() }?;
-            let infos: Vec<DeviceInfo> = pds
-                .iter()
-                .enumerate()
-                .map(|(i, &pd)| describe(&instance, i, pd))
-                .collect();
+            let infos: Vec<DeviceInfo> = pds.iter().enumerate().map(|(i, &pd)| describe(&instance, i, pd)).collect();
             let idx = choose(&infos, opts.device.as_deref())?;
             let physical = pds[idx];
             // SAFETY: valid handle.
-            let families =
-                unsafe { instance.get_physical_device_queue_family_properties(physical) };
+            let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
             let queue_family = families
                 .iter()
                 .position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
                 .ok_or_else(|| anyhow!("device {:?} has no compute queue", infos[idx].name))?
                 as u32;
             let timestamps = families[queue_family as usize].timestamp_valid_bits > 0
-                && infos[idx]
-                    .features
-                    .iter()
-                    .any(|f| f.name.starts_with("timestamp") && f.present);
+                && infos[idx].features.iter().any(|f| f.name.starts_with("timestamp") && f.present);
             let prio = [1.0f32];
-            let qinfo = [vk::DeviceQueueCreateInfo::default()
-                .queue_family_index(queue_family)
-                .queue_priorities(&prio)];
+            let qinfo = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&prio)];
             let base = vk::PhysicalDeviceFeatures::default().shader_int64(true);
-            let mut f12 =
-                vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(true);
-            let dinfo = vk::DeviceCreateInfo::default()
-                .queue_create_infos(&qinfo)
-                .enabled_features(&base)
-                .push_next(&mut f12);
+            let mut f12 = vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(true);
+            let dinfo =
+                vk::DeviceCreateInfo::default().queue_create_infos(&qinfo).enabled_features(&base).push_next(&mut f12);
             // SAFETY: features were checked present by `choose`.
-            let device = unsafe { instance.create_device(physical, &dinfo, None) }
-                .context("vkCreateDevice failed")?;
+            let device = unsafe { instance.create_device(physical, &dinfo, None) }.context("vkCreateDevice failed")?;
             // SAFETY: queue 0 of the family was requested.
             let queue = unsafe { device.get_device_queue(queue_family, 0) };
             let allocator = Allocator::new(&AllocatorCreateDesc {
@@ -383,17 +316,7 @@ impl Gpu {
             ))
         };
         match step() {
-            Ok((
-                physical,
-                device,
-                queue,
-                queue_family,
-                allocator,
-                timestamps,
-                info,
-                props,
-                subgroup_size,
-            )) => Ok(Gpu {
+            Ok((physical, device, queue, queue_family, allocator, timestamps, info, props, subgroup_size)) => Ok(Gpu {
                 entry,
                 instance,
                 physical,
@@ -415,10 +338,7 @@ impl Gpu {
 
     /// Validation messages received so far (empty when validation is off).
     pub fn validation_messages(&self) -> Messages {
-        self.validation
-            .as_ref()
-            .map(|v| v.messages())
-            .unwrap_or_default()
+        self.validation.as_ref().map(|v| v.messages()).unwrap_or_default()
     }
 
     pub fn validation_enabled(&self) -> bool {

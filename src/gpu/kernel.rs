@@ -26,12 +26,7 @@ pub struct Kernel {
 impl Gpu {
     /// Builds the kernel `name` (a .comp file under glsl/) with `defines`, binding
     /// `buffers` to bindings 0, 1, ... in order.
-    pub fn kernel(
-        self: &Arc<Self>,
-        name: &str,
-        defines: &[(&str, &str)],
-        buffers: &[&Buffer],
-    ) -> Result<Kernel> {
+    pub fn kernel(self: &Arc<Self>, name: &str, defines: &[(&str, &str)], buffers: &[&Buffer]) -> Result<Kernel> {
         let module = self.shaders.module(&self.device, name, defines)?;
         let dev = &self.device;
         let binding_info: Vec<_> = (0..buffers.len() as u32)
@@ -62,22 +57,17 @@ impl Gpu {
                 bindings: buffers.len(),
             };
             let set_layouts = [set_layout];
-            let push = [vk::PushConstantRange::default()
-                .stage_flags(vk::ShaderStageFlags::COMPUTE)
-                .size(PUSH_CONSTANT_BYTES)];
+            let push =
+                [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::COMPUTE).size(PUSH_CONSTANT_BYTES)];
             k.layout = dev.create_pipeline_layout(
-                &vk::PipelineLayoutCreateInfo::default()
-                    .set_layouts(&set_layouts)
-                    .push_constant_ranges(&push),
+                &vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(&push),
                 None,
             )?;
             let stage = vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::COMPUTE)
                 .module(module)
                 .name(c"main");
-            let info = [vk::ComputePipelineCreateInfo::default()
-                .stage(stage)
-                .layout(k.layout)];
+            let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(k.layout)];
             k.pipeline = dev
                 .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
                 .map_err(|(_, e)| e)
@@ -87,15 +77,11 @@ impl Gpu {
                     .ty(vk::DescriptorType::STORAGE_BUFFER)
                     .descriptor_count(buffers.len() as u32)];
                 k.pool = dev.create_descriptor_pool(
-                    &vk::DescriptorPoolCreateInfo::default()
-                        .max_sets(1)
-                        .pool_sizes(&sizes),
+                    &vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes),
                     None,
                 )?;
                 k.set = dev.allocate_descriptor_sets(
-                    &vk::DescriptorSetAllocateInfo::default()
-                        .descriptor_pool(k.pool)
-                        .set_layouts(&set_layouts),
+                    &vk::DescriptorSetAllocateInfo::default().descriptor_pool(k.pool).set_layouts(&set_layouts),
                 )?[0];
                 k.bind(buffers)?;
             }
@@ -113,12 +99,7 @@ impl Kernel {
     /// uses this kernel is in flight.
     pub fn bind(&self, buffers: &[&Buffer]) -> Result<()> {
         if buffers.len() != self.bindings {
-            bail!(
-                "kernel {} has {} bindings, got {} buffers",
-                self.name,
-                self.bindings,
-                buffers.len()
-            );
+            bail!("kernel {} has {} bindings, got {} buffers", self.name, self.bindings, buffers.len());
         }
         let max = self.gpu.limits.max_storage_buffer_range as u64;
         for b in buffers {
@@ -131,14 +112,8 @@ impl Kernel {
                 );
             }
         }
-        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
-            .iter()
-            .map(|b| {
-                [vk::DescriptorBufferInfo::default()
-                    .buffer(b.raw)
-                    .range(vk::WHOLE_SIZE)]
-            })
-            .collect();
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> =
+            buffers.iter().map(|b| [vk::DescriptorBufferInfo::default().buffer(b.raw).range(vk::WHOLE_SIZE)]).collect();
         let writes: Vec<_> = infos
             .iter()
             .enumerate()

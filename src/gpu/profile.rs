@@ -21,10 +21,7 @@ impl Profile {
         let i = match self.kernels.iter().position(|k| k.kernel == kernel) {
             Some(i) => i,
             None => {
-                self.kernels.push(KernelTime {
-                    kernel: kernel.to_string(),
-                    ..Default::default()
-                });
+                self.kernels.push(KernelTime { kernel: kernel.to_string(), ..Default::default() });
                 self.kernels.len() - 1
             }
         };
@@ -39,17 +36,8 @@ impl Profile {
     /// A text table: kernel, calls, total ms, mean ms, share.
     pub fn table(&self) -> String {
         let total = self.total_ms().max(1e-12);
-        let w = self
-            .kernels
-            .iter()
-            .map(|k| k.kernel.len())
-            .max()
-            .unwrap_or(6)
-            .max(6);
-        let mut s = format!(
-            "{:<w$} {:>7} {:>11} {:>10} {:>7}\n",
-            "kernel", "calls", "total ms", "mean ms", "share"
-        );
+        let w = self.kernels.iter().map(|k| k.kernel.len()).max().unwrap_or(6).max(6);
+        let mut s = format!("{:<w$} {:>7} {:>11} {:>10} {:>7}\n", "kernel", "calls", "total ms", "mean ms", "share");
         for k in &self.kernels {
             s += &format!(
                 "{:<w$} {:>7} {:>11.3} {:>10.4} {:>6.1}%\n",

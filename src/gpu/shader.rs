@@ -24,10 +24,7 @@ pub fn source(name: &str) -> Option<Cow<'static, str>> {
             return Some(Cow::Owned(s));
         }
     }
-    embedded::SOURCES
-        .iter()
-        .find(|(n, _)| *n == name)
-        .map(|(_, s)| Cow::Borrowed(*s))
+    embedded::SOURCES.iter().find(|(n, _)| *n == name).map(|(_, s)| Cow::Borrowed(*s))
 }
 
 /// The names of all embedded sources.
@@ -60,15 +57,10 @@ fn resolve_include(requested: &str, requester: &str) -> Result<shaderc::Resolved
     };
     for c in candidates {
         if let Some(src) = source(&c) {
-            return Ok(shaderc::ResolvedInclude {
-                resolved_name: c,
-                content: src.into_owned(),
-            });
+            return Ok(shaderc::ResolvedInclude { resolved_name: c, content: src.into_owned() });
         }
     }
-    Err(format!(
-        "cannot find include {requested:?} (looked in glsl/)"
-    ))
+    Err(format!("cannot find include {requested:?} (looked in glsl/)"))
 }
 
 /// Compiles a compute shader. `name` is used for error messages and include lookup.
@@ -81,10 +73,7 @@ pub fn compile_glsl_opt(name: &str, source: &str, defines: &[(&str, &str)], opti
     let compiler = shaderc::Compiler::new().map_err(|e| anyhow!("shaderc init failed: {e}"))?;
     let mut opts = shaderc::CompileOptions::new().map_err(|e| anyhow!("shaderc options: {e}"))?;
     // SPIR-V 1.5 (Vulkan 1.2): 1.6 would emit LocalSizeId and need maintenance4.
-    opts.set_target_env(
-        shaderc::TargetEnv::Vulkan,
-        shaderc::EnvVersion::Vulkan1_2 as u32,
-    );
+    opts.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
     opts.set_target_spirv(shaderc::SpirvVersion::V1_5);
     if optimize {
         opts.set_optimization_level(shaderc::OptimizationLevel::Performance);
@@ -96,19 +85,11 @@ pub fn compile_glsl_opt(name: &str, source: &str, defines: &[(&str, &str)], opti
     }
     opts.set_include_callback(|req, _ty, requester, _depth| resolve_include(req, requester));
     COMPILES.fetch_add(1, Ordering::Relaxed);
-    match compiler.compile_into_spirv(
-        source,
-        shaderc::ShaderKind::Compute,
-        name,
-        "main",
-        Some(&opts),
-    ) {
+    match compiler.compile_into_spirv(source, shaderc::ShaderKind::Compute, name, "main", Some(&opts)) {
         Ok(art) => Ok(art.as_binary().to_vec()),
-        Err(shaderc::Error::CompilationError(_, log)) => Err(CompileError {
-            name: name.to_string(),
-            log: log.trim_end().to_string(),
+        Err(shaderc::Error::CompilationError(_, log)) => {
+            Err(CompileError { name: name.to_string(), log: log.trim_end().to_string() }.into())
         }
-        .into()),
         Err(e) => Err(anyhow!("shaderc failed on {name}: {e}")),
     }
 }
@@ -134,10 +115,7 @@ impl ShaderCache {
     ) -> Result<vk::ShaderModule> {
         let src = source(name).ok_or_else(|| anyhow!("no kernel named {name:?} in glsl/"))?;
         let k = key(name, &src, defines);
-        let mut map = self
-            .modules
-            .lock()
-            .map_err(|_| anyhow!("shader cache poisoned"))?;
+        let mut map = self.modules.lock().map_err(|_| anyhow!("shader cache poisoned"))?;
         if let Some(m) = map.get(&k) {
             return Ok(*m);
         }

@@ -43,9 +43,7 @@ unsafe extern "system" fn callback(
         let text = if data.is_null() || (*data).p_message.is_null() {
             String::from("(no message)")
         } else {
-            CStr::from_ptr((*data).p_message)
-                .to_string_lossy()
-                .into_owned()
+            CStr::from_ptr((*data).p_message).to_string_lossy().into_owned()
         };
         msgs.push(format!("[{severity:?}] {text}"));
     }
@@ -58,8 +56,7 @@ impl Validation {
         let messages = Box::new(Messages::default());
         let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
             .message_severity(
-                vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
-                    | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+                vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
             )
             .message_type(
                 vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
@@ -71,11 +68,7 @@ impl Validation {
         // SAFETY: the user data box outlives the messenger (destroyed in Drop first).
         let messenger = unsafe { loader.create_debug_utils_messenger(&info, None) }
             .context("cannot create the validation messenger")?;
-        Ok(Validation {
-            loader,
-            messenger,
-            messages,
-        })
+        Ok(Validation { loader, messenger, messages })
     }
 
     pub(crate) fn messages(&self) -> Messages {
@@ -86,9 +79,6 @@ impl Validation {
 impl Drop for Validation {
     fn drop(&mut self) {
         // SAFETY: created in `new`, destroyed once.
-        unsafe {
-            self.loader
-                .destroy_debug_utils_messenger(self.messenger, None)
-        };
+        unsafe { self.loader.destroy_debug_utils_messenger(self.messenger, None) };
     }
 }

@@ -43,7 +43,7 @@ mod tests {
     fn matches_smallvcm_numbers() {
         // ../shared/SCENES.md 4.2: r0 = 0.0066512 for scene radius 2.217060; 0.004988 at
         // i+1 = 10, 0.003740 at 100, 0.002805 at 1000.
-        let s = RadiusSchedule::new(DEFAULT_RADIUS_FACTOR, 2.217060, DEFAULT_ALPHA);
+        let s = RadiusSchedule::new(DEFAULT_RADIUS_FACTOR, 2.21706, DEFAULT_ALPHA);
         assert!((s.radius(0) - 0.0066512).abs() < 1e-7);
         assert!((s.radius(9) - 0.004988).abs() < 1e-6);
         assert!((s.radius(99) - 0.003740).abs() < 1e-6);
