@@ -15,7 +15,7 @@ build: setup
 
 render: build
 	mkdir -p out
-	./target/release/vkvcm render --width 512 --height 512 --iterations 64 -o out/default.exr --png out/default.png
+	./target/release/vkvcm render --width 512 --height 512 --iterations 16 -o out/default.exr --png out/default.png
 
 # Tests force lavapipe so results do not depend on the machine's GPU.
 test: setup

@@ -28,6 +28,36 @@ enum Command {
     Devices,
     /// Render a scene to an EXR (and optionally a PNG).
     Render(RenderArgs),
+    /// Benchmarks (results for docs/performance.md).
+    #[command(subcommand)]
+    Bench(BenchCommand),
+}
+
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// Samples/s per wall second and per CPU-second, and GPU ms per kernel, for scenes x
+    /// estimators at a fixed iteration count (after one warm-up iteration each).
+    Render(BenchRenderArgs),
+}
+
+#[derive(Args)]
+struct BenchRenderArgs {
+    /// Scenes (built-in names or glTF paths), comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "gbs_s,glm_c,gbs_p,gbs_b")]
+    scenes: Vec<String>,
+    /// Estimators, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm")]
+    algos: Vec<Algorithm>,
+    /// Image width and height.
+    #[arg(long, default_value_t = 256)]
+    size: u32,
+    #[arg(long, default_value_t = 8)]
+    iterations: u64,
+    /// Also write the results as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    #[arg(long)]
+    device: Option<String>,
 }
 
 #[derive(Args)]
@@ -83,6 +113,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Devices => devices(),
         Command::Render(args) => render_cmd(args),
+        Command::Bench(BenchCommand::Render(args)) => bench_render(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -105,6 +136,33 @@ fn devices() -> Result<()> {
             let req = if f.required { "required" } else { "optional" };
             println!("    {mark} {} ({req})", f.name);
         }
+    }
+    Ok(())
+}
+
+fn bench_render(a: BenchRenderArgs) -> Result<()> {
+    if a.size == 0 || a.iterations == 0 {
+        bail!("--size and --iterations must be at least 1");
+    }
+    let gpu = Gpu::new(&GpuOptions::from_env(a.device.clone()))?;
+    println!("device: {} ({}), Vulkan {}", gpu.info.name, gpu.info.driver, gpu.info.api_version);
+    let mut rows = Vec::new();
+    for name in &a.scenes {
+        let scene = scene::load_named(name)?;
+        for &algo in &a.algos {
+            let row = render::bench::bench_one(&gpu, &scene, algo, a.size, a.size, a.iterations)
+                .with_context(|| format!("benchmarking {} on {name}", algo.name()))?;
+            eprintln!("{} {}: {:.0} samples/s", row.scene, row.algorithm, row.samples_per_second);
+            rows.push(row);
+        }
+    }
+    print!("{}", render::bench::table(&rows));
+    if let Some(p) = &a.json {
+        let text = serde_json::to_string_pretty(&rows)?;
+        let dir = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+        let mut f = tempfile::NamedTempFile::new_in(dir).with_context(|| format!("cannot write {}", p.display()))?;
+        std::io::Write::write_all(&mut f, text.as_bytes())?;
+        f.persist(p).with_context(|| format!("cannot write {}", p.display()))?;
     }
     Ok(())
 }

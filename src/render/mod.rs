@@ -1,6 +1,7 @@
 //! Estimators: each is a sequence of kernel dispatches per iteration over shared buffers
 //! (../shared/DESIGN.md). One iteration = one sample per pixel.
 
+pub mod bench;
 pub mod bidir;
 pub mod film;
 pub mod gpu_types;
