@@ -38,6 +38,22 @@ enum BenchCommand {
     /// Samples/s per wall second and per CPU-second, and GPU ms per kernel, for scenes x
     /// estimators at a fixed iteration count (after one warm-up iteration each).
     Render(BenchRenderArgs),
+    /// BVH build time and closest-hit / any-hit rays per second (camera and random rays)
+    /// on the generated traversal scenes: cornell (~4k triangles + spheres), spheres and
+    /// displaced (1M triangles each); see docs/bvh.md.
+    Traverse(BenchTraverseArgs),
+}
+
+#[derive(Args)]
+struct BenchTraverseArgs {
+    /// Scenes: cornell, spheres, displaced (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "cornell,spheres,displaced")]
+    scenes: Vec<String>,
+    /// Rays per ray set.
+    #[arg(long, default_value_t = 1 << 20)]
+    rays: u32,
+    #[arg(long)]
+    device: Option<String>,
 }
 
 #[derive(Args)]
@@ -114,6 +130,7 @@ fn main() -> ExitCode {
         Command::Devices => devices(),
         Command::Render(args) => render_cmd(args),
         Command::Bench(BenchCommand::Render(args)) => bench_render(args),
+        Command::Bench(BenchCommand::Traverse(args)) => bench_traverse(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -136,6 +153,19 @@ fn devices() -> Result<()> {
             let req = if f.required { "required" } else { "optional" };
             println!("    {mark} {} ({req})", f.name);
         }
+    }
+    Ok(())
+}
+
+fn bench_traverse(a: BenchTraverseArgs) -> Result<()> {
+    let gpu = Gpu::new(&GpuOptions::from_env(a.device.clone()))?;
+    println!("device: {} ({}), Vulkan {}", gpu.info.name, gpu.info.driver, gpu.info.api_version);
+    let opts = vkvcm::bvh::bench::TraverseBenchOptions { rays: a.rays.max(1), ..Default::default() };
+    for name in &a.scenes {
+        let scene = vkvcm::bvh::bench::bench_scene(name)
+            .with_context(|| format!("unknown traversal scene {name:?} (cornell, spheres, displaced)"))?;
+        let report = vkvcm::bvh::bench::bench_traverse(&gpu, &scene, &opts)?;
+        println!("{report}");
     }
     Ok(())
 }
