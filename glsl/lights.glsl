@@ -11,6 +11,8 @@
 uint light_kind(GpuLight l) { return floatBitsToUint(l.radiance.w); }
 bool light_is_delta(uint kind) { return kind == LIGHT_POINT || kind == LIGHT_SPOT || kind == LIGHT_DIRECTIONAL; }
 bool light_is_infinite(uint kind) { return kind == LIGHT_DIRECTIONAL || kind == LIGHT_BACKGROUND; }
+// The emitting side of an area light: its triangle's geometric normal (p1-p0)x(p2-p0).
+vec3 area_light_normal(GpuLight l) { return normalize(cross(l.b.xyz, l.c.xyz)); }
 
 // Spot falloff between the outer and inner cone (smoothstep in cos, as glTF suggests).
 float spot_falloff(GpuLight l, vec3 dir_from_light) {
@@ -49,7 +51,7 @@ LightSample light_illuminate(uint index, vec3 x, vec2 u) {
     if (kind == LIGHT_AREA) {
         vec2 bc = sample_triangle(u);
         vec3 p = l.a.xyz + bc.x * l.b.xyz + bc.y * l.c.xyz;
-        vec3 nl = normalize(cross(l.b.xyz, l.c.xyz));
+        vec3 nl = area_light_normal(l);
         vec3 d = p - x;
         float d2 = dot(d, d);
         s.dist = sqrt(d2);
@@ -94,7 +96,7 @@ LightSample light_illuminate(uint index, vec3 x, vec2 u) {
 // probability) and by emission sampling (solid angle).
 vec3 area_light_radiance(uint index, vec3 dir, out float direct_pdf_a, out float emission_pdf_w) {
     GpuLight l = lights[index];
-    vec3 nl = normalize(cross(l.b.xyz, l.c.xyz));
+    vec3 nl = area_light_normal(l);
     float c = dot(nl, -dir);
     direct_pdf_a = 0.0;
     emission_pdf_w = 0.0;
@@ -142,7 +144,7 @@ LightEmission light_emit(uint index, vec2 u_pos, vec2 u_dir) {
     if (kind == LIGHT_AREA) {
         vec2 bc = sample_triangle(u_pos);
         e.pos = l.a.xyz + bc.x * l.b.xyz + bc.y * l.c.xyz;
-        e.normal = normalize(cross(l.b.xyz, l.c.xyz));
+        e.normal = area_light_normal(l);
         vec3 local = sample_cosine_hemisphere(u_dir);
         local.z = max(local.z, EPS_COSINE_LIGHT);
         e.dir = to_world(local, e.normal);
