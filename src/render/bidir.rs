@@ -93,6 +93,8 @@ impl Bidir {
             gpu.buffer_zeroed::<u32>("light_vertex_counts", if store { light_paths as usize } else { 1 })?,
         ];
         let grid = if mode.use_vm() {
+            // One bucket per light subpath, as SmallVCM; camera_subpath.comp queries with
+            // push.light_paths as the bucket count, so the two must stay equal.
             Some(HashGrid::new(gpu, &buffers[1], &buffers[3], light_paths, slots as u32, light_paths)?)
         } else {
             None
