@@ -42,6 +42,33 @@ enum BenchCommand {
     /// on the generated traversal scenes: cornell (~4k triangles + spheres), spheres and
     /// displaced (1M triangles each); see docs/bvh.md.
     Traverse(BenchTraverseArgs),
+    /// Error at equal time: each estimator renders for --seconds of wall-clock time, and
+    /// its RMSE, relative MSE and mean bias against a long reference render are reported
+    /// (the reference's own remaining noise is printed with it).
+    EqualTime(BenchEqualTimeArgs),
+}
+
+#[derive(Args)]
+struct BenchEqualTimeArgs {
+    #[arg(long, value_delimiter = ',', default_value = "gbs_s,glm_c,gbs_p,gbs_b")]
+    scenes: Vec<String>,
+    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm")]
+    algos: Vec<Algorithm>,
+    #[arg(long, default_value_t = 128)]
+    size: u32,
+    /// Wall-clock seconds per estimator.
+    #[arg(long, default_value_t = 5.0)]
+    seconds: f64,
+    /// Estimator of the reference (vcm samples every path of the reference scenes,
+    /// including the SDS paths bpt and pt miss).
+    #[arg(long, value_enum, default_value = "vcm")]
+    reference_algo: Algorithm,
+    #[arg(long, default_value_t = 2048)]
+    reference_iterations: u64,
+    #[arg(long)]
+    json: Option<PathBuf>,
+    #[arg(long)]
+    device: Option<String>,
 }
 
 #[derive(Args)]
@@ -131,6 +158,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render_cmd(args),
         Command::Bench(BenchCommand::Render(args)) => bench_render(args),
         Command::Bench(BenchCommand::Traverse(args)) => bench_traverse(args),
+        Command::Bench(BenchCommand::EqualTime(args)) => bench_equal_time(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -170,6 +198,48 @@ fn bench_traverse(a: BenchTraverseArgs) -> Result<()> {
     Ok(())
 }
 
+fn bench_equal_time(a: BenchEqualTimeArgs) -> Result<()> {
+    if a.size == 0 || !(a.seconds > 0.0) || a.reference_iterations < 2 {
+        bail!("--size and --seconds must be positive and --reference-iterations at least 2");
+    }
+    let gpu = Gpu::new(&GpuOptions::from_env(a.device.clone()))?;
+    println!("device: {} ({}), Vulkan {}", gpu.info.name, gpu.info.driver, gpu.info.api_version);
+    let mut rows = Vec::new();
+    for name in &a.scenes {
+        let scene = scene::load_named(name)?;
+        eprintln!("{name}: reference, {} x {} iterations ...", a.reference_algo.name(), a.reference_iterations);
+        let r = render::bench::reference(&gpu, &scene, a.reference_algo, a.size, a.reference_iterations)?;
+        println!(
+            "{name}: reference {} x {} iterations at {}x{}, its own noise (RMS standard error) {:.5}",
+            r.algorithm.name(),
+            r.iterations,
+            a.size,
+            a.size,
+            r.noise_rms
+        );
+        for &algo in &a.algos {
+            let row = render::bench::equal_time(&gpu, &scene, algo, a.seconds, &r)?;
+            eprintln!("{name} {}: RMSE {:.5}", row.algorithm, row.rmse);
+            rows.push(row);
+        }
+    }
+    print!("{}", render::bench::equal_time_table(&rows));
+    if let Some(p) = &a.json {
+        write_json(p, &rows)?;
+    }
+    Ok(())
+}
+
+/// Writes `value` as pretty JSON, atomically.
+fn write_json<T: serde::Serialize>(p: &std::path::Path, value: &T) -> Result<()> {
+    let text = serde_json::to_string_pretty(value)?;
+    let dir = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+    let mut f = tempfile::NamedTempFile::new_in(dir).with_context(|| format!("cannot write {}", p.display()))?;
+    std::io::Write::write_all(&mut f, text.as_bytes())?;
+    f.persist(p).with_context(|| format!("cannot write {}", p.display()))?;
+    Ok(())
+}
+
 fn bench_render(a: BenchRenderArgs) -> Result<()> {
     if a.size == 0 || a.iterations == 0 {
         bail!("--size and --iterations must be at least 1");
@@ -188,11 +258,7 @@ fn bench_render(a: BenchRenderArgs) -> Result<()> {
     }
     print!("{}", render::bench::table(&rows));
     if let Some(p) = &a.json {
-        let text = serde_json::to_string_pretty(&rows)?;
-        let dir = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
-        let mut f = tempfile::NamedTempFile::new_in(dir).with_context(|| format!("cannot write {}", p.display()))?;
-        std::io::Write::write_all(&mut f, text.as_bytes())?;
-        f.persist(p).with_context(|| format!("cannot write {}", p.display()))?;
+        write_json(p, &rows)?;
     }
     Ok(())
 }

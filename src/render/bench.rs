@@ -100,3 +100,75 @@ pub fn table(rows: &[BenchRow]) -> String {
     }
     s
 }
+
+/// One estimator's error after a fixed wall-clock budget.
+#[derive(Clone, Debug, Serialize)]
+pub struct EqualTimeRow {
+    pub scene: String,
+    pub algorithm: String,
+    pub seconds: f64,
+    pub iterations: u64,
+    pub rmse: f64,
+    pub rel_mse: f64,
+    pub mean_abs_bias: f64,
+}
+
+/// A long render used as the reference, with an estimate of its own remaining noise:
+/// the RMS over pixels and channels of the standard error of its per-pixel mean.
+pub struct Reference {
+    pub image: crate::image::Image,
+    pub algorithm: Algorithm,
+    pub iterations: u64,
+    pub noise_rms: f64,
+}
+
+pub fn reference(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, size: u32, iterations: u64) -> Result<Reference> {
+    let s = RenderSettings::new(algo, size, size, Budget::Iterations(iterations));
+    let out = render(gpu, scene, &s, None, &mut |_| {})?;
+    let n = out.iterations as f64;
+    let mut acc = 0.0;
+    for (sum, sq) in out.sum.iter().zip(&out.sum_sq) {
+        for c in 0..3 {
+            let m = sum[c] / n;
+            let var = ((sq[c] / n - m * m) * n / (n - 1.0).max(1.0)).max(0.0);
+            acc += var / n;
+        }
+    }
+    let noise_rms = (acc / (3 * out.sum.len()) as f64).sqrt();
+    let image = crate::image::Image { width: out.width, height: out.height, data: out.pixels };
+    Ok(Reference { image, algorithm: algo, iterations: out.iterations, noise_rms })
+}
+
+/// Renders with `algo` for `seconds` of wall-clock time (after a 1-iteration warm-up
+/// that pays the driver's compilation) and measures the error against the reference.
+pub fn equal_time(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, seconds: f64, reference: &Reference) -> Result<EqualTimeRow> {
+    let (w, h) = (reference.image.width, reference.image.height);
+    render(gpu, scene, &RenderSettings::new(algo, w, h, Budget::Iterations(1)), None, &mut |_| {})?;
+    let mut s = RenderSettings::new(algo, w, h, Budget::Seconds(seconds));
+    // A different seed from the reference's, so the errors are independent.
+    s.frame.seed = 4321;
+    let out = render(gpu, scene, &s, None, &mut |_| {})?;
+    let img = crate::image::Image { width: w, height: h, data: out.pixels };
+    let m = crate::image::compare(&img, &reference.image)?;
+    Ok(EqualTimeRow {
+        scene: scene.name.clone(),
+        algorithm: algo.name().to_string(),
+        seconds: out.seconds,
+        iterations: out.iterations,
+        rmse: m.rmse,
+        rel_mse: m.rel_mse,
+        mean_abs_bias: m.mean_abs_bias,
+    })
+}
+
+/// A markdown table of equal-time rows.
+pub fn equal_time_table(rows: &[EqualTimeRow]) -> String {
+    let mut s = String::from("| scene | algo | seconds | iterations | RMSE | relMSE | mean bias |\n|---|---|---|---|---|---|---|\n");
+    for r in rows {
+        s += &format!(
+            "| {} | {} | {:.1} | {} | {:.5} | {:.5} | {:.5} |\n",
+            r.scene, r.algorithm, r.seconds, r.iterations, r.rmse, r.rel_mse, r.mean_abs_bias
+        );
+    }
+    s
+}
