@@ -199,7 +199,7 @@ fn bench_traverse(a: BenchTraverseArgs) -> Result<()> {
 }
 
 fn bench_equal_time(a: BenchEqualTimeArgs) -> Result<()> {
-    if a.size == 0 || !(a.seconds > 0.0) || a.reference_iterations < 2 {
+    if a.size == 0 || a.seconds.is_nan() || a.seconds <= 0.0 || a.reference_iterations < 2 {
         bail!("--size and --seconds must be positive and --reference-iterations at least 2");
     }
     let gpu = Gpu::new(&GpuOptions::from_env(a.device.clone()))?;

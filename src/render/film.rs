@@ -8,6 +8,9 @@ use anyhow::Result;
 
 use crate::gpu::{Buffer, Gpu};
 
+/// Per-pixel RGB sums.
+pub type PixelSums = Vec<[f64; 3]>;
+
 /// vec4 entries per pixel in `Film::accum`.
 pub const FILM_VEC4_PER_PIXEL: usize = 4;
 
@@ -33,7 +36,7 @@ impl Film {
 
     /// Per-pixel sums of the iterations' values and of their squares (linear RGB, row 0
     /// at the top).
-    pub fn sums(&self) -> Result<(Vec<[f64; 3]>, Vec<[f64; 3]>)> {
+    pub fn sums(&self) -> Result<(PixelSums, PixelSums)> {
         let raw: Vec<[f32; 4]> = self.accum.read()?;
         let rgb = |v: [f32; 4]| [v[0] as f64, v[1] as f64, v[2] as f64];
         let sum = raw.chunks_exact(FILM_VEC4_PER_PIXEL).map(|p| rgb(p[0])).collect();
