@@ -1,8 +1,21 @@
 // vkvcm's material model, written once for every estimator: Lambert + normalised Phong
-// lobe + Fresnel-weighted mirror / smooth dielectric. Component choice and Russian
-// roulette follow SmallVCM (Georgiev & Davidovic), as ../shared/SCENES.md 2.4 states:
-// component probabilities proportional to luminance albedo, continuation probability =
-// clamp(max RGB of (diffuse + phong + F mirror) + (1 - F), 0, 1).
+// lobe + GGX microfacet reflection + Fresnel-weighted mirror / smooth dielectric.
+// Component choice and Russian roulette follow SmallVCM (Georgiev & Davidovic), as
+// ../shared/SCENES.md 2.4 states: component probabilities proportional to luminance
+// albedo, continuation probability = clamp(max RGB of (diffuse + phong + glossy +
+// F mirror) + (1 - F), 0, 1) (glossy is zero for SmallVCM's materials, so their rule is
+// unchanged).
+//
+// GGX lobe (`glossy`, used for glTF metallic/roughness): Trowbridge-Reitz distribution D
+// as in Walter, Marschner, Li, Torrance, "Microfacet Models for Refraction through Rough
+// Surfaces" (EGSR 2007); Smith height-correlated masking-shadowing
+// G2 = 1 / (1 + Lambda(wo) + Lambda(wi)) as in Heitz, "Understanding the Masking-
+// Shadowing Function in Microfacet-Based BRDFs" (JCGT 2014); Schlick's Fresnel with
+// F0 = the lobe's colour (a metal's colour, or 0.04 for a dielectric coat). It is
+// sampled by D(h) cos(theta_h) (Walter 2007), not by the visible normals (Heitz 2018):
+// pdf(wi | wo) = D(h) cos(theta_h) / (4 |wo.h|), and since wo.h = wi.h for a reflection
+// the reverse pdf has the same form with wi.h. f, being reciprocal, needs no adjoint
+// correction.
 //
 // Requires: `materials[]` (GpuMaterial) declared by the kernel, common.glsl, types.glsl.
 #ifndef BSDF_GLSL
@@ -14,7 +27,7 @@ struct Bsdf {
     vec3 n;          // normal: for opaque materials on the side of wo; for dielectrics outward
     vec3 wo;         // the fixed direction (towards the previous vertex), unit
     uint material;
-    float prob_diffuse, prob_phong, prob_reflect, prob_refract;
+    float prob_diffuse, prob_phong, prob_glossy, prob_reflect, prob_refract;
     float cont_prob;
     float fresnel;   // reflectance F (1 for non-dielectrics)
     float eta_ratio; // eta on the wo side / eta on the other side (dielectrics)
@@ -34,6 +47,46 @@ float fresnel_dielectric(float cos_i, float ior) {
     float r_par = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
     float r_perp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
     return 0.5 * (r_par * r_par + r_perp * r_perp);
+}
+
+// GGX (Trowbridge-Reitz) normal distribution D(h) for cos(theta_h) = `ch` > 0, width
+// `a` (Walter et al. 2007, eq. 33, written with cos only).
+float ggx_d(float ch, float a) {
+    float a2 = a * a;
+    float t = ch * ch * (a2 - 1.0) + 1.0;
+    return a2 * INV_PI / (t * t);
+}
+
+// Smith's Lambda for GGX at a direction with cos(theta) = `c` > 0 (Heitz 2014, eq. 72).
+float ggx_lambda(float c, float a) {
+    float c2 = c * c;
+    float tan2 = max(0.0, 1.0 - c2) / c2;
+    return 0.5 * (sqrt(1.0 + a * a * tan2) - 1.0);
+}
+
+// The GGX lobe for unit wo, wi above the surface (cos_o, cos_i > 0): f, and the pdfs of
+// sampling wi given wo (fwd) and wo given wi (rev) by D(h) cos(theta_h), without the
+// component probability.
+vec3 ggx_eval(vec3 n, vec3 wo, vec3 wi, float cos_o, float cos_i, vec3 f0, float a, out float pdf_fwd,
+              out float pdf_rev) {
+    pdf_fwd = 0.0;
+    pdf_rev = 0.0;
+    vec3 hs = wo + wi;
+    float hl = length(hs);
+    if (hl < 1e-7) return vec3(0.0);
+    vec3 h = hs / hl;
+    float ch = dot(n, h);
+    float oh = dot(wo, h);
+    float ih = dot(wi, h);
+    if (ch < EPS_COSINE || oh < EPS_COSINE || ih < EPS_COSINE) return vec3(0.0);
+    float d = ggx_d(ch, a);
+    float g2 = 1.0 / (1.0 + ggx_lambda(cos_o, a) + ggx_lambda(cos_i, a));
+    float s = 1.0 - oh;
+    float s2 = s * s;
+    vec3 fr = f0 + (vec3(1.0) - f0) * (s2 * s2 * s);
+    pdf_fwd = d * ch / (4.0 * oh);
+    pdf_rev = d * ch / (4.0 * ih);
+    return fr * (d * g2 / (4.0 * cos_o * cos_i));
 }
 
 // `ng`: geometric normal (for a dielectric it must point outwards).
@@ -57,19 +110,21 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 wo, bool from_light) {
     }
     float a_d = luminance(m.diffuse.rgb);
     float a_p = luminance(m.phong.rgb);
+    float a_g = luminance(m.glossy.rgb);
     float a_r = b.fresnel * luminance(m.mirror.rgb);
     float a_t = ior < 0.0 ? 0.0 : 1.0 - b.fresnel;
-    float total = a_d + a_p + a_r + a_t;
+    float total = a_d + a_p + a_g + a_r + a_t;
     if (total < 1e-9) {
         b.valid = false;
         total = 1.0;
     }
     b.prob_diffuse = a_d / total;
     b.prob_phong = a_p / total;
+    b.prob_glossy = a_g / total;
     b.prob_reflect = a_r / total;
     b.prob_refract = a_t / total;
-    b.cont_prob = clamp(max3(m.diffuse.rgb + m.phong.rgb + b.fresnel * m.mirror.rgb) + (1.0 - b.fresnel), 0.0, 1.0);
-    b.delta = b.prob_diffuse == 0.0 && b.prob_phong == 0.0;
+    b.cont_prob = clamp(max3(m.diffuse.rgb + m.phong.rgb + m.glossy.rgb + b.fresnel * m.mirror.rgb) + (1.0 - b.fresnel), 0.0, 1.0);
+    b.delta = b.prob_diffuse == 0.0 && b.prob_phong == 0.0 && b.prob_glossy == 0.0;
     return b;
 }
 
@@ -101,6 +156,12 @@ vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
             pdf_rev += p;
         }
     }
+    if (b.prob_glossy > 0.0) {
+        float pf, pr;
+        f += ggx_eval(b.n, b.wo, wi, cos_o, cos_i, m.glossy.rgb, m.glossy.w, pf, pr);
+        pdf_fwd += b.prob_glossy * pf;
+        pdf_rev += b.prob_glossy * pr;
+    }
     return f;
 }
 
@@ -127,9 +188,22 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
     GpuMaterial m = materials[b.material];
     float cos_o = dot(b.n, b.wo);
     float x = u.z;
-    if (x < b.prob_diffuse + b.prob_phong) {
+    float p_nonspec = b.prob_diffuse + b.prob_phong + b.prob_glossy;
+    if (x < p_nonspec) {
         if (x < b.prob_diffuse) {
             s.wi = to_world(sample_cosine_hemisphere(u.xy), b.n);
+        } else if (x >= b.prob_diffuse + b.prob_phong) {
+            // GGX: half vector from D(h) cos(theta_h): tan^2(theta_h) = a^2 u / (1 - u)
+            // (Walter et al. 2007, eq. 35-36), then reflect wo about it.
+            float a = m.glossy.w;
+            float t2 = a * a * u.x / max(1.0 - u.x, 1e-7);
+            float ch = 1.0 / sqrt(1.0 + t2);
+            float sh = sqrt(max(0.0, 1.0 - ch * ch));
+            float phi = 2.0 * PI * u.y;
+            vec3 h = to_world(vec3(sh * cos(phi), sh * sin(phi), ch), b.n);
+            float oh = dot(b.wo, h);
+            if (oh <= 0.0) return s;
+            s.wi = 2.0 * oh * h - b.wo;
         } else {
             float e = m.diffuse.w;
             vec3 r = 2.0 * cos_o * b.n - b.wo;
@@ -146,7 +220,7 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
         return s;
     }
     s.specular = true;
-    if (x < b.prob_diffuse + b.prob_phong + b.prob_reflect) {
+    if (x < p_nonspec + b.prob_reflect) {
         s.wi = 2.0 * dot(b.n, b.wo) * b.n - b.wo;
         s.pdf = b.prob_reflect;
         s.pdf_rev = b.prob_reflect;

@@ -15,6 +15,7 @@ struct GpuMaterial {
     vec4 phong;     // rgb, w: IOR (< 0: not a dielectric)
     vec4 mirror;    // rgb
     vec4 emission;  // rgb radiance
+    vec4 glossy;    // rgb: GGX lobe colour (Schlick F0), w: GGX alpha (>= 1e-3)
 };
 
 struct GpuTriangle {

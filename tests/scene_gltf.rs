@@ -468,12 +468,15 @@ fn material_mapping_and_emission() {
     let m = &s.materials;
     assert_eq!(m.len(), 6, "5 + the glTF default material");
     assert_eq!(m[0].name, "plastic");
-    assert_close(m[0].diffuse, Vec3::splat(0.48));
-    assert_close(m[0].phong, Vec3::splat(0.04));
-    assert_eq!(m[0].phong_exponent, 1.0);
+    // metallic/roughness -> diffuse (1-m) b + GGX lobe F0 = mix(0.04, b, m), roughness r.
+    assert_close(m[0].diffuse, Vec3::splat(0.5));
+    assert_close(m[0].glossy, Vec3::splat(0.04));
+    assert_eq!(m[0].roughness, 1.0);
+    assert_eq!(m[0].phong, Vec3::ZERO);
     assert_eq!(m[0].mirror, Vec3::ZERO);
+    // metallic 1, roughness 0 stays a perfect mirror.
     assert_eq!(m[1].mirror, Vec3::new(1.0, 0.5, 0.25));
-    assert_eq!(m[1].diffuse + m[1].phong, Vec3::ZERO);
+    assert_eq!(m[1].diffuse + m[1].phong + m[1].glossy, Vec3::ZERO);
     assert_eq!(m[1].ior, -1.0);
     assert_eq!((m[2].mirror, m[2].ior, m[2].diffuse), (Vec3::ONE, 1.33, Vec3::ZERO));
     assert_eq!(m[3].emission, Vec3::new(4.0, 2.0, 0.0));
@@ -481,8 +484,11 @@ fn material_mapping_and_emission() {
     assert_eq!(m[4].phong, Vec3::splat(0.4));
     assert_eq!(m[4].phong_exponent, 90.0);
     assert_eq!(m[4].mirror, Vec3::ZERO);
+    assert_eq!(m[4].glossy, Vec3::ZERO, "VKVCM_materials_phong states the material completely");
     assert_eq!(s.triangles[5].material, 5);
     assert_eq!(m[5].name, "gltf-default");
+    // glTF's default material: base 1, metallic 1, roughness 1 -> a rough white metal.
+    assert_eq!((m[5].diffuse, m[5].glossy, m[5].roughness), (Vec3::ZERO, Vec3::ONE, 1.0));
     assert_eq!(s.lights, vec![Light::Area { triangle: 3, radiance: Vec3::new(4.0, 2.0, 0.0) }]);
 }
 

@@ -26,7 +26,14 @@ pub struct GpuMaterial {
     pub mirror: [f32; 4],
     /// rgb: emitted radiance; w: unused.
     pub emission: [f32; 4],
+    /// rgb: GGX microfacet lobe colour (Schlick's F0); w: GGX alpha = roughness^2, at
+    /// least `MIN_GGX_ALPHA`.
+    pub glossy: [f32; 4],
 }
+
+/// Smallest GGX alpha the kernels see (a smaller one makes D(h) overflow-prone and the
+/// lobe a mirror in all but name).
+pub const MIN_GGX_ALPHA: f32 = 1e-3;
 
 /// A triangle in original scene order, for shading a hit.
 #[repr(C)]

@@ -165,6 +165,7 @@ impl SceneGpu {
                 phong: v4(m.phong, m.ior),
                 mirror: v4(m.mirror, 0.0),
                 emission: v4(m.emission, 0.0),
+                glossy: v4(m.glossy, (m.roughness * m.roughness).max(MIN_GGX_ALPHA)),
             })
             .collect();
         let buffers = vec![

@@ -4,7 +4,7 @@
 //! `docs/scene-format.md`; in short: the default scene's node hierarchy with world
 //! transforms, triangle primitives (TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN; indexed or
 //! not) with optional normals, the metallic/roughness material mapped to vkvcm's
-//! diffuse + Phong + mirror/dielectric model, emission (one area light per emitting
+//! diffuse + GGX + mirror/dielectric model, emission (one area light per emitting
 //! triangle), `KHR_lights_punctual`, the first perspective camera, and the vkvcm
 //! extensions `VKVCM_spheres`, `VKVCM_materials_phong` and `VKVCM_background`.
 //!
@@ -50,8 +50,6 @@ pub struct LoadOptions {
 /// Specular reflectance of dielectrics at normal incidence used by the
 /// metallic/roughness mapping (glTF's fixed F0).
 const DIELECTRIC_F0: f32 = 0.04;
-const MIN_PHONG_EXPONENT: f32 = 1.0;
-const MAX_PHONG_EXPONENT: f32 = 10000.0;
 
 /// Loads a `.gltf` or `.glb` file. Errors name the file and the offending object.
 pub fn load_gltf(path: &Path, options: &LoadOptions) -> Result<Scene> {
@@ -670,6 +668,8 @@ impl Importer<'_> {
                 mirror: c("mirror")?,
                 ior: ext_f32(v, "ior", -1.0, &ctx)?,
                 emission: Vec3::ZERO,
+                glossy: Vec3::ZERO,
+                roughness: 1.0,
             }
         } else if let Some(t) = m.transmission().filter(|t| t.transmission_factor() > 0.0) {
             if t.transmission_factor() < 1.0 || roughness > 0.0 || base != Vec3::ONE {
@@ -957,17 +957,14 @@ impl Importer<'_> {
     }
 }
 
-/// The metallic/roughness -> diffuse + Phong (+ mirror) mapping of docs/scene-format.md.
+/// The metallic/roughness -> diffuse + GGX (+ mirror) mapping of docs/scene-format.md.
 fn metallic_roughness(base: Vec3, metallic: f32, roughness: f32) -> Material {
     if metallic >= 1.0 && roughness <= 0.0 {
         return Material { mirror: base, ..Material::default() };
     }
-    let diffuse = base * ((1.0 - metallic) * (1.0 - DIELECTRIC_F0));
-    let phong =
-        (base * metallic + Vec3::splat((1.0 - metallic) * DIELECTRIC_F0)).min(Vec3::ONE - diffuse).max(Vec3::ZERO);
-    let exponent = (2.0 / roughness.powi(4) - 2.0).clamp(MIN_PHONG_EXPONENT, MAX_PHONG_EXPONENT);
-    let exponent = if exponent.is_nan() { MAX_PHONG_EXPONENT } else { exponent };
-    Material { diffuse, phong, phong_exponent: exponent, ..Material::default() }
+    let diffuse = base * (1.0 - metallic);
+    let glossy = Vec3::splat(DIELECTRIC_F0).lerp(base, metallic);
+    Material { diffuse, glossy, roughness, ..Material::default() }
 }
 
 #[cfg(test)]
@@ -989,20 +986,24 @@ mod tests {
 
     #[test]
     fn metallic_roughness_mapping() {
+        let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-6;
         let m = metallic_roughness(Vec3::splat(0.5), 0.0, 1.0);
-        assert!((m.diffuse - Vec3::splat(0.48)).abs().max_element() < 1e-6);
-        assert!((m.phong - Vec3::splat(0.04)).abs().max_element() < 1e-6);
-        assert_eq!(m.phong_exponent, 1.0);
+        assert!(close(m.diffuse, Vec3::splat(0.5)));
+        assert!(close(m.glossy, Vec3::splat(0.04)));
+        assert_eq!(m.roughness, 1.0);
+        assert_eq!(m.phong, Vec3::ZERO);
         let m = metallic_roughness(Vec3::new(1.0, 0.5, 0.25), 1.0, 0.0);
         assert_eq!(m.mirror, Vec3::new(1.0, 0.5, 0.25));
         assert_eq!(m.diffuse, Vec3::ZERO);
-        assert_eq!(m.phong, Vec3::ZERO);
-        let m = metallic_roughness(Vec3::ONE, 1.0, 0.5);
-        assert!((m.phong_exponent - 30.0).abs() < 1e-4);
-        assert_eq!(m.phong, Vec3::ONE);
+        assert_eq!(m.glossy, Vec3::ZERO);
+        let m = metallic_roughness(Vec3::new(1.0, 0.5, 0.25), 1.0, 0.5);
+        assert!(close(m.glossy, Vec3::new(1.0, 0.5, 0.25)));
+        assert_eq!(m.diffuse, Vec3::ZERO);
+        assert_eq!(m.roughness, 0.5);
         let m = metallic_roughness(Vec3::ONE, 0.5, 0.0);
-        assert_eq!(m.phong_exponent, MAX_PHONG_EXPONENT);
-        assert!((m.diffuse + m.phong).max_element() <= 1.0 + 1e-6);
+        assert!(close(m.diffuse, Vec3::splat(0.5)));
+        assert!(close(m.glossy, Vec3::splat(0.52)));
+        assert_eq!(m.mirror, Vec3::ZERO);
     }
 
     #[test]

@@ -38,6 +38,11 @@ pub struct Material {
     pub ior: f32,
     /// Emitted radiance (W/(m^2 sr)) for area emitters; zero for non-emitters.
     pub emission: Vec3,
+    /// GGX microfacet reflection lobe: colour = Schlick's F0 (zero: no lobe). See
+    /// glsl/bsdf.glsl.
+    pub glossy: Vec3,
+    /// Perceptual roughness of the GGX lobe; its alpha is roughness^2 (at least 1e-3).
+    pub roughness: f32,
 }
 
 impl Default for Material {
@@ -50,6 +55,8 @@ impl Default for Material {
             mirror: Vec3::ZERO,
             ior: -1.0,
             emission: Vec3::ZERO,
+            glossy: Vec3::ZERO,
+            roughness: 1.0,
         }
     }
 }

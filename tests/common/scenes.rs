@@ -91,3 +91,32 @@ pub fn sds_scene() -> Scene {
     sc.spheres.push(Sphere { center: Vec3::new(0.2, 0.1, 0.8), radius: 0.3, material: 1 });
     sc
 }
+
+/// Two quads in the plane z = 0 (x < 0 and x > 0) with materials `left` and `right`,
+/// under a large one-sided square area light at height 1.5 facing down, with a diffuse
+/// back wall; the camera looks down at the floor and sees the light's glossy reflection.
+/// The light is large so that BSDF-sampled hits of it are not rare events.
+pub fn glossy_floor_scene(left: Material, right: Material) -> Scene {
+    let wall = Material {
+        name: "wall".into(),
+        diffuse: Vec3::splat(0.3),
+        glossy: Vec3::splat(0.5),
+        roughness: 0.5,
+        ..Default::default()
+    };
+    let lamp = Material { name: "lamp".into(), emission: Vec3::splat(2.0), ..Default::default() };
+    let quad = |a: Vec3, b: Vec3, c: Vec3, d: Vec3, material: u32| {
+        vec![Triangle { p: [a, b, c], n: None, material }, Triangle { p: [a, c, d], n: None, material }]
+    };
+    let v = Vec3::new;
+    let mut tris = Vec::new();
+    tris.extend(quad(v(-3., -3., 0.), v(0., -3., 0.), v(0., 3., 0.), v(-3., 3., 0.), 0));
+    tris.extend(quad(v(0., -3., 0.), v(3., -3., 0.), v(3., 3., 0.), v(0., 3., 0.), 1));
+    tris.extend(quad(v(-3., 3., 0.), v(3., 3., 0.), v(3., 3., 3.), v(-3., 3., 3.), 2));
+    // Light: normal -z (counter-clockwise seen from below).
+    tris.extend(quad(v(-1.5, -0.5, 1.5), v(-1.5, 2.5, 1.5), v(1.5, 2.5, 1.5), v(1.5, -0.5, 1.5), 3));
+    let materials = vec![left, right, wall, lamp];
+    let lights = area_lights(&tris, &materials);
+    let cam = camera(v(0.0, -2.5, 1.0), v(0.0, 2.5, -0.8), Vec3::Z, 60.0);
+    scene("glossy_floor", tris, materials, lights, cam)
+}
