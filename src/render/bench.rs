@@ -141,7 +141,13 @@ pub fn reference(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, size: u32, iter
 
 /// Renders with `algo` for `seconds` of wall-clock time (after a 1-iteration warm-up
 /// that pays the driver's compilation) and measures the error against the reference.
-pub fn equal_time(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, seconds: f64, reference: &Reference) -> Result<EqualTimeRow> {
+pub fn equal_time(
+    gpu: &Arc<Gpu>,
+    scene: &Scene,
+    algo: Algorithm,
+    seconds: f64,
+    reference: &Reference,
+) -> Result<EqualTimeRow> {
     let (w, h) = (reference.image.width, reference.image.height);
     render(gpu, scene, &RenderSettings::new(algo, w, h, Budget::Iterations(1)), None, &mut |_| {})?;
     let mut s = RenderSettings::new(algo, w, h, Budget::Seconds(seconds));
@@ -163,7 +169,9 @@ pub fn equal_time(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, seconds: f64, 
 
 /// A markdown table of equal-time rows.
 pub fn equal_time_table(rows: &[EqualTimeRow]) -> String {
-    let mut s = String::from("| scene | algo | seconds | iterations | RMSE | relMSE | mean bias |\n|---|---|---|---|---|---|---|\n");
+    let mut s = String::from(
+        "| scene | algo | seconds | iterations | RMSE | relMSE | mean bias |\n|---|---|---|---|---|---|---|\n",
+    );
     for r in rows {
         s += &format!(
             "| {} | {} | {:.1} | {} | {:.5} | {:.5} | {:.5} |\n",
