@@ -15,7 +15,14 @@ use vkvcm::scene::Scene;
 
 const ALPHA: f64 = 1e-3;
 
-fn render(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, size: u32, budget: Budget, radius_factor: f32) -> RenderOutput {
+fn render(
+    gpu: &Arc<Gpu>,
+    scene: &Scene,
+    algo: Algorithm,
+    size: u32,
+    budget: Budget,
+    radius_factor: f32,
+) -> RenderOutput {
     let mut s = RenderSettings::new(algo, size, size, budget);
     s.frame.seed = 101 + algo as u32;
     s.radius_factor = radius_factor;

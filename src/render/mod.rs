@@ -185,7 +185,14 @@ pub fn render(
             };
             let schedule =
                 radius::RadiusSchedule::new(settings.radius_factor, scene_gpu.params.scene_sphere[3], settings.alpha);
-            Estimator::Bidir(Box::new(bidir::Bidir::new(gpu, &scene_gpu, &film, mode, frame.max_path_length, schedule)?))
+            Estimator::Bidir(Box::new(bidir::Bidir::new(
+                gpu,
+                &scene_gpu,
+                &film,
+                mode,
+                frame.max_path_length,
+                schedule,
+            )?))
         }
         Algorithm::El => {
             let defines = scene_gpu::define_refs(&scene_gpu.defines);
