@@ -7,7 +7,7 @@ layout(local_size_x = 64) in;
 #include "vcm_bindings.glsl"
 
 void main() {
-    uint pixel = gl_GlobalInvocationID.x;
+    uint pixel = invocation_index();
     if (pixel >= push.count) return;
     film_add(pixel, splat_take(pixel));
 }

@@ -127,7 +127,7 @@ vec3 merge(SubpathState st, Surface s, Bsdf b) {
 #endif
 
 void main() {
-    uint pixel = gl_GlobalInvocationID.x;
+    uint pixel = invocation_index();
     if (pixel >= push.count) return;
     uint w = image_width();
     uint rng = rng_init(params.misc.x, push.iteration, pixel, 0u);

@@ -88,4 +88,11 @@ vec3 offset_ray(vec3 p, vec3 n, vec3 dir, float scene_radius) {
 
 bool finite3(vec3 v) { return !any(isnan(v)) && !any(isinf(v)); }
 
+// Index of this invocation in a 1-D problem dispatched as a 2-D grid of workgroups
+// (gpu::groups_2d), so that problems beyond 65,535 workgroups (the guaranteed
+// maxComputeWorkGroupCount[0]) fit.
+uint invocation_index() {
+    return gl_GlobalInvocationID.y * (gl_NumWorkGroups.x * gl_WorkGroupSize.x) + gl_GlobalInvocationID.x;
+}
+
 #endif

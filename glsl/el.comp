@@ -10,7 +10,7 @@ layout(push_constant) uniform PushBlock { GpuPush push; };
 #include "film.glsl"
 
 void main() {
-    uint pixel = gl_GlobalInvocationID.x;
+    uint pixel = invocation_index();
     if (pixel >= push.count) return;
     uint w = image_width();
     uint rng = rng_init(params.misc.x, push.iteration, pixel, 0u);

@@ -21,7 +21,7 @@ layout(local_size_x = 64) in;
 #include "vcm_bindings.glsl"
 
 void main() {
-    uint path = gl_GlobalInvocationID.x;
+    uint path = invocation_index();
     if (path >= push.count) return;
     uint rng = rng_init(params.misc.x, push.iteration, path, 1u);
     uint nl = light_count();

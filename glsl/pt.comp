@@ -20,7 +20,7 @@ layout(push_constant) uniform PushBlock { GpuPush push; };
 float balance(float a, float b) { return a / (a + b); }
 
 void main() {
-    uint pixel = gl_GlobalInvocationID.x;
+    uint pixel = invocation_index();
     uint w = image_width();
     if (pixel >= push.count) return;
     uint rng = rng_init(params.misc.x, push.iteration, pixel, 0u);

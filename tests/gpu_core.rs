@@ -34,6 +34,26 @@ fn roundtrip_matches_cpu_on_random_data() {
     });
 }
 
+/// More invocations than 65,535 workgroups of 64 hold: the dispatch is folded into 2-D
+/// (gpu::groups_2d) and every element is still computed exactly once.
+#[test]
+fn dispatch_beyond_the_workgroup_count_limit() {
+    with_gpu(|gpu| {
+        let n = 64 * 65_535 + 1_000usize;
+        let a: Vec<f32> = (0..n).map(|i| (i % 1000) as f32).collect();
+        let ba = gpu.buffer_from_slice("a", &a).unwrap();
+        let out = gpu.buffer_zeroed::<f32>("out", n).unwrap();
+        let k = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "2")], &[&ba, &ba, &out]).unwrap();
+        let mut batch = gpu.batch().unwrap();
+        let groups = vkvcm::gpu::groups_2d(n as u32, 64);
+        assert!(groups[1] > 1, "the test must need a 2-D dispatch");
+        batch.dispatch(&k, groups, bytemuck::bytes_of(&(n as u32))).unwrap();
+        batch.submit_wait(None).unwrap();
+        let o: Vec<f32> = out.read().unwrap();
+        assert!(o.iter().zip(&a).all(|(o, a)| *o == 3.0 * a));
+    });
+}
+
 #[test]
 fn atomics_count_exactly() {
     with_gpu(|gpu| {

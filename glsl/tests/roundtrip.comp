@@ -6,7 +6,8 @@ layout(std430, binding = 1) readonly buffer B { float b[]; };
 layout(std430, binding = 2) writeonly buffer O { float o[]; };
 layout(push_constant) uniform Push { uint n; } pc;
 #include "tests/scale_add.glsl"
+#include "common.glsl"
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = invocation_index();
     if (i < pc.n) o[i] = scale_add(a[i], b[i]);
 }

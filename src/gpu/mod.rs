@@ -21,3 +21,34 @@ pub use validation::Messages;
 pub fn groups_for(n: u32, local: u32) -> u32 {
     n.div_ceil(local)
 }
+
+/// Most workgroups per dispatch dimension every Vulkan device accepts.
+pub const MAX_GROUPS_PER_DIM: u32 = 65_535;
+
+/// A dispatch covering `n` invocations of a 1-D problem with groups of `local`, folded
+/// into two dimensions when it needs more than [`MAX_GROUPS_PER_DIM`] groups; kernels
+/// recover the index with `invocation_index()` (glsl/common.glsl) and skip indices >= n.
+pub fn groups_2d(n: u32, local: u32) -> [u32; 3] {
+    let total = groups_for(n, local);
+    if total <= MAX_GROUPS_PER_DIM {
+        [total, 1, 1]
+    } else {
+        [MAX_GROUPS_PER_DIM, total.div_ceil(MAX_GROUPS_PER_DIM), 1]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn groups_2d_covers_every_invocation() {
+        for n in [1u32, 64, 65, 64 * 65_535, 64 * 65_535 + 1, 8_294_400, u32::MAX / 2] {
+            let [x, y, z] = groups_2d(n, 64);
+            assert!(x <= MAX_GROUPS_PER_DIM && y <= MAX_GROUPS_PER_DIM && z == 1);
+            assert!(x as u64 * y as u64 * 64 >= n as u64, "{n}");
+            // No whole row of groups is wasted.
+            assert!((x as u64 * (y as u64 - 1)) * 64 < n as u64, "{n}");
+        }
+    }
+}

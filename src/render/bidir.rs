@@ -17,7 +17,7 @@ use super::gpu_types::GpuPush;
 use super::hash_grid::HashGrid;
 use super::radius::RadiusSchedule;
 use super::scene_gpu::{define_refs, SceneGpu};
-use crate::gpu::{groups_for, Batch, Buffer, Gpu, Kernel};
+use crate::gpu::{groups_2d, Batch, Buffer, Gpu, Kernel};
 
 /// Which light-subpath estimator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -140,11 +140,11 @@ impl Bidir {
             light_paths: self.light_paths,
             ..Default::default()
         };
-        batch.dispatch(&self.light, [groups_for(self.light_paths, 64), 1, 1], bytemuck::bytes_of(&push))?;
+        batch.dispatch(&self.light, groups_2d(self.light_paths, 64), bytemuck::bytes_of(&push))?;
         if let Some(g) = &self.grid {
             g.record_build(batch, radius, self.grid_origin)?;
         }
         push.count = self.pixels;
-        batch.dispatch(&self.resolve, [groups_for(self.pixels, 64), 1, 1], bytemuck::bytes_of(&push))
+        batch.dispatch(&self.resolve, groups_2d(self.pixels, 64), bytemuck::bytes_of(&push))
     }
 }

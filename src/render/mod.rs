@@ -131,7 +131,7 @@ impl Estimator {
             Estimator::Bidir(b) => b.record(batch, iteration),
             Estimator::El(k, pixels) => {
                 let push = gpu_types::GpuPush::simple(iteration, *pixels);
-                batch.dispatch(k, [crate::gpu::groups_for(*pixels, 64), 1, 1], bytemuck::bytes_of(&push))
+                batch.dispatch(k, crate::gpu::groups_2d(*pixels, 64), bytemuck::bytes_of(&push))
             }
         }
     }

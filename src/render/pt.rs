@@ -7,7 +7,7 @@ use anyhow::Result;
 use super::film::Film;
 use super::gpu_types::GpuPush;
 use super::scene_gpu::{define_refs, SceneGpu};
-use crate::gpu::{groups_for, Batch, Gpu, Kernel};
+use crate::gpu::{groups_2d, Batch, Gpu, Kernel};
 
 pub struct PathTracer {
     kernel: Kernel,
@@ -25,6 +25,6 @@ impl PathTracer {
 
     pub fn record(&self, batch: &mut Batch, iteration: u32) -> Result<()> {
         let push = GpuPush::simple(iteration, self.pixels);
-        batch.dispatch(&self.kernel, [groups_for(self.pixels, 64), 1, 1], bytemuck::bytes_of(&push))
+        batch.dispatch(&self.kernel, groups_2d(self.pixels, 64), bytemuck::bytes_of(&push))
     }
 }
