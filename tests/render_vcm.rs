@@ -6,7 +6,6 @@ mod common;
 
 use std::sync::Arc;
 
-use common::scenes::sds_scene;
 use common::{render_stats, with_gpu};
 use vkvcm::gpu::Gpu;
 use vkvcm::image::stats::welch_test;
@@ -60,7 +59,8 @@ fn vcm_matches_bpt_where_bpt_is_complete() {
 /// brighter on glm_c, and the per-pixel test above passed). The image mean resolves it.
 /// Renders with the same seed share their random numbers (light and camera subpaths are
 /// the same), so the per-seed difference of image means, VCM (or BPM) minus BPT, has a
-/// far smaller variance than either mean: a paired t-test over 8 seeds (pairs are
+/// far smaller variance than either mean (PPM shares less, so its test is weaker but
+/// equally valid): a paired t-test over 8 seeds (pairs are
 /// independent across seeds), df = 7, two-sided p >= 1e-3, i.e. |t| < 5.41.
 #[test]
 fn merging_estimators_conserve_energy() {
@@ -81,7 +81,7 @@ fn merging_estimators_conserve_energy() {
             };
             let seeds: Vec<u32> = (0..8).map(|k| 7 + 1000 * k).collect();
             let bpt: Vec<f64> = seeds.iter().map(|&k| image_mean(Algorithm::Bpt, k)).collect();
-            for algo in [Algorithm::Vcm, Algorithm::Bpm] {
+            for algo in [Algorithm::Vcm, Algorithm::Bpm, Algorithm::Ppm] {
                 let d: Vec<f64> = seeds.iter().zip(&bpt).map(|(&k, b)| image_mean(algo, k) - b).collect();
                 let n = d.len() as f64;
                 let m = d.iter().sum::<f64>() / n;
@@ -114,13 +114,14 @@ fn merging_bias_shrinks_with_iterations() {
     });
 }
 
-/// A point light inside a glass sphere lights a floor seen only through a glass slab:
-/// every path is L S+ D S+ E. BPT cannot sample any of them (black), VCM and PPM find
+/// scenes/hard/sds.gltf (scripts/make_sds_scene.py): a point light inside a glass sphere
+/// lights a floor seen only through a glass slab: every path is L S+ D S+ E. BPT cannot sample any of them (black), VCM and PPM find
 /// them by merging, and at equal time VCM's error against a long PPM reference is lower
 /// than BPT's.
 #[test]
 fn merging_finds_sds_paths_that_bpt_misses() {
-    let scene = sds_scene();
+    let scene = vkvcm::scene::load_named(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/hard/sds.gltf")).unwrap();
+    assert_eq!((scene.triangles.len(), scene.spheres.len(), scene.lights.len()), (14, 1, 1));
     with_gpu(|gpu| {
         let size = 16;
         let reference = render(gpu, &scene, Algorithm::Ppm, size, Budget::Iterations(2048), 0.01).pixels;

@@ -55,43 +55,6 @@ pub fn area_lights(triangles: &[Triangle], materials: &[Material]) -> Vec<Light>
         .collect()
 }
 
-/// Axis-aligned closed box [lo, hi] as 12 triangles with outward normals (a dielectric
-/// slab needs its normals to point outwards).
-pub fn outward_box(lo: Vec3, hi: Vec3, material: u32) -> Vec<Triangle> {
-    let c = (lo + hi) * 0.5;
-    let h = (hi - lo) * 0.5;
-    inward_box(1.0, material)
-        .into_iter()
-        .map(|t| Triangle { p: [t.p[0] * h + c, t.p[2] * h + c, t.p[1] * h + c], n: None, material })
-        .collect()
-}
-
-/// SDS everywhere: a point light inside a glass sphere above a diffuse floor, the floor
-/// seen only through a glass slab in front of the camera. Every light path is
-/// L S+ D S+ E: vertex connection cannot sample any of it, merging can.
-pub fn sds_scene() -> Scene {
-    use vkvcm::scene::Sphere;
-    let floor = Material { name: "floor".into(), diffuse: Vec3::splat(0.8), ..Default::default() };
-    let glass = Material { name: "glass".into(), mirror: Vec3::ONE, ior: 1.5, ..Default::default() };
-    let s = 3.0;
-    let mut tris = vec![
-        Triangle { p: [Vec3::new(-s, -s, 0.), Vec3::new(s, -s, 0.), Vec3::new(s, s, 0.)], n: None, material: 0 },
-        Triangle { p: [Vec3::new(-s, -s, 0.), Vec3::new(s, s, 0.), Vec3::new(-s, s, 0.)], n: None, material: 0 },
-    ];
-    // A slab between camera (z = 3) and floor, wider than the view.
-    tris.extend(outward_box(Vec3::new(-3.0, -3.0, 2.0), Vec3::new(3.0, 3.0, 2.3), 1));
-    let cam = camera(Vec3::new(0.0, 0.0, 3.0), -Vec3::Z, Vec3::Y, 50.0);
-    let mut sc = scene(
-        "sds",
-        tris,
-        vec![floor, glass],
-        vec![Light::Point { position: Vec3::new(0.2, 0.1, 0.8), intensity: Vec3::splat(2.0) }],
-        cam,
-    );
-    sc.spheres.push(Sphere { center: Vec3::new(0.2, 0.1, 0.8), radius: 0.3, material: 1 });
-    sc
-}
-
 /// Two quads in the plane z = 0 (x < 0 and x > 0) with materials `left` and `right`,
 /// under a large one-sided square area light at height 1.5 facing down, with a diffuse
 /// back wall; the camera looks down at the floor and sees the light's glossy reflection.
