@@ -39,10 +39,8 @@ float emitter_hit_weight(SubpathState st, float direct_pdf, float emission_pdf, 
 }
 
 vec3 direct_illumination(SubpathState st, Surface s, Bsdf b, inout uint rng) {
-    uint nl = light_count();
-    uint li = min(uint(rnd(rng) * float(nl)), nl - 1u);
-    float pick = 1.0 / float(nl);
-    LightSample ls = light_illuminate(li, s.p, rnd2(rng));
+    float pick = 1.0 / float(light_count());
+    LightSample ls = light_illuminate(pick_light(rng), s.p, rnd2(rng));
     if (!ls.ok) return vec3(0.0);
     float pf, pr;
     vec3 f = bsdf_eval(b, ls.wi, pf, pr);
@@ -53,8 +51,7 @@ vec3 direct_illumination(SubpathState st, Surface s, Bsdf b, inout uint rng) {
     float w_light = pf / (pick * ls.pdf_w);
     float w_camera = (ls.emission_pdf_w * cos_x / (ls.pdf_w * ls.cos_light)) * (push.mis_vm + st.dvcm + st.dvc * pr);
     float w = 1.0 / (w_light + 1.0 + w_camera);
-    bool vis = ls.dist >= 1e29 ? visible_dir(s.p, s.ng, ls.wi) : visible(s.p, s.ng, ls.light_point, ls.light_normal);
-    if (!vis) return vec3(0.0);
+    if (!light_sample_visible(s.p, s.ng, ls)) return vec3(0.0);
     return (w * cos_x / (pick * ls.pdf_w)) * ls.radiance * f;
 }
 
@@ -129,12 +126,10 @@ vec3 merge(SubpathState st, Surface s, Bsdf b) {
 void main() {
     uint pixel = invocation_index();
     if (pixel >= push.count) return;
-    uint w = image_width();
     uint rng = rng_init(params.misc.x, push.iteration, pixel, 0u);
-    vec2 raster = vec2(float(pixel % w), float(pixel / w)) + rnd2(rng);
     SubpathState st;
     st.o = params.cam_pos.xyz;
-    st.d = camera_direction(raster);
+    st.d = camera_sample(pixel, rng);
     st.thr = vec3(1.0);
     st.len = 1u;
     st.specular = true;

@@ -12,10 +12,8 @@ layout(push_constant) uniform PushBlock { GpuPush push; };
 void main() {
     uint pixel = invocation_index();
     if (pixel >= push.count) return;
-    uint w = image_width();
     uint rng = rng_init(params.misc.x, push.iteration, pixel, 0u);
-    vec2 raster = vec2(float(pixel % w), float(pixel / w)) + rnd2(rng);
-    vec3 d = camera_direction(raster);
+    vec3 d = camera_sample(pixel, rng);
     Hit h;
     vec3 v = vec3(0.0);
     if (trace_closest(params.cam_pos.xyz, d, 0.0, 1e30, h)) {

@@ -25,7 +25,7 @@ void main() {
     if (path >= push.count) return;
     uint rng = rng_init(params.misc.x, push.iteration, path, 1u);
     uint nl = light_count();
-    uint li = min(uint(rnd(rng) * float(nl)), nl - 1u);
+    uint li = pick_light(rng);
     float pick = 1.0 / float(nl);
     vec2 u_pos = rnd2(rng);
     vec2 u_dir = rnd2(rng);

@@ -14,6 +14,12 @@ bool light_is_infinite(uint kind) { return kind == LIGHT_DIRECTIONAL || kind == 
 // The emitting side of an area light: its triangle's geometric normal (p1-p0)x(p2-p0).
 vec3 area_light_normal(GpuLight l) { return normalize(cross(l.b.xyz, l.c.xyz)); }
 
+// Picks a light uniformly (probability 1 / #lights, as SmallVCM).
+uint pick_light(inout uint rng) {
+    uint n = params.dims.z;
+    return min(uint(rnd(rng) * float(n)), n - 1u);
+}
+
 // Spot falloff between the outer and inner cone (smoothstep in cos, as glTF suggests).
 float spot_falloff(GpuLight l, vec3 dir_from_light) {
     float c = dot(dir_from_light, l.b.xyz);

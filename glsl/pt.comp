@@ -21,12 +21,10 @@ float balance(float a, float b) { return a / (a + b); }
 
 void main() {
     uint pixel = invocation_index();
-    uint w = image_width();
     if (pixel >= push.count) return;
     uint rng = rng_init(params.misc.x, push.iteration, pixel, 0u);
-    vec2 raster = vec2(float(pixel % w), float(pixel / w)) + rnd2(rng);
     vec3 o = params.cam_pos.xyz;
-    vec3 d = camera_direction(raster);
+    vec3 d = camera_sample(pixel, rng);
     vec3 thr = vec3(1.0);
     vec3 L = vec3(0.0);
     float last_pdf = 1.0;
@@ -62,23 +60,18 @@ void main() {
         if (!b.valid) break;
 #if NEE
         if (!b.delta && len + 1u >= min_len) {
-            uint li = min(uint(rnd(rng) * float(light_count())), light_count() - 1u);
-            LightSample ls = light_illuminate(li, s.p, rnd2(rng));
+            LightSample ls = light_illuminate(pick_light(rng), s.p, rnd2(rng));
             if (ls.ok) {
                 float pf, pr;
                 vec3 f = bsdf_eval(b, ls.wi, pf, pr);
                 if (max3(f) > 0.0) {
-                    bool vis = ls.dist >= 1e29 ? visible_dir(s.p, s.ng, ls.wi)
-                                               : visible(s.p, s.ng, ls.light_point, ls.light_normal);
-                    if (vis) {
+                    if (light_sample_visible(s.p, s.ng, ls)) {
                         float wgt = ls.delta ? 1.0 : balance(pick * ls.pdf_w, pf * b.cont_prob);
                         float cos_x = dot(b.n, ls.wi);
                         L += thr * f * ls.radiance * (wgt * cos_x / (pick * ls.pdf_w));
                     }
                 }
             }
-        } else {
-            rnd(rng); rnd(rng); rnd(rng);
         }
 #endif
         BsdfSample bs = bsdf_sample(b, vec3(rnd2(rng), rnd(rng)));

@@ -38,6 +38,12 @@ vec3 camera_direction(vec2 raster) {
     return normalize(d);
 }
 
+// The primary ray of this iteration's sample of `pixel`, jittered uniformly inside it.
+vec3 camera_sample(uint pixel, inout uint rng) {
+    uint w = image_width();
+    return camera_direction(vec2(float(pixel % w), float(pixel / w)) + rnd2(rng));
+}
+
 // Solid-angle pdf of the camera generating direction `d` (pixel area 1): dist^2 / cos^3.
 float camera_pdf_w(vec3 d) {
     float c = dot(d, params.cam_forward.xyz);
@@ -101,6 +107,11 @@ bool visible(vec3 a, vec3 na, vec3 b, vec3 nb) {
 // Shadow ray towards an infinite light in direction `w`.
 bool visible_dir(vec3 a, vec3 na, vec3 w) {
     return !trace_any(offset_ray(a, na, w, scene_radius()), w, 0.0, 1e30);
+}
+
+// Shadow ray for a direct-illumination sample taken at p (geometric normal ng).
+bool light_sample_visible(vec3 p, vec3 ng, LightSample ls) {
+    return ls.dist >= 1e29 ? visible_dir(p, ng, ls.wi) : visible(p, ng, ls.light_point, ls.light_normal);
 }
 
 #endif

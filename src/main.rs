@@ -185,9 +185,15 @@ fn devices() -> Result<()> {
     Ok(())
 }
 
-fn bench_traverse(a: BenchTraverseArgs) -> Result<()> {
-    let gpu = Gpu::new(&GpuOptions::from_env(a.device.clone()))?;
+/// Opens the device for a benchmark and prints which one it is (results name it).
+fn open_bench_gpu(device: Option<String>) -> Result<Arc<Gpu>> {
+    let gpu = Gpu::new(&GpuOptions::from_env(device))?;
     println!("device: {} ({}), Vulkan {}", gpu.info.name, gpu.info.driver, gpu.info.api_version);
+    Ok(gpu)
+}
+
+fn bench_traverse(a: BenchTraverseArgs) -> Result<()> {
+    let gpu = open_bench_gpu(a.device.clone())?;
     let opts = vkvcm::bvh::bench::TraverseBenchOptions { rays: a.rays.max(1), ..Default::default() };
     for name in &a.scenes {
         let scene = vkvcm::bvh::bench::bench_scene(name)
@@ -202,8 +208,7 @@ fn bench_equal_time(a: BenchEqualTimeArgs) -> Result<()> {
     if a.size == 0 || a.seconds.is_nan() || a.seconds <= 0.0 || a.reference_iterations < 2 {
         bail!("--size and --seconds must be positive and --reference-iterations at least 2");
     }
-    let gpu = Gpu::new(&GpuOptions::from_env(a.device.clone()))?;
-    println!("device: {} ({}), Vulkan {}", gpu.info.name, gpu.info.driver, gpu.info.api_version);
+    let gpu = open_bench_gpu(a.device.clone())?;
     let mut rows = Vec::new();
     for name in &a.scenes {
         let scene = scene::load_named(name)?;
@@ -244,8 +249,7 @@ fn bench_render(a: BenchRenderArgs) -> Result<()> {
     if a.size == 0 || a.iterations == 0 {
         bail!("--size and --iterations must be at least 1");
     }
-    let gpu = Gpu::new(&GpuOptions::from_env(a.device.clone()))?;
-    println!("device: {} ({}), Vulkan {}", gpu.info.name, gpu.info.driver, gpu.info.api_version);
+    let gpu = open_bench_gpu(a.device.clone())?;
     let mut rows = Vec::new();
     for name in &a.scenes {
         let scene = scene::load_named(name)?;

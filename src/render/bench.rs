@@ -32,6 +32,7 @@ pub struct BenchRow {
 
 /// User + system CPU time of this process in seconds (getrusage), `None` if unavailable.
 pub fn process_cpu_seconds() -> Option<f64> {
+    // SAFETY: rusage is plain old data; all-zero is a valid value.
     let mut u: libc::rusage = unsafe { std::mem::zeroed() };
     // SAFETY: `u` is a valid rusage to fill.
     if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut u) } != 0 {
