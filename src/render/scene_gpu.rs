@@ -26,8 +26,6 @@ pub struct FrameSettings {
 pub struct SceneGpu {
     pub params: GpuParams,
     pub buffers: Vec<Buffer>,
-    pub light_count: u32,
-    pub bvh_stats: bvh::BuildStats,
     /// Defines every kernel that traces rays must be compiled with (BVH layout).
     pub defines: Vec<(String, String)>,
 }
@@ -119,7 +117,6 @@ impl SceneGpu {
             bail!("scene {:?} has no geometry", scene.name);
         }
         let tree = bvh::build(&scene.triangles, &scene.spheres);
-        let bvh_stats = tree.stats.clone();
         let gb = tree.into_gpu();
         let defines = gb.glsl_defines().into_iter().map(|(k, v)| (k.to_string(), v)).collect();
         let (lights, background) = gpu_lights(scene)?;
@@ -178,7 +175,7 @@ impl SceneGpu {
             gpu.buffer_from_slice("lights", &lights)?,
             gpu.buffer_from_slice("shading_normals", &normals)?,
         ];
-        Ok(SceneGpu { params, buffers, light_count: lights.len() as u32, bvh_stats, defines })
+        Ok(SceneGpu { params, buffers, defines })
     }
 
     /// Bindings 0-7 followed by `extra` (bindings 8, 9, ...).
