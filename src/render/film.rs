@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use anyhow::Result;
+use anyhow::{bail, Result};
 
 use crate::gpu::{Buffer, Gpu};
 
@@ -42,6 +42,20 @@ impl Film {
         let sum = raw.chunks_exact(FILM_VEC4_PER_PIXEL).map(|p| rgb(p[0])).collect();
         let sum_sq = raw.chunks_exact(FILM_VEC4_PER_PIXEL).map(|p| rgb(p[2])).collect();
         Ok((sum, sum_sq))
+    }
+
+    /// Replaces the sums (Kahan compensations reset to zero); lengths must match the film.
+    pub fn load_sums(&self, sum: &[[f64; 3]], sum_sq: &[[f64; 3]]) -> Result<()> {
+        let n = self.width as usize * self.height as usize;
+        if sum.len() != n || sum_sq.len() != n {
+            bail!("saved sums have {} and {} pixels but the film has {n}", sum.len(), sum_sq.len());
+        }
+        let v = |p: [f64; 3]| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0];
+        let mut raw = Vec::with_capacity(FILM_VEC4_PER_PIXEL * n);
+        for (s, q) in sum.iter().zip(sum_sq) {
+            raw.extend_from_slice(&[v(*s), [0.0; 4], v(*q), [0.0; 4]]);
+        }
+        self.accum.write(&raw)
     }
 
     /// Samples rejected so far because they were NaN, infinite or negative, and splats

@@ -168,101 +168,185 @@ pub fn render(
     cancel: Option<&AtomicBool>,
     progress: &mut dyn FnMut(&Progress),
 ) -> Result<RenderOutput> {
-    check_frame(gpu, settings)?;
-    let frame = &settings.frame;
-    let scene_gpu = SceneGpu::new(gpu, scene, frame)?;
-    let film = Film::new(gpu, frame.width, frame.height)?;
-    let pixels = frame.width * frame.height;
-    let est = match settings.algorithm {
-        Algorithm::Pt => Estimator::Pt(pt::PathTracer::new(gpu, &scene_gpu, &film, settings.nee)?),
-        Algorithm::Lt | Algorithm::Bpt | Algorithm::Ppm | Algorithm::Bpm | Algorithm::Vcm => {
-            let mode = match settings.algorithm {
-                Algorithm::Lt => bidir::BidirMode::LightTracing,
-                Algorithm::Bpt => bidir::BidirMode::Bpt,
-                Algorithm::Ppm => bidir::BidirMode::Ppm,
-                Algorithm::Bpm => bidir::BidirMode::Bpm,
-                _ => bidir::BidirMode::Vcm,
-            };
-            let schedule =
-                radius::RadiusSchedule::new(settings.radius_factor, scene_gpu.params.scene_sphere[3], settings.alpha);
-            Estimator::Bidir(Box::new(bidir::Bidir::new(
-                gpu,
-                &scene_gpu,
-                &film,
-                mode,
-                frame.max_path_length,
-                schedule,
-            )?))
-        }
-        Algorithm::El => {
-            let defines = scene_gpu::define_refs(&scene_gpu.defines);
-            let k = gpu.kernel("el.comp", &defines, &scene_gpu.bindings(&[&film.accum, &film.stats]))?;
-            Estimator::El(k, pixels)
-        }
-    };
-    let mut batch = gpu.batch()?;
-    let mut profile = Profile::default();
-    let start = Instant::now();
-    let mut done: u64 = 0;
-    let mut per_batch: u64 = 1;
-    let mut interrupted = false;
-    // Aim for batches of about a quarter second: few submits, responsive progress.
-    const TARGET_BATCH_SECONDS: f64 = 0.25;
-    loop {
-        let remaining = match settings.budget {
-            Budget::Iterations(n) => n - done,
-            Budget::Seconds(t) => {
-                if done > 0 && start.elapsed().as_secs_f64() >= t {
-                    0
-                } else {
-                    per_batch
-                }
+    let mut r = Renderer::new(gpu, scene, settings)?;
+    r.run(settings.budget, cancel, progress)?;
+    r.output()
+}
+
+/// A render in progress: the pipelines, scene buffers and film of one scene and setting,
+/// kept between calls to [`Renderer::run`] so that a render can be continued, sampled at
+/// checkpoints (`vkvcm converge`) or resumed from saved sums.
+pub struct Renderer {
+    settings: RenderSettings,
+    // Field order is drop order: the estimator's kernels before the buffers they bind.
+    est: Estimator,
+    film: Film,
+    _scene_gpu: SceneGpu,
+    batch: Batch,
+    profile: Profile,
+    /// Iterations accumulated in the film (including resumed ones).
+    done: u64,
+    /// Wall-clock seconds spent in `run` (plus those of a resumed render).
+    seconds: f64,
+    interrupted: bool,
+}
+
+impl Renderer {
+    /// Uploads the scene and builds the estimator's kernels; `settings.budget` is only
+    /// checked here (each [`Renderer::run`] call takes its own budget).
+    pub fn new(gpu: &Arc<Gpu>, scene: &Scene, settings: &RenderSettings) -> Result<Renderer> {
+        check_frame(gpu, settings)?;
+        let frame = &settings.frame;
+        let scene_gpu = SceneGpu::new(gpu, scene, frame)?;
+        let film = Film::new(gpu, frame.width, frame.height)?;
+        let pixels = frame.width * frame.height;
+        let est = match settings.algorithm {
+            Algorithm::Pt => Estimator::Pt(pt::PathTracer::new(gpu, &scene_gpu, &film, settings.nee)?),
+            Algorithm::Lt | Algorithm::Bpt | Algorithm::Ppm | Algorithm::Bpm | Algorithm::Vcm => {
+                let mode = match settings.algorithm {
+                    Algorithm::Lt => bidir::BidirMode::LightTracing,
+                    Algorithm::Bpt => bidir::BidirMode::Bpt,
+                    Algorithm::Ppm => bidir::BidirMode::Ppm,
+                    Algorithm::Bpm => bidir::BidirMode::Bpm,
+                    _ => bidir::BidirMode::Vcm,
+                };
+                let schedule = radius::RadiusSchedule::new(
+                    settings.radius_factor,
+                    scene_gpu.params.scene_sphere[3],
+                    settings.alpha,
+                );
+                Estimator::Bidir(Box::new(bidir::Bidir::new(
+                    gpu,
+                    &scene_gpu,
+                    &film,
+                    mode,
+                    frame.max_path_length,
+                    schedule,
+                )?))
+            }
+            Algorithm::El => {
+                let defines = scene_gpu::define_refs(&scene_gpu.defines);
+                let k = gpu.kernel("el.comp", &defines, &scene_gpu.bindings(&[&film.accum, &film.stats]))?;
+                Estimator::El(k, pixels)
             }
         };
-        if remaining == 0 {
-            break;
-        }
-        if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
-            interrupted = true;
-            break;
-        }
-        let n = remaining.min(per_batch);
-        let t0 = Instant::now();
-        for i in 0..n {
-            est.record(&mut batch, (done + i) as u32)?;
-        }
-        batch.submit_wait(Some(&mut profile))?;
-        done += n;
-        let dt = t0.elapsed().as_secs_f64().max(1e-6);
-        let per_iter = dt / n as f64;
-        per_batch = ((TARGET_BATCH_SECONDS / per_iter) as u64).clamp(1, 256);
-        if let Budget::Seconds(t) = settings.budget {
-            let left = t - start.elapsed().as_secs_f64();
-            per_batch = per_batch.min(((left / per_iter).ceil() as u64).max(1));
-        }
-        let seconds = start.elapsed().as_secs_f64();
-        let fraction = match settings.budget {
-            Budget::Iterations(n) => done as f64 / n as f64,
-            Budget::Seconds(t) => (seconds / t).min(1.0),
-        };
-        progress(&Progress { iterations: done, seconds, fraction });
+        Ok(Renderer {
+            settings: settings.clone(),
+            est,
+            film,
+            _scene_gpu: scene_gpu,
+            batch: gpu.batch()?,
+            profile: Profile::default(),
+            done: 0,
+            seconds: 0.0,
+            interrupted: false,
+        })
     }
-    let seconds = start.elapsed().as_secs_f64();
-    let (sum, sum_sq) = film.sums()?;
-    let k = 1.0 / done.max(1) as f64;
-    let pixels = sum.iter().map(|p| p.map(|v| (v * k) as f32)).collect();
-    let (rejected_samples, overflow_splats) = film.rejected()?;
-    Ok(RenderOutput {
-        width: frame.width,
-        height: frame.height,
-        pixels,
-        sum,
-        sum_sq,
-        iterations: done,
-        seconds,
-        rejected_samples,
-        overflow_splats,
-        profile,
-        interrupted,
-    })
+
+    /// Iterations accumulated so far.
+    pub fn iterations(&self) -> u64 {
+        self.done
+    }
+
+    /// Wall-clock seconds rendered so far.
+    pub fn seconds(&self) -> f64 {
+        self.seconds
+    }
+
+    /// The settings this renderer was built with.
+    pub fn settings(&self) -> &RenderSettings {
+        &self.settings
+    }
+
+    /// Replaces the film with saved per-pixel sums of `iterations` iterations (see
+    /// [`RenderOutput::sum`]); the next iteration continues the same random sequences and
+    /// radius schedule, so resuming gives the image an uninterrupted render would.
+    pub fn resume(&mut self, sum: &[[f64; 3]], sum_sq: &[[f64; 3]], iterations: u64, seconds: f64) -> Result<()> {
+        self.film.load_sums(sum, sum_sq)?;
+        self.done = iterations;
+        self.seconds = seconds;
+        Ok(())
+    }
+
+    /// Renders more iterations until `budget` (counted from this call) is spent or
+    /// `cancel` is set. `progress` is called after every batch.
+    pub fn run(
+        &mut self,
+        budget: Budget,
+        cancel: Option<&AtomicBool>,
+        progress: &mut dyn FnMut(&Progress),
+    ) -> Result<()> {
+        let start = Instant::now();
+        let mut done: u64 = 0;
+        let mut per_batch: u64 = 1;
+        // Aim for batches of about a quarter second: few submits, responsive progress.
+        const TARGET_BATCH_SECONDS: f64 = 0.25;
+        loop {
+            let remaining = match budget {
+                Budget::Iterations(n) => n - done,
+                Budget::Seconds(t) => {
+                    if done > 0 && start.elapsed().as_secs_f64() >= t {
+                        0
+                    } else {
+                        per_batch
+                    }
+                }
+            };
+            if remaining == 0 {
+                break;
+            }
+            if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                self.interrupted = true;
+                break;
+            }
+            let n = remaining.min(per_batch);
+            let first = self.done;
+            if first + n > u32::MAX as u64 {
+                bail!("more than {} iterations: the iteration index would wrap", u32::MAX);
+            }
+            let t0 = Instant::now();
+            for i in 0..n {
+                self.est.record(&mut self.batch, (first + i) as u32)?;
+            }
+            self.batch.submit_wait(Some(&mut self.profile))?;
+            done += n;
+            self.done += n;
+            let dt = t0.elapsed().as_secs_f64().max(1e-6);
+            self.seconds += dt;
+            let per_iter = dt / n as f64;
+            per_batch = ((TARGET_BATCH_SECONDS / per_iter) as u64).clamp(1, 256);
+            if let Budget::Seconds(t) = budget {
+                let left = t - start.elapsed().as_secs_f64();
+                per_batch = per_batch.min(((left / per_iter).ceil() as u64).max(1));
+            }
+            let seconds = start.elapsed().as_secs_f64();
+            let fraction = match budget {
+                Budget::Iterations(n) => done as f64 / n as f64,
+                Budget::Seconds(t) => (seconds / t).min(1.0),
+            };
+            progress(&Progress { iterations: self.done, seconds: self.seconds, fraction });
+        }
+        Ok(())
+    }
+
+    /// The image so far (reads the film back; the render can continue afterwards).
+    pub fn output(&self) -> Result<RenderOutput> {
+        let (sum, sum_sq) = self.film.sums()?;
+        let k = 1.0 / self.done.max(1) as f64;
+        let pixels = sum.iter().map(|p| p.map(|v| (v * k) as f32)).collect();
+        let (rejected_samples, overflow_splats) = self.film.rejected()?;
+        Ok(RenderOutput {
+            width: self.settings.frame.width,
+            height: self.settings.frame.height,
+            pixels,
+            sum,
+            sum_sq,
+            iterations: self.done,
+            seconds: self.seconds,
+            rejected_samples,
+            overflow_splats,
+            profile: self.profile.clone(),
+            interrupted: self.interrupted,
+        })
+    }
 }

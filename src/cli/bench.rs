@@ -1,0 +1,164 @@
+//! `vkvcm bench ...`: render throughput, BVH traversal and equal-time error.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, Subcommand};
+
+use super::write_json;
+use vkvcm::gpu::{Gpu, GpuOptions};
+use vkvcm::render::{self, Algorithm};
+use vkvcm::scene;
+
+#[derive(Subcommand)]
+pub enum BenchCommand {
+    /// Samples/s per wall second and per CPU-second, and GPU ms per kernel, for scenes x
+    /// estimators at a fixed iteration count (after one warm-up iteration each).
+    Render(BenchRenderArgs),
+    /// BVH build time and closest-hit / any-hit rays per second (camera and random rays)
+    /// on the generated traversal scenes: cornell (~4k triangles + spheres), spheres and
+    /// displaced (1M triangles each); see docs/bvh.md.
+    Traverse(BenchTraverseArgs),
+    /// Error at equal time: each estimator renders for --seconds of wall-clock time, and
+    /// its RMSE, relative MSE and mean bias against a long reference render are reported
+    /// (the reference's own remaining noise is printed with it).
+    EqualTime(BenchEqualTimeArgs),
+}
+
+#[derive(Args)]
+pub struct BenchEqualTimeArgs {
+    #[arg(long, value_delimiter = ',', default_value = "gbs_s,glm_c,gbs_p,gbs_b")]
+    pub scenes: Vec<String>,
+    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm")]
+    pub algos: Vec<Algorithm>,
+    #[arg(long, default_value_t = 128)]
+    pub size: u32,
+    /// Wall-clock seconds per estimator.
+    #[arg(long, default_value_t = 5.0)]
+    pub seconds: f64,
+    /// Estimator of the reference (vcm samples every path of the reference scenes,
+    /// including the SDS paths bpt and pt miss).
+    #[arg(long, value_enum, default_value = "vcm")]
+    pub reference_algo: Algorithm,
+    #[arg(long, default_value_t = 2048)]
+    pub reference_iterations: u64,
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    #[arg(long)]
+    pub device: Option<String>,
+}
+
+#[derive(Args)]
+pub struct BenchTraverseArgs {
+    /// Scenes: cornell, spheres, displaced (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "cornell,spheres,displaced")]
+    pub scenes: Vec<String>,
+    /// Rays per ray set.
+    #[arg(long, default_value_t = 1 << 20)]
+    pub rays: u32,
+    #[arg(long)]
+    pub device: Option<String>,
+}
+
+#[derive(Args)]
+pub struct BenchRenderArgs {
+    /// Scenes (built-in names or glTF paths), comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "gbs_s,glm_c,gbs_p,gbs_b")]
+    pub scenes: Vec<String>,
+    /// Estimators, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm")]
+    pub algos: Vec<Algorithm>,
+    /// Image width and height.
+    #[arg(long, default_value_t = 256)]
+    pub size: u32,
+    #[arg(long, default_value_t = 8)]
+    pub iterations: u64,
+    /// Also write the results as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    #[arg(long)]
+    pub device: Option<String>,
+}
+
+impl BenchCommand {
+    pub fn run(self) -> Result<()> {
+        match self {
+            BenchCommand::Render(a) => bench_render(a),
+            BenchCommand::Traverse(a) => bench_traverse(a),
+            BenchCommand::EqualTime(a) => bench_equal_time(a),
+        }
+    }
+}
+
+/// Opens the device for a benchmark and prints which one it is (results name it).
+fn open_bench_gpu(device: Option<String>) -> Result<Arc<Gpu>> {
+    let gpu = Gpu::new(&GpuOptions::from_env(device))?;
+    println!("device: {} ({}), Vulkan {}", gpu.info.name, gpu.info.driver, gpu.info.api_version);
+    Ok(gpu)
+}
+
+fn bench_traverse(a: BenchTraverseArgs) -> Result<()> {
+    let gpu = open_bench_gpu(a.device.clone())?;
+    let opts = vkvcm::bvh::bench::TraverseBenchOptions { rays: a.rays.max(1), ..Default::default() };
+    for name in &a.scenes {
+        let scene = vkvcm::bvh::bench::bench_scene(name)
+            .with_context(|| format!("unknown traversal scene {name:?} (cornell, spheres, displaced)"))?;
+        let report = vkvcm::bvh::bench::bench_traverse(&gpu, &scene, &opts)?;
+        println!("{report}");
+    }
+    Ok(())
+}
+
+fn bench_equal_time(a: BenchEqualTimeArgs) -> Result<()> {
+    if a.size == 0 || a.seconds.is_nan() || a.seconds <= 0.0 || a.reference_iterations < 2 {
+        bail!("--size and --seconds must be positive and --reference-iterations at least 2");
+    }
+    let gpu = open_bench_gpu(a.device.clone())?;
+    let mut rows = Vec::new();
+    for name in &a.scenes {
+        let scene = scene::load_named(name)?;
+        eprintln!("{name}: reference, {} x {} iterations ...", a.reference_algo.name(), a.reference_iterations);
+        let r = render::bench::reference(&gpu, &scene, a.reference_algo, a.size, a.reference_iterations)?;
+        println!(
+            "{name}: reference {} x {} iterations at {}x{}, its own noise (RMS standard error) {:.5}",
+            r.algorithm.name(),
+            r.iterations,
+            a.size,
+            a.size,
+            r.noise_rms
+        );
+        for &algo in &a.algos {
+            let row = render::bench::equal_time(&gpu, &scene, algo, a.seconds, &r)?;
+            eprintln!("{name} {}: RMSE {:.5}", row.algorithm, row.rmse);
+            rows.push(row);
+        }
+    }
+    print!("{}", render::bench::equal_time_table(&rows));
+    if let Some(p) = &a.json {
+        write_json(p, &rows)?;
+    }
+    Ok(())
+}
+
+fn bench_render(a: BenchRenderArgs) -> Result<()> {
+    if a.size == 0 || a.iterations == 0 {
+        bail!("--size and --iterations must be at least 1");
+    }
+    let gpu = open_bench_gpu(a.device.clone())?;
+    let mut rows = Vec::new();
+    for name in &a.scenes {
+        let scene = scene::load_named(name)?;
+        for &algo in &a.algos {
+            let row = render::bench::bench_one(&gpu, &scene, algo, a.size, a.size, a.iterations)
+                .with_context(|| format!("benchmarking {} on {name}", algo.name()))?;
+            eprintln!("{} {}: {:.0} samples/s", row.scene, row.algorithm, row.samples_per_second);
+            rows.push(row);
+        }
+    }
+    print!("{}", render::bench::table(&rows));
+    if let Some(p) = &a.json {
+        write_json(p, &rows)?;
+    }
+    Ok(())
+}
