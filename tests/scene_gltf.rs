@@ -97,7 +97,7 @@ impl Doc {
 
     fn load(&self) -> anyhow::Result<Scene> {
         let dir = tempfile::tempdir().unwrap();
-        scene::load(&self.write(dir.path()))
+        load(&self.write(dir.path()))
     }
 
     /// The same document as a GLB: buffer 0 becomes the BIN chunk.
@@ -125,6 +125,35 @@ impl Doc {
         out.extend_from_slice(&bin);
         out
     }
+}
+
+/// Loads `path` and moves it back to the file's coordinates: the importer re-centres
+/// scenes on the camera (`LoadReport::origin`), these tests state positions as written.
+fn load(path: &Path) -> anyhow::Result<Scene> {
+    load_with(path, &LoadOptions::default())
+}
+
+fn load_with(path: &Path, options: &LoadOptions) -> anyhow::Result<Scene> {
+    let mut s = scene::load_with(path, options)?;
+    s.translate(glam::DVec3::from_array(s.report.origin).as_vec3());
+    Ok(s)
+}
+
+#[test]
+fn scenes_are_recentred_on_the_camera_in_f64() {
+    // A triangle 1e5 from the origin, 1 unit in front of the camera: in f32 world
+    // coordinates its vertices would round to multiples of 2^-7; camera-relative they
+    // keep their exact offsets.
+    let far = 100_000.0f64;
+    let mut d = Doc::new(&[[0.0, 0.0, 0.0], [0.001, 0.0, 0.0], [0.0, 0.001, 0.0]], None, None);
+    d.json["nodes"][0]["translation"] = json!([far, 0.0, 0.0]);
+    d.json["nodes"][1]["translation"] = json!([far, 0.0, 1.0]);
+    let dir = tempfile::tempdir().unwrap();
+    let s = scene::load(&d.write(dir.path())).unwrap();
+    assert_eq!(s.report.origin, [far, 0.0, 1.0]);
+    assert_eq!(s.camera.position, Vec3::ZERO);
+    assert_eq!(s.triangles[0].p[0], Vec3::new(0.0, 0.0, -1.0));
+    assert_eq!(s.triangles[0].p[1], Vec3::new(0.001, 0.0, -1.0));
 }
 
 fn close(a: Vec3, b: Vec3) -> bool {
@@ -313,7 +342,7 @@ fn uris_must_stay_inside_the_scene_folder() {
         d.json["buffers"][0]["uri"] = json!(uri);
         let path = sub.join("scene.gltf");
         std::fs::write(&path, serde_json::to_vec(&d.json).unwrap()).unwrap();
-        let e = err_of(scene::load(&path));
+        let e = err_of(load(&path));
         assert!(e.contains(why) && e.contains("buffer 0"), "{uri}: {e}");
     }
     // A subfolder of the scene's folder is fine.
@@ -323,7 +352,7 @@ fn uris_must_stay_inside_the_scene_folder() {
     std::fs::write(sub.join("bufs/my data.bin"), &d.bin).unwrap();
     let path = sub.join("scene.gltf");
     std::fs::write(&path, serde_json::to_vec(&d.json).unwrap()).unwrap();
-    assert_eq!(scene::load(&path).unwrap().triangles.len(), 1);
+    assert_eq!(load(&path).unwrap().triangles.len(), 1);
 }
 
 #[test]
@@ -333,12 +362,12 @@ fn embedded_data_uri() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("embedded.gltf");
     std::fs::write(&path, serde_json::to_vec(&d.json).unwrap()).unwrap();
-    let s = scene::load(&path).unwrap();
+    let s = load(&path).unwrap();
     assert_eq!(s.triangles, Doc::triangle().load().unwrap().triangles);
     assert_eq!(s.name, "embedded");
     d.json["buffers"][0]["uri"] = json!("data:application/octet-stream;base64,@@@@");
     std::fs::write(&path, serde_json::to_vec(&d.json).unwrap()).unwrap();
-    assert!(err_of(scene::load(&path)).contains("base64"));
+    assert!(err_of(load(&path)).contains("base64"));
 }
 
 #[test]
@@ -353,7 +382,7 @@ fn glb_round_trip() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("scene.glb");
     std::fs::write(&path, d.glb()).unwrap();
-    let from_glb = scene::load(&path).unwrap();
+    let from_glb = load(&path).unwrap();
     assert_eq!(from_glb.triangles.len(), 2);
     assert_eq!(from_glb.triangles, from_gltf.triangles);
     assert_eq!(from_glb.camera, from_gltf.camera);
@@ -361,7 +390,7 @@ fn glb_round_trip() {
     // A truncated GLB is an error, not a panic.
     let glb = d.glb();
     std::fs::write(&path, &glb[..glb.len() - 10]).unwrap();
-    let e = err_of(scene::load(&path));
+    let e = err_of(load(&path));
     assert!(e.contains("scene.glb") && e.contains("GLB"), "{e}");
 }
 
@@ -422,14 +451,14 @@ fn camera_selected_by_name() {
     d.json["scenes"][0]["nodes"] = json!([0, 1, 2]);
     let dir = tempfile::tempdir().unwrap();
     let path = d.write(dir.path());
-    let first = scene::load(&path).unwrap();
+    let first = load(&path).unwrap();
     assert_eq!(first.camera.position, Vec3::new(0.0, 0.0, 5.0));
     for name in ["second", "wide"] {
-        let s = scene::load_with(&path, &LoadOptions { camera: Some(name.into()) }).unwrap();
+        let s = load_with(&path, &LoadOptions { camera: Some(name.into()) }).unwrap();
         assert_eq!(s.camera.position, Vec3::new(0.0, 7.0, 0.0));
         assert_eq!(s.camera.yfov, 1.2);
     }
-    let e = err_of(scene::load_with(&path, &LoadOptions { camera: Some("nope".into()) }));
+    let e = err_of(load_with(&path, &LoadOptions { camera: Some("nope".into()) }));
     assert!(e.contains("nope") && e.contains("cam") && e.contains("second"), "{e}");
 }
 
@@ -577,9 +606,9 @@ fn malformed_files_are_errors() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("broken.gltf");
     std::fs::write(&path, b"{ \"asset\": { \"version\": \"2.0\" }, ").unwrap();
-    let e = err_of(scene::load(&path));
+    let e = err_of(load(&path));
     assert!(e.contains("broken.gltf") && e.contains("JSON"), "{e}");
-    let e = err_of(scene::load(&dir.path().join("absent.gltf")));
+    let e = err_of(load(&dir.path().join("absent.gltf")));
     assert!(e.contains("absent.gltf"), "{e}");
     // A node hierarchy with a cycle.
     let mut d = Doc::triangle();

@@ -17,8 +17,10 @@ fn assert_close(a: Vec3, b: Vec3, tol: f32, what: &str) {
     assert!(close(a, b, tol), "{what}: {a} != {b} (tol {tol})");
 }
 
+/// Loads a built-in scene in the file's coordinates (the importer re-centres on the camera).
 fn load(name: &str) -> Scene {
-    let s = scene::load_named(name).unwrap_or_else(|e| panic!("{name}: {e:#}"));
+    let mut s = scene::load_named(name).unwrap_or_else(|e| panic!("{name}: {e:#}"));
+    s.translate(glam::DVec3::from_array(s.report.origin).as_vec3());
     assert!(s.report.warnings.is_empty(), "{name}: {:?}", s.report.warnings);
     assert_eq!(s.report.degenerate_triangles, 0);
     s

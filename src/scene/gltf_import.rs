@@ -15,7 +15,7 @@
 
 use super::{Camera, Light, LoadReport, Material, Scene, Sphere, Triangle};
 use anyhow::{anyhow, bail, Context, Result};
-use glam::{Mat3, Mat4, Vec3};
+use glam::{DMat4, DQuat, DVec3, Mat3, Mat4, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::json;
 use gltf::mesh::{Mode, Semantic};
@@ -514,10 +514,14 @@ impl Importer<'_> {
         };
 
         // Depth-first traversal in node order; glTF requires a forest, so a node reached
-        // twice is an error rather than an infinite loop.
+        // twice is an error rather than an infinite loop. World transforms are composed in
+        // f64 and the scene is re-centred on the chosen camera before it is rounded to f32
+        // (camera-relative coordinates, docs/numerics.md): a scene 1e5 units from the origin
+        // keeps the precision it has near the origin.
         let mut visited = vec![false; doc.nodes().len()];
-        let mut stack: Vec<(gltf::Node, Mat4)> =
-            scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect::<Vec<_>>().into_iter().rev().collect();
+        let mut order: Vec<(gltf::Node, DMat4)> = Vec::new();
+        let mut stack: Vec<(gltf::Node, DMat4)> =
+            scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect::<Vec<_>>().into_iter().rev().collect();
         while let Some((node, parent)) = stack.pop() {
             if std::mem::replace(&mut visited[node.index()], true) {
                 bail!(
@@ -526,13 +530,18 @@ impl Importer<'_> {
                     scene.index()
                 );
             }
-            let local = Mat4::from_cols_array_2d(&node.transform().matrix());
-            let world = parent * local;
-            self.visit_node(&node, world)?;
+            let world = parent * local_transform_f64(&node);
             let children: Vec<_> = node.children().collect();
             for child in children.into_iter().rev() {
                 stack.push((child, world));
             }
+            order.push((node, world));
+        }
+        let origin = camera_origin(&order, options.camera.as_deref());
+        self.scene.report.origin = origin.to_array();
+        let rebase = DMat4::from_translation(-origin);
+        for (node, world) in &order {
+            self.visit_node(node, (rebase * *world).as_mat4())?;
         }
 
         // Camera.
@@ -958,6 +967,41 @@ impl Importer<'_> {
 }
 
 /// The metallic/roughness -> diffuse + GGX (+ mirror) mapping of docs/scene-format.md.
+/// A node's local transform in f64 (TRS composed in f64, so a large translation stays exact).
+fn local_transform_f64(node: &gltf::Node) -> DMat4 {
+    match node.transform() {
+        gltf::scene::Transform::Matrix { matrix } => DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from))),
+        gltf::scene::Transform::Decomposed { translation, rotation, scale } => {
+            let q = DQuat::from_array(rotation.map(f64::from));
+            // glTF rotations are unit quaternions; normalising guards against rounding in the file.
+            let q = if q.length_squared() > 0.0 { q.normalize() } else { DQuat::IDENTITY };
+            DMat4::from_scale_rotation_translation(
+                DVec3::from_array(scale.map(f64::from)),
+                q,
+                DVec3::from_array(translation.map(f64::from)),
+            )
+        }
+    }
+}
+
+/// World position of the camera the importer will choose (the one named `want`, else the
+/// first perspective camera in traversal order), or the origin when there is none: the
+/// scene is translated so that this point becomes (0, 0, 0).
+fn camera_origin(order: &[(gltf::Node, DMat4)], want: Option<&str>) -> DVec3 {
+    let is_persp =
+        |n: &gltf::Node| n.camera().is_some_and(|c| matches!(c.projection(), gltf::camera::Projection::Perspective(_)));
+    let matches = |n: &gltf::Node| match want {
+        None => true,
+        Some(w) => n.name() == Some(w) || n.camera().and_then(|c| c.name().map(str::to_string)).as_deref() == Some(w),
+    };
+    order
+        .iter()
+        .find(|(n, _)| is_persp(n) && matches(n))
+        .map(|(_, w)| w.transform_point3(DVec3::ZERO))
+        .filter(|p| p.is_finite())
+        .unwrap_or(DVec3::ZERO)
+}
+
 fn metallic_roughness(base: Vec3, metallic: f32, roughness: f32) -> Material {
     if metallic >= 1.0 && roughness <= 0.0 {
         return Material { mirror: base, ..Material::default() };

@@ -102,6 +102,9 @@ pub struct Camera {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct LoadReport {
     pub degenerate_triangles: usize,
+    /// World position (in the file's coordinates, f64) that the importer moved to the
+    /// origin: the chosen camera's position. Scene coordinates are camera-relative.
+    pub origin: [f64; 3],
     pub warnings: Vec<String>,
 }
 
@@ -199,6 +202,23 @@ pub fn builtin_path(name: &str) -> Option<PathBuf> {
 }
 
 impl Scene {
+    /// Moves everything by `by` (geometry, punctual lights, camera; directions unchanged).
+    pub fn translate(&mut self, by: Vec3) {
+        for t in &mut self.triangles {
+            t.p = t.p.map(|p| p + by);
+        }
+        for s in &mut self.spheres {
+            s.center += by;
+        }
+        for l in &mut self.lights {
+            match l {
+                Light::Point { position, .. } | Light::Spot { position, .. } => *position += by,
+                Light::Area { .. } | Light::Directional { .. } | Light::Background { .. } => {}
+            }
+        }
+        self.camera.position += by;
+    }
+
     /// Axis-aligned bounds (min, max) of all triangles and spheres; `(0, 0)` when the
     /// scene has no geometry.
     pub fn bounds(&self) -> (Vec3, Vec3) {
