@@ -25,6 +25,13 @@ enum Command {
     /// Benchmarks (results for docs/performance.md).
     #[command(subcommand)]
     Bench(cli::bench::BenchCommand),
+    /// A reference image: a long render in two independent halves, with its own error
+    /// estimate (RMS of the halves' difference / 2) stored in the EXR.
+    Reference(cli::converge::ReferenceArgs),
+    /// Error vs. render time of estimators against a reference: CSV and a log-log plot.
+    Converge(cli::converge::ConvergeArgs),
+    /// RMSE, relative MSE, mean bias and max error of a.exr against b.exr (the reference).
+    Diff(cli::diff::DiffArgs),
 }
 
 fn main() -> ExitCode {
@@ -33,6 +40,9 @@ fn main() -> ExitCode {
         Command::Devices => devices(),
         Command::Render(args) => cli::render::render_cmd(args),
         Command::Bench(cmd) => cmd.run(),
+        Command::Reference(args) => cli::converge::reference_cmd(args),
+        Command::Converge(args) => cli::converge::converge_cmd(args),
+        Command::Diff(args) => cli::diff::diff_cmd(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

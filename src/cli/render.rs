@@ -3,14 +3,15 @@
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
+use std::time::Instant;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 
 use super::progress::Reporter;
 use vkvcm::gpu::{Gpu, GpuOptions};
 use vkvcm::image::{self, Image};
-use vkvcm::render::{self, Algorithm, Budget, Progress, RenderSettings};
+use vkvcm::render::{self, saved, Algorithm, Budget, Progress, RenderOutput, RenderSettings, Renderer};
 use vkvcm::scene::{self, LoadOptions};
 
 #[derive(Args)]
@@ -20,10 +21,12 @@ pub struct RenderArgs {
     /// Estimator.
     #[arg(long, short = 'a', value_enum, default_value = "vcm")]
     pub algo: Algorithm,
-    /// Iterations (one sample per pixel each).
+    /// Iterations (one sample per pixel each). With --resume: the total, counting the
+    /// resumed ones.
     #[arg(long, short = 'i', conflicts_with = "time")]
     pub iterations: Option<u64>,
-    /// Render for this many wall-clock seconds instead of a fixed iteration count.
+    /// Render for this many wall-clock seconds instead of a fixed iteration count (with
+    /// --resume: this many more seconds).
     #[arg(long, short = 't')]
     pub time: Option<f64>,
     #[arg(long, default_value_t = 512)]
@@ -44,15 +47,23 @@ pub struct RenderArgs {
     /// Camera to use, by node or camera name (default: the first one).
     #[arg(long)]
     pub camera: Option<String>,
-    /// Output EXR (linear float32). Default: <scene>_<algo>.exr.
+    /// Output EXR (linear float32, with the second moment and settings to resume it).
+    /// Default: <scene>_<algo>.exr.
     #[arg(long, short = 'o')]
     pub output: Option<PathBuf>,
-    /// Also write a tone-mapped sRGB PNG.
+    /// Also write a tone-mapped sRGB PNG (at the end).
     #[arg(long)]
     pub png: Option<PathBuf>,
     /// Exposure scale for the PNG.
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
+    /// Write the output EXR every SECONDS of rendering (atomically, with its iteration count).
+    #[arg(long, value_name = "SECONDS")]
+    pub checkpoint_every: Option<f64>,
+    /// Continue the render saved in the output EXR (or in EXR, written to the output) with
+    /// the same settings. A missing output EXR starts a new render.
+    #[arg(long, value_name = "EXR", num_args = 0..=1)]
+    pub resume: Option<Option<PathBuf>>,
     /// Print per-kernel GPU time.
     #[arg(long)]
     pub profile: bool,
@@ -77,7 +88,48 @@ pub fn install_interrupt() -> Arc<AtomicBool> {
     flag
 }
 
+/// Seconds between host copies of the film when no --checkpoint-every is given: what a
+/// device loss can still write (each copy costs one film read-back).
+const SNAPSHOT_SECONDS: f64 = 5.0;
+
+/// Checks the arguments that need no scene or device; errors name the option.
+fn check_args(a: &RenderArgs) -> Result<()> {
+    if a.width == 0 {
+        bail!("--width 0: the image width must be at least 1 pixel");
+    }
+    if a.height == 0 {
+        bail!("--height 0: the image height must be at least 1 pixel");
+    }
+    if a.iterations == Some(0) {
+        bail!("--iterations 0: at least one iteration is needed");
+    }
+    if let Some(t) = a.time {
+        if !(t > 0.0 && t.is_finite()) {
+            bail!("--time {t}: must be a positive number of seconds");
+        }
+    }
+    if let Some(c) = a.checkpoint_every {
+        if !(c > 0.0 && c.is_finite()) {
+            bail!("--checkpoint-every {c}: must be a positive number of seconds");
+        }
+    }
+    if a.max_path_length == 0 {
+        bail!("--max-path-length 0: must be at least 1");
+    }
+    if !(a.radius_factor > 0.0 && a.radius_factor.is_finite()) {
+        bail!("--radius-factor {}: must be a positive number", a.radius_factor);
+    }
+    if !(a.alpha > 0.0 && a.alpha <= 1.0) {
+        bail!("--alpha {}: must be in (0, 1]", a.alpha);
+    }
+    if !(a.exposure > 0.0 && a.exposure.is_finite()) {
+        bail!("--exposure {}: must be a positive number", a.exposure);
+    }
+    Ok(())
+}
+
 pub fn render_cmd(a: RenderArgs) -> Result<()> {
+    check_args(&a)?;
     let scene_name = a.scene.clone().unwrap_or_else(|| "default".into());
     let scene = scene::load_named_with(&scene_name, &LoadOptions { camera: a.camera.clone() })?;
     for w in &scene.report.warnings {
@@ -87,12 +139,11 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
         eprintln!("warning: skipped {} degenerate triangle(s)", scene.report.degenerate_triangles);
     }
     let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}_{}.exr", scene.name, a.algo.name())));
-    check_writable(&output)?;
+    check_writable(&output).context("--output")?;
     if let Some(p) = &a.png {
-        check_writable(p)?;
+        check_writable(p).context("--png")?;
     }
     let budget = match (a.iterations, a.time) {
-        (_, Some(t)) if !(t > 0.0 && t.is_finite()) => bail!("--time must be a positive number of seconds"),
         (_, Some(t)) => Budget::Seconds(t),
         (Some(n), None) => Budget::Iterations(n),
         (None, None) => Budget::Iterations(16),
@@ -100,43 +151,146 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     let mut settings = RenderSettings::new(a.algo, a.width, a.height, budget);
     settings.frame.seed = a.seed;
     settings.frame.max_path_length = a.max_path_length;
-    if !(a.radius_factor > 0.0 && a.radius_factor.is_finite()) {
-        bail!("--radius-factor must be a positive number");
-    }
-    if !(a.alpha > 0.0 && a.alpha <= 1.0) {
-        bail!("--alpha must be in (0, 1]");
-    }
     settings.radius_factor = a.radius_factor;
     settings.alpha = a.alpha;
+    let camera = a.camera.clone().unwrap_or_else(|| "default".into());
+
+    // --resume: the saved render, checked against these settings before the GPU opens.
+    let saved = match &a.resume {
+        None => None,
+        Some(from) => {
+            let path = from.as_ref().unwrap_or(&output);
+            if from.is_none() && !path.exists() {
+                eprintln!("note: {} does not exist yet: starting a new render", path.display());
+                None
+            } else {
+                let s = saved::read_render_exr(path).context("--resume")?;
+                s.check_matches(&settings, &scene.name, &camera)
+                    .with_context(|| format!("cannot resume {}", path.display()))?;
+                Some(s)
+            }
+        }
+    };
+    if let (Some(s), Budget::Iterations(n)) = (&saved, budget) {
+        if s.iterations >= n {
+            eprintln!(
+                "{} already has {} iterations (asked for {n} in total): nothing to do",
+                output.display(),
+                s.iterations
+            );
+            return Ok(());
+        }
+    }
 
     let gpu = Gpu::new(&GpuOptions::from_env(a.device.clone()))?;
     eprintln!("device: {} ({})", gpu.info.name, gpu.info.driver);
+    let provenance = saved::Provenance { scene: scene.name.clone(), camera, device: gpu.info.name.clone() };
+    render::resources::check(&gpu, &scene, &settings).map_err(|e| {
+        let mpl = if matches!(a.algo, Algorithm::El | Algorithm::Pt) {
+            String::new()
+        } else {
+            format!(" --max-path-length {}", a.max_path_length)
+        };
+        anyhow!("--width {} --height {}{mpl}: {e:#}", a.width, a.height)
+    })?;
+    let mut r = Renderer::new(&gpu, &scene, &settings)
+        .with_context(|| format!("preparing {} with {}", scene.name, a.algo.name()))?;
+    if let Some(s) = &saved {
+        r.resume_saved(s)?;
+        eprintln!("resuming {} at iteration {} ({:.1} s rendered)", output.display(), s.iterations, s.seconds);
+    }
     let cancel = install_interrupt();
     let pixels = (a.width as u64 * a.height as u64) as f64;
-    let mut reporter = Reporter::new(budget);
-    let out = render::render(&gpu, &scene, &settings, Some(&cancel), &mut |p: &Progress| reporter.update(p, pixels))
-        .with_context(|| format!("rendering {} with {}", scene.name, a.algo.name()))?;
-    reporter.finish();
+    let mut reporter = Reporter::new(budget, r.iterations(), r.seconds());
 
-    let img = Image { width: out.width, height: out.height, data: out.pixels.clone() };
-    let meta = vec![
-        ("vkvcm:scene".to_string(), scene.name.clone()),
-        ("vkvcm:estimator".to_string(), a.algo.name().to_string()),
-        ("vkvcm:iterations".to_string(), out.iterations.to_string()),
-        ("vkvcm:seconds".to_string(), format!("{:.3}", out.seconds)),
-        ("vkvcm:seed".to_string(), a.seed.to_string()),
-        ("vkvcm:max_path_length".to_string(), a.max_path_length.to_string()),
-        ("vkvcm:radius_factor".to_string(), a.radius_factor.to_string()),
-        ("vkvcm:alpha".to_string(), a.alpha.to_string()),
-        ("vkvcm:device".to_string(), gpu.info.name.clone()),
-        ("vkvcm:rejected_samples".to_string(), out.rejected_samples.to_string()),
-    ];
-    image::write_exr(&output, &img, &meta)?;
+    // Render in slices of --checkpoint-every (or SNAPSHOT_SECONDS) seconds; after each,
+    // read the film back: the checkpoint to write, and what a device loss can still write.
+    let slice = a.checkpoint_every.unwrap_or(SNAPSHOT_SECONDS);
+    let start = Instant::now();
+    let mut last: Option<RenderOutput> = None;
+    let failure = loop {
+        let step = match budget {
+            Budget::Iterations(n) => n.saturating_sub(r.iterations()),
+            Budget::Seconds(t) => {
+                let left = t - start.elapsed().as_secs_f64();
+                if left > 0.0 || r.iterations() == 0 {
+                    1
+                } else {
+                    0
+                }
+            }
+        };
+        if step == 0 || cancel.load(Ordering::SeqCst) {
+            break None;
+        }
+        let slice_budget = match budget {
+            Budget::Iterations(n) => Budget::Iterations(n - r.iterations()),
+            Budget::Seconds(t) => Budget::Seconds((t - start.elapsed().as_secs_f64()).max(0.0)),
+        };
+        let mut on_progress = |p: &Progress| reporter.update(p, pixels);
+        if let Err(e) = r.run_slice(slice_budget, Some(slice), Some(&cancel), &mut on_progress) {
+            break Some(e);
+        }
+        let finished = match budget {
+            Budget::Iterations(n) => r.iterations() >= n,
+            Budget::Seconds(t) => start.elapsed().as_secs_f64() >= t,
+        };
+        if finished || cancel.load(Ordering::SeqCst) {
+            break None;
+        }
+        match r.output() {
+            Ok(out) => {
+                if a.checkpoint_every.is_some() {
+                    match saved::write_render_exr(&output, &out, &settings, &provenance) {
+                        Ok(()) => {
+                            reporter.note(&format!("checkpoint: {} iterations in {}", out.iterations, output.display()))
+                        }
+                        Err(e) => reporter.note(&format!("warning: checkpoint not written: {e:#}")),
+                    }
+                }
+                last = Some(out);
+            }
+            Err(e) => break Some(e),
+        }
+    };
+    let out = match failure {
+        None => r.output().with_context(|| format!("rendering {} with {}", scene.name, a.algo.name())),
+        Some(e) => Err(e.context(format!("rendering {} with {}", scene.name, a.algo.name()))),
+    };
+    reporter.finish();
+    let out = match out {
+        Ok(out) => out,
+        Err(e) => {
+            // The device may be gone: write the last host copy, if it adds iterations.
+            let before = saved.as_ref().map_or(0, |s| s.iterations);
+            match last {
+                Some(l) if l.iterations > before => {
+                    saved::write_render_exr(&output, &l, &settings, &provenance)?;
+                    eprintln!(
+                        "wrote the last completed {} iterations ({:.1} s) to {}",
+                        l.iterations,
+                        l.seconds,
+                        output.display()
+                    );
+                }
+                _ => eprintln!("no completed iterations to write; {} is unchanged", output.display()),
+            }
+            return Err(e);
+        }
+    };
+    if out.iterations == 0 {
+        eprintln!("interrupted before the first iteration finished: nothing written");
+        std::process::exit(130);
+    }
+
+    saved::write_render_exr(&output, &out, &settings, &provenance)?;
+    let new_seconds = out.seconds - saved.as_ref().map_or(0.0, |s| s.seconds);
+    let new_iterations = out.iterations - saved.as_ref().map_or(0, |s| s.iterations);
     eprintln!(
         "{} iterations in {:.2} s ({:.0} samples/s){}; wrote {}",
         out.iterations,
         out.seconds,
-        out.iterations as f64 * pixels / out.seconds.max(1e-9),
+        new_iterations as f64 * pixels / new_seconds.max(1e-9),
         if out.interrupted { " (interrupted)" } else { "" },
         output.display()
     );
@@ -144,12 +298,14 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
         eprintln!("warning: {} sample(s) were NaN, infinite or negative and were rejected", out.rejected_samples);
     }
     if let Some(p) = &a.png {
+        let img = Image { width: out.width, height: out.height, data: out.pixels.clone() };
         image::write_png(p, &img, a.exposure)?;
         eprintln!("wrote {}", p.display());
     }
     if a.profile {
         eprint!("{}", out.profile.table());
     }
+    drop(r);
     let msgs = gpu.validation_messages();
     drop(gpu);
     if !msgs.list().is_empty() {
@@ -164,7 +320,13 @@ pub fn check_writable(path: &std::path::Path) -> Result<()> {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
+    if path.is_dir() {
+        bail!("cannot write {}: it is a directory", path.display());
+    }
     if !dir.is_dir() {
+        if dir.exists() {
+            bail!("cannot write {}: {} is not a directory", path.display(), dir.display());
+        }
         bail!("cannot write {}: directory {} does not exist", path.display(), dir.display());
     }
     tempfile::NamedTempFile::new_in(&dir)

@@ -1,15 +1,47 @@
 //! Command batches: record dispatches (each wrapped in timestamp queries when the device
 //! supports them), submit, wait, and fold the timings into a `Profile`.
 
-use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, OnceLock};
 
-use anyhow::{bail, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use ash::vk;
 
 use super::{Buffer, Gpu, Kernel, Profile, PUSH_CONSTANT_BYTES};
 
 /// Most timed dispatches per batch.
 const MAX_TIMED: u32 = 256;
+
+/// A Vulkan error as a short phrase with its code, for messages that say what was being
+/// done: "device lost (VK_ERROR_DEVICE_LOST)".
+pub(crate) fn vk_error_text(e: vk::Result) -> String {
+    let what = match e {
+        vk::Result::ERROR_DEVICE_LOST => "device lost",
+        vk::Result::ERROR_OUT_OF_DEVICE_MEMORY => "out of device memory",
+        vk::Result::ERROR_OUT_OF_HOST_MEMORY => "out of host memory",
+        _ => return format!("{e:?} ({e})"),
+    };
+    format!("{what} (VK_{e:?})")
+}
+
+/// Test hook: with `VKVCM_TEST_FAIL_AFTER_BATCHES=N`, the (N+1)-th and every later
+/// `Batch::submit_wait` of the process, and every one-shot transfer after that, fail with
+/// `VK_ERROR_DEVICE_LOST` as a lost device would (tests/cli_render.rs uses it).
+pub(crate) fn simulated_device_loss(counts_as_batch: bool) -> Result<(), vk::Result> {
+    static LIMIT: OnceLock<Option<u64>> = OnceLock::new();
+    static SUBMITS: AtomicU64 = AtomicU64::new(0);
+    let Some(limit) =
+        *LIMIT.get_or_init(|| std::env::var("VKVCM_TEST_FAIL_AFTER_BATCHES").ok().and_then(|v| v.trim().parse().ok()))
+    else {
+        return Ok(());
+    };
+    let n = if counts_as_batch { SUBMITS.fetch_add(1, Ordering::SeqCst) } else { SUBMITS.load(Ordering::SeqCst) };
+    if n >= limit {
+        Err(vk::Result::ERROR_DEVICE_LOST)
+    } else {
+        Ok(())
+    }
+}
 
 /// A reusable command buffer. Every dispatch is preceded by a compute->compute memory
 /// barrier, so consecutive kernels see each other's writes.
@@ -20,6 +52,8 @@ pub struct Batch {
     fence: vk::Fence,
     queries: vk::QueryPool,
     timed: Vec<String>,
+    /// Kernels recorded since the last submit, each once, for error messages.
+    kernels: Vec<String>,
     recording: bool,
 }
 
@@ -35,6 +69,7 @@ impl Gpu {
                 fence: vk::Fence::null(),
                 queries: vk::QueryPool::null(),
                 timed: Vec::new(),
+                kernels: Vec::new(),
                 recording: false,
             };
             b.pool = dev.create_command_pool(
@@ -76,6 +111,7 @@ impl Batch {
             }
         }
         self.timed.clear();
+        self.kernels.clear();
         self.recording = true;
         Ok(())
     }
@@ -145,6 +181,9 @@ impl Batch {
         if timed {
             self.timed.push(kernel.name().to_string());
         }
+        if !self.kernels.iter().any(|k| k == kernel.name()) {
+            self.kernels.push(kernel.name().to_string());
+        }
         Ok(())
     }
 
@@ -164,14 +203,17 @@ impl Batch {
         }
         self.recording = false;
         let dev = &self.gpu.device;
+        let kernels = if self.kernels.is_empty() { "transfers".to_string() } else { self.kernels.join(", ") };
+        let fail = |step: &str, e: vk::Result| anyhow!("{step} of a batch ({kernels}): {}", vk_error_text(e));
         // SAFETY: recorded command buffer; fence unsignalled (reset after each wait).
         unsafe {
-            dev.end_command_buffer(self.cmd)?;
+            dev.end_command_buffer(self.cmd).map_err(|e| fail("recording", e))?;
             let cmds = [self.cmd];
             let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
-            dev.queue_submit(self.gpu.queue, &submit, self.fence).context("vkQueueSubmit failed")?;
-            dev.wait_for_fences(&[self.fence], true, u64::MAX).context("waiting for the GPU failed (device lost?)")?;
-            dev.reset_fences(&[self.fence])?;
+            simulated_device_loss(true).map_err(|e| fail("vkQueueSubmit", e))?;
+            dev.queue_submit(self.gpu.queue, &submit, self.fence).map_err(|e| fail("vkQueueSubmit", e))?;
+            dev.wait_for_fences(&[self.fence], true, u64::MAX).map_err(|e| fail("waiting for the GPU", e))?;
+            dev.reset_fences(&[self.fence]).map_err(|e| fail("vkResetFences", e))?;
         }
         if let Some(p) = profile {
             if !self.timed.is_empty() {

@@ -2,12 +2,13 @@
 
 use std::sync::Arc;
 
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, bail, Result};
 use ash::vk;
 use bytemuck::Pod;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
+use super::batch::vk_error_text;
 use super::Gpu;
 
 /// A device buffer usable as a storage buffer and as a transfer source/destination.
@@ -33,7 +34,7 @@ impl Gpu {
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
         // SAFETY: valid device and create info.
         let raw = unsafe { self.device.create_buffer(&info, None) }
-            .with_context(|| format!("cannot create buffer {name:?} ({size} bytes)"))?;
+            .map_err(|e| anyhow!("cannot create buffer {name:?} ({size} bytes): {}", vk_error_text(e)))?;
         // SAFETY: `raw` was just created.
         let requirements = unsafe { self.device.get_buffer_memory_requirements(raw) };
         let alloc = self.allocator.lock().map_err(|_| anyhow!("allocator poisoned"))?.allocate(&AllocationCreateDesc {
@@ -52,7 +53,12 @@ impl Gpu {
             }
         };
         // SAFETY: memory from the allocator matches the requirements.
-        unsafe { self.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }?;
+        if let Err(e) = unsafe { self.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) } {
+            // SAFETY: not bound, not in use.
+            unsafe { self.device.destroy_buffer(raw, None) };
+            let _ = self.allocator.lock().map(|mut a| a.free(allocation));
+            bail!("cannot bind memory to buffer {name:?} ({size} bytes): {}", vk_error_text(e));
+        }
         Ok(Buffer { gpu: self.clone(), raw, allocation: Some(allocation), size, name: name.to_string() })
     }
 
@@ -92,8 +98,10 @@ impl Gpu {
                 dev.end_command_buffer(cmd)?;
                 let cmds = [cmd];
                 let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
-                dev.queue_submit(self.queue, &submit, vk::Fence::null())?;
-                dev.queue_wait_idle(self.queue).context("queue wait failed (device lost?)")?;
+                let fail = |step: &str, e: vk::Result| anyhow!("{step} of a buffer transfer: {}", vk_error_text(e));
+                super::batch::simulated_device_loss(false).map_err(|e| fail("vkQueueSubmit", e))?;
+                dev.queue_submit(self.queue, &submit, vk::Fence::null()).map_err(|e| fail("vkQueueSubmit", e))?;
+                dev.queue_wait_idle(self.queue).map_err(|e| fail("waiting for the GPU", e))?;
                 Ok(())
             })();
             dev.destroy_command_pool(pool, None);

@@ -345,6 +345,16 @@ impl Gpu {
         self.validation.is_some()
     }
 
+    /// Size in bytes of the largest device-local memory heap (the largest heap if none is
+    /// marked device-local): where every vkvcm buffer lives. On lavapipe it is system RAM.
+    pub fn device_local_heap_bytes(&self) -> u64 {
+        // SAFETY: valid handles.
+        let mem = unsafe { self.instance.get_physical_device_memory_properties(self.physical) };
+        let heaps = &mem.memory_heaps[..mem.memory_heap_count as usize];
+        let local = heaps.iter().filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL)).map(|h| h.size).max();
+        local.or_else(|| heaps.iter().map(|h| h.size).max()).unwrap_or(0)
+    }
+
     /// Waits until the device is idle.
     pub fn wait_idle(&self) -> Result<()> {
         // SAFETY: valid device.

@@ -60,8 +60,28 @@ pub fn write_exr(path: &Path, img: &Image, meta: &[(String, String)]) -> Result<
 /// Errors (one line, naming `path`) when the directory does not exist or is not
 /// writable, the image is empty, or the metadata is invalid.
 pub fn write_exr_with(path: &Path, img: &Image, meta: &[(String, String)], compression: ExrCompression) -> Result<()> {
+    write_exr_channels(path, img, &[], meta, compression)
+}
+
+/// A named float32 channel beside R, G and B (`data[y * width + x]`), for example
+/// `("moment2.R", ...)`.
+pub type ExtraChannel = (String, Vec<f32>);
+
+/// `(key, value)` string attributes, sorted by key.
+pub type Metadata = Vec<(String, String)>;
+
+/// [`write_exr_with`] with `extra` float32 channels in the same part (channel names must
+/// be unique, 1 to 255 bytes without NUL, not R, G or B, with one value per pixel).
+/// Channels are stored in name order, as OpenEXR requires.
+pub fn write_exr_channels(
+    path: &Path,
+    img: &Image,
+    extra: &[ExtraChannel],
+    meta: &[(String, String)],
+    compression: ExrCompression,
+) -> Result<()> {
     let bytes =
-        encode_exr(img, meta, compression).map_err(|e| anyhow!("cannot write EXR {}: {e:#}", path.display()))?;
+        encode_exr(img, extra, meta, compression).map_err(|e| anyhow!("cannot write EXR {}: {e:#}", path.display()))?;
     write_atomic(path, "EXR", |w| Ok(w.write_all(&bytes)?))
 }
 
@@ -71,6 +91,12 @@ pub fn write_exr_with(path: &Path, img: &Image, meta: &[(String, String)], compr
 ///
 /// Errors name the file: missing file, not an EXR, no layer with R, G and B.
 pub fn read_exr(path: &Path) -> Result<(Image, Vec<(String, String)>)> {
+    let (img, _, meta) = read_exr_channels(path)?;
+    Ok((img, meta))
+}
+
+/// [`read_exr`] that also returns the layer's other channels (as float32, sorted by name).
+pub fn read_exr_channels(path: &Path) -> Result<(Image, Vec<ExtraChannel>, Metadata)> {
     use ::exr::prelude::{ReadChannels, ReadLayers};
     let shown = path.display();
     let image = ::exr::image::read::read()
@@ -118,13 +144,27 @@ pub fn read_exr(path: &Path) -> Result<(Image, Vec<(String, String)>)> {
         let data = (0..n).map(|i| [planes[0][i], planes[1][i], planes[2][i]]).collect();
         let width = u32::try_from(w).map_err(|_| anyhow!("cannot read EXR {shown}: too wide"))?;
         let height = u32::try_from(h).map_err(|_| anyhow!("cannot read EXR {shown}: too tall"))?;
-        return Ok((Image { width, height, data }, meta));
+        let mut extra = Vec::new();
+        for c in list.iter().filter(|c| !(c.name.eq("R") || c.name.eq("G") || c.name.eq("B"))) {
+            let values: Vec<f32> = c.sample_data.values_as_f32().collect();
+            if values.len() != n {
+                bail!("cannot read EXR {shown}: channel {} is subsampled (not supported)", c.name);
+            }
+            extra.push((c.name.to_string(), values));
+        }
+        extra.sort_by(|a, b| a.0.cmp(&b.0));
+        return Ok((Image { width, height, data }, extra, meta));
     }
     bail!("cannot read EXR {shown}: no layer has channels R, G and B (channels found: {})", found.join(", "))
 }
 
 /// Encodes `img` and `meta` into the bytes of an EXR file (what [`write_exr_with`] writes).
-pub(crate) fn encode_exr(img: &Image, meta: &[(String, String)], compression: ExrCompression) -> Result<Vec<u8>> {
+pub(crate) fn encode_exr(
+    img: &Image,
+    extra: &[ExtraChannel],
+    meta: &[(String, String)],
+    compression: ExrCompression,
+) -> Result<Vec<u8>> {
     let (w, h) = (img.width as usize, img.height as usize);
     if w == 0 || h == 0 {
         bail!("image is empty ({}x{})", img.width, img.height);
@@ -135,6 +175,24 @@ pub(crate) fn encode_exr(img: &Image, meta: &[(String, String)], compression: Ex
     if img.data.len() != w * h {
         bail!("image data has {} pixels, expected {}x{}", img.data.len(), img.width, img.height);
     }
+
+    // Channels in name order (OpenEXR requires it): which RGB component or extra channel.
+    let mut channels: Vec<(&str, Channel)> =
+        vec![("B", Channel::Rgb(2)), ("G", Channel::Rgb(1)), ("R", Channel::Rgb(0))];
+    for (i, (name, data)) in extra.iter().enumerate() {
+        if name.is_empty() || name.len() > 255 || !name.bytes().all(|b| b.is_ascii_graphic()) {
+            bail!("invalid channel name {name:?}: must be 1 to 255 printable ASCII characters");
+        }
+        if data.len() != w * h {
+            bail!("channel {name:?} has {} values, expected {}x{}", data.len(), img.width, img.height);
+        }
+        channels.push((name.as_str(), Channel::Extra(i)));
+    }
+    channels.sort_by(|a, b| a.0.cmp(b.0));
+    if let Some(d) = channels.windows(2).find(|p| p[0].0 == p[1].0) {
+        bail!("duplicate channel {:?}", d[0].0);
+    }
+    let channel_names: Vec<&str> = channels.iter().map(|c| c.0).collect();
 
     let mut meta: Vec<&(String, String)> = meta.iter().collect();
     meta.sort();
@@ -152,7 +210,7 @@ pub(crate) fn encode_exr(img: &Image, meta: &[(String, String)], compression: Ex
             bail!("metadata value of {key:?} is too long");
         }
     }
-    let long_names = meta.iter().any(|kv| kv.0.len() > 31);
+    let long_names = meta.iter().any(|kv| kv.0.len() > 31) || channel_names.iter().any(|n| n.len() > 31);
 
     let mut out = Vec::with_capacity(4096);
     out.extend_from_slice(&20000630i32.to_le_bytes()); // magic number
@@ -160,7 +218,7 @@ pub(crate) fn encode_exr(img: &Image, meta: &[(String, String)], compression: Ex
     out.extend_from_slice(&version.to_le_bytes());
 
     let mut chlist = Vec::new();
-    for name in ["B", "G", "R"] {
+    for name in &channel_names {
         chlist.extend_from_slice(name.as_bytes());
         chlist.push(0);
         chlist.extend_from_slice(&2i32.to_le_bytes()); // pixel type FLOAT
@@ -199,12 +257,17 @@ pub(crate) fn encode_exr(img: &Image, meta: &[(String, String)], compression: Ex
     let encode_chunk = |chunk: usize, header: Option<&::exr::meta::header::Header>| -> Result<Vec<u8>> {
         let y0 = chunk * lines;
         let n = lines.min(h - y0);
-        let mut raw = Vec::with_capacity(w * 12 * n);
+        let mut raw = Vec::with_capacity(w * 4 * channels.len() * n);
         for y in y0..y0 + n {
-            let row = &img.data[y * w..(y + 1) * w];
-            for c in [2, 1, 0] {
-                for p in row {
-                    raw.extend_from_slice(&p[c].to_le_bytes());
+            let row = y * w..(y + 1) * w;
+            for (_, c) in &channels {
+                match *c {
+                    Channel::Rgb(c) => {
+                        img.data[row.clone()].iter().for_each(|p| raw.extend_from_slice(&p[c].to_le_bytes()))
+                    }
+                    Channel::Extra(i) => {
+                        extra[i].1[row.clone()].iter().for_each(|v| raw.extend_from_slice(&v.to_le_bytes()))
+                    }
                 }
             }
         }
@@ -219,7 +282,7 @@ pub(crate) fn encode_exr(img: &Image, meta: &[(String, String)], compression: Ex
         }
     };
     let zip_header = match compression {
-        ExrCompression::Zip => Some(zip_header(w, h)),
+        ExrCompression::Zip => Some(zip_header(w, h, &channel_names)),
         ExrCompression::None => None,
     };
     let threads = match compression {
@@ -258,6 +321,13 @@ pub(crate) fn encode_exr(img: &Image, meta: &[(String, String)], compression: Ex
     Ok(out)
 }
 
+/// Where a written channel's values come from.
+#[derive(Clone, Copy)]
+enum Channel {
+    Rgb(usize),
+    Extra(usize),
+}
+
 /// Appends one header attribute: name, NUL, type name, NUL, i32 size, value.
 fn attribute(out: &mut Vec<u8>, name: &str, ty: &str, value: &[u8]) {
     out.extend_from_slice(name.as_bytes());
@@ -269,12 +339,9 @@ fn attribute(out: &mut Vec<u8>, name: &str, ty: &str, value: &[u8]) {
 }
 
 /// The `exr` crate header its ZIP encoder needs: channel list and block size only.
-fn zip_header(w: usize, h: usize) -> ::exr::meta::header::Header {
+fn zip_header(w: usize, h: usize, names: &[&str]) -> ::exr::meta::header::Header {
     use ::exr::meta::attribute::{ChannelDescription, LineOrder, SampleType, Text};
-    let channels = ["B", "G", "R"]
-        .into_iter()
-        .map(|n| ChannelDescription::named(Text::new_or_panic(n), SampleType::F32))
-        .collect();
+    let channels = names.iter().map(|n| ChannelDescription::named(Text::new_or_panic(*n), SampleType::F32)).collect();
     ::exr::meta::header::Header::new(Text::new_or_panic("rgb"), (w, h), channels).with_encoding(
         ::exr::compression::Compression::ZIP16,
         ::exr::meta::BlockDescription::ScanLines,

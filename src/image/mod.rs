@@ -13,6 +13,7 @@
 mod atomic;
 mod exr_io;
 mod metrics;
+pub mod plot;
 mod png_io;
 pub mod stats;
 

@@ -123,25 +123,15 @@ pub struct Reference {
     pub noise_rms: f64,
 }
 
+/// `iterations` in all, in two independent halves ([`super::converge::render_reference`]).
 pub fn reference(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, size: u32, iterations: u64) -> Result<Reference> {
     let s = RenderSettings::new(algo, size, size, Budget::Iterations(iterations));
-    let out = render(gpu, scene, &s, None, &mut |_| {})?;
-    let n = out.iterations as f64;
-    let mut acc = 0.0;
-    for (sum, sq) in out.sum.iter().zip(&out.sum_sq) {
-        for c in 0..3 {
-            let m = sum[c] / n;
-            let var = ((sq[c] / n - m * m) * n / (n - 1.0).max(1.0)).max(0.0);
-            acc += var / n;
-        }
-    }
-    let noise_rms = (acc / (3 * out.sum.len()) as f64).sqrt();
-    let image = crate::image::Image { width: out.width, height: out.height, data: out.pixels };
-    Ok(Reference { image, algorithm: algo, iterations: out.iterations, noise_rms })
+    let r = super::converge::render_reference(gpu, scene, &s, None, &mut |_, _| {})?;
+    Ok(Reference { image: r.image, algorithm: algo, iterations: r.iterations, noise_rms: r.stderr_rms })
 }
 
-/// Renders with `algo` for `seconds` of wall-clock time (after a 1-iteration warm-up
-/// that pays the driver's compilation) and measures the error against the reference.
+/// Renders with `algo` for `seconds` of render time (its first iteration, which pays the
+/// driver's compilation, is discarded) and measures the error against the reference.
 pub fn equal_time(
     gpu: &Arc<Gpu>,
     scene: &Scene,
@@ -150,21 +140,23 @@ pub fn equal_time(
     reference: &Reference,
 ) -> Result<EqualTimeRow> {
     let (w, h) = (reference.image.width, reference.image.height);
-    render(gpu, scene, &RenderSettings::new(algo, w, h, Budget::Iterations(1)), None, &mut |_| {})?;
     let mut s = RenderSettings::new(algo, w, h, Budget::Seconds(seconds));
     // A different seed from the reference's, so the errors are independent.
     s.frame.seed = 4321;
-    let out = render(gpu, scene, &s, None, &mut |_| {})?;
-    let img = crate::image::Image { width: w, height: h, data: out.pixels };
-    let m = crate::image::compare(&img, &reference.image)?;
+    let target = super::converge::Target {
+        image: &reference.image,
+        error: super::converge::ReferenceError { rmse: Some(reference.noise_rms), rel_mse: None },
+    };
+    let rows = super::converge::converge_one(gpu, scene, &s, &target, &[seconds], None, &mut |_| {})?;
+    let row = rows.last().ok_or_else(|| anyhow::anyhow!("equal-time render of {} measured nothing", algo.name()))?;
     Ok(EqualTimeRow {
         scene: scene.name.clone(),
         algorithm: algo.name().to_string(),
-        seconds: out.seconds,
-        iterations: out.iterations,
-        rmse: m.rmse,
-        rel_mse: m.rel_mse,
-        mean_abs_bias: m.mean_abs_bias,
+        seconds: row.seconds,
+        iterations: row.iterations,
+        rmse: row.rmse,
+        rel_mse: row.rel_mse,
+        mean_abs_bias: row.mean_abs_bias,
     })
 }
 

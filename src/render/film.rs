@@ -35,25 +35,34 @@ impl Film {
     }
 
     /// Per-pixel sums of the iterations' values and of their squares (linear RGB, row 0
-    /// at the top).
+    /// at the top), each the float32 Kahan sum minus its compensation, in float64.
     pub fn sums(&self) -> Result<(PixelSums, PixelSums)> {
         let raw: Vec<[f32; 4]> = self.accum.read()?;
-        let rgb = |v: [f32; 4]| [v[0] as f64, v[1] as f64, v[2] as f64];
-        let sum = raw.chunks_exact(FILM_VEC4_PER_PIXEL).map(|p| rgb(p[0])).collect();
-        let sum_sq = raw.chunks_exact(FILM_VEC4_PER_PIXEL).map(|p| rgb(p[2])).collect();
+        // film_kahan_add keeps comp = (t - sum) - y, the amount t overshoots: true = t - comp.
+        let rgb = |t: [f32; 4], c: [f32; 4]| std::array::from_fn(|i| t[i] as f64 - c[i] as f64);
+        let sum = raw.chunks_exact(FILM_VEC4_PER_PIXEL).map(|p| rgb(p[0], p[1])).collect();
+        let sum_sq = raw.chunks_exact(FILM_VEC4_PER_PIXEL).map(|p| rgb(p[2], p[3])).collect();
         Ok((sum, sum_sq))
     }
 
-    /// Replaces the sums (Kahan compensations reset to zero); lengths must match the film.
+    /// Replaces the sums, each split into a float32 sum and the Kahan compensation that
+    /// holds its rounding error (so [`Film::sums`] returns them to about 2^-48 relative);
+    /// lengths must match the film. The rejected-sample counters are not touched.
     pub fn load_sums(&self, sum: &[[f64; 3]], sum_sq: &[[f64; 3]]) -> Result<()> {
         let n = self.width as usize * self.height as usize;
         if sum.len() != n || sum_sq.len() != n {
             bail!("saved sums have {} and {} pixels but the film has {n}", sum.len(), sum_sq.len());
         }
-        let v = |p: [f64; 3]| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0];
+        let split = |p: [f64; 3]| {
+            let t = p.map(|v| v as f32);
+            let c: [f32; 3] = std::array::from_fn(|i| (t[i] as f64 - p[i]) as f32);
+            ([t[0], t[1], t[2], 0.0], [c[0], c[1], c[2], 0.0])
+        };
         let mut raw = Vec::with_capacity(FILM_VEC4_PER_PIXEL * n);
         for (s, q) in sum.iter().zip(sum_sq) {
-            raw.extend_from_slice(&[v(*s), [0.0; 4], v(*q), [0.0; 4]]);
+            let (st, sc) = split(*s);
+            let (qt, qc) = split(*q);
+            raw.extend_from_slice(&[st, sc, qt, qc]);
         }
         self.accum.write(&raw)
     }

@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod bidir;
+pub mod converge;
 pub mod film;
 pub mod gpu_types;
 pub mod hash_grid;

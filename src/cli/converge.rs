@@ -1,0 +1,309 @@
+//! `vkvcm reference` (a reference render with its own error estimate) and `vkvcm converge`
+//! (error-vs-time curves of estimators against a reference: CSV and a log-log PNG).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+
+use super::render::{check_writable, install_interrupt};
+use vkvcm::gpu::{Gpu, GpuOptions};
+use vkvcm::image::{self, plot};
+use vkvcm::render::converge::{self as conv, ReferenceError};
+use vkvcm::render::{Algorithm, Budget, RenderSettings};
+use vkvcm::scene::{self, Light, Scene};
+
+#[derive(Args)]
+pub struct ReferenceArgs {
+    /// A glTF file (.gltf/.glb) or a built-in scene: gbs_s, glm_c, gbs_p, gbs_b.
+    pub scene: String,
+    /// Output EXR. Default: <scene>_reference.exr.
+    #[arg(long, short = 'o')]
+    pub output: Option<PathBuf>,
+    /// Estimator. Use an unbiased one (bpt, pt). vcm, ppm and bpm are only consistent:
+    /// their merging bias shrinks with time but is there at any finite time, and the
+    /// error estimate from two halves cannot see it (both halves share it).
+    #[arg(long, short = 'a', value_enum, default_value = "bpt")]
+    pub algo: Algorithm,
+    /// Total render seconds (both halves together).
+    #[arg(long, short = 't', conflicts_with = "iterations")]
+    pub time: Option<f64>,
+    /// Total iterations (both halves together; at least 2). Default: 256.
+    #[arg(long, short = 'i')]
+    pub iterations: Option<u64>,
+    #[arg(long, default_value_t = 256)]
+    pub width: u32,
+    #[arg(long, default_value_t = 256)]
+    pub height: u32,
+    /// Seed of the first half; the second half uses seed + 1.
+    #[arg(long, default_value_t = 1234)]
+    pub seed: u32,
+    /// Longest path, in segments.
+    #[arg(long, default_value_t = 10)]
+    pub max_path_length: u32,
+    /// Also write a tone-mapped sRGB PNG of the reference.
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Vulkan device: index or name substring (see `vkvcm devices`).
+    #[arg(long)]
+    pub device: Option<String>,
+}
+
+#[derive(Args)]
+pub struct ConvergeArgs {
+    /// The scene of the reference: a glTF file or a built-in name.
+    pub scene: String,
+    /// Reference EXR (from `vkvcm reference`; any EXR of the same size works, without a
+    /// noise floor unless it carries vkvcm:reference_rmse).
+    #[arg(long, short = 'r')]
+    pub reference: PathBuf,
+    /// Estimators, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "pt,bpt,vcm")]
+    pub algos: Vec<Algorithm>,
+    /// Render seconds per estimator (read-backs and error measurement not counted).
+    #[arg(long, short = 't', default_value_t = 10.0)]
+    pub time: f64,
+    /// Checkpoints per estimator at T/2^(K-1), ..., T/2, T.
+    #[arg(long, short = 'k', default_value_t = 6)]
+    pub checkpoints: usize,
+    /// Write the rows as CSV here (default: print them to stdout).
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+    /// Write a log-log plot of RMSE vs. seconds (PNG).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Image size (default: the reference's; any other size is refused).
+    #[arg(long)]
+    pub width: Option<u32>,
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Seed of the measured renders (keep it different from the reference's).
+    #[arg(long, default_value_t = 4321)]
+    pub seed: u32,
+    /// Longest path, in segments (default: the reference's vkvcm:max_path_length, else 10).
+    #[arg(long)]
+    pub max_path_length: Option<u32>,
+    /// Vulkan device: index or name substring (see `vkvcm devices`).
+    #[arg(long)]
+    pub device: Option<String>,
+}
+
+/// Names of the materials and lights that make SDS paths (light -> specular -> diffuse
+/// -> specular -> eye) unreachable for pt, lt and bpt: a delta light (point, spot, sun)
+/// and a specular surface. `None` when the scene has no such pair.
+fn sds_hazard(scene: &Scene) -> Option<&'static str> {
+    let delta = scene.lights.iter().find_map(|l| match l {
+        Light::Point { .. } => Some("a point light"),
+        Light::Spot { .. } => Some("a spot light"),
+        Light::Directional { .. } => Some("a directional light"),
+        _ => None,
+    })?;
+    let specular = scene.materials.iter().any(|m| m.ior >= 0.0 || m.mirror.max_element() > 0.0);
+    specular.then_some(delta)
+}
+
+fn meta_value<'a>(meta: &'a [(String, String)], key: &str) -> Option<&'a str> {
+    meta.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
+}
+
+fn open_gpu(device: Option<String>) -> Result<std::sync::Arc<Gpu>> {
+    let gpu = Gpu::new(&GpuOptions::from_env(device))?;
+    eprintln!("device: {} ({})", gpu.info.name, gpu.info.driver);
+    Ok(gpu)
+}
+
+/// Fails when the device's validation layer reported anything (VKVCM_VALIDATION=1).
+fn check_validation(gpu: std::sync::Arc<Gpu>) -> Result<()> {
+    let msgs = gpu.validation_messages();
+    drop(gpu);
+    if !msgs.list().is_empty() {
+        bail!("{} Vulkan validation message(s) (printed above)", msgs.list().len());
+    }
+    Ok(())
+}
+
+pub fn reference_cmd(a: ReferenceArgs) -> Result<()> {
+    let scene = scene::load_named(&a.scene)?;
+    let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}_reference.exr", scene.name)));
+    check_writable(&output)?;
+    if let Some(p) = &a.png {
+        check_writable(p)?;
+    }
+    let budget = match (a.iterations, a.time) {
+        (_, Some(t)) if !(t > 0.0 && t.is_finite()) => bail!("--time must be a positive number of seconds"),
+        (_, Some(t)) => Budget::Seconds(t),
+        (Some(n), None) if n < 2 => bail!("--iterations must be at least 2 (one per half)"),
+        (Some(n), None) => Budget::Iterations(n),
+        (None, None) => Budget::Iterations(256),
+    };
+    match a.algo {
+        Algorithm::El => bail!("--algo el is a preview (|cos| at the first hit), not radiance: use bpt or pt"),
+        Algorithm::Vcm | Algorithm::Ppm | Algorithm::Bpm => eprintln!(
+            "warning: {} is consistent but biased at any finite time (merging); the reference's error \
+             estimate from two halves does not include that bias",
+            a.algo.name()
+        ),
+        Algorithm::Pt | Algorithm::Lt | Algorithm::Bpt => {
+            if let Some(light) = sds_hazard(&scene) {
+                eprintln!(
+                    "warning: {} has {light} and specular surfaces: {} cannot sample SDS paths \
+                     (light -> specular -> diffuse -> specular -> eye, e.g. caustics seen through glass), \
+                     so this reference lacks them; --algo vcm samples them but is only consistent",
+                    scene.name,
+                    a.algo.name()
+                );
+            }
+        }
+    }
+    let mut settings = RenderSettings::new(a.algo, a.width, a.height, budget);
+    settings.frame.seed = a.seed;
+    settings.frame.max_path_length = a.max_path_length;
+
+    let gpu = open_gpu(a.device.clone())?;
+    let mut last = -1.0;
+    let r = conv::render_reference(&gpu, &scene, &settings, None, &mut |half, p| {
+        if p.seconds - last >= 5.0 || p.fraction >= 1.0 {
+            last = p.seconds;
+            eprintln!("half {}: {:5.1}% {} it, {:.1} s", half + 1, 100.0 * p.fraction, p.iterations, p.seconds);
+        }
+        if p.fraction >= 1.0 {
+            last = -1.0;
+        }
+    })
+    .with_context(|| format!("rendering the reference of {} with {}", scene.name, a.algo.name()))?;
+    image::write_exr(&output, &r.image, &r.metadata(&scene.name, &settings))?;
+    println!(
+        "reference {}: {} x {} iterations ({:.1} s) at {}x{}, seeds {} and {}",
+        output.display(),
+        r.algorithm.name(),
+        r.iterations,
+        r.seconds,
+        a.width,
+        a.height,
+        r.seeds[0],
+        r.seeds[1]
+    );
+    println!("its own error estimate, from the two halves: rmse {:.6e}, rel_mse {:.6e}", r.rmse, r.rel_mse);
+    println!("(RMS standard error from the per-pixel variance: {:.6e})", r.stderr_rms);
+    if r.rejected_samples > 0 {
+        eprintln!("warning: {} sample(s) were NaN, infinite or negative and were rejected", r.rejected_samples);
+    }
+    if let Some(p) = &a.png {
+        image::write_png(p, &r.image, 1.0)?;
+        eprintln!("wrote {}", p.display());
+    }
+    check_validation(gpu)
+}
+
+/// Writes `bytes` to `path` atomically.
+fn write_text(path: &Path, text: &str) -> Result<()> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let mut f = tempfile::NamedTempFile::new_in(dir).with_context(|| format!("cannot write {}", path.display()))?;
+    std::io::Write::write_all(&mut f, text.as_bytes()).with_context(|| format!("cannot write {}", path.display()))?;
+    f.persist(path).with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(())
+}
+
+pub fn converge_cmd(a: ConvergeArgs) -> Result<()> {
+    let times = conv::checkpoint_times(a.time, a.checkpoints).context("--time / --checkpoints")?;
+    if a.algos.is_empty() {
+        bail!("--algos: name at least one estimator");
+    }
+    if a.algos.contains(&Algorithm::El) {
+        bail!("--algos: el is a preview (|cos| at the first hit), not radiance; it has no error to measure");
+    }
+    let (reference, meta) = image::read_exr(&a.reference)?;
+    let (w, h) = (a.width.unwrap_or(reference.width), a.height.unwrap_or(reference.height));
+    if (w, h) != (reference.width, reference.height) {
+        bail!(
+            "the reference {} is {}x{} but the render would be {w}x{h}: render at the reference's size \
+             (leave out --width/--height) or make a reference of this size",
+            a.reference.display(),
+            reference.width,
+            reference.height
+        );
+    }
+    if reference.non_finite_count() > 0 {
+        bail!("the reference {} has {} non-finite pixel(s)", a.reference.display(), reference.non_finite_count());
+    }
+    for p in [&a.csv, &a.plot].into_iter().flatten() {
+        check_writable(p)?;
+    }
+    let scene = scene::load_named(&a.scene)?;
+    if let Some(s) = meta_value(&meta, "vkvcm:scene").filter(|s| *s != scene.name) {
+        eprintln!("warning: the reference {} was rendered from scene {s}, not {}", a.reference.display(), scene.name);
+    }
+    for key in ["vkvcm:seed", "vkvcm:seed_b"] {
+        if meta_value(&meta, key) == Some(a.seed.to_string().as_str()) {
+            eprintln!("warning: --seed {} is the reference's own seed: the errors are not independent", a.seed);
+        }
+    }
+    let ref_max_len = meta_value(&meta, "vkvcm:max_path_length").and_then(|v| v.parse::<u32>().ok());
+    let max_path_length = a.max_path_length.or(ref_max_len).unwrap_or(10);
+    if ref_max_len.is_some_and(|m| m != max_path_length) {
+        eprintln!(
+            "warning: the reference was rendered with max path length {ref_max_len:?}, these with {max_path_length}"
+        );
+    }
+    let ref_err = ReferenceError::from_metadata(&meta);
+    let ref_algo = meta_value(&meta, "vkvcm:estimator").unwrap_or("unknown estimator").to_string();
+    match ref_err.rmse {
+        Some(e) => eprintln!("reference {}: {ref_algo}, its own RMSE estimate {e:.4e}", a.reference.display()),
+        None => eprintln!("reference {}: no vkvcm:reference_rmse, so no noise floor", a.reference.display()),
+    }
+
+    let target = conv::Target { image: &reference, error: ref_err };
+    let gpu = open_gpu(a.device.clone())?;
+    let cancel = install_interrupt();
+    let mut rows = Vec::new();
+    for &algo in &a.algos {
+        let mut s = RenderSettings::new(algo, w, h, Budget::Seconds(a.time));
+        s.frame.seed = a.seed;
+        s.frame.max_path_length = max_path_length;
+        let r = conv::converge_one(&gpu, &scene, &s, &target, &times, Some(&cancel), &mut |c| {
+            let r = c.row;
+            eprintln!(
+                "{:>4} {}/{}: {:6} it {:8.2} s  RMSE {:.4e}  relMSE {:.4e}  |bias| {:.3e}",
+                r.estimator, r.checkpoint, c.of, r.iterations, r.seconds, r.rmse, r.rel_mse, r.mean_abs_bias
+            );
+        })
+        .with_context(|| format!("rendering {} with {}", scene.name, algo.name()))?;
+        rows.extend(r);
+        if cancel.load(std::sync::atomic::Ordering::Relaxed) {
+            eprintln!("interrupted: writing the rows so far");
+            break;
+        }
+    }
+
+    let text = conv::csv_string(&rows)?;
+    match &a.csv {
+        Some(p) => {
+            write_text(p, &text)?;
+            eprintln!("wrote {}", p.display());
+        }
+        None => print!("{text}"),
+    }
+    if let Some(p) = &a.plot {
+        let series = a
+            .algos
+            .iter()
+            .map(|algo| plot::Series {
+                name: algo.name().to_string(),
+                points: rows.iter().filter(|r| r.estimator == algo.name()).map(|r| (r.seconds, r.rmse)).collect(),
+            })
+            .filter(|s| !s.points.is_empty())
+            .collect();
+        let plot = plot::LogLogPlot {
+            title: format!("{} {w}x{h}: error vs. render time", scene.name),
+            x_label: "render seconds".into(),
+            y_label: "RMSE".into(),
+            series,
+            floor: ref_err.rmse.map(|e| (e, format!("reference ({ref_algo}) own RMSE"))),
+            width: 900,
+            height: 600,
+        };
+        plot::write_loglog_png(p, &plot)?;
+        eprintln!("wrote {}", p.display());
+    }
+    check_validation(gpu)
+}

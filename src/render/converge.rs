@@ -1,0 +1,337 @@
+//! Convergence measurements: a reference render from two independent halves (with its own
+//! error estimate), and error-vs-time curves of estimators against it (`vkvcm reference`,
+//! `vkvcm converge`, `vkvcm bench equal-time`).
+//!
+//! The error estimate of a reference follows the usual split-sample trick: if `a` and `b`
+//! are independent unbiased renders with the same variance, `(a - b) / 2` has the variance
+//! of `(a + b) / 2` around its expectation, so RMS((a - b) / 2) estimates the RMS error of
+//! their average. It sees noise only: a bias both halves share (VCM's merging at finite
+//! time, paths neither half can sample) stays invisible.
+
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+use anyhow::{bail, Result};
+use serde::Serialize;
+
+use super::{Algorithm, Budget, Progress, RenderOutput, RenderSettings, Renderer};
+use crate::gpu::Gpu;
+use crate::image::{compare, Image, Metrics};
+use crate::scene::Scene;
+
+/// The `K` checkpoint times of a render of `total` seconds, spaced by factors of two and
+/// ending at `total`: `total * 2^-(K-1), ..., total / 2, total`.
+pub fn checkpoint_times(total: f64, checkpoints: usize) -> Result<Vec<f64>> {
+    if !(total > 0.0 && total.is_finite()) {
+        bail!("the render time must be a positive number of seconds (got {total})");
+    }
+    if !(1..=40).contains(&checkpoints) {
+        bail!("checkpoints must be between 1 and 40 (got {checkpoints})");
+    }
+    Ok((0..checkpoints).map(|i| total * 0.5f64.powi((checkpoints - 1 - i) as i32)).collect())
+}
+
+/// A reference image with its own error estimate.
+#[derive(Clone, Debug)]
+pub struct Reference {
+    /// The average of the two halves.
+    pub image: Image,
+    pub algorithm: Algorithm,
+    /// Iterations in all (both halves; each has half).
+    pub iterations: u64,
+    /// Render seconds in all.
+    pub seconds: f64,
+    /// Seeds of the two halves.
+    pub seeds: [u32; 2],
+    /// RMS over pixels and channels of (a - b) / 2: an estimate of the RMS error of `image`.
+    pub rmse: f64,
+    /// mean(((a - b) / 2)^2 / (image^2 + 1e-2)): the same for the relative MSE
+    /// ([`crate::image::REL_MSE_EPSILON`]).
+    pub rel_mse: f64,
+    /// RMS over pixels and channels of the standard error of the per-pixel mean, from the
+    /// per-iteration variance of both halves: a second estimate of the same quantity.
+    pub stderr_rms: f64,
+    /// Samples rejected as NaN, infinite or negative, both halves.
+    pub rejected_samples: u64,
+}
+
+impl Reference {
+    /// EXR metadata (`vkvcm:*`) describing the reference and its error estimate.
+    pub fn metadata(&self, scene: &str, settings: &RenderSettings) -> Vec<(String, String)> {
+        let kv = |k: &str, v: String| (format!("vkvcm:{k}"), v);
+        vec![
+            kv("scene", scene.to_string()),
+            kv("estimator", self.algorithm.name().to_string()),
+            kv("iterations", self.iterations.to_string()),
+            kv("seconds", format!("{:.3}", self.seconds)),
+            kv("seed", self.seeds[0].to_string()),
+            kv("seed_b", self.seeds[1].to_string()),
+            kv("max_path_length", settings.frame.max_path_length.to_string()),
+            kv("radius_factor", settings.radius_factor.to_string()),
+            kv("alpha", settings.alpha.to_string()),
+            kv("rejected_samples", self.rejected_samples.to_string()),
+            kv("reference_rmse", format!("{:e}", self.rmse)),
+            kv("reference_rel_mse", format!("{:e}", self.rel_mse)),
+            kv("reference_stderr_rms", format!("{:e}", self.stderr_rms)),
+        ]
+    }
+}
+
+/// The reference's own error estimate read back from EXR metadata (absent fields: `None`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ReferenceError {
+    pub rmse: Option<f64>,
+    pub rel_mse: Option<f64>,
+}
+
+impl ReferenceError {
+    /// Reads `vkvcm:reference_rmse` and `vkvcm:reference_rel_mse`; unparsable values count
+    /// as absent.
+    pub fn from_metadata(meta: &[(String, String)]) -> Self {
+        let get = |k: &str| {
+            meta.iter()
+                .find(|(key, _)| key == k)
+                .and_then(|(_, v)| v.trim().parse::<f64>().ok())
+                .filter(|v| v.is_finite())
+        };
+        ReferenceError { rmse: get("vkvcm:reference_rmse"), rel_mse: get("vkvcm:reference_rel_mse") }
+    }
+}
+
+/// A [`Renderer`] whose first iteration, which pays the driver's shader compilation, has
+/// been rendered and discarded (film, iteration count and seconds reset to zero), so that
+/// time budgets measure rendering only.
+pub fn warm_renderer(gpu: &Arc<Gpu>, scene: &Scene, settings: &RenderSettings) -> Result<Renderer> {
+    let mut r = Renderer::new(gpu, scene, settings)?;
+    r.run(Budget::Iterations(1), None, &mut |_| {})?;
+    let pixels = settings.frame.width as usize * settings.frame.height as usize;
+    r.resume(&vec![[0.0; 3]; pixels], &vec![[0.0; 3]; pixels], 0, 0.0)?;
+    Ok(r)
+}
+
+fn output_image(out: &RenderOutput) -> Image {
+    Image { width: out.width, height: out.height, data: out.pixels.clone() }
+}
+
+/// Renders `settings.budget` in two independent halves: the first with
+/// `settings.frame.seed` and half the budget, the second with the seed + 1 and exactly as
+/// many iterations as the first got (so their average is the pooled mean). The budget
+/// is the total: [`Budget::Iterations`] must be at least 2.
+pub fn render_reference(
+    gpu: &Arc<Gpu>,
+    scene: &Scene,
+    settings: &RenderSettings,
+    cancel: Option<&AtomicBool>,
+    progress: &mut dyn FnMut(usize, &Progress),
+) -> Result<Reference> {
+    let half_budget = match settings.budget {
+        Budget::Iterations(n) if n < 2 => bail!("a reference needs at least 2 iterations (one per half)"),
+        Budget::Iterations(n) => Budget::Iterations(n / 2),
+        Budget::Seconds(t) if !(t > 0.0 && t.is_finite()) => bail!("the reference time must be positive"),
+        Budget::Seconds(t) => Budget::Seconds(t / 2.0),
+    };
+    let seeds = [settings.frame.seed, settings.frame.seed.wrapping_add(1)];
+    let mut sa = settings.clone();
+    sa.budget = half_budget;
+    let mut ra = warm_renderer(gpu, scene, &sa)?;
+    ra.run(half_budget, cancel, &mut |p| progress(0, p))?;
+    let a = ra.output()?;
+    drop(ra);
+    let mut sb = sa.clone();
+    sb.frame.seed = seeds[1];
+    sb.budget = Budget::Iterations(a.iterations);
+    let mut rb = warm_renderer(gpu, scene, &sb)?;
+    rb.run(sb.budget, cancel, &mut |p| progress(1, p))?;
+    let b = rb.output()?;
+    drop(rb);
+    if b.iterations != a.iterations {
+        bail!("reference interrupted: the second half has {} of {} iterations", b.iterations, a.iterations);
+    }
+
+    let (ia, ib) = (output_image(&a), output_image(&b));
+    let image = Image::average(&[ia.clone(), ib])?;
+    // a - (a + b) / 2 = (a - b) / 2, and `compare` divides by the second image's square.
+    let m = compare(&ia, &image)?;
+    let n = (a.iterations + b.iterations) as f64;
+    let mut acc = 0.0;
+    for i in 0..a.sum.len() {
+        for c in 0..3 {
+            let (s, q) = (a.sum[i][c] + b.sum[i][c], a.sum_sq[i][c] + b.sum_sq[i][c]);
+            let mean = s / n;
+            let var = ((q / n - mean * mean) * n / (n - 1.0).max(1.0)).max(0.0);
+            acc += var / n;
+        }
+    }
+    let stderr_rms = (acc / (3 * a.sum.len()).max(1) as f64).sqrt();
+    Ok(Reference {
+        image,
+        algorithm: settings.algorithm,
+        iterations: a.iterations + b.iterations,
+        seconds: a.seconds + b.seconds,
+        seeds,
+        rmse: m.rmse,
+        rel_mse: m.rel_mse,
+        stderr_rms,
+        rejected_samples: a.rejected_samples + b.rejected_samples,
+    })
+}
+
+/// One row of `vkvcm converge`'s CSV: an estimator's error at one checkpoint.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ConvergeRow {
+    pub estimator: String,
+    /// 1-based checkpoint index.
+    pub checkpoint: usize,
+    pub iterations: u64,
+    /// Render seconds so far (read-backs and metrics excluded).
+    pub seconds: f64,
+    pub rmse: f64,
+    pub rel_mse: f64,
+    pub mean_abs_bias: f64,
+    pub max_abs: f64,
+    /// The reference's own error estimate (empty when the reference carries none).
+    pub reference_rmse: Option<f64>,
+    pub reference_rel_mse: Option<f64>,
+}
+
+/// The rows as CSV text with a header line (columns in [`ConvergeRow`]'s field order).
+pub fn csv_string(rows: &[ConvergeRow]) -> Result<String> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    if rows.is_empty() {
+        w.write_record([
+            "estimator",
+            "checkpoint",
+            "iterations",
+            "seconds",
+            "rmse",
+            "rel_mse",
+            "mean_abs_bias",
+            "max_abs",
+            "reference_rmse",
+            "reference_rel_mse",
+        ])?;
+    }
+    for r in rows {
+        w.serialize(r)?;
+    }
+    let bytes = w.into_inner().map_err(|e| anyhow::anyhow!("CSV: {e}"))?;
+    Ok(String::from_utf8(bytes)?)
+}
+
+/// The image [`converge_one`] measures against, and its own error estimate.
+#[derive(Clone, Copy, Debug)]
+pub struct Target<'a> {
+    pub image: &'a Image,
+    pub error: ReferenceError,
+}
+
+/// What [`converge_one`] reports after each checkpoint.
+pub struct Checkpoint<'a> {
+    pub row: &'a ConvergeRow,
+    pub of: usize,
+}
+
+/// Renders with `settings.algorithm` (the size must match the reference's) and measures
+/// the error against `reference` at each time of `times` (increasing, seconds of render
+/// time). One [`Renderer`] does the whole run, warmed up by [`warm_renderer`]. A checkpoint whose time was already passed still renders one more iteration,
+/// so iterations and seconds increase from row to row. Stops early (returning the rows so
+/// far) when `cancel` is set.
+pub fn converge_one(
+    gpu: &Arc<Gpu>,
+    scene: &Scene,
+    settings: &RenderSettings,
+    reference: &Target,
+    times: &[f64],
+    cancel: Option<&AtomicBool>,
+    on_checkpoint: &mut dyn FnMut(&Checkpoint),
+) -> Result<Vec<ConvergeRow>> {
+    let (w, h) = (settings.frame.width, settings.frame.height);
+    if (w, h) != (reference.image.width, reference.image.height) {
+        bail!("the render is {w}x{h} but the reference is {}x{}", reference.image.width, reference.image.height);
+    }
+    let mut r = warm_renderer(gpu, scene, settings)?;
+    let mut rows = Vec::with_capacity(times.len());
+    for (i, &t) in times.iter().enumerate() {
+        if cancel.is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
+            break;
+        }
+        // At least one iteration (Budget::Seconds always runs one).
+        let left = (t - r.seconds()).max(1e-9);
+        r.run(Budget::Seconds(left), cancel, &mut |_| {})?;
+        let out = r.output()?;
+        let m: Metrics = compare(&output_image(&out), reference.image)?;
+        rows.push(ConvergeRow {
+            estimator: settings.algorithm.name().to_string(),
+            checkpoint: i + 1,
+            iterations: out.iterations,
+            seconds: out.seconds,
+            rmse: m.rmse,
+            rel_mse: m.rel_mse,
+            mean_abs_bias: m.mean_abs_bias,
+            max_abs: m.max_abs,
+            reference_rmse: reference.error.rmse,
+            reference_rel_mse: reference.error.rel_mse,
+        });
+        on_checkpoint(&Checkpoint { row: rows.last().expect("just pushed"), of: times.len() });
+    }
+    Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn checkpoints_halve_back_from_the_total() {
+        assert_eq!(checkpoint_times(8.0, 4).unwrap(), vec![1.0, 2.0, 4.0, 8.0]);
+        assert_eq!(checkpoint_times(3.0, 1).unwrap(), vec![3.0]);
+        let t = checkpoint_times(30.0, 7).unwrap();
+        assert_eq!(t.len(), 7);
+        assert_eq!(*t.last().unwrap(), 30.0);
+        assert!((t[0] - 30.0 / 64.0).abs() < 1e-12);
+        assert!(t.windows(2).all(|p| (p[1] / p[0] - 2.0).abs() < 1e-12));
+    }
+
+    #[test]
+    fn checkpoints_reject_bad_input() {
+        for (t, k) in [(0.0, 3), (-1.0, 3), (f64::NAN, 3), (f64::INFINITY, 3), (1.0, 0), (1.0, 41)] {
+            assert!(checkpoint_times(t, k).is_err(), "{t} {k}");
+        }
+    }
+
+    fn row(est: &str, k: usize, reference_rmse: Option<f64>) -> ConvergeRow {
+        ConvergeRow {
+            estimator: est.into(),
+            checkpoint: k,
+            iterations: 12,
+            seconds: 0.5,
+            rmse: 0.125,
+            rel_mse: 1e-3,
+            mean_abs_bias: 0.0,
+            max_abs: 2.5,
+            reference_rmse,
+            reference_rel_mse: reference_rmse.map(|v| v * v),
+        }
+    }
+
+    #[test]
+    fn csv_has_a_header_and_one_line_per_row() {
+        let s = csv_string(&[row("pt", 1, Some(0.5)), row("bpt", 2, None)]).unwrap();
+        let want = "estimator,checkpoint,iterations,seconds,rmse,rel_mse,mean_abs_bias,max_abs,reference_rmse,reference_rel_mse\n\
+                    pt,1,12,0.5,0.125,0.001,0.0,2.5,0.5,0.25\n\
+                    bpt,2,12,0.5,0.125,0.001,0.0,2.5,,\n";
+        assert_eq!(s, want);
+        // Empty: the header alone.
+        assert_eq!(csv_string(&[]).unwrap(), want.lines().next().unwrap().to_string() + "\n");
+    }
+
+    #[test]
+    fn reference_error_reads_metadata() {
+        let meta = vec![
+            ("vkvcm:reference_rmse".to_string(), "1.5e-3".to_string()),
+            ("vkvcm:reference_rel_mse".to_string(), "oops".to_string()),
+        ];
+        assert_eq!(ReferenceError::from_metadata(&meta), ReferenceError { rmse: Some(1.5e-3), rel_mse: None });
+        assert_eq!(ReferenceError::from_metadata(&[]), ReferenceError::default());
+    }
+}

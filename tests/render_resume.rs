@@ -1,0 +1,163 @@
+//! Resume: a render of N iterations saved to EXR, read back and continued for N more
+//! equals an uninterrupted render of 2N iterations (the per-pixel random numbers and the
+//! merge radius depend only on the iteration index, and every estimator's sums are
+//! deterministic). Plus: mismatching settings are refused, and absurd frames fail
+//! cleanly before allocation.
+
+mod common;
+
+use std::sync::Arc;
+
+use common::with_gpu;
+use vkvcm::gpu::Gpu;
+use vkvcm::render::saved::{self, Provenance};
+use vkvcm::render::{Algorithm, Budget, RenderOutput, RenderSettings, Renderer};
+use vkvcm::scene::{load_named, Scene};
+
+const N: u64 = 6;
+const SIZE: u32 = 32;
+
+/// Largest per-pixel difference allowed, relative to the larger value: the EXR stores
+/// mean and second moment as float32 (one rounding, 2^-24 = 6e-8 relative), the film
+/// keeps float32 Kahan sums that the continuation adds to (a few more roundings). 2e-6
+/// is ~30 float32 ulps: generous for rounding, yet a restarted iteration index (the
+/// first N iterations repeated) differs by Monte Carlo noise, percent-level here.
+const REL_TOL: f32 = 2e-6;
+
+fn settings(algo: Algorithm, budget: Budget) -> RenderSettings {
+    RenderSettings::new(algo, SIZE, SIZE, budget)
+}
+
+fn render(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, n: u64) -> RenderOutput {
+    let s = settings(algo, Budget::Iterations(n));
+    let mut r = Renderer::new(gpu, scene, &s).expect("renderer");
+    r.run(Budget::Iterations(n), None, &mut |_| {}).expect("run");
+    r.output().expect("output")
+}
+
+/// Largest relative difference between two sets of per-pixel values.
+fn max_rel(a: impl Iterator<Item = f64>, b: impl Iterator<Item = f64>) -> f32 {
+    a.zip(b)
+        .map(|(x, y)| {
+            let m = x.abs().max(y.abs());
+            if m == 0.0 {
+                0.0
+            } else {
+                ((x - y).abs() / m) as f32
+            }
+        })
+        .fold(0.0, f32::max)
+}
+
+fn flat(v: &[[f64; 3]]) -> impl Iterator<Item = f64> + '_ {
+    v.iter().flatten().copied()
+}
+
+fn resume_matches_uninterrupted(algo: Algorithm) {
+    let scene = load_named("gbs_s").unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("half.exr");
+    with_gpu(|gpu| {
+        let full = render(gpu, &scene, algo, 2 * N);
+        let half = render(gpu, &scene, algo, N);
+        let prov = Provenance { scene: scene.name.clone(), camera: "default".into(), device: gpu.info.name.clone() };
+        let s = settings(algo, Budget::Iterations(2 * N));
+        saved::write_render_exr(&path, &half, &s, &prov).unwrap();
+
+        let loaded = saved::read_render_exr(&path).unwrap();
+        assert_eq!(loaded.iterations, N);
+        loaded.check_matches(&s, &scene.name, "default").unwrap();
+        let mut r = Renderer::new(gpu, &scene, &s).unwrap();
+        r.resume_saved(&loaded).unwrap();
+        r.run(Budget::Iterations(N), None, &mut |_| {}).unwrap();
+        let resumed = r.output().unwrap();
+        drop(r);
+
+        assert_eq!(resumed.iterations, 2 * N);
+        let mean = |o: &RenderOutput| o.pixels.iter().flatten().map(|&v| v as f64).collect::<Vec<_>>();
+        let d_mean = max_rel(mean(&full).into_iter(), mean(&resumed).into_iter());
+        let d_m2 = max_rel(flat(&full.sum_sq), flat(&resumed.sum_sq));
+        // The halves differ by noise: the tolerance above is meaningful.
+        let d_half = max_rel(mean(&full).into_iter(), mean(&half).into_iter());
+        eprintln!("{}: max rel diff mean {d_mean:e}, second moment {d_m2:e}; N vs 2N {d_half:e}", algo.name());
+        assert!(d_half > 1e3 * REL_TOL, "{}: N and 2N iterations are nearly equal ({d_half})", algo.name());
+        assert!(d_mean <= REL_TOL, "{}: resumed mean differs by {d_mean:e} relative", algo.name());
+        assert!(d_m2 <= REL_TOL, "{}: resumed second moment differs by {d_m2:e} relative", algo.name());
+    });
+}
+
+#[test]
+fn resume_pt() {
+    resume_matches_uninterrupted(Algorithm::Pt);
+}
+
+#[test]
+fn resume_vcm() {
+    resume_matches_uninterrupted(Algorithm::Vcm);
+}
+
+#[test]
+fn resume_refuses_other_settings() {
+    let scene = load_named("gbs_s").unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("r.exr");
+    with_gpu(|gpu| {
+        let out = render(gpu, &scene, Algorithm::Pt, 1);
+        let s = settings(Algorithm::Pt, Budget::Iterations(1));
+        let prov = Provenance { scene: scene.name.clone(), camera: "default".into(), device: "x".into() };
+        saved::write_render_exr(&path, &out, &s, &prov).unwrap();
+    });
+    let loaded = saved::read_render_exr(&path).unwrap();
+    let base = settings(Algorithm::Pt, Budget::Iterations(2));
+    loaded.check_matches(&base, &scene.name, "default").unwrap();
+    let refuse = |s: &RenderSettings, scene_name: &str, camera: &str, needle: &str| {
+        let e = loaded.check_matches(s, scene_name, camera).unwrap_err().to_string();
+        assert!(e.contains(needle) && !e.contains('\n'), "{e}");
+    };
+    let mut s = base.clone();
+    s.frame.seed += 1;
+    refuse(&s, &scene.name, "default", "--seed");
+    let mut s = base.clone();
+    s.algorithm = Algorithm::Vcm;
+    refuse(&s, &scene.name, "default", "--algo");
+    let mut s = base.clone();
+    s.frame.width = 16;
+    refuse(&s, &scene.name, "default", "--width");
+    let mut s = base.clone();
+    s.frame.max_path_length = 4;
+    refuse(&s, &scene.name, "default", "--max-path-length");
+    let mut s = base.clone();
+    s.alpha = 0.5;
+    refuse(&s, &scene.name, "default", "--alpha");
+    refuse(&base, "glm_c", "default", "scene");
+    refuse(&base, &scene.name, "cam2", "--camera");
+
+    // A plain EXR (no second moment, no settings) is refused with its name.
+    let plain = dir.path().join("plain.exr");
+    vkvcm::image::write_exr(&plain, &vkvcm::image::Image::new(2, 2), &[]).unwrap();
+    let e = saved::read_render_exr(&plain).unwrap_err().to_string();
+    assert!(e.contains("plain.exr"), "{e}");
+}
+
+#[test]
+fn absurd_frames_fail_before_allocation() {
+    let scene = load_named("gbs_s").unwrap();
+    with_gpu(|gpu| {
+        for (algo, w, h, needle) in [
+            (Algorithm::Pt, 60_000, 60_000, "maxStorageBufferRange"),
+            (Algorithm::Vcm, 60_000, 60_000, "maxStorageBufferRange"),
+            (Algorithm::Vcm, 4096, 4096, "light_vertices"),
+            (Algorithm::Pt, 0, 16, "width and height"),
+            (Algorithm::Vcm, 16, 0, "width and height"),
+            (Algorithm::Pt, 100_000, 100_000, "pixels"),
+        ] {
+            let s = settings(algo, Budget::Iterations(1));
+            let s = RenderSettings { frame: vkvcm::render::FrameSettings { width: w, height: h, ..s.frame }, ..s };
+            let e = match Renderer::new(gpu, &scene, &s) {
+                Ok(_) => panic!("{w}x{h} {}: no error", algo.name()),
+                Err(e) => format!("{e:#}"),
+            };
+            assert!(e.contains(needle) && !e.contains('\n'), "{w}x{h}: {e}");
+        }
+    });
+}
