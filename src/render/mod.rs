@@ -9,13 +9,15 @@ pub mod gpu_types;
 pub mod hash_grid;
 pub mod pt;
 pub mod radius;
+pub mod resources;
+pub mod saved;
 pub mod scene_gpu;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 
 use crate::gpu::{Batch, Gpu, Kernel, Profile};
 use crate::scene::Scene;
@@ -138,26 +140,21 @@ impl Estimator {
     }
 }
 
-/// Checks that the frame fits the device before anything is allocated.
-fn check_frame(gpu: &Gpu, s: &RenderSettings) -> Result<()> {
-    let (w, h) = (s.frame.width as u64, s.frame.height as u64);
-    if w == 0 || h == 0 {
-        bail!("image size {w}x{h}: width and height must be at least 1");
-    }
-    let film_bytes = w * h * 16 * film::FILM_VEC4_PER_PIXEL as u64;
-    let max = gpu.limits.max_storage_buffer_range as u64;
-    if film_bytes > max {
-        bail!(
-            "image {w}x{h} needs a {film_bytes}-byte film buffer but this device binds at most {max} bytes (maxStorageBufferRange)"
-        );
-    }
+/// Checks the settings, and that every buffer of the render fits the device
+/// ([`resources::check`]), before anything is allocated.
+fn check_frame(gpu: &Gpu, scene: &Scene, s: &RenderSettings) -> Result<()> {
     if s.frame.max_path_length == 0 {
         bail!("max path length must be at least 1");
+    }
+    // Light vertices keep their path length in 8 bits (glsl/vcm.glsl) and store at most
+    // max_path_length - 1 of them per subpath.
+    if s.frame.max_path_length > 256 && !matches!(s.algorithm, Algorithm::El | Algorithm::Pt) {
+        bail!("max path length {} is more than the light-vertex store's 256", s.frame.max_path_length);
     }
     if let Budget::Iterations(0) = s.budget {
         bail!("iterations must be at least 1");
     }
-    Ok(())
+    resources::check(gpu, scene, s)
 }
 
 /// Renders `scene`. `progress` is called after every batch of iterations; `cancel`
@@ -187,6 +184,10 @@ pub struct Renderer {
     profile: Profile,
     /// Iterations accumulated in the film (including resumed ones).
     done: u64,
+    /// Iterations per submit, adapted to about a quarter second and kept between runs.
+    per_batch: u64,
+    /// Rejected samples and overflowing splats of a resumed render (the film counts anew).
+    prior_rejected: (u64, u64),
     /// Wall-clock seconds spent in `run` (plus those of a resumed render).
     seconds: f64,
     interrupted: bool,
@@ -196,7 +197,7 @@ impl Renderer {
     /// Uploads the scene and builds the estimator's kernels; `settings.budget` is only
     /// checked here (each [`Renderer::run`] call takes its own budget).
     pub fn new(gpu: &Arc<Gpu>, scene: &Scene, settings: &RenderSettings) -> Result<Renderer> {
-        check_frame(gpu, settings)?;
+        check_frame(gpu, scene, settings)?;
         let frame = &settings.frame;
         let scene_gpu = SceneGpu::new(gpu, scene, frame)?;
         let film = Film::new(gpu, frame.width, frame.height)?;
@@ -239,6 +240,8 @@ impl Renderer {
             batch: gpu.batch()?,
             profile: Profile::default(),
             done: 0,
+            per_batch: 1,
+            prior_rejected: (0, 0),
             seconds: 0.0,
             interrupted: false,
         })
@@ -269,6 +272,14 @@ impl Renderer {
         Ok(())
     }
 
+    /// Continues a render saved by [`saved::write_render_exr`]; the caller has checked
+    /// [`saved::SavedRender::check_matches`].
+    pub fn resume_saved(&mut self, saved: &saved::SavedRender) -> Result<()> {
+        self.resume(&saved.sum, &saved.sum_sq, saved.iterations, saved.seconds)?;
+        self.prior_rejected = (saved.rejected_samples, saved.overflow_splats);
+        Ok(())
+    }
+
     /// Renders more iterations until `budget` (counted from this call) is spent or
     /// `cancel` is set. `progress` is called after every batch.
     pub fn run(
@@ -277,48 +288,65 @@ impl Renderer {
         cancel: Option<&AtomicBool>,
         progress: &mut dyn FnMut(&Progress),
     ) -> Result<()> {
+        self.run_slice(budget, None, cancel, progress)
+    }
+
+    /// [`Renderer::run`] that also returns after the batch that passes `slice_seconds`
+    /// of wall-clock time (checkpoints: call it again to continue). Errors say which
+    /// iterations of which estimator failed; the film then holds an unknown state, but
+    /// every earlier [`Renderer::output`] stays valid.
+    pub fn run_slice(
+        &mut self,
+        budget: Budget,
+        slice_seconds: Option<f64>,
+        cancel: Option<&AtomicBool>,
+        progress: &mut dyn FnMut(&Progress),
+    ) -> Result<()> {
         let start = Instant::now();
         let mut done: u64 = 0;
-        let mut per_batch: u64 = 1;
         // Aim for batches of about a quarter second: few submits, responsive progress.
         const TARGET_BATCH_SECONDS: f64 = 0.25;
+        // Seconds this call may run: the budget's or the slice's, whichever is shorter.
+        let limit = match budget {
+            Budget::Seconds(t) => Some(slice_seconds.map_or(t, |s| s.min(t))),
+            Budget::Iterations(_) => slice_seconds,
+        };
         loop {
             let remaining = match budget {
-                Budget::Iterations(n) => n - done,
-                Budget::Seconds(t) => {
-                    if done > 0 && start.elapsed().as_secs_f64() >= t {
-                        0
-                    } else {
-                        per_batch
-                    }
-                }
+                Budget::Iterations(n) => n.saturating_sub(done),
+                Budget::Seconds(_) => self.per_batch,
             };
-            if remaining == 0 {
+            if remaining == 0 || (done > 0 && limit.is_some_and(|t| start.elapsed().as_secs_f64() >= t)) {
                 break;
             }
             if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
                 self.interrupted = true;
                 break;
             }
-            let n = remaining.min(per_batch);
+            let n = remaining.min(self.per_batch);
             let first = self.done;
             if first + n > u32::MAX as u64 {
                 bail!("more than {} iterations: the iteration index would wrap", u32::MAX);
             }
             let t0 = Instant::now();
+            let what = || {
+                let last = first + n - 1;
+                let range = if n == 1 { format!("iteration {first}") } else { format!("iterations {first}-{last}") };
+                format!("{range} of {}", self.settings.algorithm.name())
+            };
             for i in 0..n {
-                self.est.record(&mut self.batch, (first + i) as u32)?;
+                self.est.record(&mut self.batch, (first + i) as u32).with_context(what)?;
             }
-            self.batch.submit_wait(Some(&mut self.profile))?;
+            self.batch.submit_wait(Some(&mut self.profile)).with_context(what)?;
             done += n;
             self.done += n;
             let dt = t0.elapsed().as_secs_f64().max(1e-6);
             self.seconds += dt;
             let per_iter = dt / n as f64;
-            per_batch = ((TARGET_BATCH_SECONDS / per_iter) as u64).clamp(1, 256);
-            if let Budget::Seconds(t) = budget {
+            self.per_batch = ((TARGET_BATCH_SECONDS / per_iter) as u64).clamp(1, 256);
+            if let Some(t) = limit {
                 let left = t - start.elapsed().as_secs_f64();
-                per_batch = per_batch.min(((left / per_iter).ceil() as u64).max(1));
+                self.per_batch = self.per_batch.min(((left / per_iter).ceil() as u64).max(1));
             }
             let seconds = start.elapsed().as_secs_f64();
             let fraction = match budget {
@@ -332,10 +360,11 @@ impl Renderer {
 
     /// The image so far (reads the film back; the render can continue afterwards).
     pub fn output(&self) -> Result<RenderOutput> {
-        let (sum, sum_sq) = self.film.sums()?;
+        let (sum, sum_sq) = self.film.sums().context("reading the film back")?;
         let k = 1.0 / self.done.max(1) as f64;
         let pixels = sum.iter().map(|p| p.map(|v| (v * k) as f32)).collect();
-        let (rejected_samples, overflow_splats) = self.film.rejected()?;
+        let (rejected, overflow) = self.film.rejected().context("reading the film's counters back")?;
+        let (rejected_samples, overflow_splats) = (rejected + self.prior_rejected.0, overflow + self.prior_rejected.1);
         Ok(RenderOutput {
             width: self.settings.frame.width,
             height: self.settings.frame.height,
