@@ -29,54 +29,23 @@ layout(std430, binding = 15) readonly buffer GridIndicesBuf { uint grid_indices[
 #include "hash_grid.glsl"
 #endif
 
-// Emitter hit by the camera subpath: weight 1 / (1 + w_camera). Without connections
-// (ppm, bpm) only purely specular camera paths may see emitters, with weight 1.
-float emitter_hit_weight(SubpathState st, float direct_pdf, float emission_pdf, float pick) {
-    if (st.len == 1u) return 1.0;
-    if (USE_VC == 0) return st.specular ? 1.0 : 0.0;
-    float w_camera = direct_pdf * pick * st.dvcm + emission_pdf * pick * st.dvc;
-    return 1.0 / (1.0 + w_camera);
-}
-
 vec3 direct_illumination(SubpathState st, Surface s, Bsdf b, inout uint rng) {
     float pick = 1.0 / float(light_count());
     LightSample ls = light_illuminate(pick_light(rng), s.p, rnd2(rng));
     if (!ls.ok) return vec3(0.0);
-    float pf, pr;
-    vec3 f = bsdf_eval(b, ls.wi, pf, pr);
+    vec3 f;
+    float cos_x;
+    float w = nee_eval(st, b, ls, pick, f, cos_x);
     if (max3(f) <= 0.0) return vec3(0.0);
-    pf = ls.delta ? 0.0 : pf * b.cont_prob;
-    pr *= b.cont_prob;
-    float cos_x = dot(b.n, ls.wi);
-    float w_light = pf / (pick * ls.pdf_w);
-    float w_camera = (ls.emission_pdf_w * cos_x / (ls.pdf_w * ls.cos_light)) * (push.mis_vm + st.dvcm + st.dvc * pr);
-    float w = 1.0 / (w_light + 1.0 + w_camera);
     if (!light_sample_visible(s.p, s.ng, ls)) return vec3(0.0);
     return (w * cos_x / (pick * ls.pdf_w)) * ls.radiance * f;
 }
 
 vec3 connect_vertices(SubpathState st, Surface s, Bsdf b, LightVertex v) {
-    vec3 dir = v.p - s.p;
-    float dist2 = dot(dir, dir);
-    float dist = sqrt(dist2);
-    dir /= dist;
-    float cpf, cpr;
-    vec3 fc = bsdf_eval(b, dir, cpf, cpr);
-    if (max3(fc) <= 0.0) return vec3(0.0);
-    Bsdf lb = bsdf_init(v.material, v.n, v.wo, true);
-    float lpf, lpr;
-    vec3 fl = bsdf_eval(lb, -dir, lpf, lpr);
-    if (max3(fl) <= 0.0) return vec3(0.0);
-    cpf *= b.cont_prob; cpr *= b.cont_prob;
-    lpf *= lb.cont_prob; lpr *= lb.cont_prob;
-    float cos_c = abs(dot(b.n, dir));
-    float cos_l = abs(dot(lb.n, dir));
-    float g = cos_c * cos_l / dist2;
-    float camera_pdf_a = cpf * cos_l / dist2;  // camera BSDF sampling the light vertex
-    float light_pdf_a = lpf * cos_c / dist2;   // light BSDF sampling the camera vertex
-    float w_light = camera_pdf_a * (push.mis_vm + v.dvcm + v.dvc * lpr);
-    float w_camera = light_pdf_a * (push.mis_vm + st.dvcm + st.dvc * cpr);
-    float w = 1.0 / (w_light + 1.0 + w_camera);
+    vec3 fc, fl;
+    float g;
+    float w = connection_eval(st, s.p, b, v, fc, fl, g);
+    if (max3(fc) <= 0.0 || max3(fl) <= 0.0) return vec3(0.0);
     if (!visible(s.p, s.ng, v.p, v.n)) return vec3(0.0);
     return (w * g) * fc * fl;
 }
@@ -105,17 +74,10 @@ vec3 merge(SubpathState st, Surface s, Bsdf b) {
             LightVertex v = lv_load(slot);
             uint total = v.len + st.len;
             if (total > max_len || total < min_len) continue;
-            float pf, pr;
-            vec3 f = bsdf_eval(b, v.wo, pf, pr);
+            float w;
+            vec3 f = merge_eval(st, b, v, w);
             if (max3(f) <= 0.0) continue;
-            pf *= b.cont_prob;
-            pr *= b.cont_prob;
-            float w = 1.0;
-            if (PPM == 0) {
-                float w_light = v.dvcm * push.mis_vc + v.dvm * pf;
-                float w_camera = st.dvcm * push.mis_vc + st.dvm * pr;
-                w = 1.0 / (w_light + 1.0 + w_camera);
-            }
+            if (PPM != 0) w = 1.0;
             sum += w * f * v.thr;
         }
     }
@@ -134,9 +96,7 @@ void main() {
     st.len = 1u;
     st.specular = true;
     st.finite_light = true;
-    st.dvcm = float(push.light_paths) / camera_pdf_w(st.d);
-    st.dvc = 0.0;
-    st.dvm = 0.0;
+    mis_camera_start(st, st.d);
     float pick = 1.0 / float(light_count());
     uint max_len = max_path_length();
     uint min_len = min_path_length();
@@ -148,7 +108,7 @@ void main() {
             if (bg != NO_LIGHT && st.len >= min_len) {
                 float dpdf, epdf;
                 vec3 le = background_radiance(bg, dpdf, epdf);
-                L += st.thr * le * emitter_hit_weight(st, dpdf, epdf, pick);
+                L += st.thr * le * mis_weight_hit(st, dpdf, epdf, pick, USE_VC != 0);
             }
             break;
         }
@@ -157,7 +117,7 @@ void main() {
         if (s.light != NO_LIGHT && st.len >= min_len) {
             float dpdf_a, epdf;
             vec3 le = area_light_radiance(s.light, st.d, dpdf_a, epdf);
-            if (max3(le) > 0.0) L += st.thr * le * emitter_hit_weight(st, dpdf_a, epdf, pick);
+            if (max3(le) > 0.0) L += st.thr * le * mis_weight_hit(st, dpdf_a, epdf, pick, USE_VC != 0);
         }
         if (st.len >= max_len) break;
         Bsdf b = bsdf_init(s.material, s.ng, -st.d, false);

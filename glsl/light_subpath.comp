@@ -62,9 +62,7 @@ void main() {
         st.len = 1u;
         st.finite_light = e.finite;
         st.specular = true;
-        st.dvcm = direct_pdf / emission_pdf;
-        st.dvc = e.delta ? 0.0 : (e.finite ? e.cos_light : 1.0) / emission_pdf;
-        st.dvm = st.dvc * push.mis_vc;
+        mis_light_start(st, emission_pdf, direct_pdf, e.cos_light, e.delta, e.finite);
         uint max_len = max_path_length();
         for (;; ++st.len) {
             Hit h;

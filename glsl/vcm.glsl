@@ -56,6 +56,26 @@ LightVertex lv_load(uint slot) {
     return v;
 }
 
+// ---- MIS bookkeeping (../shared/SCENES.md 4.4). Every technique's weight is a small
+// function below, used by the production kernels and by the debug kernel
+// glsl/tests/mis_weights.comp, which checks that the weights of all techniques that can
+// sample one path sum to 1 (docs/estimators.md).
+
+// Light subpath start. `emission_pdf` and `direct_pdf` include the light-pick probability.
+void mis_light_start(inout SubpathState st, float emission_pdf, float direct_pdf, float cos_light, bool delta,
+                     bool finite) {
+    st.dvcm = direct_pdf / emission_pdf;
+    st.dvc = delta ? 0.0 : (finite ? cos_light : 1.0) / emission_pdf;
+    st.dvm = st.dvc * push.mis_vc;
+}
+
+// Camera subpath start along the primary direction `d`.
+void mis_camera_start(inout SubpathState st, vec3 d) {
+    st.dvcm = float(push.light_paths) / camera_pdf_w(d);
+    st.dvc = 0.0;
+    st.dvm = 0.0;
+}
+
 // MIS update on reaching a new vertex at distance `dist` with |cos| `cos_fix` there.
 void mis_on_hit(inout SubpathState st, float dist, float cos_fix, bool first_from_infinite) {
     if (!first_from_infinite) st.dvcm *= dist * dist;
@@ -65,25 +85,111 @@ void mis_on_hit(inout SubpathState st, float dist, float cos_fix, bool first_fro
     st.dvm *= inv;
 }
 
+// MIS update after scattering into a direction with |cos| `cos_wi`: `pdf` and `pdf_rev`
+// are the solid-angle pdfs of that direction and of the reverse one, both times the
+// Russian-roulette continuation probability.
+void mis_on_scatter(inout SubpathState st, float pdf, float pdf_rev, float cos_wi, bool specular) {
+    if (specular) {
+        st.dvcm = 0.0;
+        st.dvc *= cos_wi;
+        st.dvm *= cos_wi;
+    } else {
+        float k = cos_wi / pdf;
+        st.dvc = k * (st.dvc * pdf_rev + st.dvcm + push.mis_vm);
+        st.dvm = k * (st.dvm * pdf_rev + st.dvcm * push.mis_vc + 1.0);
+        st.dvcm = 1.0 / pdf;
+        st.specular = false;
+    }
+}
+
+// The same update for a given direction `wi` out of a vertex with BSDF `b` (the pdfs are
+// evaluated instead of sampled): for the debug kernel, which follows a fixed path. For a
+// delta BSDF `wi` must be its specular direction.
+void mis_on_scatter_to(inout SubpathState st, Bsdf b, vec3 wi) {
+    float cos_wi = abs(dot(b.n, wi));
+    if (b.delta) {
+        mis_on_scatter(st, 0.0, 0.0, cos_wi, true);
+        return;
+    }
+    float pf, pr;
+    bsdf_eval(b, wi, pf, pr);
+    mis_on_scatter(st, pf * b.cont_prob, pr * b.cont_prob, cos_wi, false);
+}
+
+// Camera subpath hits an emitter (area light or background), pdfs without the pick
+// probability: weight 1 / (1 + w_camera), 1 for the primary ray. Without connections
+// (ppm, bpm) only purely specular camera paths may see emitters, with weight 1.
+float mis_weight_hit(SubpathState st, float direct_pdf, float emission_pdf, float pick, bool use_vc) {
+    if (st.len == 1u) return 1.0;
+    if (!use_vc) return st.specular ? 1.0 : 0.0;
+    float w_camera = direct_pdf * pick * st.dvcm + emission_pdf * pick * st.dvc;
+    return 1.0 / (1.0 + w_camera);
+}
+
+// Next-event estimation at a camera vertex with BSDF `b` towards light sample `ls`:
+// returns the MIS weight, with f the BSDF value (zero: no contribution) and cos_x the
+// cosine at the camera vertex.
+float nee_eval(SubpathState st, Bsdf b, LightSample ls, float pick, out vec3 f, out float cos_x) {
+    float pf, pr;
+    f = bsdf_eval(b, ls.wi, pf, pr);
+    cos_x = dot(b.n, ls.wi);
+    if (max3(f) <= 0.0) return 0.0;
+    pf = ls.delta ? 0.0 : pf * b.cont_prob;
+    pr *= b.cont_prob;
+    float w_light = pf / (pick * ls.pdf_w);
+    float w_camera = (ls.emission_pdf_w * cos_x / (ls.pdf_w * ls.cos_light)) * (push.mis_vm + st.dvcm + st.dvc * pr);
+    return 1.0 / (w_light + 1.0 + w_camera);
+}
+
+// Vertex connection between camera vertex `p` (BSDF `b`, state `st`) and light vertex
+// `v`: returns the MIS weight with both BSDF values and the geometry term g (fc or fl
+// zero: no contribution). Visibility is the caller's.
+float connection_eval(SubpathState st, vec3 p, Bsdf b, LightVertex v, out vec3 fc, out vec3 fl, out float g) {
+    fl = vec3(0.0);
+    g = 0.0;
+    vec3 dir = v.p - p;
+    float dist2 = dot(dir, dir);
+    float dist = sqrt(dist2);
+    dir /= dist;
+    float cpf, cpr;
+    fc = bsdf_eval(b, dir, cpf, cpr);
+    if (max3(fc) <= 0.0) return 0.0;
+    Bsdf lb = bsdf_init(v.material, v.n, v.wo, true);
+    float lpf, lpr;
+    fl = bsdf_eval(lb, -dir, lpf, lpr);
+    if (max3(fl) <= 0.0) return 0.0;
+    cpf *= b.cont_prob; cpr *= b.cont_prob;
+    lpf *= lb.cont_prob; lpr *= lb.cont_prob;
+    float cos_c = abs(dot(b.n, dir));
+    float cos_l = abs(dot(lb.n, dir));
+    g = cos_c * cos_l / dist2;
+    float camera_pdf_a = cpf * cos_l / dist2;  // camera BSDF sampling the light vertex
+    float light_pdf_a = lpf * cos_c / dist2;   // light BSDF sampling the camera vertex
+    float w_light = camera_pdf_a * (push.mis_vm + v.dvcm + v.dvc * lpr);
+    float w_camera = light_pdf_a * (push.mis_vm + st.dvcm + st.dvc * cpr);
+    return 1.0 / (w_light + 1.0 + w_camera);
+}
+
+// Merging camera vertex (BSDF `b`, state `st`) with light vertex `v`: returns the camera
+// BSDF value towards v's predecessor, and in `w` the MIS weight.
+vec3 merge_eval(SubpathState st, Bsdf b, LightVertex v, out float w) {
+    float pf, pr;
+    vec3 f = bsdf_eval(b, v.wo, pf, pr);
+    pf *= b.cont_prob;
+    pr *= b.cont_prob;
+    float w_light = v.dvcm * push.mis_vc + v.dvm * pf;
+    float w_camera = st.dvcm * push.mis_vc + st.dvm * pr;
+    w = 1.0 / (w_light + 1.0 + w_camera);
+    return f;
+}
+
 // Samples the continuation at a vertex: Russian roulette, throughput and MIS update.
 // Returns false when the subpath ends.
 bool scatter(inout SubpathState st, Bsdf b, vec3 p, vec3 ng, inout uint rng) {
     BsdfSample bs = bsdf_sample(b, vec3(rnd2(rng), rnd(rng)));
     if (!bs.ok) return false;
     if (rnd(rng) >= b.cont_prob) return false;
-    float pdf = bs.pdf * b.cont_prob;
-    float pdf_rev = bs.pdf_rev * b.cont_prob;
-    if (bs.specular) {
-        st.dvcm = 0.0;
-        st.dvc *= bs.cos_wi;
-        st.dvm *= bs.cos_wi;
-    } else {
-        float k = bs.cos_wi / pdf;
-        st.dvc = k * (st.dvc * pdf_rev + st.dvcm + push.mis_vm);
-        st.dvm = k * (st.dvm * pdf_rev + st.dvcm * push.mis_vc + 1.0);
-        st.dvcm = 1.0 / pdf;
-        st.specular = false;
-    }
+    mis_on_scatter(st, bs.pdf * b.cont_prob, bs.pdf_rev * b.cont_prob, bs.cos_wi, bs.specular);
     st.thr *= bs.weight / b.cont_prob;
     st.o = offset_ray(p, ng, bs.wi, scene_radius());
     st.d = bs.wi;
@@ -102,32 +208,47 @@ bool camera_raster(vec3 x, out vec2 raster) {
     return raster.x >= 0.0 && raster.y >= 0.0 && raster.x < float(image_width()) && raster.y < float(image_height());
 }
 
-// Connects a light-subpath point (a surface vertex with BSDF `b`, or when `b_valid` is
-// false an area-light point whose emission towards the camera is `le_cos_weight`) to the
-// camera and splats the contribution. `weight_one` disables MIS (pure light tracing).
-void connect_to_camera(SubpathState st, vec3 p, vec3 ng, Bsdf b, bool weight_one) {
-    vec2 raster;
-    if (!camera_raster(p, raster)) return;
+// A light vertex at p (BSDF `b`, state `st`) seen by the camera: returns the MIS weight
+// of this light-to-camera connection (1 when `weight_one`: pure light tracing), with the
+// BSDF value f towards the camera (zero: no contribution), the camera's pdf per unit area
+// at p and the raster position. False when p is behind the camera or off the image.
+bool camera_connection_eval(SubpathState st, vec3 p, Bsdf b, bool weight_one, out float w, out vec3 f,
+                            out float camera_pdf_a, out vec2 raster) {
+    w = 0.0;
+    f = vec3(0.0);
+    camera_pdf_a = 0.0;
+    if (!camera_raster(p, raster)) return false;
     vec3 to_cam = params.cam_pos.xyz - p;
     float dist = length(to_cam);
     to_cam /= dist;
     float pf, pr;
-    vec3 f = bsdf_eval(b, to_cam, pf, pr);
-    if (max3(f) <= 0.0) return;
+    f = bsdf_eval(b, to_cam, pf, pr);
+    if (max3(f) <= 0.0) return true;
     pr *= b.cont_prob;
     float cos_cam = dot(params.cam_forward.xyz, -to_cam);
     float cos_x = abs(dot(b.n, to_cam));
     float plane = params.cam_pos.w;
     // Pdf of the camera generating this point, per unit area at p (pixel area 1).
     float image_to_solid = plane * plane / (cos_cam * cos_cam * cos_cam);
-    float camera_pdf_a = image_to_solid * cos_x / (dist * dist);
+    camera_pdf_a = image_to_solid * cos_x / (dist * dist);
     float n_l = float(push.light_paths);
-    float w = 1.0;
+    w = 1.0;
     if (!weight_one) {
         float w_light = (camera_pdf_a / n_l) * (push.mis_vm + st.dvcm + st.dvc * pr);
         w = 1.0 / (w_light + 1.0);
     }
-    vec3 contrib = (w / n_l) * st.thr * f * camera_pdf_a;
+    return true;
+}
+
+// Connects a light-subpath surface vertex to the camera and splats the contribution.
+// `weight_one` disables MIS (pure light tracing).
+void connect_to_camera(SubpathState st, vec3 p, vec3 ng, Bsdf b, bool weight_one) {
+    float w, camera_pdf_a;
+    vec3 f;
+    vec2 raster;
+    if (!camera_connection_eval(st, p, b, weight_one, w, f, camera_pdf_a, raster)) return;
+    if (max3(f) <= 0.0) return;
+    vec3 contrib = (w / float(push.light_paths)) * st.thr * f * camera_pdf_a;
     if (max3(contrib) <= 0.0) return;
     if (!visible(p, ng, params.cam_pos.xyz, vec3(0.0))) return;
     uint pixel = uint(raster.y) * image_width() + uint(raster.x);
