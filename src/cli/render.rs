@@ -88,9 +88,12 @@ pub fn install_interrupt() -> Arc<AtomicBool> {
     flag
 }
 
-/// Seconds between host copies of the film when no --checkpoint-every is given: what a
-/// device loss can still write (each copy costs one film read-back).
-const SNAPSHOT_SECONDS: f64 = 5.0;
+/// Without --checkpoint-every, the film is copied to the host (what a device loss can
+/// still write) after slices of `SNAPSHOT_COST_FACTOR` times the last copy's duration,
+/// at most `MAX_SNAPSHOT_SECONDS`: at most ~4% of the time goes to copies, and a small
+/// film is copied after every batch.
+const SNAPSHOT_COST_FACTOR: f64 = 25.0;
+const MAX_SNAPSHOT_SECONDS: f64 = 5.0;
 
 /// Checks the arguments that need no scene or device; errors name the option.
 fn check_args(a: &RenderArgs) -> Result<()> {
@@ -203,50 +206,42 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     let pixels = (a.width as u64 * a.height as u64) as f64;
     let mut reporter = Reporter::new(budget, r.iterations(), r.seconds());
 
-    // Render in slices of --checkpoint-every (or SNAPSHOT_SECONDS) seconds; after each,
-    // read the film back: the checkpoint to write, and what a device loss can still write.
-    let slice = a.checkpoint_every.unwrap_or(SNAPSHOT_SECONDS);
+    // Render in slices of --checkpoint-every seconds (or see SNAPSHOT_COST_FACTOR); after
+    // each, read the film back: the checkpoint to write, and what a device loss can still
+    // write. `on_disk`: iterations in the output file.
+    let mut slice = a.checkpoint_every.unwrap_or(0.0);
     let start = Instant::now();
     let mut last: Option<RenderOutput> = None;
+    let mut on_disk = saved.as_ref().map_or(0, |s| s.iterations);
     let failure = loop {
-        let step = match budget {
-            Budget::Iterations(n) => n.saturating_sub(r.iterations()),
-            Budget::Seconds(t) => {
-                let left = t - start.elapsed().as_secs_f64();
-                if left > 0.0 || r.iterations() == 0 {
-                    1
-                } else {
-                    0
-                }
-            }
-        };
-        if step == 0 || cancel.load(Ordering::SeqCst) {
-            break None;
-        }
         let slice_budget = match budget {
-            Budget::Iterations(n) => Budget::Iterations(n - r.iterations()),
-            Budget::Seconds(t) => Budget::Seconds((t - start.elapsed().as_secs_f64()).max(0.0)),
+            Budget::Iterations(n) => Budget::Iterations(n.saturating_sub(r.iterations())),
+            Budget::Seconds(t) => Budget::Seconds(t - start.elapsed().as_secs_f64()),
         };
-        let mut on_progress = |p: &Progress| reporter.update(p, pixels);
-        if let Err(e) = r.run_slice(slice_budget, Some(slice), Some(&cancel), &mut on_progress) {
-            break Some(e);
-        }
-        let finished = match budget {
-            Budget::Iterations(n) => r.iterations() >= n,
-            Budget::Seconds(t) => start.elapsed().as_secs_f64() >= t,
+        let finished = match slice_budget {
+            Budget::Iterations(n) => n == 0,
+            Budget::Seconds(t) => t <= 0.0 && r.iterations() > 0,
         };
         if finished || cancel.load(Ordering::SeqCst) {
             break None;
         }
+        let mut on_progress = |p: &Progress| reporter.update(p, pixels);
+        if let Err(e) = r.run_slice(slice_budget, Some(slice), Some(&cancel), &mut on_progress) {
+            break Some(e);
+        }
+        let t0 = Instant::now();
         match r.output() {
             Ok(out) => {
                 if a.checkpoint_every.is_some() {
                     match saved::write_render_exr(&output, &out, &settings, &provenance) {
                         Ok(()) => {
+                            on_disk = out.iterations;
                             reporter.note(&format!("checkpoint: {} iterations in {}", out.iterations, output.display()))
                         }
                         Err(e) => reporter.note(&format!("warning: checkpoint not written: {e:#}")),
                     }
+                } else {
+                    slice = (SNAPSHOT_COST_FACTOR * t0.elapsed().as_secs_f64()).min(MAX_SNAPSHOT_SECONDS);
                 }
                 last = Some(out);
             }
@@ -255,16 +250,15 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     };
     let out = match failure {
         None => r.output().with_context(|| format!("rendering {} with {}", scene.name, a.algo.name())),
-        Some(e) => Err(e.context(format!("rendering {} with {}", scene.name, a.algo.name()))),
+        Some(e) => Err(e.context(format!("rendering {}", scene.name))),
     };
     reporter.finish();
     let out = match out {
         Ok(out) => out,
         Err(e) => {
             // The device may be gone: write the last host copy, if it adds iterations.
-            let before = saved.as_ref().map_or(0, |s| s.iterations);
             match last {
-                Some(l) if l.iterations > before => {
+                Some(l) if l.iterations > on_disk => {
                     saved::write_render_exr(&output, &l, &settings, &provenance)?;
                     eprintln!(
                         "wrote the last completed {} iterations ({:.1} s) to {}",
@@ -273,6 +267,7 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
                         output.display()
                     );
                 }
+                _ if on_disk > 0 => eprintln!("{} holds the last completed {on_disk} iterations", output.display()),
                 _ => eprintln!("no completed iterations to write; {} is unchanged", output.display()),
             }
             return Err(e);

@@ -292,7 +292,8 @@ impl Renderer {
     }
 
     /// [`Renderer::run`] that also returns after the batch that passes `slice_seconds`
-    /// of wall-clock time (checkpoints: call it again to continue). Errors say which
+    /// of wall-clock time (checkpoints: call it again to continue; 0 returns after one
+    /// batch, whose size does not depend on the slice). Errors say which
     /// iterations of which estimator failed; the film then holds an unknown state, but
     /// every earlier [`Renderer::output`] stays valid.
     pub fn run_slice(
@@ -307,9 +308,14 @@ impl Renderer {
         // Aim for batches of about a quarter second: few submits, responsive progress.
         const TARGET_BATCH_SECONDS: f64 = 0.25;
         // Seconds this call may run: the budget's or the slice's, whichever is shorter.
-        let limit = match budget {
-            Budget::Seconds(t) => Some(slice_seconds.map_or(t, |s| s.min(t))),
-            Budget::Iterations(_) => slice_seconds,
+        // Only the budget shortens batches; a slice ends after the batch that passes it.
+        let budget_seconds = match budget {
+            Budget::Seconds(t) => Some(t),
+            Budget::Iterations(_) => None,
+        };
+        let limit = match (budget_seconds, slice_seconds) {
+            (Some(t), Some(s)) => Some(t.min(s)),
+            (t, s) => t.or(s),
         };
         loop {
             let remaining = match budget {
@@ -344,7 +350,7 @@ impl Renderer {
             self.seconds += dt;
             let per_iter = dt / n as f64;
             self.per_batch = ((TARGET_BATCH_SECONDS / per_iter) as u64).clamp(1, 256);
-            if let Some(t) = limit {
+            if let Some(t) = budget_seconds {
                 let left = t - start.elapsed().as_secs_f64();
                 self.per_batch = self.per_batch.min(((left / per_iter).ceil() as u64).max(1));
             }

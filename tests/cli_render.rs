@@ -1,0 +1,208 @@
+//! `vkvcm render` as a user runs it: bad arguments give one error line naming the
+//! argument; SIGINT/SIGTERM write the partial image; checkpoints grow; --resume continues;
+//! a (simulated) device loss still writes the last completed snapshot. Tiny images, pt.
+
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use vkvcm::render::saved;
+
+fn vkvcm(dir: &Path) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_vkvcm"));
+    c.current_dir(dir).env("VKVCM_VALIDATION", "1").env_remove("VKVCM_TEST_FAIL_AFTER_BATCHES");
+    if std::env::var_os("VK_DRIVER_FILES").is_none() {
+        c.env("VK_DRIVER_FILES", "/usr/share/vulkan/icd.d/lvp_icd.json");
+    }
+    c
+}
+
+const TINY: [&str; 6] = ["render", "-a", "pt", "--width", "16", "--height"];
+
+fn tiny(dir: &Path) -> Command {
+    let mut c = vkvcm(dir);
+    c.args(TINY).arg("16");
+    c
+}
+
+fn error_lines(o: &Output) -> Vec<String> {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("panicked"), "panic:\n{err}");
+    assert!(!err.contains("validation"), "validation message:\n{err}");
+    err.lines().filter(|l| l.starts_with("error")).map(str::to_string).collect()
+}
+
+/// Fails unless `o` failed with exactly one error line, containing every needle.
+fn one_error(o: &Output, needles: &[&str]) {
+    assert!(!o.status.success(), "succeeded: {}", String::from_utf8_lossy(&o.stderr));
+    let lines = error_lines(o);
+    assert_eq!(lines.len(), 1, "error lines: {lines:?}\n{}", String::from_utf8_lossy(&o.stderr));
+    for n in needles {
+        assert!(lines[0].contains(n), "{:?} lacks {n:?}", lines[0]);
+    }
+}
+
+#[test]
+fn bad_arguments_one_error_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let run = |args: &[&str]| vkvcm(d).arg("render").args(args).output().unwrap();
+    one_error(&run(&["--width", "0", "--height", "16"]), &["--width"]);
+    one_error(&run(&["--width", "16", "--height", "0"]), &["--height"]);
+    one_error(&run(&["-a", "pt", "--width", "16", "--height", "100000000"]), &["--height 100000000", "MiB"]);
+    one_error(&run(&["--width", "16", "--height", "16", "-i", "0"]), &["--iterations"]);
+    one_error(&run(&["--width", "16", "--height", "16", "--time=-1"]), &["--time"]);
+    one_error(&run(&["--width", "16", "--height", "16", "--checkpoint-every", "0"]), &["--checkpoint-every"]);
+    one_error(&run(&["--width", "16", "--height", "16", "-o", "missing/x.exr"]), &["--output", "missing"]);
+    std::fs::create_dir(d.join("adir")).unwrap();
+    one_error(&run(&["--width", "16", "--height", "16", "-o", "adir"]), &["--output", "directory"]);
+    // Unwritable: a read-only directory, or /proc where root ignores permissions.
+    // SAFETY: plain libc call.
+    let unwritable = if unsafe { libc::geteuid() } == 0 {
+        "/proc/x.exr".to_string()
+    } else {
+        let ro = d.join("ro");
+        std::fs::create_dir(&ro).unwrap();
+        std::fs::set_permissions(&ro, std::os::unix::fs::PermissionsExt::from_mode(0o555)).unwrap();
+        ro.join("x.exr").display().to_string()
+    };
+    one_error(&run(&["--width", "16", "--height", "16", "-o", &unwritable]), &["--output", "cannot write"]);
+}
+
+/// Spawns `cmd` with stderr piped; lines arrive on the returned channel.
+fn spawn(mut cmd: Command) -> (Child, mpsc::Receiver<String>) {
+    let mut child = cmd.stderr(Stdio::piped()).spawn().unwrap();
+    let err = child.stderr.take().unwrap();
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(err).lines().map_while(Result::ok) {
+            eprintln!("  | {line}");
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    (child, rx)
+}
+
+fn wait_line(rx: &mpsc::Receiver<String>, prefix: &str, timeout: Duration) -> String {
+    let end = Instant::now() + timeout;
+    loop {
+        let left = end.saturating_duration_since(Instant::now());
+        match rx.recv_timeout(left) {
+            Ok(l) if l.starts_with(prefix) => return l,
+            Ok(_) => {}
+            Err(e) => panic!("no line starting with {prefix:?} within {timeout:?}: {e}"),
+        }
+    }
+}
+
+fn wait_exit(child: &mut Child, timeout: Duration) -> std::process::ExitStatus {
+    let end = Instant::now() + timeout;
+    loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            return s;
+        }
+        if Instant::now() > end {
+            let _ = child.kill();
+            panic!("vkvcm did not exit within {timeout:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn interrupted_render_is_written(signal: i32) {
+    let dir = tempfile::tempdir().unwrap();
+    let mut cmd = tiny(dir.path());
+    cmd.args(["--time", "60", "-o", "out.exr"]);
+    let (mut child, rx) = spawn(cmd);
+    wait_line(&rx, "progress:", Duration::from_secs(60));
+    let t0 = Instant::now();
+    // SAFETY: plain libc call on our child's pid.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, signal) }, 0);
+    let status = wait_exit(&mut child, Duration::from_secs(10));
+    assert!(status.success(), "status {status:?}");
+    assert!(t0.elapsed() < Duration::from_secs(5), "took {:?} to stop", t0.elapsed());
+    let s = saved::read_render_exr(&dir.path().join("out.exr")).unwrap();
+    assert!(s.iterations >= 1 && s.seconds < 60.0, "{} iterations, {} s", s.iterations, s.seconds);
+    assert!(s.sum.iter().flatten().any(|&v| v > 0.0), "black image");
+}
+
+#[test]
+fn sigint_writes_partial_image() {
+    interrupted_render_is_written(libc::SIGINT);
+}
+
+#[test]
+fn sigterm_writes_partial_image() {
+    interrupted_render_is_written(libc::SIGTERM);
+}
+
+#[test]
+fn checkpoints_grow() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.exr");
+    let mut cmd = tiny(dir.path());
+    cmd.args(["--time", "30", "--checkpoint-every", "0.3", "-o", "out.exr"]);
+    let (mut child, rx) = spawn(cmd);
+    wait_line(&rx, "checkpoint:", Duration::from_secs(60));
+    let first = saved::read_render_exr(&out).unwrap().iterations;
+    wait_line(&rx, "checkpoint:", Duration::from_secs(10));
+    let second = saved::read_render_exr(&out).unwrap().iterations;
+    assert!(first >= 1 && second > first, "checkpoints at {first} then {second} iterations");
+    // SAFETY: plain libc call on our child's pid.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    assert!(wait_exit(&mut child, Duration::from_secs(10)).success());
+    assert!(saved::read_render_exr(&out).unwrap().iterations >= second);
+}
+
+#[test]
+fn resume_continues_to_the_total() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.exr");
+    let o = tiny(dir.path()).args(["-i", "3", "-o", "out.exr"]).output().unwrap();
+    assert!(o.status.success());
+    let o = tiny(dir.path()).args(["-i", "7", "-o", "out.exr", "--resume"]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("resuming"));
+    assert_eq!(saved::read_render_exr(&out).unwrap().iterations, 7);
+    // Other settings are refused, naming the option; the file is untouched.
+    let o = tiny(dir.path()).args(["-i", "9", "-o", "out.exr", "--resume", "--seed", "5"]).output().unwrap();
+    one_error(&o, &["--seed", "out.exr"]);
+    assert_eq!(saved::read_render_exr(&out).unwrap().iterations, 7);
+    // --resume on a missing output starts a new render.
+    let o = tiny(dir.path()).args(["-i", "2", "-o", "new.exr", "--resume"]).output().unwrap();
+    assert!(o.status.success());
+    assert_eq!(saved::read_render_exr(&dir.path().join("new.exr")).unwrap().iterations, 2);
+}
+
+/// The simulated device loss (VKVCM_TEST_FAIL_AFTER_BATCHES): one error line saying what
+/// failed, and the image of the last completed snapshot written. A 16x16 film is copied
+/// to the host after every batch, so the loss at the 7th submit leaves 6 batches' worth.
+#[test]
+fn device_loss_writes_last_snapshot() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = tiny(dir.path())
+        .args(["-i", "1000000", "-o", "out.exr"])
+        .env("VKVCM_TEST_FAIL_AFTER_BATCHES", "6")
+        .output()
+        .unwrap();
+    one_error(&o, &["device lost", "of pt", "iteration"]);
+    let s = saved::read_render_exr(&dir.path().join("out.exr")).unwrap();
+    assert!(s.iterations >= 6 && s.iterations < 1_000_000, "{} iterations", s.iterations);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains(&format!("wrote the last completed {} iterations", s.iterations)), "{err}");
+
+    // With checkpoints, the last one is what the file keeps.
+    let o = tiny(dir.path())
+        .args(["-i", "1000000", "--checkpoint-every", "0.01", "-o", "cp.exr"])
+        .env("VKVCM_TEST_FAIL_AFTER_BATCHES", "6")
+        .output()
+        .unwrap();
+    one_error(&o, &["device lost"]);
+    let s = saved::read_render_exr(&dir.path().join("cp.exr")).unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains(&format!("the last completed {} iterations", s.iterations)), "{err}");
+}
