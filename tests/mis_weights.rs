@@ -21,14 +21,16 @@ use vkvcm::render::{FrameSettings, SceneGpu};
 use vkvcm::scene::{Light, Material, Scene};
 
 /// Tolerance on |sum - 1|. Every weight is 1 / (1 + sum of positive terms), each term a
-/// product of at most ~4 factors per vertex over at most 10 vertices, evaluated in
-/// float32 (relative rounding 6e-8 per operation): a few hundred roundings bound the
-/// relative error of a weight by ~1e-5, and no subtraction can cancel. The two ends of
-/// the path compute the same cosines and pdfs from directions normalised in opposite
-/// senses, and the Phong lobe raises a cosine to the power 90 (a relative error of 1e-7
-/// in the cosine becomes 1e-5). 1e-3 leaves a wide margin over that, while every
-/// sabotage tried (docs/estimators.md) moves the sum by more than 1e-2.
-const TOL: f64 = 1e-3;
+/// product of a few factors per vertex over at most 10 vertices, evaluated in float32
+/// (relative rounding 6e-8 per operation): a few hundred roundings bound the relative
+/// error of a weight by ~1e-5, and no subtraction can cancel. The two ends of the path
+/// compute the same cosines and pdfs from directions normalised in opposite senses, and
+/// the Phong lobe raises a cosine to the power 90 (a relative error of 1e-7 in the cosine
+/// becomes 1e-5). Measured on lavapipe: max |sum - 1| = 2.4e-7 (one float ulp at 1) in
+/// every mode. 1e-4 leaves margin for drivers with approximate division and
+/// transcendentals, while each sabotage tried (docs/estimators.md) moves some sum by more
+/// than 1e-3.
+const TOL: f64 = 1e-4;
 /// Random paths per scene and mode (before rejection of joins that contribute nothing).
 const PATHS: u32 = 32768;
 /// SmallVCM's reference resolution: N_L = 256 x 256 light subpaths per iteration.
