@@ -123,7 +123,7 @@ pub fn check_needs(needs: &[BufferNeed], max_binding: u64, heap: u64, what: &str
 }
 
 /// Fails, before anything is allocated, when a render of `scene` with `s` would not fit
-/// the device: image size, per-buffer binding range, total memory.
+/// the device: image size, primitive count, per-buffer binding range, total memory.
 pub fn check(gpu: &Gpu, scene: &Scene, s: &RenderSettings) -> Result<()> {
     let (w, h) = (s.frame.width, s.frame.height);
     if w == 0 || h == 0 {
@@ -132,6 +132,10 @@ pub fn check(gpu: &Gpu, scene: &Scene, s: &RenderSettings) -> Result<()> {
     let what = format!("a {w}x{h} {} render", s.algorithm.name());
     if w as u64 * h as u64 > u32::MAX as u64 {
         bail!("{what} has {} pixels, more than the 2^32 - 1 the kernels can index", w as u64 * h as u64);
+    }
+    let prims = scene.triangles.len() + scene.spheres.len();
+    if prims > crate::bvh::layout::MAX_PRIMS {
+        bail!("scene {:?} has {prims} primitives; the BVH holds at most {}", scene.name, crate::bvh::layout::MAX_PRIMS);
     }
     let needs = estimate(scene, s);
     check_needs(&needs, gpu.limits.max_storage_buffer_range as u64, gpu.device_local_heap_bytes(), &what)
