@@ -195,10 +195,17 @@ pub fn reference_cmd(a: ReferenceArgs) -> Result<()> {
     check_validation(gpu)
 }
 
-/// Writes `bytes` to `path` atomically.
+/// Writes `text` to `path` atomically (temporary file + rename), with the permissions the
+/// umask gives an ordinary file (a bare temporary file would be 0600).
 fn write_text(path: &Path, text: &str) -> Result<()> {
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let mut f = tempfile::NamedTempFile::new_in(dir).with_context(|| format!("cannot write {}", path.display()))?;
+    let mut b = tempfile::Builder::new();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        b.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut f = b.tempfile_in(dir).with_context(|| format!("cannot write {}", path.display()))?;
     std::io::Write::write_all(&mut f, text.as_bytes()).with_context(|| format!("cannot write {}", path.display()))?;
     f.persist(path).with_context(|| format!("cannot write {}", path.display()))?;
     Ok(())

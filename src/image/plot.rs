@@ -14,6 +14,8 @@ use super::atomic::write_atomic;
 
 const FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 const FAMILY: &str = "sans-serif";
+/// Pixels right of the chart for the legend.
+const LEGEND_WIDTH: u32 = 200;
 
 fn register_font() {
     static ONCE: Once = Once::new();
@@ -86,8 +88,8 @@ fn log_range(values: impl Iterator<Item = f64>, pad: f64) -> Option<(f64, f64)> 
 pub fn render_loglog(plot: &LogLogPlot) -> Result<Vec<u8>> {
     register_font();
     let (w, h) = (plot.width, plot.height);
-    if w < 200 || h < 150 {
-        bail!("plot size {w}x{h} is too small (at least 200x150)");
+    if w < 400 || h < 200 {
+        bail!("plot size {w}x{h} is too small (at least 400x200)");
     }
     let xs = plot.series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
     let Some((x0, x1)) = log_range(xs, 0.05) else { bail!("nothing to plot: no positive x value") };
@@ -99,13 +101,24 @@ pub fn render_loglog(plot: &LogLogPlot) -> Result<Vec<u8>> {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
         let err = |e: DrawingAreaErrorKind<_>| anyhow!("plot: {e}");
         root.fill(&WHITE).map_err(err)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(&plot.title, (FAMILY, 22))
-            .margin(14)
-            .x_label_area_size(48)
-            .y_label_area_size(72)
-            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-            .map_err(err)?;
+        let (root, legend) = root.split_horizontally(w - LEGEND_WIDTH);
+        let mut chart =
+            ChartBuilder::on(&root)
+                .caption(&plot.title, (FAMILY, 22))
+                .margin(14)
+                .x_label_area_size(48)
+                .y_label_area_size(72)
+                .build_cartesian_2d(
+                    (x0..x1)
+                        .log_scale()
+                        .with_key_points(log_ticks(x0, x1, &[1.0, 2.0, 5.0]))
+                        .with_light_points(log_ticks(x0, x1, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0])),
+                    (y0..y1)
+                        .log_scale()
+                        .with_key_points(log_ticks(y0, y1, &[1.0, 2.0, 5.0]))
+                        .with_light_points(log_ticks(y0, y1, &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0])),
+                )
+                .map_err(err)?;
         chart
             .configure_mesh()
             .x_desc(&plot.x_label)
@@ -122,31 +135,48 @@ pub fn render_loglog(plot: &LogLogPlot) -> Result<Vec<u8>> {
             let colour = PALETTE[i % PALETTE.len()];
             let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(|p| positive(p.0) && positive(p.1)).collect();
             let style = colour.stroke_width(2);
-            chart
-                .draw_series(LineSeries::new(pts.clone(), style))
-                .map_err(err)?
-                .label(&s.name)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 22, y)], colour.stroke_width(2)));
+            chart.draw_series(LineSeries::new(pts.clone(), style)).map_err(err)?;
             chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, colour.filled()))).map_err(err)?;
         }
-        if let Some((y, label)) = &plot.floor {
+        if let Some((y, _)) = &plot.floor {
             if positive(*y) {
                 let grey = RGBColor(90, 90, 90);
                 chart
                     .draw_series(DashedLineSeries::new(vec![(x0, *y), (x1, *y)], 8, 6, grey.stroke_width(2)))
-                    .map_err(err)?
-                    .label(label)
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 22, y)], grey.stroke_width(2)));
+                    .map_err(err)?;
             }
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .label_font((FAMILY, 15))
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(160, 160, 160))
-            .draw()
-            .map_err(err)?;
+        // The legend, right of the chart (inside it would hide some curve or other).
+        let mut y = 60;
+        for (i, s) in plot.series.iter().enumerate() {
+            let colour = PALETTE[i % PALETTE.len()];
+            legend.draw(&PathElement::new(vec![(8, y), (34, y)], colour.stroke_width(2))).map_err(err)?;
+            legend.draw(&Circle::new((21, y), 3, colour.filled())).map_err(err)?;
+            legend.draw(&Text::new(s.name.clone(), (42, y - 7), (FAMILY, 16))).map_err(err)?;
+            y += 26;
+        }
+        if let Some((_, label)) = &plot.floor {
+            let grey = RGBColor(90, 90, 90);
+            for x in [8, 22] {
+                legend.draw(&PathElement::new(vec![(x, y), (x + 8, y)], grey.stroke_width(2))).map_err(err)?;
+            }
+            // Wrap a long label onto lines of about 18 characters.
+            let mut lines: Vec<String> = vec![String::new()];
+            for word in label.split_whitespace() {
+                let cur = lines.last_mut().expect("one line at least");
+                if !cur.is_empty() && cur.len() + word.len() > 18 {
+                    lines.push(word.to_string());
+                } else {
+                    if !cur.is_empty() {
+                        cur.push(' ');
+                    }
+                    cur.push_str(word);
+                }
+            }
+            for (k, line) in lines.into_iter().enumerate() {
+                legend.draw(&Text::new(line, (42, y - 7 + 19 * k as i32), (FAMILY, 16))).map_err(err)?;
+            }
+        }
         root.present().map_err(err)?;
     }
     Ok(buf)
@@ -160,6 +190,22 @@ pub fn write_loglog_png(path: &Path, plot: &LogLogPlot) -> Result<()> {
         .write_image(&rgb, plot.width, plot.height, ::image::ExtendedColorType::Rgb8)
         .map_err(|e| anyhow!("cannot write plot {}: {e}", path.display()))?;
     write_atomic(path, "PNG", |w| Ok(w.write_all(&bytes)?))
+}
+
+/// The values m * 10^k in [lo, hi] for each mantissa m of `mantissas` (e.g. 1, 2, 5): tick
+/// positions of a log axis. plotters' own choice labels only part of a range that starts
+/// inside a decade.
+fn log_ticks(lo: f64, hi: f64, mantissas: &[f64]) -> Vec<f64> {
+    let mut v = Vec::new();
+    for k in lo.log10().floor() as i32..=hi.log10().ceil() as i32 {
+        for m in mantissas {
+            let t = m * 10f64.powi(k);
+            if t >= lo && t <= hi {
+                v.push(t);
+            }
+        }
+    }
+    v
 }
 
 /// Tick labels: 0.01, 0.1, 1, 10, 100 plainly, other magnitudes as 1e-4.
@@ -184,6 +230,12 @@ mod tests {
         assert_eq!(format_tick(20.0), "20");
         assert_eq!(format_tick(1e-4), "1e-4");
         assert_eq!(format_tick(3e4), "3e4");
+    }
+
+    #[test]
+    fn log_ticks_cover_partial_decades() {
+        assert_eq!(log_ticks(0.03, 0.7, &[1.0, 2.0, 5.0]), vec![0.05, 0.1, 0.2, 0.5]);
+        assert_eq!(log_ticks(1.0, 10.0, &[1.0]), vec![1.0, 10.0]);
     }
 
     #[test]
