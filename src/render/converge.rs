@@ -100,7 +100,8 @@ impl ReferenceError {
 
 /// A [`Renderer`] whose first iteration, which pays the driver's shader compilation, has
 /// been rendered and discarded (film, iteration count and seconds reset to zero), so that
-/// time budgets measure rendering only.
+/// time budgets measure rendering only. (The film's rejected-sample counter and the
+/// kernel profile keep that iteration's share.)
 pub fn warm_renderer(gpu: &Arc<Gpu>, scene: &Scene, settings: &RenderSettings) -> Result<Renderer> {
     let mut r = Renderer::new(gpu, scene, settings)?;
     r.run(Budget::Iterations(1), None, &mut |_| {})?;
