@@ -65,6 +65,10 @@ void main() {
         mis_light_start(st, emission_pdf, direct_pdf, e.cos_light, e.delta, e.finite);
         uint max_len = max_path_length();
         for (;; ++st.len) {
+            // A vertex at length len only makes paths of len + 1 segments or more (stored
+            // for connections and merges, or connected to the camera): with max_len = 1
+            // there is nothing to trace (and no slot to store in: lv_slots() = 0).
+            if (st.len + 1u > max_len) break;
             Hit h;
             if (!trace_closest(st.o, st.d, 0.0, 1e30, h)) break;
             Surface s = surface_at(h, st.o, st.d);

@@ -170,7 +170,8 @@ fn tiny_bright_emitter_is_finite_and_unbiased() {
 fn closed_furnaces_never_gain_energy() {
     let (a, le, max_len) = (0.6f32, 0.5f32, 5u32);
     let expected = le * (0..max_len).map(|k| a.powi(k as i32)).sum::<f32>();
-    let mat = Material { name: "furnace".into(), diffuse: Vec3::splat(a), emission: Vec3::splat(le), ..Default::default() };
+    let mat =
+        Material { name: "furnace".into(), diffuse: Vec3::splat(a), emission: Vec3::splat(le), ..Default::default() };
     for (label, stretch) in [("cube", Vec3::ONE), ("flat box", Vec3::new(1.0, 1e-3, 1.0))] {
         let mut tris = inward_box(1.0, 0);
         let mut rng = 0x1234_5678u32;
@@ -228,4 +229,30 @@ fn closed_furnaces_never_gain_energy() {
             }
         });
     }
+}
+
+/// With a maximum path length of 1 every estimator renders only the emitters the camera
+/// sees directly (light subpaths have no slot to store a vertex in and must not connect
+/// vertices to the camera, which would make 2-segment paths): bpt, vcm and lt agree with
+/// pt per pixel. lt sees the emitters through its emitter-to-camera connections.
+#[test]
+fn max_path_length_one_is_direct_emission_only() {
+    with_gpu(|gpu| {
+        let scene = vkvcm::scene::load_named("glm_c").unwrap();
+        let run = |algo: Algorithm, seed: u32| {
+            let mut s = RenderSettings::new(algo, 24, 24, Budget::Iterations(64));
+            s.frame.max_path_length = 1;
+            s.frame.seed = seed;
+            let out = render::render(gpu, &scene, &s, None, &mut |_| {}).unwrap();
+            assert_eq!(out.rejected_samples, 0, "{algo:?}: rejected samples");
+            out
+        };
+        let pt = run(Algorithm::Pt, 1);
+        assert!(pt.pixels.iter().any(|p| p[0] > 0.0), "pt sees no emitter: the test would be vacuous");
+        let pt = render_stats(&pt, None);
+        for (algo, seed) in [(Algorithm::Bpt, 2), (Algorithm::Vcm, 3), (Algorithm::Lt, 4)] {
+            let t = welch_test(&pt, &render_stats(&run(algo, seed), None), ALPHA).unwrap();
+            assert!(t.passed(), "max path length 1, pt vs {algo:?}: {t}");
+        }
+    });
 }
