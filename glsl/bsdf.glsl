@@ -17,9 +17,15 @@
 // the reverse pdf has the same form with wi.h. f, being reciprocal, needs no adjoint
 // correction.
 //
+// Components no material of the scene has are compiled out (HAS_DIFFUSE, HAS_PHONG,
+// HAS_GGX, HAS_MIRROR, HAS_DIELECTRIC: glsl/features.glsl); the branches taken and the
+// arithmetic done for the components present are the same as with all of them.
+//
 // Requires: `materials[]` (GpuMaterial) declared by the kernel, common.glsl, types.glsl.
 #ifndef BSDF_GLSL
 #define BSDF_GLSL
+
+#include "features.glsl"
 
 #define EPS_COSINE 1e-6
 
@@ -99,20 +105,42 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 wo, bool from_light) {
     b.from_light = from_light;
     float c = dot(ng, wo);
     b.valid = abs(c) >= EPS_COSINE;
+#if HAS_DIELECTRIC
     if (ior < 0.0) {
+#endif
         b.n = c >= 0.0 ? ng : -ng;  // opaque surfaces reflect on both sides
         b.fresnel = 1.0;
         b.eta_ratio = 1.0;
+#if HAS_DIELECTRIC
     } else {
         b.n = ng;
         b.fresnel = fresnel_dielectric(c, ior);
         b.eta_ratio = c >= 0.0 ? 1.0 / ior : ior;
     }
-    float a_d = luminance(m.diffuse.rgb);
-    float a_p = luminance(m.phong.rgb);
-    float a_g = luminance(m.glossy.rgb);
-    float a_r = b.fresnel * luminance(m.mirror.rgb);
-    float a_t = ior < 0.0 ? 0.0 : 1.0 - b.fresnel;
+#endif
+    // Albedos of the components; an absent one is 0 in every material, so leaving it (and
+    // its zero terms in the sums below) out changes nothing.
+    float a_d = 0.0, a_p = 0.0, a_g = 0.0, a_r = 0.0, a_t = 0.0;
+    vec3 albedo = vec3(0.0);
+#if HAS_DIFFUSE
+    a_d = luminance(m.diffuse.rgb);
+    albedo += m.diffuse.rgb;
+#endif
+#if HAS_PHONG
+    a_p = luminance(m.phong.rgb);
+    albedo += m.phong.rgb;
+#endif
+#if HAS_GGX
+    a_g = luminance(m.glossy.rgb);
+    albedo += m.glossy.rgb;
+#endif
+#if HAS_MIRROR
+    a_r = b.fresnel * luminance(m.mirror.rgb);
+    albedo += b.fresnel * m.mirror.rgb;
+#endif
+#if HAS_DIELECTRIC
+    a_t = ior < 0.0 ? 0.0 : 1.0 - b.fresnel;
+#endif
     float total = a_d + a_p + a_g + a_r + a_t;
     if (total < 1e-9) {
         b.valid = false;
@@ -123,7 +151,7 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 wo, bool from_light) {
     b.prob_glossy = a_g / total;
     b.prob_reflect = a_r / total;
     b.prob_refract = a_t / total;
-    b.cont_prob = clamp(max3(m.diffuse.rgb + m.phong.rgb + m.glossy.rgb + b.fresnel * m.mirror.rgb) + (1.0 - b.fresnel), 0.0, 1.0);
+    b.cont_prob = clamp(max3(albedo) + (1.0 - b.fresnel), 0.0, 1.0);
     b.delta = b.prob_diffuse == 0.0 && b.prob_phong == 0.0 && b.prob_glossy == 0.0;
     return b;
 }
@@ -139,11 +167,14 @@ vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
     if (b.delta || cos_o < EPS_COSINE || cos_i < EPS_COSINE) return vec3(0.0);
     GpuMaterial m = materials[b.material];
     vec3 f = vec3(0.0);
+#if HAS_DIFFUSE
     if (b.prob_diffuse > 0.0) {
         f += m.diffuse.rgb * INV_PI;
         pdf_fwd += b.prob_diffuse * cos_i * INV_PI;
         pdf_rev += b.prob_diffuse * cos_o * INV_PI;
     }
+#endif
+#if HAS_PHONG
     if (b.prob_phong > 0.0) {
         float e = m.diffuse.w;
         vec3 r = 2.0 * cos_o * b.n - b.wo;
@@ -156,12 +187,15 @@ vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
             pdf_rev += p;
         }
     }
+#endif
+#if HAS_GGX
     if (b.prob_glossy > 0.0) {
         float pf, pr;
         f += ggx_eval(b.n, b.wo, wi, cos_o, cos_i, m.glossy.rgb, m.glossy.w, pf, pr);
         pdf_fwd += b.prob_glossy * pf;
         pdf_rev += b.prob_glossy * pr;
     }
+#endif
     return f;
 }
 
@@ -189,10 +223,16 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
     float cos_o = dot(b.n, b.wo);
     float x = u.z;
     float p_nonspec = b.prob_diffuse + b.prob_phong + b.prob_glossy;
+#if HAS_DIFFUSE || HAS_PHONG || HAS_GGX
     if (x < p_nonspec) {
+        // An absent component has probability 0, so its branch is never taken.
+#if HAS_DIFFUSE
         if (x < b.prob_diffuse) {
             s.wi = to_world(sample_cosine_hemisphere(u.xy), b.n);
-        } else if (x >= b.prob_diffuse + b.prob_phong) {
+        } else
+#endif
+#if HAS_GGX
+        if (x >= b.prob_diffuse + b.prob_phong) {
             // GGX: half vector from D(h) cos(theta_h): tan^2(theta_h) = a^2 u / (1 - u)
             // (Walter et al. 2007, eq. 35-36), then reflect wo about it.
             float a = m.glossy.w;
@@ -204,13 +244,19 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
             float oh = dot(b.wo, h);
             if (oh <= 0.0) return s;
             s.wi = 2.0 * oh * h - b.wo;
-        } else {
+        } else
+#endif
+        {
+#if HAS_PHONG
             float e = m.diffuse.w;
             vec3 r = 2.0 * cos_o * b.n - b.wo;
             float ct = pow(u.x, 1.0 / (e + 1.0));
             float st = sqrt(max(0.0, 1.0 - ct * ct));
             float phi = 2.0 * PI * u.y;
             s.wi = to_world(vec3(st * cos(phi), st * sin(phi), ct), r);
+#else
+            return s;  // unreachable: x < p_nonspec selects a present component
+#endif
         }
         vec3 f = bsdf_eval(b, s.wi, s.pdf, s.pdf_rev);
         s.cos_wi = dot(b.n, s.wi);
@@ -219,7 +265,9 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
         s.ok = true;
         return s;
     }
+#endif
     s.specular = true;
+#if HAS_MIRROR
     if (x < p_nonspec + b.prob_reflect) {
         s.wi = 2.0 * dot(b.n, b.wo) * b.n - b.wo;
         s.pdf = b.prob_reflect;
@@ -227,7 +275,10 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
         s.cos_wi = abs(dot(b.n, s.wi));
         // f |cos| / pdf with f = F mirror / |cos|.
         s.weight = b.fresnel * m.mirror.rgb / b.prob_reflect;
-    } else {
+    } else
+#endif
+    {
+#if HAS_DIELECTRIC
         // Refraction: wo and the normal decide the side; eta_ratio = eta_o / eta_t.
         float c = dot(b.n, b.wo);
         vec3 n = c >= 0.0 ? b.n : -b.n;
@@ -244,6 +295,11 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
         // (light subpath) transport is not (Veach 1997, 5.2).
         float scale = b.from_light ? 1.0 : eta * eta;
         s.weight = vec3((1.0 - b.fresnel) * scale / b.prob_refract);
+#else
+        // Without dielectrics prob_refract is 0: the generic kernel reaches this branch
+        // only through rounding (x >= p_nonspec + prob_reflect) and fails (pdf 0) too.
+        return s;
+#endif
     }
     s.ok = s.pdf > 0.0;
     return s;

@@ -146,4 +146,5 @@ void main() {
         if (!scatter(st, b, s.p, s.ng, rng)) break;
     }
     film_add(pixel, L + splat_take(pixel));
+    COUNT_RAYS_FLUSH();
 }

@@ -21,4 +21,5 @@ void main() {
         v = vec3(abs(dot(s.ns, d)));
     }
     film_add(pixel, v);
+    COUNT_RAYS_FLUSH();
 }

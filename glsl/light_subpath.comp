@@ -96,4 +96,5 @@ void main() {
 #if STORE_VERTICES
     lv_count[path] = stored;
 #endif
+    COUNT_RAYS_FLUSH();
 }

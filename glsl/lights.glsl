@@ -2,9 +2,16 @@
 // event estimation) and the pdfs of hitting an emitter, with the quantities the MIS of
 // ../shared/SCENES.md 4.4 needs. Lights are picked uniformly (1 / #lights).
 //
+// Light kinds the scene lacks are compiled out (HAS_AREA_LIGHTS, HAS_POINT_LIGHTS,
+// HAS_SPOT_LIGHTS, HAS_DIRECTIONAL_LIGHTS, HAS_BACKGROUND: glsl/features.glsl): each kind
+// has its own `if (kind == ...)` block, and the blocks present do the same arithmetic in
+// every variant.
+//
 // Requires: `lights[]` (GpuLight), `params` (GpuParams), common.glsl, types.glsl.
 #ifndef LIGHTS_GLSL
 #define LIGHTS_GLSL
+
+#include "features.glsl"
 
 #define EPS_COSINE_LIGHT 1e-6
 
@@ -54,6 +61,7 @@ LightSample light_illuminate(uint index, vec3 x, vec2 u) {
     s.light_normal = vec3(0.0);
     s.radiance = l.radiance.rgb;
     float r_scene = params.scene_sphere.w;
+#if HAS_AREA_LIGHTS
     if (kind == LIGHT_AREA) {
         vec2 bc = sample_triangle(u);
         vec3 p = l.a.xyz + bc.x * l.b.xyz + bc.y * l.c.xyz;
@@ -69,30 +77,43 @@ LightSample light_illuminate(uint index, vec3 x, vec2 u) {
         s.emission_pdf_w = s.cos_light * INV_PI / area;
         s.light_point = p;
         s.light_normal = nl;
-    } else if (kind == LIGHT_POINT || kind == LIGHT_SPOT) {
+    }
+#endif
+#if HAS_POINT_LIGHTS || HAS_SPOT_LIGHTS
+    if (kind == LIGHT_POINT || kind == LIGHT_SPOT) {
         vec3 d = l.a.xyz - x;
         float d2 = dot(d, d);
         s.dist = sqrt(d2);
         s.wi = d / s.dist;
         s.pdf_w = d2;
-        if (kind == LIGHT_POINT) {
-            s.emission_pdf_w = INV_4PI;
-        } else {
+#if HAS_POINT_LIGHTS
+        if (kind == LIGHT_POINT) s.emission_pdf_w = INV_4PI;
+#endif
+#if HAS_SPOT_LIGHTS
+        if (kind == LIGHT_SPOT) {
             s.radiance *= spot_falloff(l, -s.wi);
             s.emission_pdf_w = 1.0 / (2.0 * PI * (1.0 - l.c.w));
         }
+#endif
         s.light_point = l.a.xyz;
-    } else if (kind == LIGHT_DIRECTIONAL) {
+    }
+#endif
+#if HAS_DIRECTIONAL_LIGHTS
+    if (kind == LIGHT_DIRECTIONAL) {
         s.wi = -l.b.xyz;
         s.dist = 1e30;
         s.pdf_w = 1.0;
         s.emission_pdf_w = 1.0 / (PI * r_scene * r_scene);
-    } else {  // background
+    }
+#endif
+#if HAS_BACKGROUND
+    if (kind == LIGHT_BACKGROUND) {
         s.wi = sample_uniform_sphere(u);
         s.dist = 1e30;
         s.pdf_w = INV_4PI;
         s.emission_pdf_w = INV_4PI / (PI * r_scene * r_scene);
     }
+#endif
     s.ok = max3(s.radiance) > 0.0;
     return s;
 }
@@ -147,6 +168,7 @@ LightEmission light_emit(uint index, vec2 u_pos, vec2 u_dir) {
     e.energy = l.radiance.rgb;
     vec3 c = params.scene_sphere.xyz;
     float r = params.scene_sphere.w;
+#if HAS_AREA_LIGHTS
     if (kind == LIGHT_AREA) {
         vec2 bc = sample_triangle(u_pos);
         e.pos = l.a.xyz + bc.x * l.b.xyz + bc.y * l.c.xyz;
@@ -159,12 +181,18 @@ LightEmission light_emit(uint index, vec2 u_pos, vec2 u_dir) {
         e.emission_pdf_w = pdf_a * e.cos_light * INV_PI;
         e.direct_pdf = pdf_a;
         e.energy *= e.cos_light;
-    } else if (kind == LIGHT_POINT) {
+    }
+#endif
+#if HAS_POINT_LIGHTS
+    if (kind == LIGHT_POINT) {
         e.pos = l.a.xyz;
         e.dir = sample_uniform_sphere(u_dir);
         e.emission_pdf_w = INV_4PI;
         e.direct_pdf = 1.0;
-    } else if (kind == LIGHT_SPOT) {
+    }
+#endif
+#if HAS_SPOT_LIGHTS
+    if (kind == LIGHT_SPOT) {
         // Uniform in the outer cone.
         float co = l.c.w;
         float ct = 1.0 - u_dir.x * (1.0 - co);
@@ -175,23 +203,32 @@ LightEmission light_emit(uint index, vec2 u_pos, vec2 u_dir) {
         e.emission_pdf_w = 1.0 / (2.0 * PI * (1.0 - co));
         e.direct_pdf = 1.0;
         e.energy *= spot_falloff(l, e.dir);
-    } else {
+    }
+#endif
+#if HAS_DIRECTIONAL_LIGHTS || HAS_BACKGROUND
+    if (kind == LIGHT_DIRECTIONAL || kind == LIGHT_BACKGROUND) {
         // Directional and background: a disc of the scene's bounding-sphere radius,
         // perpendicular to the direction, placed before the scene.
+#if HAS_DIRECTIONAL_LIGHTS
         if (kind == LIGHT_DIRECTIONAL) {
             e.dir = l.b.xyz;
             e.emission_pdf_w = 1.0 / (PI * r * r);
             e.direct_pdf = 1.0;
-        } else {
+        }
+#endif
+#if HAS_BACKGROUND
+        if (kind == LIGHT_BACKGROUND) {
             e.dir = sample_uniform_sphere(u_dir);
             e.emission_pdf_w = INV_4PI / (PI * r * r);
             e.direct_pdf = INV_4PI;
         }
+#endif
         vec2 disc = sample_concentric_disc(u_pos);
         vec3 t, b;
         make_frame(e.dir, t, b);
         e.pos = c + r * (disc.x * t + disc.y * b) - r * e.dir;
     }
+#endif
     return e;
 }
 

@@ -85,4 +85,5 @@ void main() {
         if (max3(thr) <= 0.0) break;
     }
     film_add(pixel, L);
+    COUNT_RAYS_FLUSH();
 }

@@ -1,8 +1,11 @@
 // Scene buffers shared by every render kernel (fixed bindings 0-7), the camera, and the
 // conversion of a BVH hit into a shading point. Kernel-specific buffers use bindings 8+.
+// Scene features the scene lacks compile out (glsl/features.glsl): spheres, shading
+// normals, area lights (then no surface is an emitter) and the background.
 #ifndef SCENE_GLSL
 #define SCENE_GLSL
 
+#include "features.glsl"
 #include "types.glsl"
 #include "common.glsl"
 
@@ -18,6 +21,32 @@ layout(std430, binding = 6) readonly buffer LightsBuf { GpuLight lights[]; };
 layout(std430, binding = 7) readonly buffer NormalsBuf { vec4 shading_normals[]; };
 
 #include "bvh.glsl"
+
+// COUNT_RAYS (profiling): every trace_closest / trace_any call of the kernel is counted in
+// a private counter, and COUNT_RAYS_FLUSH(), the last statement of a kernel's main, adds
+// it to the 64-bit count in stats[2] (low word) and stats[3] (high word) with one atomic
+// per invocation (the carry: the add that wraps the low word increments the high one).
+#if COUNT_RAYS
+uint rays_traced = 0u;
+bool trace_closest_counted(vec3 o, vec3 d, float tmin, float tmax, out Hit h) {
+    rays_traced += 1u;
+    return trace_closest(o, d, tmin, tmax, h);
+}
+bool trace_any_counted(vec3 o, vec3 d, float tmin, float tmax) {
+    rays_traced += 1u;
+    return trace_any(o, d, tmin, tmax);
+}
+#define trace_closest trace_closest_counted
+#define trace_any trace_any_counted
+#define COUNT_RAYS_FLUSH()                                                \
+    if (rays_traced > 0u) {                                               \
+        uint old_rays_ = atomicAdd(stats[2], rays_traced);                \
+        if (old_rays_ + rays_traced < old_rays_) atomicAdd(stats[3], 1u); \
+    }
+#else
+#define COUNT_RAYS_FLUSH()
+#endif
+
 #include "bsdf.glsl"
 #include "lights.glsl"
 
@@ -26,7 +55,11 @@ uint image_height() { return params.dims.y; }
 uint light_count() { return params.dims.z; }
 uint max_path_length() { return params.dims.w; }
 uint min_path_length() { return params.misc.y; }
+#if HAS_BACKGROUND
 uint background_light() { return params.misc.z; }
+#else
+uint background_light() { return NO_LIGHT; }
+#endif
 float scene_radius() { return params.scene_sphere.w; }
 
 // ---- Pinhole camera: the image plane lies at `cam_pos.w` pixels, so a pixel has unit
@@ -61,6 +94,7 @@ struct Surface {
 
 Surface surface_at(Hit h, vec3 o, vec3 d) {
     Surface s;
+#if HAS_SPHERES
     if (h.is_sphere) {
         GpuSphere sp = spheres[h.prim];
         vec3 c = sp.center_radius.xyz;
@@ -71,13 +105,16 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
         s.ns = n;
         s.material = sp.info.x;
         s.light = sp.info.y;
-    } else {
+    } else
+#endif
+    {
         GpuTriangle tri = triangles[h.prim];
         vec3 e1 = tri.p1.xyz - tri.p0.xyz;
         vec3 e2 = tri.p2.xyz - tri.p0.xyz;
         s.p = tri.p0.xyz + h.u * e1 + h.v * e2;
         s.ng = normalize(cross(e1, e2));
         s.ns = s.ng;
+#if HAS_SHADING_NORMALS
         uint first_normal = floatBitsToUint(tri.p2.w);
         if (first_normal != 0xffffffffu) {
             vec3 n = (1.0 - h.u - h.v) * shading_normals[first_normal].xyz
@@ -86,8 +123,13 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
             float len = length(n);
             if (len > 0.0) s.ns = (dot(n, s.ng) < 0.0 ? -n : n) / len;
         }
+#endif
         s.material = floatBitsToUint(tri.p0.w);
+#if HAS_AREA_LIGHTS
         s.light = floatBitsToUint(tri.p1.w);
+#else
+        s.light = NO_LIGHT;  // only area lights make surfaces emitters
+#endif
     }
     return s;
 }

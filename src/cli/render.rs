@@ -64,9 +64,20 @@ pub struct RenderArgs {
     /// the same settings. A missing output EXR starts a new render.
     #[arg(long, value_name = "EXR", num_args = 0..=1)]
     pub resume: Option<Option<PathBuf>>,
-    /// Print per-kernel GPU time.
+    /// Print GPU time per stage and kernel per iteration, and rays traced per second (the
+    /// kernels then count rays).
     #[arg(long)]
     pub profile: bool,
+    /// Write the --profile report as JSON to FILE (implies counting rays).
+    #[arg(long, value_name = "FILE")]
+    pub profile_json: Option<PathBuf>,
+    /// Compile every scene feature into the kernels instead of only the scene's (for
+    /// comparison: the image agrees within float rounding).
+    #[arg(long)]
+    pub generic: bool,
+    /// Print the feature set the kernels are compiled with and the buffers allocated.
+    #[arg(long)]
+    pub verbose: bool,
     /// Vulkan device: index or name substring (see `vkvcm devices`).
     #[arg(long)]
     pub device: Option<String>,
@@ -156,6 +167,11 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     settings.frame.max_path_length = a.max_path_length;
     settings.radius_factor = a.radius_factor;
     settings.alpha = a.alpha;
+    settings.generic = a.generic;
+    settings.count_rays = a.profile || a.profile_json.is_some();
+    if let Some(p) = &a.profile_json {
+        check_writable(p).context("--profile-json")?;
+    }
     let camera = a.camera.clone().unwrap_or_else(|| "default".into());
 
     // --resume: the saved render, checked against these settings before the GPU opens.
@@ -198,6 +214,10 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     })?;
     let mut r = Renderer::new(&gpu, &scene, &settings)
         .with_context(|| format!("preparing {} with {}", scene.name, a.algo.name()))?;
+    if a.verbose {
+        eprintln!("{}", r.features());
+        eprint!("{}", render::features::buffer_table(&r.buffers()));
+    }
     if let Some(s) = &saved {
         r.resume_saved(s)?;
         eprintln!("resuming {} at iteration {} ({:.1} s rendered)", output.display(), s.iterations, s.seconds);
@@ -298,7 +318,12 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
         eprintln!("wrote {}", p.display());
     }
     if a.profile {
-        eprint!("{}", out.profile.table());
+        eprint!("{}", out.profile.report());
+    }
+    if let Some(p) = &a.profile_json {
+        let report = vkvcm::gpu::ProfileReport::new(&out.profile, &scene.name, a.algo.name(), a.width, a.height);
+        super::write_json(p, &report).context("--profile-json")?;
+        eprintln!("wrote {}", p.display());
     }
     drop(r);
     let msgs = gpu.validation_messages();

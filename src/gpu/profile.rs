@@ -1,4 +1,5 @@
-//! Per-kernel GPU time from timestamp queries, reported by `--profile`.
+//! Per-kernel GPU time from timestamp queries, reported by `--profile`: per kernel, per
+//! render stage and iteration, with the rays traced per second when they were counted.
 
 use serde::Serialize;
 
@@ -14,6 +15,37 @@ pub struct KernelTime {
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Profile {
     pub kernels: Vec<KernelTime>,
+    /// Iterations the timings cover, and their wall-clock seconds (set by the renderer).
+    pub iterations: u64,
+    pub wall_seconds: f64,
+    /// Rays traced in those iterations, when counted (kernels built with COUNT_RAYS).
+    pub rays: Option<u64>,
+}
+
+/// The render stage of a kernel (a glsl/ file name), as src/render/features.rs names
+/// them: the light-subpath kernel, the four hash-grid passes, the camera-subpath kernels
+/// (pt.comp and el.comp are whole paths from the camera) and light tracing's accumulate.
+pub fn stage_of(kernel: &str) -> &'static str {
+    match kernel {
+        "light_subpath.comp" => "light subpaths",
+        k if k.starts_with("hash_grid_") => "grid build",
+        "camera_subpath.comp" | "pt.comp" | "el.comp" => "camera subpaths",
+        "accumulate.comp" => "accumulate",
+        _ => "other",
+    }
+}
+
+const STAGE_ORDER: [&str; 5] = ["light subpaths", "grid build", "camera subpaths", "accumulate", "other"];
+
+/// GPU time of one stage.
+#[derive(Clone, Debug, Serialize)]
+pub struct StageTime {
+    pub stage: String,
+    /// Its kernels, in first-dispatch order.
+    pub kernels: Vec<String>,
+    pub ms_per_iteration: f64,
+    /// Fraction of the GPU time of all stages.
+    pub share: f64,
 }
 
 impl Profile {
@@ -29,8 +61,47 @@ impl Profile {
         self.kernels[i].total_ms += ns * 1e-6;
     }
 
+    /// Counts `n` more iterations that took `seconds` of wall-clock time.
+    pub fn add_iterations(&mut self, n: u64, seconds: f64) {
+        self.iterations += n;
+        self.wall_seconds += seconds;
+    }
+
     pub fn total_ms(&self) -> f64 {
         self.kernels.iter().map(|k| k.total_ms).sum()
+    }
+
+    /// GPU time per iteration of each stage present, in pipeline order.
+    pub fn stages(&self) -> Vec<StageTime> {
+        let n = self.iterations.max(1) as f64;
+        let total = self.total_ms().max(1e-12);
+        STAGE_ORDER
+            .iter()
+            .filter_map(|&stage| {
+                let ks: Vec<&KernelTime> = self.kernels.iter().filter(|k| stage_of(&k.kernel) == stage).collect();
+                if ks.is_empty() {
+                    return None;
+                }
+                let ms: f64 = ks.iter().map(|k| k.total_ms).sum();
+                Some(StageTime {
+                    stage: stage.to_string(),
+                    kernels: ks.iter().map(|k| k.kernel.clone()).collect(),
+                    ms_per_iteration: ms / n,
+                    share: ms / total,
+                })
+            })
+            .collect()
+    }
+
+    /// Rays per second of wall-clock time, when rays were counted.
+    pub fn rays_per_second(&self) -> Option<f64> {
+        self.rays.filter(|_| self.wall_seconds > 0.0).map(|r| r as f64 / self.wall_seconds)
+    }
+
+    /// Rays per second of GPU (kernel) time, when rays were counted.
+    pub fn rays_per_gpu_second(&self) -> Option<f64> {
+        let s = self.total_ms() * 1e-3;
+        self.rays.filter(|_| s > 0.0).map(|r| r as f64 / s)
     }
 
     /// A text table: kernel, calls, total ms, mean ms, share.
@@ -50,5 +121,103 @@ impl Profile {
         }
         s += &format!("{:<w$} {:>7} {:>11.3}\n", "total", "", self.total_ms());
         s
+    }
+
+    /// The stage table (GPU ms per iteration) and the ray throughput, then [`Profile::table`].
+    pub fn report(&self) -> String {
+        let mut s = format!("{:<16} {:>12} {:>7}  kernels\n", "stage", "ms/iteration", "share");
+        for st in self.stages() {
+            s += &format!(
+                "{:<16} {:>12.3} {:>6.1}%  {}\n",
+                st.stage,
+                st.ms_per_iteration,
+                100.0 * st.share,
+                st.kernels.join(", ")
+            );
+        }
+        s += &format!(
+            "{:<16} {:>12.3}          ({} iterations, {:.3} s wall)\n",
+            "total",
+            self.total_ms() / self.iterations.max(1) as f64,
+            self.iterations,
+            self.wall_seconds
+        );
+        if let (Some(r), Some(rw), Some(rg)) = (self.rays, self.rays_per_second(), self.rays_per_gpu_second()) {
+            s += &format!(
+                "rays: {r} traced ({:.0} per iteration), {:.3} M/s of wall time, {:.3} M/s of GPU time\n",
+                r as f64 / self.iterations.max(1) as f64,
+                rw * 1e-6,
+                rg * 1e-6
+            );
+        }
+        s + &self.table()
+    }
+}
+
+/// What `--profile-json` writes: the profile of one render with its stages per iteration.
+#[derive(Clone, Debug, Serialize)]
+pub struct ProfileReport {
+    pub scene: String,
+    pub estimator: String,
+    pub width: u32,
+    pub height: u32,
+    /// Iterations timed (this run; a resumed render's earlier ones are not included).
+    pub iterations: u64,
+    pub wall_seconds: f64,
+    pub gpu_ms_per_iteration: f64,
+    pub samples_per_second: f64,
+    pub stages: Vec<StageTime>,
+    pub kernels: Vec<KernelTime>,
+    pub rays: Option<u64>,
+    pub rays_per_second: Option<f64>,
+    pub rays_per_gpu_second: Option<f64>,
+}
+
+impl ProfileReport {
+    pub fn new(p: &Profile, scene: &str, estimator: &str, width: u32, height: u32) -> ProfileReport {
+        let samples = width as f64 * height as f64 * p.iterations as f64;
+        ProfileReport {
+            scene: scene.to_string(),
+            estimator: estimator.to_string(),
+            width,
+            height,
+            iterations: p.iterations,
+            wall_seconds: p.wall_seconds,
+            gpu_ms_per_iteration: p.total_ms() / p.iterations.max(1) as f64,
+            samples_per_second: if p.wall_seconds > 0.0 { samples / p.wall_seconds } else { 0.0 },
+            stages: p.stages(),
+            kernels: p.kernels.clone(),
+            rays: p.rays,
+            rays_per_second: p.rays_per_second(),
+            rays_per_gpu_second: p.rays_per_gpu_second(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stages_group_kernels_in_pipeline_order() {
+        let mut p = Profile::default();
+        for (k, ms) in [
+            ("camera_subpath.comp", 3.0),
+            ("light_subpath.comp", 2.0),
+            ("hash_grid_count.comp", 0.5),
+            ("hash_grid_scan.comp", 0.25),
+            ("hash_grid_scan.comp", 0.25),
+        ] {
+            p.add(k, ms * 1e6);
+        }
+        p.add_iterations(2, 0.01);
+        p.rays = Some(1000);
+        let st = p.stages();
+        let names: Vec<&str> = st.iter().map(|s| s.stage.as_str()).collect();
+        assert_eq!(names, ["light subpaths", "grid build", "camera subpaths"]);
+        assert!((st[1].ms_per_iteration - 0.5).abs() < 1e-12);
+        assert!((st[2].share - 0.5).abs() < 1e-12);
+        assert!((p.rays_per_second().unwrap() - 1e5).abs() < 1e-6);
+        assert!(p.report().contains("grid build"));
     }
 }

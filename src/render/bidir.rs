@@ -127,6 +127,17 @@ impl Bidir {
         Ok(Bidir { mode, light, resolve, grid, radius, grid_origin, pixels, light_paths, _buffers: buffers })
     }
 
+    /// Every buffer this estimator allocated: the splat sums and the light-vertex store
+    /// (1-vertex placeholders for `lt`, which stores none), and the hash grid's when
+    /// merging.
+    pub fn buffers(&self) -> Vec<&Buffer> {
+        let mut b: Vec<&Buffer> = self._buffers.iter().collect();
+        if let Some(g) = &self.grid {
+            b.extend(g.buffers());
+        }
+        b
+    }
+
     pub fn record(&self, batch: &mut Batch, iteration: u32) -> Result<()> {
         let i = iteration as u64;
         let (mis_vm, mis_vc) = self.radius.mis_factors(i, self.light_paths, self.mode.use_vc(), self.mode.use_vm());

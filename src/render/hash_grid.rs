@@ -277,6 +277,11 @@ impl HashGrid {
         self.num_buckets
     }
 
+    /// Every buffer the grid owns (for `vkvcm render --verbose`).
+    pub fn buffers(&self) -> Vec<&Buffer> {
+        vec![&self.cell_start, &self.cell_indices, &self._keys, &self.scan._scratch]
+    }
+
     pub fn light_paths(&self) -> u32 {
         self.light_paths
     }

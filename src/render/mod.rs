@@ -4,6 +4,7 @@
 pub mod bench;
 pub mod bidir;
 pub mod converge;
+pub mod features;
 pub mod film;
 pub mod gpu_types;
 pub mod hash_grid;
@@ -76,6 +77,11 @@ pub struct RenderSettings {
     pub radius_factor: f32,
     /// Radius reduction exponent alpha of r_i = r_0 (i+1)^((alpha-1)/2).
     pub alpha: f32,
+    /// Kernels with every scene feature compiled in, instead of only the scene's
+    /// (src/render/features.rs); the image agrees within float rounding.
+    pub generic: bool,
+    /// Count the rays traced (`Profile::rays`; a few atomics per invocation).
+    pub count_rays: bool,
 }
 
 impl RenderSettings {
@@ -87,6 +93,8 @@ impl RenderSettings {
             nee: true,
             radius_factor: radius::DEFAULT_RADIUS_FACTOR,
             alpha: radius::DEFAULT_ALPHA,
+            generic: false,
+            count_rays: false,
         }
     }
 }
@@ -180,6 +188,7 @@ pub struct Renderer {
     est: Estimator,
     film: Film,
     _scene_gpu: SceneGpu,
+    features: features::FeatureSet,
     batch: Batch,
     profile: Profile,
     /// Iterations accumulated in the film (including resumed ones).
@@ -199,7 +208,9 @@ impl Renderer {
     pub fn new(gpu: &Arc<Gpu>, scene: &Scene, settings: &RenderSettings) -> Result<Renderer> {
         check_frame(gpu, scene, settings)?;
         let frame = &settings.frame;
-        let scene_gpu = SceneGpu::new(gpu, scene, frame)?;
+        let features = features::FeatureSet::new(scene, settings.algorithm, settings.generic)
+            .with_count_rays(settings.count_rays);
+        let scene_gpu = SceneGpu::with_features(gpu, scene, frame, &features)?;
         let film = Film::new(gpu, frame.width, frame.height)?;
         let pixels = frame.width * frame.height;
         let est = match settings.algorithm {
@@ -237,6 +248,7 @@ impl Renderer {
             est,
             film,
             _scene_gpu: scene_gpu,
+            features,
             batch: gpu.batch()?,
             profile: Profile::default(),
             done: 0,
@@ -255,6 +267,21 @@ impl Renderer {
     /// Wall-clock seconds rendered so far.
     pub fn seconds(&self) -> f64 {
         self.seconds
+    }
+
+    /// What the kernels were compiled with.
+    pub fn features(&self) -> &features::FeatureSet {
+        &self.features
+    }
+
+    /// `(name, bytes)` of every buffer the render allocated.
+    pub fn buffers(&self) -> Vec<(String, u64)> {
+        let mut b: Vec<&crate::gpu::Buffer> = self._scene_gpu.buffers.iter().collect();
+        b.extend([&self.film.accum, &self.film.stats]);
+        if let Estimator::Bidir(bd) = &self.est {
+            b.extend(bd.buffers());
+        }
+        b.iter().map(|b| (b.name().to_string(), b.size())).collect()
     }
 
     /// The settings this renderer was built with.
@@ -348,6 +375,7 @@ impl Renderer {
             self.done += n;
             let dt = t0.elapsed().as_secs_f64().max(1e-6);
             self.seconds += dt;
+            self.profile.add_iterations(n, dt);
             let per_iter = dt / n as f64;
             self.per_batch = ((TARGET_BATCH_SECONDS / per_iter) as u64).clamp(1, 256);
             if let Some(t) = budget_seconds {
@@ -371,6 +399,12 @@ impl Renderer {
         let pixels = sum.iter().map(|p| p.map(|v| (v * k) as f32)).collect();
         let (rejected, overflow) = self.film.rejected().context("reading the film's counters back")?;
         let (rejected_samples, overflow_splats) = (rejected + self.prior_rejected.0, overflow + self.prior_rejected.1);
+        let mut profile = self.profile.clone();
+        if self.settings.count_rays {
+            // glsl/scene.glsl COUNT_RAYS_FLUSH: a 64-bit count in film_stats[2..4].
+            let s = self.film.stats.read::<u32>().context("reading the ray count back")?;
+            profile.rays = Some(s[2] as u64 | (s[3] as u64) << 32);
+        }
         Ok(RenderOutput {
             width: self.settings.frame.width,
             height: self.settings.frame.height,
@@ -381,7 +415,7 @@ impl Renderer {
             seconds: self.seconds,
             rejected_samples,
             overflow_splats,
-            profile: self.profile.clone(),
+            profile,
             interrupted: self.interrupted,
         })
     }

@@ -6,6 +6,7 @@ use std::sync::Arc;
 use anyhow::{bail, Result};
 use glam::Vec3;
 
+use super::features::FeatureSet;
 use super::gpu_types::*;
 use crate::bvh;
 use crate::gpu::{Buffer, Gpu};
@@ -26,7 +27,8 @@ pub struct FrameSettings {
 pub struct SceneGpu {
     pub params: GpuParams,
     pub buffers: Vec<Buffer>,
-    /// Defines every kernel that traces rays must be compiled with (BVH layout).
+    /// Defines every kernel that traces rays must be compiled with: the feature set's
+    /// (src/render/features.rs), which include the BVH layout's BVH_NO_SPHERES.
     pub defines: Vec<(String, String)>,
 }
 
@@ -109,7 +111,20 @@ pub fn gpu_params(scene: &Scene, frame: &FrameSettings, background: u32) -> GpuP
 }
 
 impl SceneGpu {
+    /// The scene with kernels specialised to it (the features of a `vcm` render: all but
+    /// shading normals, which only `el` reads).
     pub fn new(gpu: &Arc<Gpu>, scene: &Scene, frame: &FrameSettings) -> Result<SceneGpu> {
+        Self::with_features(gpu, scene, frame, &FeatureSet::new(scene, super::Algorithm::Vcm, false))
+    }
+
+    /// The scene for kernels compiled with `features`: shading normals are uploaded only
+    /// when the kernels read them (a 16-byte placeholder is bound otherwise).
+    pub fn with_features(
+        gpu: &Arc<Gpu>,
+        scene: &Scene,
+        frame: &FrameSettings,
+        features: &FeatureSet,
+    ) -> Result<SceneGpu> {
         if scene.lights.is_empty() {
             bail!("scene {:?} has no light source (no emissive material, punctual light or background)", scene.name);
         }
@@ -118,7 +133,10 @@ impl SceneGpu {
         }
         let tree = bvh::build(&scene.triangles, &scene.spheres);
         let gb = tree.into_gpu();
-        let defines = gb.glsl_defines().into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+        let defines = features.defines();
+        // The feature set's BVH_NO_SPHERES is the BVH layout's (sphere code compiled in for a
+        // sphere-free layout is fine: that is the generic variant).
+        debug_assert_eq!(gb.glsl_defines().is_empty(), !scene.spheres.is_empty());
         let (lights, background) = gpu_lights(scene)?;
         let params = gpu_params(scene, frame, background);
 
@@ -135,12 +153,12 @@ impl SceneGpu {
             .enumerate()
             .map(|(i, t)| {
                 let first = match &t.n {
-                    Some(n) => {
+                    Some(n) if features.shading_normals => {
                         let first = normals.len() as u32;
                         normals.extend(n.iter().map(|v| v4(*v, 0.0)));
                         first
                     }
-                    None => u32::MAX,
+                    _ => u32::MAX,
                 };
                 GpuTriangle {
                     p0: v4(t.p[0], bits(t.material)),

@@ -1,0 +1,56 @@
+// Scene features a kernel is compiled with (src/render/features.rs derives them from the
+// scene and the estimator; `--generic` defines them all to 1). Code for an absent feature
+// is compiled out with `#if HAS_...`. Removing it never changes a result: an absent
+// material component has zero albedo in every material (probability 0, contribution 0,
+// and the sums it would add to get an exact +0), an absent light kind is never picked, and
+// no random number is drawn by the removed code, so both variants consume the same random
+// sequence. A kernel compiled without these defines gets every feature (the generic
+// variant), as do the debug kernels under glsl/tests/.
+#ifndef FEATURES_GLSL
+#define FEATURES_GLSL
+
+// Material components (glsl/bsdf.glsl).
+#ifndef HAS_DIFFUSE
+#define HAS_DIFFUSE 1
+#endif
+#ifndef HAS_PHONG
+#define HAS_PHONG 1
+#endif
+#ifndef HAS_GGX
+#define HAS_GGX 1
+#endif
+#ifndef HAS_MIRROR
+#define HAS_MIRROR 1
+#endif
+#ifndef HAS_DIELECTRIC
+#define HAS_DIELECTRIC 1
+#endif
+// Light kinds (glsl/lights.glsl).
+#ifndef HAS_AREA_LIGHTS
+#define HAS_AREA_LIGHTS 1
+#endif
+#ifndef HAS_POINT_LIGHTS
+#define HAS_POINT_LIGHTS 1
+#endif
+#ifndef HAS_SPOT_LIGHTS
+#define HAS_SPOT_LIGHTS 1
+#endif
+#ifndef HAS_DIRECTIONAL_LIGHTS
+#define HAS_DIRECTIONAL_LIGHTS 1
+#endif
+#ifndef HAS_BACKGROUND
+#define HAS_BACKGROUND 1
+#endif
+// Geometry (glsl/scene.glsl; the BVH's own switch is BVH_NO_SPHERES).
+#ifndef HAS_SPHERES
+#define HAS_SPHERES 1
+#endif
+#ifndef HAS_SHADING_NORMALS
+#define HAS_SHADING_NORMALS 1
+#endif
+// Profiling: count traced rays into stats[2..3] (glsl/scene.glsl, COUNT_RAYS_FLUSH).
+#ifndef COUNT_RAYS
+#define COUNT_RAYS 0
+#endif
+
+#endif
