@@ -53,15 +53,41 @@ const DIELECTRIC_F0: f32 = 0.04;
 
 /// Loads a `.gltf` or `.glb` file. Errors name the file and the offending object.
 pub fn load_gltf(path: &Path, options: &LoadOptions) -> Result<Scene> {
-    let bytes = std::fs::read(path).map_err(|e| anyhow!("{}: cannot read scene file: {e}", path.display()))?;
-    let base_dir = path.parent().unwrap_or_else(|| Path::new("."));
+    let bytes = std::fs::read(path).map_err(|e| one_line(path, &anyhow!("cannot read scene file: {e}")))?;
+    load_gltf_bytes(&bytes, path, options)
+}
+
+/// Imports `bytes` as if they were the contents of the `.gltf`/`.glb` file `path`: external
+/// buffers are resolved in `path`'s folder, the scene is named after its file stem, and an
+/// error is one line that starts with `path`. The entry point of the fuzz target
+/// (`fuzz/fuzz_targets/gltf_load.rs`); it never panics on malformed input.
+pub fn load_gltf_bytes(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene> {
+    let base_dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
     let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    import_bytes(&bytes, base_dir, name, options).map_err(|e| anyhow!("{}: {e:#}", path.display()))
+    import_bytes(bytes, base_dir, name, options).map_err(|e| one_line(path, &e))
+}
+
+/// `"<path>: <error chain>"` on one line (the CLI prints errors as one `error: ...` line;
+/// a newline in a file name or a nested message must not break that).
+pub(crate) fn one_line(path: &Path, e: &anyhow::Error) -> anyhow::Error {
+    let msg = format!("{}: {e:#}", path.display());
+    anyhow!(msg.replace(['\n', '\r'], " "))
 }
 
 /// `data:` URI holding `bytes` in base64, as used for embedded glTF buffers.
 pub fn encode_data_uri(bytes: &[u8]) -> String {
     format!("data:application/octet-stream;base64,{}", base64_encode(bytes))
+}
+
+/// The bytes of a base64 `data:` URI (the inverse of [`encode_data_uri`]).
+pub fn decode_data_uri(uri: &str) -> Result<Vec<u8>> {
+    if !uri.starts_with("data:") {
+        bail!("not a data: URI");
+    }
+    load_uri(uri, Path::new("."))
 }
 
 // ---------------------------------------------------------------------------------------
@@ -107,6 +133,7 @@ impl Warnings {
 
 fn parse_document(bytes: &[u8], warnings: &mut Warnings) -> Result<(json::Root, Option<Vec<u8>>)> {
     let (mut root, blob): (json::Root, Option<Vec<u8>>) = if bytes.starts_with(b"glTF") {
+        check_glb_header(bytes)?;
         let glb = gltf::binary::Glb::from_slice(bytes).map_err(|e| anyhow!("invalid GLB container: {e}"))?;
         let root =
             serde_json::from_slice(&glb.json).map_err(|e| anyhow!("invalid glTF JSON in the GLB JSON chunk: {e}"))?;
@@ -116,23 +143,28 @@ fn parse_document(bytes: &[u8], warnings: &mut Warnings) -> Result<(json::Root, 
         (root, None)
     };
 
-    // Extensions: the gltf crate refuses unknown required extensions during validation;
-    // vkvcm's own are handled here and unknown ones become warnings.
-    let mut seen = Vec::new();
-    for (list, required) in [(&root.extensions_used, false), (&root.extensions_required, true)] {
-        for ext in list {
-            if SUPPORTED_EXTENSIONS.contains(&ext.as_str()) || seen.contains(ext) {
-                continue;
-            }
-            seen.push(ext.clone());
-            let what = if required {
-                format!("required extension {ext} is not supported and was ignored; the scene may render incorrectly")
-            } else {
-                format!("extension {ext} is not supported and was ignored")
-            };
-            warnings.warn(what, "");
-        }
+    // Extensions. glTF 2.0 (section 3.12): a loader that does not support an extension
+    // listed in `extensionsRequired` must not load the asset, so those are errors; unknown
+    // extensions that are only used become warnings.
+    let unsupported: Vec<&str> =
+        root.extensions_required.iter().map(String::as_str).filter(|e| !SUPPORTED_EXTENSIONS.contains(e)).collect();
+    if !unsupported.is_empty() {
+        bail!(
+            "unsupported required extension(s) {} (extensionsRequired; supported: {})",
+            unsupported.join(", "),
+            SUPPORTED_EXTENSIONS.join(", ")
+        );
     }
+    let mut seen = Vec::new();
+    for ext in &root.extensions_used {
+        if SUPPORTED_EXTENSIONS.contains(&ext.as_str()) || seen.contains(ext) {
+            continue;
+        }
+        seen.push(ext.clone());
+        warnings.warn(format!("extension {ext} is not supported and was ignored"), "");
+    }
+    // vkvcm's own extensions are handled here; the gltf crate's validation refuses
+    // required extensions it does not know.
     root.extensions_required.retain(|e| json::extensions::ENABLED_EXTENSIONS.contains(&e.as_str()));
 
     // gltf-json's primitive check indexes the POSITION accessor without a bounds check:
@@ -185,6 +217,25 @@ fn parse_document(bytes: &[u8], warnings: &mut Warnings) -> Result<(json::Root, 
     Ok((root, blob))
 }
 
+/// Checks the 12-byte GLB header before `gltf::binary::Glb::from_slice`, which computes
+/// `length - 12` unchecked (a debug-build panic for a declared length below 12).
+fn check_glb_header(bytes: &[u8]) -> Result<()> {
+    let word = |i: usize| bytes.get(i..i + 4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+    let (Some(version), Some(length)) = (word(4), word(8)) else {
+        bail!("invalid GLB container: the file ends inside the 12-byte header ({} bytes)", bytes.len());
+    };
+    if version != 2 {
+        bail!("invalid GLB container: version {version} is not supported (only 2)");
+    }
+    if (length as usize) < 12 + 8 {
+        bail!("invalid GLB container: declared length {length} is too short for a header and a JSON chunk");
+    }
+    if length as usize > bytes.len() {
+        bail!("invalid GLB container: declared length {length} but the file has {} bytes (truncated?)", bytes.len());
+    }
+    Ok(())
+}
+
 fn import_bytes(bytes: &[u8], base_dir: &Path, name: String, options: &LoadOptions) -> Result<Scene> {
     let mut warnings = Warnings::default();
     let (root, blob) = parse_document(bytes, &mut warnings)?;
@@ -213,7 +264,10 @@ fn import_bytes(bytes: &[u8], base_dir: &Path, name: String, options: &LoadOptio
         punctual: Vec::new(),
     };
     importer.run(options)?;
-    let Importer { mut scene, warnings, .. } = importer;
+    let Importer { mut scene, mut warnings, .. } = importer;
+    for (kind, detail) in super::validate::camera_warnings(&scene) {
+        warnings.warn(kind, detail);
+    }
     scene.report.warnings = warnings.finish();
     Ok(scene)
 }
@@ -271,7 +325,17 @@ fn load_uri(uri: &str, base_dir: &Path) -> Result<Vec<u8>> {
         bail!("URI '{uri}' does not name a file inside the scene's folder");
     }
     let file = base_dir.join(rel);
-    std::fs::read(&file).map_err(|e| anyhow!("cannot read buffer file {}: {e}", file.display()))
+    let cannot = |e: std::io::Error| anyhow!("cannot read buffer file {}: {e}", file.display());
+    // A symbolic link may still lead outside: compare the resolved paths.
+    let real = std::fs::canonicalize(&file).map_err(cannot)?;
+    let real_base = std::fs::canonicalize(base_dir).map_err(cannot)?;
+    if !real.starts_with(&real_base) {
+        bail!("URI '{uri}' resolves (through a symbolic link) to {}, outside the scene's folder", real.display());
+    }
+    if !std::fs::metadata(&real).map_err(cannot)?.is_file() {
+        bail!("URI '{uri}': {} is not a regular file", file.display());
+    }
+    std::fs::read(&real).map_err(cannot)
 }
 
 fn percent_decode(s: &str) -> Option<String> {
@@ -388,7 +452,7 @@ fn read_vec3(buffers: &[Vec<u8>], acc: &gltf::Accessor, what: &str) -> Result<Ve
     }
     let count = acc.count();
     let Some((data, stride)) = view_bytes(buffers, acc, 12)? else {
-        return Ok(vec![Vec3::ZERO; count]);
+        bail!("accessor {ai} ({what}) has no bufferView (all zeros; sparse accessors are not supported)");
     };
     let f = |o: usize| f32::from_le_bytes([data[o], data[o + 1], data[o + 2], data[o + 3]]);
     Ok((0..count)
@@ -412,7 +476,7 @@ fn read_indices(buffers: &[Vec<u8>], acc: &gltf::Accessor) -> Result<Vec<u32>> {
     };
     let count = acc.count();
     let Some((data, stride)) = view_bytes(buffers, acc, size)? else {
-        return Ok(vec![0; count]);
+        bail!("index accessor {ai} has no bufferView (all zeros; sparse accessors are not supported)");
     };
     Ok((0..count)
         .map(|i| {

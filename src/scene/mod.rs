@@ -122,8 +122,10 @@ pub struct Scene {
 
 pub mod gltf_import;
 pub mod reference;
+pub mod validate;
 
-pub use gltf_import::{encode_data_uri, LoadOptions};
+pub use gltf_import::{decode_data_uri, encode_data_uri, load_gltf_bytes, LoadOptions};
+pub use validate::check_renderable;
 
 use std::path::{Path, PathBuf};
 
@@ -148,7 +150,9 @@ pub fn load_named(name_or_path: &str) -> anyhow::Result<Scene> {
     load_named_with(name_or_path, &LoadOptions::default())
 }
 
-/// [`load_named`] with load options.
+/// [`load_named`] with load options. Unlike [`load_with`], it also refuses scenes that
+/// cannot be rendered ([`check_renderable`]: no emitter, no geometry): it is the entry
+/// point of the commands that render.
 pub fn load_named_with(name_or_path: &str, options: &LoadOptions) -> anyhow::Result<Scene> {
     if let Some(name) = builtin_name(name_or_path) {
         let path = builtin_path(name).ok_or_else(|| {
@@ -158,6 +162,7 @@ pub fn load_named_with(name_or_path: &str, options: &LoadOptions) -> anyhow::Res
             )
         })?;
         let mut scene = load_with(&path, options)?;
+        check_renderable(&scene).map_err(|e| gltf_import::one_line(&path, &e))?;
         scene.name = name.to_string();
         return Ok(scene);
     }
@@ -168,7 +173,9 @@ pub fn load_named_with(name_or_path: &str, options: &LoadOptions) -> anyhow::Res
             BUILTIN_SCENES.join(", ")
         );
     }
-    load_with(path, options)
+    let scene = load_with(path, options)?;
+    check_renderable(&scene).map_err(|e| gltf_import::one_line(path, &e))?;
+    Ok(scene)
 }
 
 /// Canonical built-in name for `name` (`"default"` and `"0"`..`"3"` are aliases).

@@ -1,0 +1,182 @@
+#!/usr/bin/env python3
+"""Writes the malformed-scene corpus of tests/scene_malformed.rs into this folder.
+
+Each case is `<name>.gltf` or `<name>.glb` plus `<name>.<ext>.expect`: one line, a
+substring the loader's error must contain ("ok": the file must load and render-check
+cleanly). Re-run after changing a case: python3 tests/malformed/make_corpus.py
+(The symbolic-link case is built at test time in a temporary folder.)
+"""
+import base64, copy, json, os, struct
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def f32s(vals):
+    return b"".join(struct.pack("<f", v) for v in vals)
+
+
+POS = [-1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 0.0]
+BIN = f32s(POS) + struct.pack("<3H", 0, 1, 2) + b"\0\0"  # 36 + 6 + 2 = 44 bytes
+
+
+def data_uri(b):
+    return "data:application/octet-stream;base64," + base64.b64encode(b).decode()
+
+
+BASE = {
+    "asset": {"version": "2.0"},
+    "scene": 0,
+    "scenes": [{"nodes": [0, 1]}],
+    "nodes": [{"name": "tri", "mesh": 0}, {"name": "cam", "camera": 0, "translation": [0.0, 0.0, 3.0]}],
+    "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.01}}],
+    "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+    "materials": [{"name": "lamp", "emissiveFactor": [1.0, 1.0, 1.0]}],
+    "accessors": [
+        {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [-1, -1, 0], "max": [1, 1, 0]},
+        {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"},
+    ],
+    "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+    "buffers": [{"byteLength": len(BIN), "uri": data_uri(BIN)}],
+}
+
+
+def doc(edit=None):
+    d = copy.deepcopy(BASE)
+    if edit:
+        edit(d)
+    return d
+
+
+def glb(d, bin_chunk=BIN, version=2, length=None, json_len=None, json_type=b"JSON"):
+    d = copy.deepcopy(d)
+    d["buffers"][0].pop("uri", None)
+    js = json.dumps(d).encode()
+    js += b" " * (-len(js) % 4)
+    body = struct.pack("<I", len(js) if json_len is None else json_len) + json_type + js
+    if bin_chunk is not None:
+        body += struct.pack("<I", len(bin_chunk)) + b"BIN\0" + bin_chunk
+    total = 12 + len(body) if length is None else length
+    return b"glTF" + struct.pack("<II", version, total) + body
+
+
+CASES = {}
+
+
+def case(name, data, expect):
+    CASES[name] = (data if isinstance(data, bytes) else json.dumps(data, indent=1).encode(), expect)
+
+
+def set_(path, value):
+    def edit(d):
+        o = d
+        for k in path[:-1]:
+            o = o[k]
+        o[path[-1]] = value
+    return edit
+
+
+def remove(path):
+    def edit(d):
+        o = d
+        for k in path[:-1]:
+            o = o[k]
+        del o[path[-1]]
+    return edit
+
+
+def with_bin(b, byte_length=None):
+    def edit(d):
+        d["buffers"][0] = {"byteLength": len(b) if byte_length is None else byte_length, "uri": data_uri(b)}
+    return edit
+
+
+valid = json.dumps(BASE, indent=1).encode()
+case("valid.gltf", BASE, "ok")
+case("valid.glb", glb(BASE), "ok")
+
+# Container and JSON.
+case("empty.gltf", b"", "invalid glTF JSON")
+case("truncated_json.gltf", valid[: len(valid) // 2], "invalid glTF JSON")
+case("bad_json.gltf", b'{"asset": {"version": "2.0"},, }', "invalid glTF JSON")
+case("not_an_object.gltf", b"[1, 2, 3]", "invalid glTF JSON")
+case("binary_garbage.gltf", bytes(range(256)), "invalid glTF JSON")
+case("missing_asset.gltf", doc(remove(["asset"])), "missing field `asset`")
+case("wrong_types.gltf", doc(set_(["nodes"], {"mesh": 0})), "invalid glTF JSON")
+case("glb_truncated_header.glb", b"glTF\x02\x00", "ends inside the 12-byte header")
+case("glb_version_1.glb", glb(BASE, version=1), "version 1 is not supported")
+case("glb_length_below_header.glb", glb(BASE, length=4), "too short")
+full = glb(BASE)
+case("glb_truncated_mid_bin.glb", full[: len(full) - 20], "truncated")
+case("glb_truncated_mid_json.glb", full[:40], "truncated")
+case("glb_json_chunk_too_long.glb", glb(BASE, json_len=100000), "invalid GLB container")
+case("glb_first_chunk_not_json.glb", glb(BASE, json_type=b"BIN\0"), "invalid GLB container")
+bad_json_glb = glb(BASE)
+case("glb_bad_json_chunk.glb", bad_json_glb[:20] + b"{{{{" + bad_json_glb[24:], "invalid glTF JSON in the GLB JSON chunk")
+case("glb_without_bin_chunk.glb", glb(BASE, bin_chunk=None), "no (unused) GLB binary chunk")
+
+# Buffers, views, accessors.
+case("buffer_file_missing.gltf", doc(set_(["buffers", 0], {"byteLength": 44, "uri": "absent.bin"})), "absent.bin")
+case("buffer_shorter_than_byte_length.gltf", doc(with_bin(BIN, 4000)), "byteLength is 4000")
+case("buffer_byte_length_2_pow_53.gltf", doc(with_bin(BIN, 2**53)), "byteLength is 9007199254740992")
+case("data_uri_bad_base64.gltf", doc(set_(["buffers", 0, "uri"], "data:application/octet-stream;base64,QUJD*EFG")), "invalid base64")
+case("data_uri_not_base64.gltf", doc(set_(["buffers", 0, "uri"], "data:text/plain,hello")), "without base64")
+case("view_beyond_buffer.gltf", doc(set_(["bufferViews", 1, "byteOffset"], 40)), "exceeds buffer 0")
+case("accessor_beyond_view.gltf", doc(set_(["accessors", 0, "count"], 4)), "exceeds buffer view 0")
+case("accessor_offset_beyond_view.gltf", doc(set_(["accessors", 0, "byteOffset"], 12)), "exceeds buffer view 0")
+case("accessor_count_2_pow_31.gltf", doc(set_(["accessors", 0, "count"], 2**31)), "2147483648 elements")
+case("accessor_without_view.gltf", doc(remove(["accessors", 0, "bufferView"])), "accessors[0].bufferView")
+case("byte_stride_too_small.gltf", doc(set_(["bufferViews", 0, "byteStride"], 8)), "byteStride")
+case("dangling_position_accessor.gltf", doc(set_(["meshes", 0, "primitives", 0, "attributes", "POSITION"], 9)), "refers to accessor 9")
+case("dangling_buffer_view.gltf", doc(set_(["accessors", 1, "bufferView"], 7)), "accessors[1].bufferView")
+case("index_out_of_range.gltf", doc(with_bin(f32s(POS) + struct.pack("<3H", 0, 1, 3) + b"\0\0")), "element 2 = 3 is out of range")
+case("index_float_component.gltf", doc(set_(["accessors", 1, "componentType"], 5126)), "UNSIGNED_BYTE/SHORT/INT")
+case("index_vec3.gltf", doc(set_(["accessors", 1, "type"], "VEC3")), "must be SCALAR")
+case("position_u16.gltf", doc(set_(["accessors", 0, "componentType"], 5123)), "must be FLOAT VEC3")
+case("position_vec2.gltf", doc(set_(["accessors", 0, "type"], "VEC2")), "must be FLOAT VEC3")
+case("bad_component_type.gltf", doc(set_(["accessors", 0, "componentType"], 1234)), "componentType")
+nan = float("nan")
+inf = float("inf")
+case("nan_positions.gltf", doc(with_bin(f32s([nan] * 9) + struct.pack("<3H", 0, 1, 2) + b"\0\0")), "1 degenerate triangle(s) were skipped")
+case("inf_positions.gltf", doc(with_bin(f32s([inf, 0, 0] + POS[3:]) + struct.pack("<3H", 0, 1, 2) + b"\0\0")), "no geometry")
+
+# URIs.
+case("uri_absolute.gltf", doc(set_(["buffers", 0, "uri"], "/etc/passwd")), "absolute path")
+case("uri_parent.gltf", doc(set_(["buffers", 0, "uri"], "../scene_malformed.rs")), "contains '..'")
+case("uri_nested_parent.gltf", doc(set_(["buffers", 0, "uri"], "sub/../../x.bin")), "contains '..'")
+case("uri_percent_parent.gltf", doc(set_(["buffers", 0, "uri"], "%2e%2e/scene_malformed.rs")), "contains '..'")
+case("uri_percent_bad.gltf", doc(set_(["buffers", 0, "uri"], "a%zz.bin")), "bad %-escape")
+case("uri_scheme_file.gltf", doc(set_(["buffers", 0, "uri"], "file:///etc/passwd")), "has a scheme")
+case("uri_scheme_http.gltf", doc(set_(["buffers", 0, "uri"], "http://example.com/x.bin")), "has a scheme")
+case("uri_drive_letter.gltf", doc(set_(["buffers", 0, "uri"], "C:\\\\x.bin")), "absolute path")
+case("uri_directory.gltf", doc(set_(["buffers", 0, "uri"], ".")), "buffer 0")
+
+# Features, structure, content.
+case("required_extension.gltf", doc(set_(["extensionsRequired"], ["KHR_draco_mesh_compression"])), "unsupported required extension(s) KHR_draco_mesh_compression")
+case("no_scenes.gltf", doc(lambda d: (d.pop("scenes"), d.pop("scene"))), "the file has no scene")
+case("scene_index_out_of_range.gltf", doc(set_(["scene"], 5)), "scene")
+case("no_nodes.gltf", doc(set_(["scenes", 0, "nodes"], [])), "no perspective camera")
+case("no_camera.gltf", doc(set_(["scenes", 0, "nodes"], [0])), "no perspective camera")
+case("orthographic_camera.gltf", doc(set_(["cameras", 0], {"type": "orthographic", "orthographic": {"xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 10}})), "no perspective camera")
+case("camera_yfov_zero.gltf", doc(set_(["cameras", 0, "perspective", "yfov"], 0.0)), "yfov")
+case("camera_scale_zero.gltf", doc(set_(["nodes", 1, "scale"], [0.0, 0.0, 0.0])), "degenerate world transform")
+case("node_cycle.gltf", doc(lambda d: (d["nodes"][0].update(children=[1]), d["nodes"][1].update(children=[0]), d["scenes"][0].update(nodes=[0]))), "not a tree")
+case("node_listed_twice.gltf", doc(set_(["scenes", 0, "nodes"], [0, 1, 0])), "reached twice")
+case("no_emitter.gltf", doc(set_(["materials", 0], {"name": "grey"})), "no emitter: the image would be black")
+case("zero_power_light.gltf", doc(lambda d: (d["materials"].__setitem__(0, {"name": "grey"}), d.update(extensionsUsed=["KHR_lights_punctual"], extensions={"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 0.0}]}}), d["nodes"][0].update(extensions={"KHR_lights_punctual": {"light": 0}}))), "every light has zero power")
+case("negative_light.gltf", doc(lambda d: (d.update(extensionsUsed=["KHR_lights_punctual"], extensions={"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": -5.0}]}}), d["nodes"][0].update(extensions={"KHR_lights_punctual": {"light": 0}}))), "must be finite and non-negative")
+case("only_points.gltf", doc(set_(["meshes", 0, "primitives", 0, "mode"], 0)), "no geometry")
+case("sphere_negative_radius.gltf", doc(lambda d: d["nodes"][0].update(extensions={"VKVCM_spheres": {"spheres": [{"center": [0, 0, 0], "radius": -1}]}})), "radius must be a positive number")
+case("sphere_bad_material.gltf", doc(lambda d: d["nodes"][0].update(extensions={"VKVCM_spheres": {"spheres": [{"center": [0, 0, 0], "radius": 1, "material": 99}]}})), "out of range")
+case("phong_not_object.gltf", doc(set_(["materials", 0, "extensions"], {"VKVCM_materials_phong": 3})), "must be an object")
+case("background_string.gltf", doc(set_(["extensions"], {"VKVCM_background": {"radiance": [1, "x", 1]}})), "VKVCM_background.radiance[1]")
+
+if __name__ == "__main__":
+    for f in os.listdir(HERE):
+        if f.endswith((".gltf", ".glb", ".expect")):
+            os.remove(os.path.join(HERE, f))
+    for name, (data, expect) in CASES.items():
+        with open(os.path.join(HERE, name), "wb") as f:
+            f.write(data)
+        with open(os.path.join(HERE, name + ".expect"), "w") as f:
+            f.write(expect + "\n")
+    print(f"{len(CASES)} cases")
