@@ -225,3 +225,22 @@ fn feature_derivation() {
     assert!(!f.mirror && !f.dielectric);
     assert!(f.with_count_rays(true).defines().contains(&("COUNT_RAYS".to_string(), "1".to_string())));
 }
+
+#[test]
+fn bench_suite_row_measures_both_variants() {
+    let scene = load_named("glm_c").unwrap();
+    with_gpu(|gpu| {
+        let row = vkvcm::render::bench::suite_row(gpu, &scene, Algorithm::Bpt, 16, 2, 1).unwrap();
+        assert_eq!(row.iterations, 2);
+        for v in [&row.specialised, &row.generic] {
+            assert!(v.gpu_ms_per_iteration > 0.0 && v.rays_per_second > 0.0 && v.rays_per_iteration > 0.0);
+            let stages: Vec<&str> = v.stages.iter().map(|s| s.stage.as_str()).collect();
+            assert_eq!(stages, ["light subpaths", "camera subpaths"]);
+        }
+        // Both variants trace the same rays (same random numbers).
+        assert_eq!(row.specialised.rays_per_iteration, row.generic.rays_per_iteration);
+        assert!(row.speedup.is_finite() && row.speedup > 0.0);
+        assert!(row.compiled_out.contains(&"dielectric".to_string()), "{:?}", row.compiled_out);
+        assert!(vkvcm::render::bench::suite_table(&[row]).contains("| glm_c | bpt |"));
+    });
+}

@@ -24,6 +24,33 @@ pub enum BenchCommand {
     /// its RMSE, relative MSE and mean bias against a long reference render are reported
     /// (the reference's own remaining noise is printed with it).
     EqualTime(BenchEqualTimeArgs),
+    /// Scene-specialised against generic kernels (`render --generic`): the four reference
+    /// scenes x pt, lt, bpt, ppm, bpm, vcm at 128x128, 8 rounds of 4 timed iterations per
+    /// variant, the variants alternating; GPU ms per iteration, samples/s, rays/s, ms per
+    /// stage, and the speedup (docs/performance.md).
+    Suite(BenchSuiteArgs),
+}
+
+#[derive(Args)]
+pub struct BenchSuiteArgs {
+    /// Scenes (the suite: all four reference scenes).
+    #[arg(long, value_delimiter = ',', default_value = "gbs_s,glm_c,gbs_p,gbs_b")]
+    pub scenes: Vec<String>,
+    /// Estimators (the suite: all but el).
+    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm")]
+    pub algos: Vec<Algorithm>,
+    #[arg(long, default_value_t = render::bench::SUITE_SIZE)]
+    pub size: u32,
+    /// Rounds; each runs both variants, alternating which goes first.
+    #[arg(long, default_value_t = render::bench::SUITE_ROUNDS)]
+    pub rounds: u32,
+    /// Timed iterations per variant and round.
+    #[arg(long, default_value_t = render::bench::SUITE_ITERATIONS_PER_ROUND)]
+    pub iterations: u64,
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    #[arg(long)]
+    pub device: Option<String>,
 }
 
 #[derive(Args)]
@@ -87,6 +114,7 @@ impl BenchCommand {
             BenchCommand::Render(a) => bench_render(a),
             BenchCommand::Traverse(a) => bench_traverse(a),
             BenchCommand::EqualTime(a) => bench_equal_time(a),
+            BenchCommand::Suite(a) => bench_suite(a),
         }
     }
 }
@@ -135,6 +163,40 @@ fn bench_equal_time(a: BenchEqualTimeArgs) -> Result<()> {
         }
     }
     print!("{}", render::bench::equal_time_table(&rows));
+    if let Some(p) = &a.json {
+        write_json(p, &rows)?;
+    }
+    Ok(())
+}
+
+fn bench_suite(a: BenchSuiteArgs) -> Result<()> {
+    if a.size == 0 || a.iterations == 0 || a.rounds == 0 {
+        bail!("--size, --rounds and --iterations must be at least 1");
+    }
+    if let Some(p) = &a.json {
+        super::render::check_writable(p).context("--json")?;
+    }
+    let gpu = open_bench_gpu(a.device.clone())?;
+    let mut rows = Vec::new();
+    for name in &a.scenes {
+        let scene = scene::load_named(name)?;
+        for &algo in &a.algos {
+            let row = render::bench::suite_row(&gpu, &scene, algo, a.size, a.rounds, a.iterations)
+                .with_context(|| format!("benchmarking {} on {name}", algo.name()))?;
+            eprintln!(
+                "{} {}: specialised {:.2} ms/it, generic {:.2} ms/it, speedup {:.3} ({:.2}-{:.2})",
+                row.scene,
+                row.algorithm,
+                row.specialised.gpu_ms_per_iteration,
+                row.generic.gpu_ms_per_iteration,
+                row.speedup,
+                row.speedup_min,
+                row.speedup_max
+            );
+            rows.push(row);
+        }
+    }
+    print!("{}", render::bench::suite_table(&rows));
     if let Some(p) = &a.json {
         write_json(p, &rows)?;
     }

@@ -67,6 +67,50 @@ impl Profile {
         self.wall_seconds += seconds;
     }
 
+    /// What was added since `earlier` (an earlier copy of this profile).
+    pub fn since(&self, earlier: &Profile) -> Profile {
+        let kernels = self
+            .kernels
+            .iter()
+            .map(|k| {
+                let e = earlier.kernels.iter().find(|e| e.kernel == k.kernel);
+                KernelTime {
+                    kernel: k.kernel.clone(),
+                    calls: k.calls - e.map_or(0, |e| e.calls),
+                    total_ms: k.total_ms - e.map_or(0.0, |e| e.total_ms),
+                }
+            })
+            .filter(|k| k.calls > 0)
+            .collect();
+        Profile {
+            kernels,
+            iterations: self.iterations - earlier.iterations,
+            wall_seconds: self.wall_seconds - earlier.wall_seconds,
+            rays: self.rays.map(|r| r - earlier.rays.unwrap_or(0)),
+        }
+    }
+
+    /// Adds `other`'s timings, iterations and rays to this profile.
+    pub fn absorb(&mut self, other: &Profile) {
+        for k in &other.kernels {
+            let i = match self.kernels.iter().position(|m| m.kernel == k.kernel) {
+                Some(i) => i,
+                None => {
+                    self.kernels.push(KernelTime { kernel: k.kernel.clone(), ..Default::default() });
+                    self.kernels.len() - 1
+                }
+            };
+            self.kernels[i].calls += k.calls;
+            self.kernels[i].total_ms += k.total_ms;
+        }
+        self.iterations += other.iterations;
+        self.wall_seconds += other.wall_seconds;
+        self.rays = match (self.rays, other.rays) {
+            (None, None) => None,
+            (a, b) => Some(a.unwrap_or(0) + b.unwrap_or(0)),
+        };
+    }
+
     pub fn total_ms(&self) -> f64 {
         self.kernels.iter().map(|k| k.total_ms).sum()
     }

@@ -173,3 +173,187 @@ pub fn equal_time_table(rows: &[EqualTimeRow]) -> String {
     }
     s
 }
+
+// ---- `vkvcm bench suite`: specialised against generic kernels (src/render/features.rs).
+
+/// The fixed suite of `vkvcm bench suite` (docs/performance.md): the four reference
+/// scenes x six estimators at 128x128, 8 rounds of 4 timed iterations per variant.
+pub const SUITE_SCENES: [&str; 4] = ["gbs_s", "glm_c", "gbs_p", "gbs_b"];
+pub const SUITE_ALGOS: [Algorithm; 6] =
+    [Algorithm::Pt, Algorithm::Lt, Algorithm::Bpt, Algorithm::Ppm, Algorithm::Bpm, Algorithm::Vcm];
+pub const SUITE_SIZE: u32 = 128;
+pub const SUITE_ROUNDS: u32 = 8;
+pub const SUITE_ITERATIONS_PER_ROUND: u64 = 4;
+
+/// One kernel variant's measurements over all rounds.
+#[derive(Clone, Debug, Serialize)]
+pub struct VariantStats {
+    /// GPU ms per iteration (all stages): the median over the rounds.
+    pub gpu_ms_per_iteration: f64,
+    /// Wall-clock ms per iteration over all rounds (includes submission and waiting).
+    pub wall_ms_per_iteration: f64,
+    /// Samples per second of GPU time (median round).
+    pub samples_per_second: f64,
+    /// Rays per second of GPU time over all rounds.
+    pub rays_per_second: f64,
+    pub rays_per_iteration: f64,
+    /// GPU ms per iteration of each stage over all rounds.
+    pub stages: Vec<crate::gpu::StageTime>,
+}
+
+/// One scene and estimator, specialised and generic.
+#[derive(Clone, Debug, Serialize)]
+pub struct SuiteRow {
+    pub scene: String,
+    pub algorithm: String,
+    pub size: u32,
+    /// Timed iterations per variant (rounds x iterations per round).
+    pub iterations: u64,
+    pub specialised: VariantStats,
+    pub generic: VariantStats,
+    /// Generic over specialised GPU time per iteration, the median over the rounds of
+    /// each round's ratio (the two variants of a round ran back to back, under the same
+    /// load): > 1 means the specialised kernels are faster.
+    pub speedup: f64,
+    /// The smallest and largest ratio of a round: the spread the machine's load caused.
+    pub speedup_min: f64,
+    pub speedup_max: f64,
+    /// What the specialised kernels left out (the feature set's compiled-out list).
+    pub compiled_out: Vec<String>,
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        0.0
+    } else if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+fn variant_stats(total: &crate::gpu::Profile, round_ms: &mut [f64], pixels: f64) -> VariantStats {
+    let it = total.iterations.max(1) as f64;
+    let med = median(round_ms);
+    let rays = total.rays.unwrap_or(0) as f64;
+    VariantStats {
+        gpu_ms_per_iteration: med,
+        wall_ms_per_iteration: 1e3 * total.wall_seconds / it,
+        samples_per_second: pixels / (med * 1e-3).max(1e-12),
+        rays_per_second: rays / (total.total_ms() * 1e-3).max(1e-12),
+        rays_per_iteration: rays / it,
+        stages: total.stages(),
+    }
+}
+
+/// Renders `scene` with `algo` with specialised and with generic kernels (both counting
+/// rays), after one untimed warm-up iteration each (the driver compiles there), in
+/// `rounds` rounds of `per_round` iterations that alternate which variant runs first, so
+/// that a change of load on the machine affects both alike.
+pub fn suite_row(
+    gpu: &Arc<Gpu>,
+    scene: &Scene,
+    algo: Algorithm,
+    size: u32,
+    rounds: u32,
+    per_round: u64,
+) -> Result<SuiteRow> {
+    let make = |generic: bool| -> Result<super::Renderer> {
+        let mut s = RenderSettings::new(algo, size, size, Budget::Iterations(per_round));
+        s.generic = generic;
+        s.count_rays = true;
+        let mut r = super::Renderer::new(gpu, scene, &s)?;
+        r.run(Budget::Iterations(1), None, &mut |_| {})?;
+        Ok(r)
+    };
+    let mut renderers = [make(false)?, make(true)?];
+    let compiled_out = {
+        let f = renderers[0].features();
+        let all = [
+            ("diffuse", f.diffuse),
+            ("phong", f.phong),
+            ("ggx", f.ggx),
+            ("mirror", f.mirror),
+            ("dielectric", f.dielectric),
+            ("area", f.area_lights),
+            ("point", f.point_lights),
+            ("spot", f.spot_lights),
+            ("directional", f.directional_lights),
+            ("background", f.background),
+            ("spheres", f.spheres),
+            ("shading normals", f.shading_normals),
+        ];
+        all.iter().filter(|(_, on)| !on).map(|(n, _)| n.to_string()).collect()
+    };
+    let mut totals = [crate::gpu::Profile::default(), crate::gpu::Profile::default()];
+    let mut round_ms: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
+    for round in 0..rounds {
+        let order = if round % 2 == 0 { [0, 1] } else { [1, 0] };
+        for v in order {
+            let r = &mut renderers[v];
+            let before = r.output()?.profile;
+            r.run(Budget::Iterations(per_round), None, &mut |_| {})?;
+            let delta = r.output()?.profile.since(&before);
+            round_ms[v].push(delta.total_ms() / delta.iterations.max(1) as f64);
+            totals[v].absorb(&delta);
+        }
+    }
+    let mut ratios: Vec<f64> = round_ms[1].iter().zip(&round_ms[0]).map(|(g, s)| g / s.max(1e-12)).collect();
+    let speedup = median(&mut ratios);
+    let pixels = size as f64 * size as f64;
+    let specialised = variant_stats(&totals[0], &mut round_ms[0], pixels);
+    let generic = variant_stats(&totals[1], &mut round_ms[1], pixels);
+    Ok(SuiteRow {
+        scene: scene.name.clone(),
+        algorithm: algo.name().to_string(),
+        size,
+        iterations: totals[0].iterations,
+        speedup,
+        speedup_min: ratios.first().copied().unwrap_or(0.0),
+        speedup_max: ratios.last().copied().unwrap_or(0.0),
+        specialised,
+        generic,
+        compiled_out,
+    })
+}
+
+/// A markdown table of suite rows: per variant GPU ms per iteration, samples/s, rays/s,
+/// and the specialised stages' ms per iteration.
+pub fn suite_table(rows: &[SuiteRow]) -> String {
+    let mut s = String::from(
+        "| scene | algo | spec. ms/it | generic ms/it | speedup (range) | spec. Msamples/s | generic Msamples/s | spec. Mrays/s | generic Mrays/s | rays/it | spec. stages ms/it (light, grid, camera, accumulate) |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        let stage = |name: &str| {
+            r.specialised
+                .stages
+                .iter()
+                .find(|s| s.stage == name)
+                .map(|s| format!("{:.2}", s.ms_per_iteration))
+                .unwrap_or_else(|| "-".into())
+        };
+        s += &format!(
+            "| {} | {} | {:.2} | {:.2} | {:.3} ({:.2}-{:.2}) | {:.3} | {:.3} | {:.2} | {:.2} | {:.0} | {} / {} / {} / {} |\n",
+            r.scene,
+            r.algorithm,
+            r.specialised.gpu_ms_per_iteration,
+            r.generic.gpu_ms_per_iteration,
+            r.speedup,
+            r.speedup_min,
+            r.speedup_max,
+            r.specialised.samples_per_second * 1e-6,
+            r.generic.samples_per_second * 1e-6,
+            r.specialised.rays_per_second * 1e-6,
+            r.generic.rays_per_second * 1e-6,
+            r.specialised.rays_per_iteration,
+            stage("light subpaths"),
+            stage("grid build"),
+            stage("camera subpaths"),
+            stage("accumulate"),
+        );
+    }
+    s
+}
