@@ -469,11 +469,45 @@ fn process_cpu_seconds() -> Option<f64> {
     Some(ticks / 100.0) // USER_HZ is 100 on Linux
 }
 
+/// One ray as the benchmark kernels read it (`glsl/bvh_bench.comp`, and the ray-query
+/// comparison in `examples/rayquery_bench/`): origin and direction, `w` unused.
 #[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct BenchRay {
-    o: [f32; 4],
-    d: [f32; 4],
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct BenchRay {
+    pub o: [f32; 4],
+    pub d: [f32; 4],
+}
+
+impl BenchRay {
+    pub fn new(o: Vec3, d: Vec3) -> BenchRay {
+        BenchRay { o: [o.x, o.y, o.z, 0.0], d: [d.x, d.y, d.z, 0.0] }
+    }
+}
+
+/// The box of the scene's primitives themselves (not the BVH's padded, quantised boxes).
+pub fn scene_bounds(scene: &BenchScene) -> Aabb {
+    let mut bounds = Aabb::EMPTY;
+    for t in &scene.triangles {
+        for p in t.p {
+            bounds.grow_point(p);
+        }
+    }
+    for s in &scene.spheres {
+        bounds.grow(&Aabb { min: s.center - s.radius.abs(), max: s.center + s.radius.abs() });
+    }
+    bounds
+}
+
+/// The two ray sets [`bench_traverse`] traces, `("camera", ..)` then `("random", ..)`,
+/// `rays` each: primary rays of a square-ish pinhole image in scanline order, and rays
+/// with origins uniform in [`scene_bounds`] and uniform directions (seed 12345).
+pub fn bench_ray_sets(scene: &BenchScene, rays: u32) -> [(&'static str, Vec<(Vec3, Vec3)>); 2] {
+    let bounds = scene_bounds(scene);
+    let side = (rays as f64).sqrt().round() as u32;
+    let mut camera = camera_rays(&scene.camera, side, rays.div_ceil(side));
+    camera.truncate(rays as usize);
+    let random = random_rays(bounds.min, bounds.max, rays as usize, 12345);
+    [("camera", camera), ("random", random)]
 }
 
 /// Builds the BVH of `scene` (timed), then measures GPU closest-hit and any-hit traversal
@@ -485,25 +519,11 @@ pub fn bench_traverse(gpu: &Arc<Gpu>, scene: &BenchScene, opts: &TraverseBenchOp
     let g = bvh.into_gpu();
     let nodes = gpu.buffer_from_slice("bvh_nodes", &g.nodes)?;
     let prims = gpu.buffer_from_slice("bvh_prims", &g.prims)?;
-    // Random ray origins fill the scene's exact box (not the quantised node boxes).
-    let mut bounds = Aabb::EMPTY;
-    for t in &scene.triangles {
-        for p in t.p {
-            bounds.grow_point(p);
-        }
-    }
-    for s in &scene.spheres {
-        bounds.grow(&Aabb { min: s.center - s.radius.abs(), max: s.center + s.radius.abs() });
-    }
-    let side = (opts.rays as f64).sqrt().round() as u32;
-    let camera = camera_rays(&scene.camera, side, opts.rays.div_ceil(side));
-    let random = random_rays(bounds.min, bounds.max, opts.rays as usize, 12345);
     let mut sets = Vec::new();
     let ls = opts.local_size.to_string();
     let bvh_defines = g.glsl_defines();
-    for (label, rays) in [("camera", &camera[..opts.rays as usize]), ("random", &random[..])] {
-        let data: Vec<BenchRay> =
-            rays.iter().map(|(o, d)| BenchRay { o: [o.x, o.y, o.z, 0.0], d: [d.x, d.y, d.z, 0.0] }).collect();
+    for (label, rays) in bench_ray_sets(scene, opts.rays) {
+        let data: Vec<BenchRay> = rays.iter().map(|&(o, d)| BenchRay::new(o, d)).collect();
         let n = data.len() as u32;
         let ray_buf = gpu.buffer_from_slice("bench_rays", &data)?;
         let out = gpu.buffer_zeroed::<u32>("bench_results", data.len())?;
