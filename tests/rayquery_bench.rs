@@ -17,6 +17,7 @@ fn ray_query_agrees_with_vkvcm_traversal() {
         rounds: 1,
         validation: true,
         device: std::env::var("VKVCM_TEST_DEVICE").ok(),
+        show_differences: 0,
     };
     let report = match compare::run(&opts).expect("comparison failed") {
         Ok(r) => r,

@@ -26,6 +26,8 @@ pub struct Options {
     /// Device index or name substring for vkvcm's `Gpu` (the ray-query side opens the
     /// same device by name).
     pub device: Option<String>,
+    /// Differing rays to describe per ray set.
+    pub show_differences: usize,
 }
 
 /// One scene and ray set.
@@ -45,6 +47,8 @@ pub struct Row {
     /// Rays where vkvcm's GPU kernel and its CPU traversal hit different triangles.
     pub vkvcm_gpu_cpu_differ: u32,
     pub hit_fraction: f64,
+    /// The first `Options::show_differences` rays whose distances differ, described.
+    pub differences: Vec<String>,
 }
 
 fn median(v: &[f64]) -> f64 {
@@ -181,24 +185,33 @@ fn compare_scene(gpu: &Arc<Gpu>, rq: &RqDevice, scene: &BenchScene, opts: &Optio
         let rq_res = rq.results(&rq_rays);
         rq.free_rays(rq_rays);
         let (mut t_differ, mut prim_differ, mut gpu_cpu, mut hits) = (0, 0, 0, 0u64);
+        let mut differences = Vec::new();
         for (i, &(o, d)) in rays.iter().enumerate() {
             let cpu = g.closest_hit(&Ray { o, d }, 0.0, 1e30);
             let (rt, rp) = rq_res[i];
             let rq_hit = (rp != u32::MAX).then_some((rt, rp));
             gpu_cpu += u32::from(vk_prims[i] != cpu.as_ref().map_or(u32::MAX, |h| h.prim));
             hits += u64::from(cpu.is_some());
-            match (&cpu, rq_hit) {
-                (None, None) => {}
+            let differs = match (&cpu, rq_hit) {
+                (None, None) => false,
                 (Some(h), Some((t, p))) => {
                     let rel = (t as f64 - h.t as f64).abs() / (h.t as f64).abs().max(1e-30);
-                    // A NaN distance counts as differing.
-                    t_differ += u32::from(rel.is_nan() || rel > T_TOLERANCE);
                     prim_differ += u32::from(p != h.prim);
+                    // A NaN distance counts as differing.
+                    rel.is_nan() || rel > T_TOLERANCE
                 }
                 _ => {
-                    t_differ += 1;
                     prim_differ += 1;
+                    true
                 }
+            };
+            t_differ += u32::from(differs);
+            if differs && differences.len() < opts.show_differences {
+                differences.push(format!(
+                    "ray {i}: o {o:?} d {d:?}: vkvcm (CPU) {:?}, ray query {:?}",
+                    cpu.as_ref().map(|h| (h.t, h.prim)),
+                    rq_hit
+                ));
             }
         }
         rows.push(Row {
@@ -211,6 +224,7 @@ fn compare_scene(gpu: &Arc<Gpu>, rq: &RqDevice, scene: &BenchScene, opts: &Optio
             prim_differ,
             vkvcm_gpu_cpu_differ: gpu_cpu,
             hit_fraction: hits as f64 / n.max(1) as f64,
+            differences,
         });
     }
     rq.free_scene(rq_scene);

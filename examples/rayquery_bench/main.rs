@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! cargo run --release --example rayquery_bench -- [--scenes cornell,spheres,displaced]
-//!     [--rays 1048576] [--rounds 3] [--validation] [--device NAME]
+//!     [--rays 1048576] [--rounds 3] [--validation] [--device NAME] [--show-differences N]
 //! ```
 //!
 //! Per scene it builds vkvcm's BVH (CPU, timed) and the driver's BLAS (opaque triangles,
@@ -39,6 +39,9 @@ struct Args {
     /// Device index or name substring (default: vkvcm's choice).
     #[arg(long)]
     device: Option<String>,
+    /// Describe the first N rays per set whose closest-hit distances differ.
+    #[arg(long, default_value_t = 0)]
+    show_differences: usize,
 }
 
 fn main() {
@@ -53,6 +56,7 @@ fn main() {
         rounds: args.rounds.max(1),
         validation: args.validation,
         device: args.device,
+        show_differences: args.show_differences,
     };
     let report = match compare::run(&opts) {
         Ok(Ok(r)) => r,
@@ -66,6 +70,11 @@ fn main() {
         }
     };
     print!("{}", format_report(&report, &opts));
+    for row in &report.rows {
+        for d in &row.differences {
+            println!("{} {}: {d}", row.scene, row.rays);
+        }
+    }
     if !report.validation_messages.is_empty() {
         for m in &report.validation_messages {
             eprintln!("validation: {m}");
