@@ -145,7 +145,7 @@ fn build_info<'a>(
 
 impl RqDevice {
     /// Opens the device named `wanted` (vkvcm's device, so that both sides run on the same
-    /// one). `Ok(None)` with a reason when it lacks ray queries (or timestamps).
+    /// one). `Ok(Err(reason))` when it lacks ray queries (or timestamps).
     pub fn new(wanted: &str, validation: bool) -> Result<std::result::Result<RqDevice, String>> {
         // SAFETY: loading the system Vulkan loader.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| anyhow!("cannot load the Vulkan loader: {e}"))?;
@@ -209,10 +209,7 @@ impl RqDevice {
                 "device {wanted:?} lacks VK_KHR_ray_query / VK_KHR_acceleration_structure / bufferDeviceAddress / timestamps"
             )));
         }
-        match Self::open(entry, instance.clone(), physical, debug, messages) {
-            Ok(d) => Ok(Ok(d)),
-            Err(e) => Err(e),
-        }
+        Self::open(entry, instance, physical, debug, messages).map(Ok)
     }
 
     fn open(
