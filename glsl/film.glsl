@@ -3,7 +3,8 @@
 // with Kahan compensation (Kahan 1965), so long renders lose no precision without float64.
 // Each pixel has one writer per dispatch, so the result is deterministic.
 // Requires `film[]` (vec4, four per pixel: sum, its compensation, sum of squares, its
-// compensation) and `stats[]` (uint: [0] rejected samples, [1] overflowing splats).
+// compensation) and `stats[]` (uint: [0] rejected samples, [1] overflowing splats, [2..3]
+// the 64-bit count of traced rays when profiling: COUNT_RAYS in glsl/scene.glsl).
 #ifndef FILM_GLSL
 #define FILM_GLSL
 

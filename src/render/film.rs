@@ -19,7 +19,8 @@ pub struct Film {
     pub height: u32,
     /// Four vec4 per pixel: sum, its Kahan compensation, sum of squares, its compensation.
     pub accum: Buffer,
-    /// `[0]`: rejected samples; `[1]`: splats rejected for overflow.
+    /// `[0]`: rejected samples; `[1]`: splats rejected for overflow; `[2..3]`: traced rays
+    /// (low, high word) when profiling (`COUNT_RAYS`, glsl/scene.glsl).
     pub stats: Buffer,
 }
 
