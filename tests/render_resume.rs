@@ -60,13 +60,13 @@ fn resume_matches_uninterrupted(algo: Algorithm) {
     with_gpu(|gpu| {
         let full = render(gpu, &scene, algo, 2 * N);
         let half = render(gpu, &scene, algo, N);
-        let prov = Provenance { scene: scene.name.clone(), camera: "default".into(), device: gpu.info.name.clone() };
+        let prov = Provenance::new(&scene, "default", &gpu.info.name);
         let s = settings(algo, Budget::Iterations(2 * N));
         saved::write_render_exr(&path, &half, &s, &prov).unwrap();
 
         let loaded = saved::read_render_exr(&path).unwrap();
         assert_eq!(loaded.iterations, N);
-        loaded.check_matches(&s, &scene.name, "default").unwrap();
+        loaded.check_matches(&s, &prov).unwrap();
         let mut r = Renderer::new(gpu, &scene, &s).unwrap();
         r.resume_saved(&loaded).unwrap();
         r.run(Budget::Iterations(N), None, &mut |_| {}).unwrap();
@@ -104,14 +104,16 @@ fn resume_refuses_other_settings() {
     with_gpu(|gpu| {
         let out = render(gpu, &scene, Algorithm::Pt, 1);
         let s = settings(Algorithm::Pt, Budget::Iterations(1));
-        let prov = Provenance { scene: scene.name.clone(), camera: "default".into(), device: "x".into() };
+        let prov = Provenance::new(&scene, "default", "x");
         saved::write_render_exr(&path, &out, &s, &prov).unwrap();
     });
     let loaded = saved::read_render_exr(&path).unwrap();
     let base = settings(Algorithm::Pt, Budget::Iterations(2));
-    loaded.check_matches(&base, &scene.name, "default").unwrap();
+    let here = Provenance::new(&scene, "default", "y");
+    loaded.check_matches(&base, &here).unwrap();
     let refuse = |s: &RenderSettings, scene_name: &str, camera: &str, needle: &str| {
-        let e = loaded.check_matches(s, scene_name, camera).unwrap_err().to_string();
+        let p = Provenance { scene: scene_name.into(), camera: camera.into(), ..here.clone() };
+        let e = loaded.check_matches(s, &p).unwrap_err().to_string();
         assert!(e.contains(needle) && !e.contains('\n'), "{e}");
     };
     let mut s = base.clone();
@@ -131,6 +133,12 @@ fn resume_refuses_other_settings() {
     refuse(&s, &scene.name, "default", "--alpha");
     refuse(&base, "glm_c", "default", "scene");
     refuse(&base, &scene.name, "cam2", "--camera");
+    // The same scene name with edited content (one material's diffuse albedo 0.001 higher):
+    // refused; an unedited copy is accepted (above).
+    let mut edited = scene.clone();
+    edited.materials[0].diffuse += glam::Vec3::splat(1e-3);
+    let e = loaded.check_matches(&base, &Provenance::new(&edited, "default", "y")).unwrap_err().to_string();
+    assert!(e.contains("has changed") && e.contains(&scene.name) && !e.contains('\n'), "{e}");
 
     // A plain EXR (no second moment, no settings) is refused with its name.
     let plain = dir.path().join("plain.exr");

@@ -175,6 +175,7 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     let camera = a.camera.clone().unwrap_or_else(|| "default".into());
 
     // --resume: the saved render, checked against these settings before the GPU opens.
+    let mut provenance = saved::Provenance::new(&scene, &camera, "");
     let saved = match &a.resume {
         None => None,
         Some(from) => {
@@ -184,8 +185,7 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
                 None
             } else {
                 let s = saved::read_render_exr(path).context("--resume")?;
-                s.check_matches(&settings, &scene.name, &camera)
-                    .with_context(|| format!("cannot resume {}", path.display()))?;
+                s.check_matches(&settings, &provenance).with_context(|| format!("cannot resume {}", path.display()))?;
                 Some(s)
             }
         }
@@ -203,7 +203,7 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
 
     let gpu = Gpu::new(&GpuOptions::from_env(a.device.clone()))?;
     eprintln!("device: {} ({})", gpu.info.name, gpu.info.driver);
-    let provenance = saved::Provenance { scene: scene.name.clone(), camera, device: gpu.info.name.clone() };
+    provenance.device = gpu.info.name.clone();
     render::resources::check(&gpu, &scene, &settings).map_err(|e| {
         let mpl = if matches!(a.algo, Algorithm::El | Algorithm::Pt) {
             String::new()

@@ -208,8 +208,8 @@ impl Renderer {
     pub fn new(gpu: &Arc<Gpu>, scene: &Scene, settings: &RenderSettings) -> Result<Renderer> {
         check_frame(gpu, scene, settings)?;
         let frame = &settings.frame;
-        let features = features::FeatureSet::new(scene, settings.algorithm, settings.generic)
-            .with_count_rays(settings.count_rays);
+        let features =
+            features::FeatureSet::new(scene, settings.algorithm, settings.generic).with_count_rays(settings.count_rays);
         let scene_gpu = SceneGpu::with_features(gpu, scene, frame, &features)?;
         let film = Film::new(gpu, frame.width, frame.height)?;
         let pixels = frame.width * frame.height;

@@ -15,6 +15,7 @@ use anyhow::{anyhow, bail, Result};
 
 use super::{Algorithm, RenderOutput, RenderSettings};
 use crate::image::{self, ExrCompression, Image};
+use crate::scene::Scene;
 
 /// Names of the second-moment channels, for R, G, B.
 pub const MOMENT2_CHANNELS: [&str; 3] = ["moment2.R", "moment2.G", "moment2.B"];
@@ -30,12 +31,27 @@ pub struct Provenance {
     pub camera: String,
     /// The device's name (informational; a render may resume on another device).
     pub device: String,
+    /// [`Scene::fingerprint`]: a resumed render must have the same.
+    pub scene_fingerprint: String,
+}
+
+impl Provenance {
+    pub fn new(scene: &Scene, camera: &str, device: &str) -> Provenance {
+        Provenance {
+            scene: scene.name.clone(),
+            camera: camera.to_string(),
+            device: device.to_string(),
+            scene_fingerprint: scene.fingerprint(),
+        }
+    }
 }
 
 /// A render read back from an EXR written by [`write_render_exr`].
 #[derive(Clone, Debug)]
 pub struct SavedRender {
     pub scene: String,
+    /// [`Scene::fingerprint`]; `None` in files written before it was recorded.
+    pub scene_fingerprint: Option<String>,
     pub camera: String,
     pub algorithm: String,
     pub seed: u32,
@@ -61,6 +77,7 @@ pub fn render_metadata(out: &RenderOutput, s: &RenderSettings, p: &Provenance) -
     vec![
         kv("format", FORMAT.to_string()),
         kv("scene", p.scene.clone()),
+        kv("scene_fingerprint", p.scene_fingerprint.clone()),
         kv("camera", p.camera.clone()),
         kv("estimator", s.algorithm.name().to_string()),
         kv("iterations", out.iterations.to_string()),
@@ -125,6 +142,7 @@ pub fn read_render_exr(path: &Path) -> Result<SavedRender> {
     let seconds: f64 = parse(&shown, "seconds", get("seconds")?)?;
     Ok(SavedRender {
         scene: get("scene")?.to_string(),
+        scene_fingerprint: get("scene_fingerprint").ok().map(str::to_string),
         camera: get("camera")?.to_string(),
         algorithm: get("estimator")?.to_string(),
         seed: parse(&shown, "seed", get("seed")?)?,
@@ -146,17 +164,26 @@ pub fn read_render_exr(path: &Path) -> Result<SavedRender> {
 
 impl SavedRender {
     /// Fails, naming the first setting that differs (as the command-line option), unless
-    /// continuing this render with `s` for scene `scene` and camera `camera` reproduces an
+    /// continuing this render with `s` for the scene and camera of `p` reproduces an
     /// uninterrupted render.
-    pub fn check_matches(&self, s: &RenderSettings, scene: &str, camera: &str) -> Result<()> {
+    pub fn check_matches(&self, s: &RenderSettings, p: &Provenance) -> Result<()> {
         let diff = |what: &str, saved: String, now: String| -> Result<()> {
             if saved != now {
                 bail!("it was rendered with {what} {saved}, this run asks for {what} {now}");
             }
             Ok(())
         };
-        diff("scene", self.scene.clone(), scene.to_string())?;
-        diff("--camera", self.camera.clone(), camera.to_string())?;
+        diff("scene", self.scene.clone(), p.scene.clone())?;
+        if let Some(f) = &self.scene_fingerprint {
+            if *f != p.scene_fingerprint {
+                bail!(
+                    "scene {} has changed since it was rendered (scene fingerprint {f}, now {})",
+                    p.scene,
+                    p.scene_fingerprint
+                );
+            }
+        }
+        diff("--camera", self.camera.clone(), p.camera.clone())?;
         diff("--algo", self.algorithm.clone(), s.algorithm.name().to_string())?;
         diff("--width", self.width.to_string(), s.frame.width.to_string())?;
         diff("--height", self.height.to_string(), s.frame.height.to_string())?;

@@ -120,6 +120,32 @@ pub struct Scene {
     pub report: LoadReport,
 }
 
+impl Scene {
+    /// A checksum (CRC-32, 8 hex digits) of everything in the scene that shapes an image:
+    /// triangles (positions, shading normals, materials), spheres, materials, lights and the
+    /// camera; not its name or load report. Resumed renders compare it, so that an edited
+    /// scene file of the same name is not mixed into an old image. CRC-32 is meant for
+    /// accidental changes, which is all this guards against.
+    pub fn fingerprint(&self) -> String {
+        let mut h = crc32fast::Hasher::new();
+        for t in &self.triangles {
+            h.update(bytemuck::cast_slice(&t.p));
+            match &t.n {
+                Some(n) => {
+                    h.update(&[1]);
+                    h.update(bytemuck::cast_slice(n));
+                }
+                None => h.update(&[0]),
+            }
+            h.update(&t.material.to_le_bytes());
+        }
+        // Few and small: their Debug text (floats print as the shortest round-trip string).
+        let rest = format!("{:?}{:?}{:?}{:?}", self.spheres, self.materials, self.lights, self.camera);
+        h.update(rest.as_bytes());
+        format!("{:08x}", h.finalize())
+    }
+}
+
 pub mod gltf_import;
 pub mod reference;
 pub mod validate;
