@@ -63,8 +63,9 @@ pub struct Bidir {
 const LV_HALF_BYTES: u64 = 32;
 
 /// Hash-grid buckets per light subpath. SmallVCM has one; four cut the candidates that a
-/// merge query rejects (other cells hashed into the same buckets): bpm +7%, vcm +4%
-/// samples per CPU-second on lavapipe (docs/performance.md, issue #8 part 4).
+/// merge query rejects (other cells hashed into the same buckets): bpm +6-7%, vcm +4-5%
+/// samples per CPU-second on lavapipe, ppm within noise (docs/performance.md,
+/// "Performance work").
 const GRID_BUCKETS_PER_LIGHT_PATH: u64 = 4;
 
 /// Most hash-grid buckets: `grid_start` (one u32 per bucket + 1) then stays below
