@@ -60,7 +60,7 @@ vec3 merge(SubpathState st, Surface s, Bsdf b) {
     float r2 = r * r;
     vec3 origin = params.scene_sphere.xyz - vec3(params.scene_sphere.w);
     uint buckets[8];
-    uint nb = hash_grid_query_cells(s.p, origin, r, push.light_paths, buckets);
+    uint nb = hash_grid_query_cells(s.p, origin, r, push.grid_buckets, buckets);
     vec3 sum = vec3(0.0);
     uint max_len = max_path_length();
     uint min_len = min_path_length();

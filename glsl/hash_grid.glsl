@@ -38,10 +38,15 @@ ivec3 hash_grid_cell(vec3 p, vec3 origin, float cell_size) {
     return hash_grid_cell_of_scaled(floor(hash_grid_scaled(p, origin, cell_size)));
 }
 
-// SmallVCM's spatial hash of a cell, in wrapping unsigned 32-bit arithmetic.
+// SmallVCM's spatial hash of a cell, in wrapping unsigned 32-bit arithmetic. For a
+// power-of-two bucket count (what the renderer uses) the remainder is a mask: lavapipe
+// computes a vector `%` as one integer division per lane, and a query hashes 8 cells.
+// The branch is uniform (the count is a push constant), so only one side runs.
 uint hash_grid_bucket(ivec3 cell, uint num_buckets) {
     uvec3 u = uvec3(cell);
-    return ((u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u)) % num_buckets;
+    uint h = (u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u);
+    if ((num_buckets & (num_buckets - 1u)) == 0u) return h & (num_buckets - 1u);
+    return h % num_buckets;
 }
 
 // The bucket of the light vertex at p for merge radius `radius`.

@@ -54,7 +54,8 @@ struct GpuPush {
     float mis_vc;      // VC weight factor: 1 / eta when connecting, else 0
     float radius;      // merge radius of this iteration
     uint light_paths;  // N_L, light subpaths per iteration
-    uvec2 pad;
+    uint grid_buckets; // buckets of the light-vertex hash grid (merging estimators)
+    uint pad;
 };
 
 #endif

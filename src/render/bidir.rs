@@ -62,6 +62,23 @@ pub struct Bidir {
 /// Bytes of one light-vertex half (lv_a or lv_b) per vertex.
 const LV_HALF_BYTES: u64 = 32;
 
+/// Hash-grid buckets per light subpath. SmallVCM has one; four cut the candidates that a
+/// merge query rejects (other cells hashed into the same buckets): bpm +6-7%, vcm +4-5%
+/// samples per CPU-second on lavapipe, ppm within noise (docs/performance.md,
+/// "Performance work").
+const GRID_BUCKETS_PER_LIGHT_PATH: u64 = 4;
+
+/// Most hash-grid buckets: `grid_start` (one u32 per bucket + 1) then stays below
+/// 2^27 bytes, the smallest maxStorageBufferRange Vulkan allows.
+const MAX_GRID_BUCKETS: u64 = 1 << 24;
+
+/// The bucket count of the hash grid: GRID_BUCKETS_PER_LIGHT_PATH per light subpath,
+/// rounded up to a power of two (hash_grid.glsl then masks instead of dividing), at most
+/// MAX_GRID_BUCKETS. resources.rs sizes `grid_start` with it too.
+pub(crate) fn grid_buckets(light_paths: u64) -> u32 {
+    (light_paths.max(1) * GRID_BUCKETS_PER_LIGHT_PATH).next_power_of_two().min(MAX_GRID_BUCKETS) as u32
+}
+
 impl Bidir {
     pub fn new(
         gpu: &Arc<Gpu>,
@@ -93,9 +110,8 @@ impl Bidir {
             gpu.buffer_zeroed::<u32>("light_vertex_counts", if store { light_paths as usize } else { 1 })?,
         ];
         let grid = if mode.use_vm() {
-            // One bucket per light subpath, as SmallVCM; camera_subpath.comp queries with
-            // push.light_paths as the bucket count, so the two must stay equal.
-            Some(HashGrid::new(gpu, &buffers[1], &buffers[3], light_paths, slots as u32, light_paths)?)
+            let buckets = grid_buckets(light_paths as u64);
+            Some(HashGrid::new(gpu, &buffers[1], &buffers[3], light_paths, slots as u32, buckets)?)
         } else {
             None
         };
@@ -149,6 +165,7 @@ impl Bidir {
             mis_vc,
             radius,
             light_paths: self.light_paths,
+            grid_buckets: self.grid.as_ref().map_or(0, |g| g.num_buckets()),
             ..Default::default()
         };
         batch.dispatch(&self.light, groups_2d(self.light_paths, 64), bytemuck::bytes_of(&push))?;
@@ -157,5 +174,21 @@ impl Bidir {
         }
         push.count = self.pixels;
         batch.dispatch(&self.resolve, groups_2d(self.pixels, 64), bytemuck::bytes_of(&push))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::grid_buckets;
+
+    #[test]
+    fn grid_buckets_are_powers_of_two_per_light_path_within_the_binding() {
+        assert_eq!(grid_buckets(65_536), 262_144);
+        assert_eq!(grid_buckets(100), 512);
+        assert_eq!(grid_buckets(1), 4);
+        assert_eq!(grid_buckets(0), 4);
+        // 4K: 4 x 8,294,400 would round up to 2^25; capped at 2^24 (64 MiB of grid_start).
+        assert_eq!(grid_buckets(3840 * 2160), 1 << 24);
+        assert_eq!(grid_buckets(u32::MAX as u64), 1 << 24);
     }
 }

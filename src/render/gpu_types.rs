@@ -110,7 +110,9 @@ pub struct GpuPush {
     pub radius: f32,
     /// Light subpaths per iteration (N_L).
     pub light_paths: u32,
-    pub pad: [u32; 2],
+    /// Buckets of the light-vertex hash grid (estimators that merge; else 0).
+    pub grid_buckets: u32,
+    pub pad: u32,
 }
 
 impl GpuPush {

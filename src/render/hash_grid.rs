@@ -185,7 +185,8 @@ pub struct HashGrid {
 impl HashGrid {
     /// A grid over the light-vertex store `lv_a` (`vec4[]`, two per slot, position in
     /// the first) / `lv_count` (`uint` per light path) of `light_paths` paths with `slots`
-    /// slots each, hashing into `num_buckets` buckets (SmallVCM: one per light path).
+    /// slots each, hashing into `num_buckets` buckets (SmallVCM: one per light path; the
+    /// renderer: bidir::grid_buckets, four per light path as a power of two).
     pub fn new(
         gpu: &Arc<Gpu>,
         lv_a: &Buffer,

@@ -64,9 +64,10 @@ pub fn estimate(scene: &Scene, s: &RenderSettings) -> Vec<BufferNeed> {
         BufferNeed { name: "light_vertex_counts", bytes: if store { px.saturating_mul(4) } else { 4 } },
     ]);
     if merge {
-        // hash_grid.rs: one bucket per light subpath; scan scratch of the block totals.
+        // bidir.rs: grid_buckets(light subpaths); scan scratch of the block totals.
+        let buckets = super::bidir::grid_buckets(px) as u64;
         let mut scratch = 0u64;
-        let mut n = px + 1;
+        let mut n = buckets + 1;
         loop {
             n = n.div_ceil(SCAN_BLOCK);
             scratch += n;
@@ -75,7 +76,7 @@ pub fn estimate(scene: &Scene, s: &RenderSettings) -> Vec<BufferNeed> {
             }
         }
         v.extend([
-            BufferNeed { name: "grid_start", bytes: (px + 1).saturating_mul(4) },
+            BufferNeed { name: "grid_start", bytes: (buckets + 1).saturating_mul(4) },
             BufferNeed { name: "grid_indices", bytes: lv.saturating_mul(4) },
             BufferNeed { name: "grid_keys", bytes: lv.saturating_mul(8) },
             BufferNeed { name: "hash_grid_scan_scratch", bytes: scratch * 4 },

@@ -1,0 +1,39 @@
+#!/bin/bash
+# Interleaved A/B(/C...) runs of `vkvcm bench render` for comparing kernel variants on a
+# shared, loaded machine (docs/performance.md, "Performance work"). Each variant is
+#   NAME:GLSL_DIR:VKVCM_BINARY[:ENV=VALUE[:ENV=VALUE...]]
+# (GLSL_DIR is passed as VKVCM_GLSL_DIR: the shaders are compiled at run time). Every round
+# runs each variant once, in an order rotated per round so that no variant always runs
+# first; prints "NAME ROUND ALGO SAMPLES_PER_CPU_SECOND" lines for scripts/ab_summary.py.
+#
+# Usage: scripts/ab_bench.sh ROUNDS ALGOS SCENE VARIANT...
+#   e.g. git worktree/commit A built to /tmp/vkvcm_a, its glsl/ copied to /tmp/glsl_a, ...
+#   scripts/ab_bench.sh 3 pt,bpt,vcm gbs_s a:/tmp/glsl_a:/tmp/vkvcm_a b:/tmp/glsl_b:/tmp/vkvcm_a > ab.txt
+#   python3 scripts/ab_summary.py ab.txt a
+# Environment: SIZE (default 256), ITERATIONS (default 8).
+set -euo pipefail
+if [ $# -lt 4 ]; then
+    sed -n '2,15p' "$0"
+    exit 2
+fi
+rounds=$1
+algos=$2
+scene=$3
+shift 3
+variants=("$@")
+n=${#variants[@]}
+run() {
+    local name dir bin envs
+    IFS=: read -r name dir bin envs <<< "$1"
+    # shellcheck disable=SC2086
+    env VKVCM_GLSL_DIR="$dir" ${envs//:/ } "$bin" bench render --size "${SIZE:-256}" \
+        --iterations "${ITERATIONS:-8}" --scenes "$scene" --algos "$algos" 2>/dev/null |
+        awk -F'|' -v name="$name" -v round="$2" -v scene="$scene" \
+            '{ s = $2; a = $3; x = $9; gsub(/ /, "", s); gsub(/ /, "", a); gsub(/ /, "", x);
+               if (s == scene) print name, round, a, x }'
+}
+for r in $(seq 1 "$rounds"); do
+    for i in $(seq 0 $((n - 1))); do
+        run "${variants[$(((i + r) % n))]}" "$r"
+    done
+done
