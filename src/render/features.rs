@@ -15,6 +15,7 @@ use std::fmt;
 use glam::Vec3;
 use serde::Serialize;
 
+use super::bidir::Connect;
 use super::Algorithm;
 use crate::scene::{Light, Scene};
 
@@ -45,6 +46,10 @@ pub struct FeatureSet {
     pub shading_normals: bool,
     /// The scene has shading normals (whether or not the kernels read them).
     pub scene_has_shading_normals: bool,
+    /// bpt, vcm: vertex connections to the matching light subpath or to a light-vertex
+    /// cache (LV_CACHE, LV_CACHE_CONNECTIONS; the same in both variants).
+    #[serde(serialize_with = "connect_name")]
+    pub connect: Connect,
 }
 
 /// One kernel stage of an iteration.
@@ -106,6 +111,10 @@ pub fn stages(algorithm: Algorithm) -> &'static [Stage] {
     }
 }
 
+fn connect_name<S: serde::Serializer>(c: &Connect, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(&c.name())
+}
+
 fn algorithm_name<S: serde::Serializer>(a: &Algorithm, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_str(a.name())
 }
@@ -149,7 +158,17 @@ impl FeatureSet {
             spheres: g || !scene.spheres.is_empty(),
             shading_normals: g || (scene_has_shading_normals && algorithm == Algorithm::El),
             scene_has_shading_normals,
+            connect: Connect::Path,
         }
+    }
+
+    /// Where bpt's and vcm's vertex connections go (kept `Path` for the other estimators,
+    /// whose kernels have no connections).
+    pub fn with_connect(mut self, connect: Connect) -> FeatureSet {
+        if matches!(self.algorithm, Algorithm::Bpt | Algorithm::Vcm) {
+            self.connect = connect;
+        }
+        self
     }
 
     /// Also compile the ray counter in (`--profile`).
@@ -182,6 +201,10 @@ impl FeatureSet {
         .collect();
         if !self.spheres {
             d.push(("BVH_NO_SPHERES".into(), "1".into()));
+        }
+        if let Connect::Cache(n) = self.connect {
+            d.push(("LV_CACHE".into(), "1".into()));
+            d.push(("LV_CACHE_CONNECTIONS".into(), n.to_string()));
         }
         d
     }
@@ -231,6 +254,15 @@ impl fmt::Display for FeatureSet {
         writeln!(f, "  shading normals: {normals}")?;
         writeln!(f, "  textures: none (not supported by vkvcm)")?;
         writeln!(f, "  ray counter: {}", if self.count_rays { "on (--profile)" } else { "off" })?;
+        if matches!(self.algorithm, Algorithm::Bpt | Algorithm::Vcm) {
+            let c = match self.connect {
+                Connect::Path => "to the vertices of light subpath p = this pixel (--connect path)".to_string(),
+                Connect::Cache(n) => format!(
+                    "to {n} vertices per camera vertex drawn from all light subpaths (--connect cache, light-vertex prefix sum after the light pass)"
+                ),
+            };
+            writeln!(f, "  vertex connections: {c}")?;
+        }
         writeln!(f, "  stages per iteration:")?;
         for s in self.stages() {
             writeln!(f, "    {}: {}", s.name, s.detail)?;

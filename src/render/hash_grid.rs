@@ -133,6 +133,11 @@ impl ExclusiveScan {
         self.levels[0].n
     }
 
+    /// The scratch buffer of the block totals (for buffer listings).
+    pub fn buffers(&self) -> Vec<&Buffer> {
+        vec![&self._scratch]
+    }
+
     /// Always false (a scan has at least one element).
     pub fn is_empty(&self) -> bool {
         false

@@ -63,8 +63,8 @@ pub fn estimate(scene: &Scene, s: &RenderSettings) -> Vec<BufferNeed> {
         BufferNeed { name: "light_vertices_b", bytes: lv.saturating_mul(LV_HALF_BYTES) },
         BufferNeed { name: "light_vertex_counts", bytes: if store { px.saturating_mul(4) } else { 4 } },
     ]);
-    if merge {
-        // hash_grid.rs: one bucket per light subpath; scan scratch of the block totals.
+    // hash_grid.rs ExclusiveScan of px + 1 elements: scratch of the block totals.
+    let scratch = {
         let mut scratch = 0u64;
         let mut n = px + 1;
         loop {
@@ -74,6 +74,17 @@ pub fn estimate(scene: &Scene, s: &RenderSettings) -> Vec<BufferNeed> {
                 break;
             }
         }
+        scratch
+    };
+    if s.connect != super::bidir::Connect::Path {
+        // bidir.rs: the light-vertex cache's prefix sum of the per-path counts.
+        v.extend([
+            BufferNeed { name: "light_vertex_prefix", bytes: (px + 1).saturating_mul(4) },
+            BufferNeed { name: "hash_grid_scan_scratch", bytes: scratch * 4 },
+        ]);
+    }
+    if merge {
+        // hash_grid.rs: one bucket per light subpath.
         v.extend([
             BufferNeed { name: "grid_start", bytes: (px + 1).saturating_mul(4) },
             BufferNeed { name: "grid_indices", bytes: lv.saturating_mul(4) },
