@@ -48,7 +48,8 @@ pub struct RenderArgs {
     /// bpt, vcm: where a camera vertex's vertex connections go. `path`: every stored
     /// vertex of light subpath p = this pixel (SmallVCM); `cache`: --cache-connections
     /// vertices drawn uniformly from all light subpaths' vertices (light-vertex cache,
-    /// Davidovic et al. 2014). Default: path (measured, docs/estimators.md).
+    /// Davidovic et al. 2014). Default: cache for bpt (measured, docs/estimators.md),
+    /// path for vcm.
     #[arg(long, value_enum)]
     pub connect: Option<ConnectKind>,
     /// With --connect cache: light vertices connected to per camera vertex.

@@ -173,6 +173,10 @@ pub struct EqualTimeRow {
     /// Smallest and largest RMSE of a round.
     pub rmse_min: f64,
     pub rmse_max: f64,
+    /// The variance of one iteration's image, independent of the time budget and of the
+    /// machine's load: (RMSE^2 - reference noise^2) x iterations, mean over the rounds
+    /// (the reference noise is the RMS standard error it prints).
+    pub variance_per_iteration: f64,
 }
 
 /// A long render used as the reference, with an estimate of its own remaining noise:
@@ -223,6 +227,8 @@ pub fn equal_time(
         mean_abs_bias: row.mean_abs_bias,
         rmse_min: row.rmse,
         rmse_max: row.rmse,
+        variance_per_iteration: (row.rmse * row.rmse - reference.noise_rms * reference.noise_rms).max(0.0)
+            * row.iterations as f64,
     })
 }
 
@@ -274,17 +280,18 @@ fn average(rows: &[EqualTimeRow]) -> Option<EqualTimeRow> {
         mean_abs_bias: mean(&|r| r.mean_abs_bias),
         rmse_min: rows.iter().map(|r| r.rmse).fold(f64::INFINITY, f64::min),
         rmse_max: rows.iter().map(|r| r.rmse).fold(0.0, f64::max),
+        variance_per_iteration: mean(&|r| r.variance_per_iteration),
     })
 }
 
 /// A markdown table of equal-time rows.
 pub fn equal_time_table(rows: &[EqualTimeRow]) -> String {
     let mut s = String::from(
-        "| scene | algo | rounds | seconds | iterations | samples/s | RMSE (min-max) | relMSE | mean bias |\n|---|---|---|---|---|---|---|---|---|\n",
+        "| scene | algo | rounds | seconds | iterations | samples/s | RMSE (min-max) | relMSE | mean bias | var/it |\n|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         s += &format!(
-            "| {} | {} | {} | {:.1} | {:.0} | {:.0} | {:.5} ({:.5}-{:.5}) | {:.5} | {:.5} |\n",
+            "| {} | {} | {} | {:.1} | {:.0} | {:.0} | {:.5} ({:.5}-{:.5}) | {:.5} | {:.5} | {:.4} |\n",
             r.scene,
             r.algorithm,
             r.rounds,
@@ -295,7 +302,8 @@ pub fn equal_time_table(rows: &[EqualTimeRow]) -> String {
             r.rmse_min,
             r.rmse_max,
             r.rel_mse,
-            r.mean_abs_bias
+            r.mean_abs_bias,
+            r.variance_per_iteration
         );
     }
     s
@@ -483,4 +491,22 @@ pub fn suite_table(rows: &[SuiteRow]) -> String {
         );
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn variant_names_parse_back() {
+        for s in ["pt", "vcm", "bpt:path", "bpt:cache:1", "vcm:cache:4"] {
+            let v = Variant::parse(s).unwrap();
+            assert_eq!(Variant::parse(&v.name()).unwrap(), v, "{s}");
+        }
+        assert_eq!(Variant::parse("bpt:cache:3").unwrap().connect, Connect::Cache(3));
+        assert_eq!(Variant::parse("bpt").unwrap().connect, Connect::default_for(Algorithm::Bpt));
+        for bad in ["xyz", "pt:cache:1", "bpt:cache:0", "bpt:cache", "bpt:cache:x", "bpt:other"] {
+            assert!(Variant::parse(bad).is_err(), "{bad} accepted");
+        }
+    }
 }

@@ -258,7 +258,7 @@ impl fmt::Display for FeatureSet {
             let c = match self.connect {
                 Connect::Path => "to the vertices of light subpath p = this pixel (--connect path)".to_string(),
                 Connect::Cache(n) => format!(
-                    "to {n} vertices per camera vertex drawn from all light subpaths (--connect cache, light-vertex prefix sum after the light pass)"
+                    "to {n} vertices per camera vertex drawn from all light subpaths (--connect cache; the prefix sum of the light-vertex counts after the light pass runs hash_grid_scan.comp, profiled under grid build)"
                 ),
             };
             writeln!(f, "  vertex connections: {c}")?;
