@@ -21,8 +21,9 @@
 //!
 //! Sabotage checks (done by hand, not kept): dropping the weight M / (N_L n_c) of the
 //! cache connections, or drawing a light subpath uniformly and then one of its vertices
-//! uniformly while keeping that weight (drawing vertices non-uniformly), makes these
-//! tests fail (numbers in docs/estimators.md).
+//! uniformly while keeping that weight (drawing vertices non-uniformly), or dropping the
+//! path-length checks of the cache draws, makes these tests fail (numbers in
+//! docs/estimators.md).
 
 mod common;
 
@@ -107,6 +108,30 @@ fn bpt_cache_matches_bpt_path_on_all_reference_scenes() {
             let c = render_stats(&render_one(gpu, &scene, Algorithm::Bpt, cache(3), 2048, 42), None);
             assert_agree(&format!("{name}: BPT path vs BPT cache (3 connections)"), &path, &c);
         }
+    });
+}
+
+/// Path-length limits: with min = max = 3 segments only paths of exactly 3 segments count,
+/// so the cache must skip the vertices that make longer or shorter paths (and a camera
+/// vertex too deep for any connection draws nothing). Compared with `path`, which skips
+/// them by its own loop. gbs_b (background light, diffuse box): light subpaths have
+/// several vertices and camera subpaths several bounces, so both limits bind. 1024
+/// iterations, as many as vcm_cache_matches_vcm_path.
+#[test]
+fn bpt_cache_respects_path_length_limits() {
+    with_gpu(|gpu| {
+        let scene = vkvcm::scene::load_named("gbs_b").unwrap();
+        let run = |connect: Connect, seed: u32| {
+            let mut s = RenderSettings::new(Algorithm::Bpt, W, H, Budget::Iterations(1024));
+            s.frame.seed = seed;
+            s.frame.max_path_length = 3;
+            s.frame.min_path_length = 3;
+            s.connect = connect;
+            render_stats(&render::render(gpu, &scene, &s, None, &mut |_| {}).unwrap(), None)
+        };
+        let path = run(Connect::Path, 61);
+        let c = run(cache(2), 62);
+        assert_agree("gbs_b, paths of exactly 3 segments: BPT path vs BPT cache (2 connections)", &path, &c);
     });
 }
 

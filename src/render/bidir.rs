@@ -168,7 +168,9 @@ impl Bidir {
             buffers.push(gpu.buffer_zeroed::<u32>("light_vertex_prefix", light_paths as usize + 1)?);
         }
         let cache_scan = match buffers.get(4) {
-            Some(prefix) => Some(ExclusiveScan::new(gpu, prefix, light_paths + 1)?),
+            Some(prefix) => {
+                Some(ExclusiveScan::new(gpu, prefix, light_paths + 1)?.labelled(crate::gpu::LIGHT_VERTEX_PREFIX_KERNEL))
+            }
             None => None,
         };
         let grid = if mode.use_vm() {

@@ -55,8 +55,8 @@ pub struct FeatureSet {
 /// One kernel stage of an iteration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub struct Stage {
-    /// The stage's name in profiles: "light subpaths", "grid build", "camera subpaths",
-    /// "accumulate" (src/gpu/profile.rs maps kernels to it).
+    /// The stage's name in profiles: "light subpaths", "light-vertex prefix", "grid
+    /// build", "camera subpaths", "accumulate" (src/gpu/profile.rs maps kernels to it).
     pub name: &'static str,
     /// What it does for this estimator.
     pub detail: &'static str,
@@ -209,9 +209,18 @@ impl FeatureSet {
         d
     }
 
-    /// The estimator's stages.
-    pub fn stages(&self) -> &'static [Stage] {
-        stages(self.algorithm)
+    /// The estimator's stages, with the light-vertex cache's prefix sum after the light
+    /// subpaths when connecting to the cache.
+    pub fn stages(&self) -> Vec<Stage> {
+        let mut v = stages(self.algorithm).to_vec();
+        if let Connect::Cache(_) = self.connect {
+            let prefix = Stage {
+                name: "light-vertex prefix",
+                detail: "hash_grid_scan.comp: exclusive prefix sum of the per-path vertex counts (light-vertex cache)",
+            };
+            v.insert(1, prefix);
+        }
+        v
     }
 }
 
@@ -257,9 +266,9 @@ impl fmt::Display for FeatureSet {
         if matches!(self.algorithm, Algorithm::Bpt | Algorithm::Vcm) {
             let c = match self.connect {
                 Connect::Path => "to the vertices of light subpath p = this pixel (--connect path)".to_string(),
-                Connect::Cache(n) => format!(
-                    "to {n} vertices per camera vertex drawn from all light subpaths (--connect cache; the prefix sum of the light-vertex counts after the light pass runs hash_grid_scan.comp, profiled under grid build)"
-                ),
+                Connect::Cache(n) => {
+                    format!("to {n} vertices per camera vertex drawn from all light subpaths (--connect cache)")
+                }
             };
             writeln!(f, "  vertex connections: {c}")?;
         }
