@@ -175,10 +175,10 @@ impl Profile {
 
     /// The stage table (GPU ms per iteration) and the ray throughput, then [`Profile::table`].
     pub fn report(&self) -> String {
-        let mut s = format!("{:<16} {:>12} {:>7}  kernels\n", "stage", "ms/iteration", "share");
+        let mut s = format!("{:<19} {:>12} {:>7}  kernels\n", "stage", "ms/iteration", "share");
         for st in self.stages() {
             s += &format!(
-                "{:<16} {:>12.3} {:>6.1}%  {}\n",
+                "{:<19} {:>12.3} {:>6.1}%  {}\n",
                 st.stage,
                 st.ms_per_iteration,
                 100.0 * st.share,
@@ -186,7 +186,7 @@ impl Profile {
             );
         }
         s += &format!(
-            "{:<16} {:>12.3}          ({} iterations, {:.3} s wall)\n",
+            "{:<19} {:>12.3}          ({} iterations, {:.3} s wall)\n",
             "total",
             self.total_ms() / self.iterations.max(1) as f64,
             self.iterations,

@@ -267,7 +267,7 @@ impl fmt::Display for FeatureSet {
             let c = match self.connect {
                 Connect::Path => "to the vertices of light subpath p = this pixel (--connect path)".to_string(),
                 Connect::Cache(n) => {
-                    format!("to {n} vertices per camera vertex drawn from all light subpaths (--connect cache)")
+                    format!("to {n} light vertex(es) per camera vertex drawn from all light subpaths (--connect cache)")
                 }
             };
             writeln!(f, "  vertex connections: {c}")?;
