@@ -1,7 +1,8 @@
 #version 460
 // Stage 3 (../shared/DESIGN.md): one invocation per pixel sample. Traces a camera
 // subpath; at each vertex adds emitter hits, next-event estimation and connections to
-// the vertices of light subpath p = this pixel (USE_VC), and merges with the light
+// the vertices of light subpath p = this pixel, or with LV_CACHE to vertices drawn from
+// all light subpaths (USE_VC), and merges with the light
 // vertices within the radius found in the hash grid (USE_VM), each weighted by the
 // recursive MIS of ../shared/SCENES.md 4.4. Then takes this pixel's splats (light-to-
 // camera connections of stage 1) and adds the sum to the film (stage 4).
@@ -49,6 +50,82 @@ vec3 connect_vertices(SubpathState st, Surface s, Bsdf b, LightVertex v) {
     if (!visible(s.p, s.ng, v.p, v.n)) return vec3(0.0);
     return (w * g) * fc * fl;
 }
+
+#if LV_CACHE
+// Light-vertex cache (Davidovic et al. 2014, "Progressive Light Transport Simulation on
+// the GPU: Survey and Improvements", sec. on the connection strategy): instead of the M_p
+// stored vertices of light subpath p = this pixel, each non-delta camera vertex connects
+// to n_c = LV_CACHE_CONNECTIONS vertices drawn uniformly from all M = sum_q M_q stored
+// vertices of the iteration, each contribution weighted by M / (N_L n_c). Unbiased: with
+// C(v) the (MIS-weighted) connection contribution, E[(M / N_L) C(v_i)] over uniform i is
+// (1 / N_L) sum_q sum_k C(v_qk), the mean over the N_L independent, identically
+// distributed light subpaths of the per-path sum that the SmallVCM layout takes from one
+// path, whose expectation is the connection technique's term. The MIS weights are the
+// usual bpt/vcm ones: each technique still estimates its own weighted term without bias
+// and the weights of all techniques that sample a path still sum to one; they are only
+// no longer matched to the cache's connection count (Davidovic et al. adjust them; we do
+// not, docs/estimators.md). Drawing uniformly over vertices (not a path, then one of its
+// vertices) keeps the weight M / (N_L n_c) the same for every vertex. Deterministic: the
+// prefix sum is a fixed-order scan and the draws use this pixel's random sequence.
+#if USE_VM
+#define LV_PREFIX_BINDING 16
+#else
+#define LV_PREFIX_BINDING 14
+#endif
+layout(std430, binding = LV_PREFIX_BINDING) readonly buffer LvPrefixBuf { uint lv_prefix[]; };
+
+// 32 uniform random bits from two 24-bit draws.
+uint rnd_bits(inout uint rng) {
+    uint a = uint(rnd(rng) * 16777216.0);
+    uint b = uint(rnd(rng) * 16777216.0);
+    return (a << 8) | (b & 0xffu);
+}
+
+// Uniform integer in [0, n), n >= 1, exactly: multiply-shift with rejection (Lemire,
+// "Fast Random Integer Generation in an Interval", 2019). Rejects with probability
+// below n / 2^32.
+uint rnd_below(uint n, inout uint rng) {
+    uint threshold = (0u - n) % n;
+    for (;;) {
+        uint hi, lo;
+        umulExtended(rnd_bits(rng), n, hi, lo);
+        if (lo >= threshold) return hi;
+    }
+}
+
+// The light subpath q holding vertex i of all stored ones: the largest q with
+// lv_prefix[q] <= i (paths without vertices have lv_prefix[q] == lv_prefix[q + 1]).
+uint lv_cache_path(uint i) {
+    uint lo = 0u;
+    uint hi = push.light_paths;  // lv_prefix[lo] <= i < lv_prefix[hi]
+    while (hi - lo > 1u) {
+        uint mid = (lo + hi) >> 1;
+        if (lv_prefix[mid] <= i) lo = mid; else hi = mid;
+    }
+    return lo;
+}
+
+// The connections of camera vertex `s` to the cache, times light throughput and weight
+// (the caller multiplies by the camera throughput).
+vec3 connect_cache(SubpathState st, Surface s, Bsdf b, inout uint rng) {
+    uint max_len = max_path_length();
+    uint min_len = min_path_length();
+    // Light vertices have len >= 1: no path of this camera vertex fits (no draws).
+    if (st.len + 2u > max_len) return vec3(0.0);
+    uint total = lv_prefix[push.light_paths];
+    if (total == 0u) return vec3(0.0);
+    vec3 sum = vec3(0.0);
+    for (uint k = 0u; k < uint(LV_CACHE_CONNECTIONS); ++k) {
+        uint i = rnd_below(total, rng);
+        uint q = lv_cache_path(i);
+        LightVertex v = lv_load(q * lv_slots() + (i - lv_prefix[q]));
+        uint len = v.len + 1u + st.len;
+        if (len < min_len || len > max_len) continue;  // a draw that contributes 0
+        sum += v.thr * connect_vertices(st, s, b, v);
+    }
+    return sum * (float(total) / (float(push.light_paths) * float(LV_CACHE_CONNECTIONS)));
+}
+#endif
 
 #if USE_VM
 // Merging (vertex merging / photon density estimation) at camera vertex `s` with every
@@ -125,6 +202,9 @@ void main() {
 #if USE_VC
         if (!b.delta) {
             if (st.len + 1u >= min_len) L += st.thr * direct_illumination(st, s, b, rng);
+#if LV_CACHE
+            L += st.thr * connect_cache(st, s, b, rng);
+#else
             uint n = lv_count[pixel];
             uint base = pixel * lv_slots();
             for (uint k = 0u; k < n; ++k) {
@@ -134,6 +214,7 @@ void main() {
                 if (total > max_len) break;
                 L += st.thr * v.thr * connect_vertices(st, s, b, v);
             }
+#endif
         }
 #endif
 #if USE_VM

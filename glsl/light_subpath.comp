@@ -19,6 +19,9 @@
 layout(local_size_x = 64) in;
 #include "scene.glsl"
 #include "vcm_bindings.glsl"
+#if LV_CACHE && STORE_VERTICES
+layout(std430, binding = 14) writeonly buffer LvPrefixBuf { uint lv_prefix[]; };
+#endif
 
 void main() {
     uint path = invocation_index();
@@ -95,6 +98,9 @@ void main() {
     }
 #if STORE_VERTICES
     lv_count[path] = stored;
+#if LV_CACHE
+    lv_prefix[path] = stored;  // scanned into prefix sums before the camera pass
+#endif
 #endif
     COUNT_RAYS_FLUSH();
 }

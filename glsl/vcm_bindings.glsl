@@ -14,4 +14,11 @@ layout(std430, binding = 13) buffer LvCountBuf { uint lv_count[]; };
 layout(push_constant) uniform PushBlock { GpuPush push; };
 #include "film.glsl"
 #include "vcm.glsl"
+// Light-vertex cache (src/render/bidir.rs, Connect::Cache): lv_prefix[] (N_L + 1 uint),
+// bound after a kernel's other buffers; light_subpath.comp copies lv_count into it and an
+// exclusive scan turns it into each path's first index among all stored vertices (entry
+// N_L: their total) before camera_subpath.comp draws from it.
+#ifndef LV_CACHE
+#define LV_CACHE 0
+#endif
 #endif

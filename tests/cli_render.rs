@@ -56,6 +56,11 @@ fn bad_arguments_one_error_line() {
     one_error(&run(&["--width", "16", "--height", "16", "--time=-1"]), &["--time"]);
     one_error(&run(&["--width", "16", "--height", "16", "--checkpoint-every", "0"]), &["--checkpoint-every"]);
     one_error(&run(&["--width", "16", "--height", "16", "-o", "missing/x.exr"]), &["--output", "missing"]);
+    one_error(&run(&["-a", "pt", "--width", "16", "--height", "16", "--connect", "cache"]), &["--connect", "pt"]);
+    one_error(
+        &run(&["-a", "bpt", "--width", "16", "--height", "16", "--cache-connections", "0"]),
+        &["--cache-connections"],
+    );
     std::fs::create_dir(d.join("adir")).unwrap();
     one_error(&run(&["--width", "16", "--height", "16", "-o", "adir"]), &["--output", "directory"]);
     // Unwritable: a read-only directory, or /proc where root ignores permissions.
@@ -172,6 +177,12 @@ fn resume_continues_to_the_total() {
     let o = tiny(dir.path()).args(["-i", "9", "-o", "out.exr", "--resume", "--seed", "5"]).output().unwrap();
     one_error(&o, &["--seed", "out.exr"]);
     assert_eq!(saved::read_render_exr(&out).unwrap().iterations, 7);
+    // So is another connection strategy (bpt, recorded as vkvcm:connect).
+    let bpt = ["render", "-a", "bpt", "--width", "16", "--height", "16", "-o", "bpt.exr"];
+    let o = vkvcm(dir.path()).args(bpt).args(["-i", "2", "--connect", "path"]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = vkvcm(dir.path()).args(bpt).args(["-i", "3", "--resume", "--connect", "cache"]).output().unwrap();
+    one_error(&o, &["--connect", "bpt.exr"]);
     // --resume on a missing output starts a new render.
     let o = tiny(dir.path()).args(["-i", "2", "-o", "new.exr", "--resume"]).output().unwrap();
     assert!(o.status.success());

@@ -57,13 +57,19 @@ pub struct BenchSuiteArgs {
 pub struct BenchEqualTimeArgs {
     #[arg(long, value_delimiter = ',', default_value = "gbs_s,glm_c,gbs_p,gbs_b")]
     pub scenes: Vec<String>,
-    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm")]
-    pub algos: Vec<Algorithm>,
+    /// Estimators, each `algo` or, for bpt and vcm, `algo:path` / `algo:cache:N` (the
+    /// connection strategy, `render --connect`), e.g. bpt:path,bpt:cache:1.
+    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm", value_parser = render::bench::Variant::parse)]
+    pub algos: Vec<render::bench::Variant>,
     #[arg(long, default_value_t = 128)]
     pub size: u32,
-    /// Wall-clock seconds per estimator.
+    /// Wall-clock seconds per estimator and round.
     #[arg(long, default_value_t = 5.0)]
     pub seconds: f64,
+    /// Rounds: each renders every estimator once (seed 4321 + round), starting one
+    /// further along the list each round; the table shows the means over the rounds.
+    #[arg(long, default_value_t = 1)]
+    pub rounds: u32,
     /// Estimator of the reference (vcm samples every path of the reference scenes,
     /// including the SDS paths bpt and pt miss).
     #[arg(long, value_enum, default_value = "vcm")]
@@ -139,8 +145,8 @@ fn bench_traverse(a: BenchTraverseArgs) -> Result<()> {
 }
 
 fn bench_equal_time(a: BenchEqualTimeArgs) -> Result<()> {
-    if a.size == 0 || a.seconds.is_nan() || a.seconds <= 0.0 || a.reference_iterations < 2 {
-        bail!("--size and --seconds must be positive and --reference-iterations at least 2");
+    if a.size == 0 || a.seconds.is_nan() || a.seconds <= 0.0 || a.reference_iterations < 2 || a.rounds == 0 {
+        bail!("--size, --seconds and --rounds must be positive and --reference-iterations at least 2");
     }
     let gpu = open_bench_gpu(a.device.clone())?;
     let mut rows = Vec::new();
@@ -156,11 +162,10 @@ fn bench_equal_time(a: BenchEqualTimeArgs) -> Result<()> {
             a.size,
             r.noise_rms
         );
-        for &algo in &a.algos {
-            let row = render::bench::equal_time(&gpu, &scene, algo, a.seconds, &r)?;
-            eprintln!("{name} {}: RMSE {:.5}", row.algorithm, row.rmse);
-            rows.push(row);
-        }
+        let mut log = |row: &render::bench::EqualTimeRow| {
+            eprintln!("{name} {}: RMSE {:.5}, {} iterations", row.algorithm, row.rmse, row.iterations)
+        };
+        rows.extend(render::bench::equal_time_rounds(&gpu, &scene, &a.algos, a.seconds, a.rounds, &r, &mut log)?);
     }
     print!("{}", render::bench::equal_time_table(&rows));
     if let Some(p) = &a.json {

@@ -11,6 +11,7 @@ use clap::Args;
 use super::progress::Reporter;
 use vkvcm::gpu::{Gpu, GpuOptions};
 use vkvcm::image::{self, Image};
+use vkvcm::render::bidir::Connect;
 use vkvcm::render::{self, saved, Algorithm, Budget, Progress, RenderOutput, RenderSettings, Renderer};
 use vkvcm::scene::{self, LoadOptions};
 
@@ -44,6 +45,16 @@ pub struct RenderArgs {
     /// Radius reduction: r_i = r_0 (i+1)^((alpha-1)/2).
     #[arg(long, default_value_t = vkvcm::render::radius::DEFAULT_ALPHA)]
     pub alpha: f32,
+    /// bpt, vcm: where a camera vertex's vertex connections go. `path`: every stored
+    /// vertex of light subpath p = this pixel (SmallVCM); `cache`: --cache-connections
+    /// vertices drawn uniformly from all light subpaths' vertices (light-vertex cache,
+    /// Davidovic et al. 2014). Default: cache for bpt (measured, docs/estimators.md),
+    /// path for vcm.
+    #[arg(long, value_enum)]
+    pub connect: Option<ConnectKind>,
+    /// With --connect cache: light vertices connected to per camera vertex.
+    #[arg(long, default_value_t = vkvcm::render::bidir::DEFAULT_CACHE_CONNECTIONS)]
+    pub cache_connections: u32,
     /// Camera to use, by node or camera name (default: the first one).
     #[arg(long)]
     pub camera: Option<String>,
@@ -81,6 +92,28 @@ pub struct RenderArgs {
     /// Vulkan device: index or name substring (see `vkvcm devices`).
     #[arg(long)]
     pub device: Option<String>,
+}
+
+/// `--connect`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ConnectKind {
+    Path,
+    Cache,
+}
+
+/// The connection strategy `--connect` / `--cache-connections` ask for with `algo`.
+pub fn connect_setting(algo: Algorithm, kind: Option<ConnectKind>, cache_connections: u32) -> Result<Connect> {
+    if kind.is_some() && !matches!(algo, Algorithm::Bpt | Algorithm::Vcm) {
+        bail!("--connect is for bpt and vcm (the estimators that connect vertices), not {}", algo.name());
+    }
+    if cache_connections == 0 {
+        bail!("--cache-connections 0: must be at least 1");
+    }
+    Ok(match kind {
+        None => Connect::default_for(algo),
+        Some(ConnectKind::Path) => Connect::Path,
+        Some(ConnectKind::Cache) => Connect::Cache(cache_connections),
+    })
 }
 
 /// Ctrl-C once: finish the current batch and write what was rendered. Twice: abort.
@@ -168,6 +201,7 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     settings.radius_factor = a.radius_factor;
     settings.alpha = a.alpha;
     settings.generic = a.generic;
+    settings.connect = connect_setting(a.algo, a.connect, a.cache_connections)?;
     settings.count_rays = a.profile || a.profile_json.is_some();
     if let Some(p) = &a.profile_json {
         check_writable(p).context("--profile-json")?;

@@ -95,6 +95,13 @@ impl Kernel {
         &self.name
     }
 
+    /// The same kernel under another name in profiles and messages (one shader used by
+    /// two stages, see `profile::stage_of`).
+    pub fn labelled(mut self, name: &str) -> Kernel {
+        self.name = name.to_string();
+        self
+    }
+
     /// Re-points the bindings at other buffers (same count). Not while a batch that
     /// uses this kernel is in flight.
     pub fn bind(&self, buffers: &[&Buffer]) -> Result<()> {

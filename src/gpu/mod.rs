@@ -14,7 +14,7 @@ pub use batch::Batch;
 pub use buffer::Buffer;
 pub use context::{list_devices, DeviceInfo, FeatureStatus, Gpu, GpuOptions};
 pub use kernel::{Kernel, PUSH_CONSTANT_BYTES};
-pub use profile::{stage_of, KernelTime, Profile, ProfileReport, StageTime};
+pub use profile::{stage_of, KernelTime, Profile, ProfileReport, StageTime, LIGHT_VERTEX_PREFIX_KERNEL};
 pub use validation::Messages;
 
 /// Workgroups needed to cover `n` invocations with groups of `local` invocations.

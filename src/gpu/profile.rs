@@ -28,6 +28,7 @@ pub struct Profile {
 pub fn stage_of(kernel: &str) -> &'static str {
     match kernel {
         "light_subpath.comp" => "light subpaths",
+        LIGHT_VERTEX_PREFIX_KERNEL => "light-vertex prefix",
         k if k.starts_with("hash_grid_") => "grid build",
         "camera_subpath.comp" | "pt.comp" | "el.comp" => "camera subpaths",
         "accumulate.comp" => "accumulate",
@@ -35,7 +36,12 @@ pub fn stage_of(kernel: &str) -> &'static str {
     }
 }
 
-const STAGE_ORDER: [&str; 5] = ["light subpaths", "grid build", "camera subpaths", "accumulate", "other"];
+/// The name under which the light-vertex cache's prefix sum (`hash_grid_scan.comp`,
+/// src/render/bidir.rs) appears in profiles.
+pub const LIGHT_VERTEX_PREFIX_KERNEL: &str = "light_vertex_prefix (hash_grid_scan.comp)";
+
+const STAGE_ORDER: [&str; 6] =
+    ["light subpaths", "light-vertex prefix", "grid build", "camera subpaths", "accumulate", "other"];
 
 /// GPU time of one stage.
 #[derive(Clone, Debug, Serialize)]
@@ -169,10 +175,10 @@ impl Profile {
 
     /// The stage table (GPU ms per iteration) and the ray throughput, then [`Profile::table`].
     pub fn report(&self) -> String {
-        let mut s = format!("{:<16} {:>12} {:>7}  kernels\n", "stage", "ms/iteration", "share");
+        let mut s = format!("{:<19} {:>12} {:>7}  kernels\n", "stage", "ms/iteration", "share");
         for st in self.stages() {
             s += &format!(
-                "{:<16} {:>12.3} {:>6.1}%  {}\n",
+                "{:<19} {:>12.3} {:>6.1}%  {}\n",
                 st.stage,
                 st.ms_per_iteration,
                 100.0 * st.share,
@@ -180,7 +186,7 @@ impl Profile {
             );
         }
         s += &format!(
-            "{:<16} {:>12.3}          ({} iterations, {:.3} s wall)\n",
+            "{:<19} {:>12.3}          ({} iterations, {:.3} s wall)\n",
             "total",
             self.total_ms() / self.iterations.max(1) as f64,
             self.iterations,

@@ -7,9 +7,10 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{bail, Result};
 use serde::Serialize;
 
+use super::bidir::Connect;
 use super::{render, Algorithm, Budget, RenderSettings};
 use crate::gpu::{Gpu, KernelTime};
 use crate::scene::Scene;
@@ -102,16 +103,80 @@ pub fn table(rows: &[BenchRow]) -> String {
     s
 }
 
-/// One estimator's error after a fixed wall-clock budget.
+/// An estimator with its connection strategy, named `algo` (its default strategy) or
+/// `algo:path` / `algo:cache:N` (bpt, vcm), e.g. `bpt:cache:2`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Variant {
+    pub algorithm: Algorithm,
+    pub connect: Connect,
+}
+
+impl Variant {
+    pub fn parse(s: &str) -> Result<Variant> {
+        let (a, c) = match s.split_once(':') {
+            Some((a, c)) => (a, Some(c)),
+            None => (s, None),
+        };
+        let algorithm = <Algorithm as clap::ValueEnum>::from_str(a, true)
+            .map_err(|_| anyhow::anyhow!("{s:?}: unknown estimator {a:?}"))?;
+        let connect = match c {
+            None => Connect::default_for(algorithm),
+            Some(c) => {
+                if !matches!(algorithm, Algorithm::Bpt | Algorithm::Vcm) {
+                    bail!("{s:?}: only bpt and vcm take a connection strategy");
+                }
+                Connect::parse(c).ok_or_else(|| anyhow::anyhow!("{s:?}: {c:?} is not path or cache:N (N >= 1)"))?
+            }
+        };
+        Ok(Variant { algorithm, connect })
+    }
+
+    /// `algo` for its default strategy, else `algo:path` / `algo:cache:N`.
+    pub fn name(&self) -> String {
+        if self.connect == Connect::default_for(self.algorithm) {
+            self.algorithm.name().to_string()
+        } else {
+            format!("{}:{}", self.algorithm.name(), self.connect.name())
+        }
+    }
+
+    fn settings(&self, width: u32, height: u32, budget: Budget) -> RenderSettings {
+        let mut s = RenderSettings::new(self.algorithm, width, height, budget);
+        s.connect = self.connect;
+        s
+    }
+}
+
+impl From<Algorithm> for Variant {
+    fn from(algorithm: Algorithm) -> Variant {
+        Variant { algorithm, connect: Connect::default_for(algorithm) }
+    }
+}
+
+/// One estimator's error after a fixed wall-clock budget (averaged over rounds).
 #[derive(Clone, Debug, Serialize)]
 pub struct EqualTimeRow {
     pub scene: String,
+    /// [`Variant::name`].
     pub algorithm: String,
+    /// Renders (rounds) averaged; each ran for the budget with its own seed.
+    pub rounds: u32,
+    /// Render seconds and iterations per round (mean).
     pub seconds: f64,
-    pub iterations: u64,
+    pub iterations: f64,
+    /// Pixel samples per render second over all rounds.
+    pub samples_per_second: f64,
+    /// Means over the rounds.
     pub rmse: f64,
     pub rel_mse: f64,
     pub mean_abs_bias: f64,
+    /// Smallest and largest RMSE of a round.
+    pub rmse_min: f64,
+    pub rmse_max: f64,
+    /// The variance of one iteration's image, independent of the time budget and of the
+    /// machine's load: (RMSE^2 - reference noise^2) x iterations, mean over the rounds
+    /// (the reference noise is the RMS standard error it prints).
+    pub variance_per_iteration: f64,
 }
 
 /// A long render used as the reference, with an estimate of its own remaining noise:
@@ -130,45 +195,115 @@ pub fn reference(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, size: u32, iter
     Ok(Reference { image: r.image, algorithm: algo, iterations: r.iterations, noise_rms: r.stderr_rms })
 }
 
-/// Renders with `algo` for `seconds` of render time (its first iteration, which pays the
-/// driver's compilation, is discarded) and measures the error against the reference.
+/// Renders `variant` for `seconds` of render time with `seed` (its first iteration, which
+/// pays the driver's compilation, is discarded) and measures the error against the
+/// reference: a row of one round.
 pub fn equal_time(
     gpu: &Arc<Gpu>,
     scene: &Scene,
-    algo: Algorithm,
+    variant: Variant,
     seconds: f64,
+    seed: u32,
     reference: &Reference,
 ) -> Result<EqualTimeRow> {
     let (w, h) = (reference.image.width, reference.image.height);
-    let mut s = RenderSettings::new(algo, w, h, Budget::Seconds(seconds));
-    // A different seed from the reference's, so the errors are independent.
-    s.frame.seed = 4321;
+    let mut s = variant.settings(w, h, Budget::Seconds(seconds));
+    s.frame.seed = seed;
     let target = super::converge::Target {
         image: &reference.image,
         error: super::converge::ReferenceError { rmse: Some(reference.noise_rms), rel_mse: None },
     };
     let rows = super::converge::converge_one(gpu, scene, &s, &target, &[seconds], None, &mut |_| {})?;
-    let row = rows.last().ok_or_else(|| anyhow::anyhow!("equal-time render of {} measured nothing", algo.name()))?;
+    let row = rows.last().ok_or_else(|| anyhow::anyhow!("equal-time render of {} measured nothing", variant.name()))?;
     Ok(EqualTimeRow {
         scene: scene.name.clone(),
-        algorithm: algo.name().to_string(),
+        algorithm: variant.name(),
+        rounds: 1,
         seconds: row.seconds,
-        iterations: row.iterations,
+        iterations: row.iterations as f64,
+        samples_per_second: (w as f64 * h as f64 * row.iterations as f64) / row.seconds.max(1e-9),
         rmse: row.rmse,
         rel_mse: row.rel_mse,
         mean_abs_bias: row.mean_abs_bias,
+        rmse_min: row.rmse,
+        rmse_max: row.rmse,
+        variance_per_iteration: (row.rmse * row.rmse - reference.noise_rms * reference.noise_rms).max(0.0)
+            * row.iterations as f64,
+    })
+}
+
+/// [`equal_time`] for every variant in `rounds` rounds, interleaved: each round runs all
+/// variants back to back, starting one further along the list each round (so a change of
+/// load on the machine affects all alike), round r with seed `EQUAL_TIME_SEED + r` (never
+/// the reference's). One row per variant, averaged over the rounds.
+pub fn equal_time_rounds(
+    gpu: &Arc<Gpu>,
+    scene: &Scene,
+    variants: &[Variant],
+    seconds: f64,
+    rounds: u32,
+    reference: &Reference,
+    log: &mut dyn FnMut(&EqualTimeRow),
+) -> Result<Vec<EqualTimeRow>> {
+    let n = variants.len();
+    let mut per: Vec<Vec<EqualTimeRow>> = vec![Vec::new(); n];
+    for round in 0..rounds {
+        for k in 0..n {
+            let v = (k + round as usize) % n;
+            let row = equal_time(gpu, scene, variants[v], seconds, EQUAL_TIME_SEED + round, reference)?;
+            log(&row);
+            per[v].push(row);
+        }
+    }
+    Ok(per.into_iter().filter_map(|rows| average(&rows)).collect())
+}
+
+/// First seed of the equal-time renders; the reference uses 1234 and 1235.
+pub const EQUAL_TIME_SEED: u32 = 4321;
+
+fn average(rows: &[EqualTimeRow]) -> Option<EqualTimeRow> {
+    let first = rows.first()?;
+    let k = rows.len() as f64;
+    let mean = |f: &dyn Fn(&EqualTimeRow) -> f64| rows.iter().map(f).sum::<f64>() / k;
+    let pixels_per_iteration = first.samples_per_second * first.seconds / first.iterations.max(1.0);
+    let seconds: f64 = rows.iter().map(|r| r.seconds).sum();
+    let iterations: f64 = rows.iter().map(|r| r.iterations).sum();
+    Some(EqualTimeRow {
+        scene: first.scene.clone(),
+        algorithm: first.algorithm.clone(),
+        rounds: rows.len() as u32,
+        seconds: seconds / k,
+        iterations: iterations / k,
+        samples_per_second: pixels_per_iteration * iterations / seconds.max(1e-9),
+        rmse: mean(&|r| r.rmse),
+        rel_mse: mean(&|r| r.rel_mse),
+        mean_abs_bias: mean(&|r| r.mean_abs_bias),
+        rmse_min: rows.iter().map(|r| r.rmse).fold(f64::INFINITY, f64::min),
+        rmse_max: rows.iter().map(|r| r.rmse).fold(0.0, f64::max),
+        variance_per_iteration: mean(&|r| r.variance_per_iteration),
     })
 }
 
 /// A markdown table of equal-time rows.
 pub fn equal_time_table(rows: &[EqualTimeRow]) -> String {
     let mut s = String::from(
-        "| scene | algo | seconds | iterations | RMSE | relMSE | mean bias |\n|---|---|---|---|---|---|---|\n",
+        "| scene | algo | rounds | seconds | iterations | samples/s | RMSE (min-max) | relMSE | mean bias | var/it |\n|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         s += &format!(
-            "| {} | {} | {:.1} | {} | {:.5} | {:.5} | {:.5} |\n",
-            r.scene, r.algorithm, r.seconds, r.iterations, r.rmse, r.rel_mse, r.mean_abs_bias
+            "| {} | {} | {} | {:.1} | {:.0} | {:.0} | {:.5} ({:.5}-{:.5}) | {:.5} | {:.5} | {:.4} |\n",
+            r.scene,
+            r.algorithm,
+            r.rounds,
+            r.seconds,
+            r.iterations,
+            r.samples_per_second,
+            r.rmse,
+            r.rmse_min,
+            r.rmse_max,
+            r.rel_mse,
+            r.mean_abs_bias,
+            r.variance_per_iteration
         );
     }
     s
@@ -356,4 +491,22 @@ pub fn suite_table(rows: &[SuiteRow]) -> String {
         );
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn variant_names_parse_back() {
+        for s in ["pt", "vcm", "bpt:path", "bpt:cache:1", "vcm:cache:4"] {
+            let v = Variant::parse(s).unwrap();
+            assert_eq!(Variant::parse(&v.name()).unwrap(), v, "{s}");
+        }
+        assert_eq!(Variant::parse("bpt:cache:3").unwrap().connect, Connect::Cache(3));
+        assert_eq!(Variant::parse("bpt").unwrap().connect, Connect::default_for(Algorithm::Bpt));
+        for bad in ["xyz", "pt:cache:1", "bpt:cache:0", "bpt:cache", "bpt:cache:x", "bpt:other"] {
+            assert!(Variant::parse(bad).is_err(), "{bad} accepted");
+        }
+    }
 }

@@ -5,8 +5,12 @@
 //! glsl/camera_subpath.comp (one per pixel; it also takes the splats into the film) or,
 //! for `lt`, glsl/accumulate.comp.
 //!
-//! Light vertices use SmallVCM's layout: the camera subpath of pixel p connects to the
-//! vertices of light subpath p, which live in fixed slots (see glsl/vcm.glsl).
+//! Light vertices use SmallVCM's layout: light subpath p's vertices live in fixed slots
+//! (see glsl/vcm.glsl). Vertex connections ([`Connect`]) go either to the vertices of
+//! light subpath p = this pixel (SmallVCM) or to vertices drawn uniformly from the whole
+//! iteration's store, a light-vertex cache (Davidovic et al. 2014, "Progressive Light
+//! Transport Simulation on the GPU: Survey and Improvements"); for the cache, an exclusive
+//! prefix sum of the per-path vertex counts is built after the light pass.
 
 use std::sync::Arc;
 
@@ -14,7 +18,7 @@ use anyhow::{bail, Result};
 
 use super::film::Film;
 use super::gpu_types::GpuPush;
-use super::hash_grid::HashGrid;
+use super::hash_grid::{ExclusiveScan, HashGrid};
 use super::radius::RadiusSchedule;
 use super::scene_gpu::{define_refs, SceneGpu};
 use crate::gpu::{groups_2d, Batch, Buffer, Gpu, Kernel};
@@ -46,11 +50,66 @@ impl BidirMode {
     }
 }
 
+/// Where a camera vertex's vertex connections go (bpt, vcm). Every choice is unbiased
+/// with the same MIS weights: see glsl/camera_subpath.comp and docs/estimators.md.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub enum Connect {
+    /// To every stored vertex of light subpath p = this pixel (SmallVCM).
+    Path,
+    /// To this many vertices drawn uniformly from all light subpaths' stored vertices
+    /// (light-vertex cache, Davidovic et al. 2014), each weighted by
+    /// (stored vertices) / (light subpaths x this many).
+    Cache(u32),
+}
+
+/// Default light vertices per camera vertex of `--connect cache`: 1 measured better at
+/// equal time than 2 and 4 (docs/estimators.md).
+pub const DEFAULT_CACHE_CONNECTIONS: u32 = 1;
+
+impl Connect {
+    /// The default for `algorithm` (`vkvcm render --connect`): for bpt the cache with
+    /// [`DEFAULT_CACHE_CONNECTIONS`], measured slightly better at equal time than `Path`
+    /// (docs/estimators.md); vcm keeps SmallVCM's layout (not measured); `Path` (ignored)
+    /// for the rest.
+    pub fn default_for(algorithm: super::Algorithm) -> Connect {
+        match algorithm {
+            super::Algorithm::Bpt => Connect::Cache(DEFAULT_CACHE_CONNECTIONS),
+            _ => Connect::Path,
+        }
+    }
+
+    /// The connections per camera vertex of the cache, 0 for `Path`.
+    pub fn cache_connections(self) -> u32 {
+        match self {
+            Connect::Path => 0,
+            Connect::Cache(n) => n,
+        }
+    }
+
+    /// `path` or `cache:N`, as settings and saved renders show it.
+    pub fn name(self) -> String {
+        match self {
+            Connect::Path => "path".into(),
+            Connect::Cache(n) => format!("cache:{n}"),
+        }
+    }
+
+    /// Parses [`Connect::name`]'s output.
+    pub fn parse(s: &str) -> Option<Connect> {
+        match s {
+            "path" => Some(Connect::Path),
+            _ => s.strip_prefix("cache:")?.parse().ok().filter(|&n| n > 0).map(Connect::Cache),
+        }
+    }
+}
+
 pub struct Bidir {
     mode: BidirMode,
     light: Kernel,
     resolve: Kernel,
     grid: Option<HashGrid>,
+    /// Light-vertex cache: the scan turning `lv_prefix` into prefix sums of the counts.
+    cache_scan: Option<ExclusiveScan>,
     radius: RadiusSchedule,
     grid_origin: [f32; 3],
     pixels: u32,
@@ -87,7 +146,17 @@ impl Bidir {
         mode: BidirMode,
         max_path_length: u32,
         radius: RadiusSchedule,
+        connect: Connect,
     ) -> Result<Bidir> {
+        if connect != Connect::Path && !mode.use_vc() {
+            bail!(
+                "the light-vertex cache (connect {}) is for estimators that connect vertices (bpt, vcm)",
+                connect.name()
+            );
+        }
+        if connect == Connect::Cache(0) {
+            bail!("the light-vertex cache needs at least 1 connection per camera vertex");
+        }
         let pixels = film.width * film.height;
         let light_paths = pixels;
         let store = mode.stores_vertices();
@@ -103,12 +172,24 @@ impl Bidir {
                 max
             );
         }
-        let buffers = vec![
+        let mut buffers = vec![
             gpu.buffer_zeroed::<u64>("splat", 3 * pixels as usize)?,
             gpu.buffer_zeroed::<[f32; 4]>("light_vertices_a", 2 * lv_vertices as usize)?,
             gpu.buffer_zeroed::<[f32; 4]>("light_vertices_b", 2 * lv_vertices as usize)?,
             gpu.buffer_zeroed::<u32>("light_vertex_counts", if store { light_paths as usize } else { 1 })?,
         ];
+        let cache = connect != Connect::Path;
+        if cache {
+            // light_subpath.comp copies the counts here; scanned in place, entry p is the
+            // index of path p's first vertex among all stored ones, entry N_L the total.
+            buffers.push(gpu.buffer_zeroed::<u32>("light_vertex_prefix", light_paths as usize + 1)?);
+        }
+        let cache_scan = match buffers.get(4) {
+            Some(prefix) => {
+                Some(ExclusiveScan::new(gpu, prefix, light_paths + 1)?.labelled(crate::gpu::LIGHT_VERTEX_PREFIX_KERNEL))
+            }
+            None => None,
+        };
         let grid = if mode.use_vm() {
             let buckets = grid_buckets(light_paths as u64);
             Some(HashGrid::new(gpu, &buffers[1], &buffers[3], light_paths, slots as u32, buckets)?)
@@ -116,14 +197,18 @@ impl Bidir {
             None
         };
         let mut bind = scene.bindings(&[&film.accum, &film.stats]);
-        bind.extend(buffers.iter());
+        bind.extend(buffers[..4].iter());
+        // The prefix buffer binds after the hash grid's (glsl/vcm_bindings.glsl).
+        let prefix = buffers.get(4);
         let lt = mode == BidirMode::LightTracing;
         let flag = |b: bool| (b as u32).to_string();
         let mut light_defines = scene.defines.clone();
         light_defines.push(("STORE_VERTICES".into(), flag(store)));
         light_defines.push(("LIGHT_TRACE_ONLY".into(), flag(lt)));
         light_defines.push(("CONNECT_CAMERA".into(), flag(lt || mode.use_vc())));
-        let light = gpu.kernel("light_subpath.comp", &define_refs(&light_defines), &bind)?;
+        let mut light_bind = bind.clone();
+        light_bind.extend(prefix);
+        let light = gpu.kernel("light_subpath.comp", &define_refs(&light_defines), &light_bind)?;
         let resolve = if lt {
             gpu.kernel("accumulate.comp", &define_refs(&scene.defines), &bind)?
         } else {
@@ -136,11 +221,23 @@ impl Bidir {
                 cam_bind.push(&g.cell_start);
                 cam_bind.push(&g.cell_indices);
             }
+            cam_bind.extend(prefix);
             gpu.kernel("camera_subpath.comp", &define_refs(&d), &cam_bind)?
         };
         let s = scene.params.scene_sphere;
         let grid_origin = [s[0] - s[3], s[1] - s[3], s[2] - s[3]];
-        Ok(Bidir { mode, light, resolve, grid, radius, grid_origin, pixels, light_paths, _buffers: buffers })
+        Ok(Bidir {
+            mode,
+            light,
+            resolve,
+            grid,
+            cache_scan,
+            radius,
+            grid_origin,
+            pixels,
+            light_paths,
+            _buffers: buffers,
+        })
     }
 
     /// Every buffer this estimator allocated: the splat sums and the light-vertex store
@@ -150,6 +247,9 @@ impl Bidir {
         let mut b: Vec<&Buffer> = self._buffers.iter().collect();
         if let Some(g) = &self.grid {
             b.extend(g.buffers());
+        }
+        if let Some(s) = &self.cache_scan {
+            b.extend(s.buffers());
         }
         b
     }
@@ -171,6 +271,9 @@ impl Bidir {
         batch.dispatch(&self.light, groups_2d(self.light_paths, 64), bytemuck::bytes_of(&push))?;
         if let Some(g) = &self.grid {
             g.record_build(batch, radius, self.grid_origin)?;
+        }
+        if let Some(s) = &self.cache_scan {
+            s.record(batch)?;
         }
         push.count = self.pixels;
         batch.dispatch(&self.resolve, groups_2d(self.pixels, 64), bytemuck::bytes_of(&push))

@@ -15,6 +15,7 @@ use std::fmt;
 use glam::Vec3;
 use serde::Serialize;
 
+use super::bidir::Connect;
 use super::Algorithm;
 use crate::scene::{Light, Scene};
 
@@ -45,13 +46,17 @@ pub struct FeatureSet {
     pub shading_normals: bool,
     /// The scene has shading normals (whether or not the kernels read them).
     pub scene_has_shading_normals: bool,
+    /// bpt, vcm: vertex connections to the matching light subpath or to a light-vertex
+    /// cache (LV_CACHE, LV_CACHE_CONNECTIONS; the same in both variants).
+    #[serde(serialize_with = "connect_name")]
+    pub connect: Connect,
 }
 
 /// One kernel stage of an iteration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub struct Stage {
-    /// The stage's name in profiles: "light subpaths", "grid build", "camera subpaths",
-    /// "accumulate" (src/gpu/profile.rs maps kernels to it).
+    /// The stage's name in profiles: "light subpaths", "light-vertex prefix", "grid
+    /// build", "camera subpaths", "accumulate" (src/gpu/profile.rs maps kernels to it).
     pub name: &'static str,
     /// What it does for this estimator.
     pub detail: &'static str,
@@ -106,6 +111,10 @@ pub fn stages(algorithm: Algorithm) -> &'static [Stage] {
     }
 }
 
+fn connect_name<S: serde::Serializer>(c: &Connect, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(&c.name())
+}
+
 fn algorithm_name<S: serde::Serializer>(a: &Algorithm, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_str(a.name())
 }
@@ -149,7 +158,17 @@ impl FeatureSet {
             spheres: g || !scene.spheres.is_empty(),
             shading_normals: g || (scene_has_shading_normals && algorithm == Algorithm::El),
             scene_has_shading_normals,
+            connect: Connect::Path,
         }
+    }
+
+    /// Where bpt's and vcm's vertex connections go (kept `Path` for the other estimators,
+    /// whose kernels have no connections).
+    pub fn with_connect(mut self, connect: Connect) -> FeatureSet {
+        if matches!(self.algorithm, Algorithm::Bpt | Algorithm::Vcm) {
+            self.connect = connect;
+        }
+        self
     }
 
     /// Also compile the ray counter in (`--profile`).
@@ -183,12 +202,25 @@ impl FeatureSet {
         if !self.spheres {
             d.push(("BVH_NO_SPHERES".into(), "1".into()));
         }
+        if let Connect::Cache(n) = self.connect {
+            d.push(("LV_CACHE".into(), "1".into()));
+            d.push(("LV_CACHE_CONNECTIONS".into(), n.to_string()));
+        }
         d
     }
 
-    /// The estimator's stages.
-    pub fn stages(&self) -> &'static [Stage] {
-        stages(self.algorithm)
+    /// The estimator's stages, with the light-vertex cache's prefix sum after the light
+    /// subpaths when connecting to the cache.
+    pub fn stages(&self) -> Vec<Stage> {
+        let mut v = stages(self.algorithm).to_vec();
+        if let Connect::Cache(_) = self.connect {
+            let prefix = Stage {
+                name: "light-vertex prefix",
+                detail: "hash_grid_scan.comp: exclusive prefix sum of the per-path vertex counts (light-vertex cache)",
+            };
+            v.insert(1, prefix);
+        }
+        v
     }
 }
 
@@ -231,6 +263,15 @@ impl fmt::Display for FeatureSet {
         writeln!(f, "  shading normals: {normals}")?;
         writeln!(f, "  textures: none (not supported by vkvcm)")?;
         writeln!(f, "  ray counter: {}", if self.count_rays { "on (--profile)" } else { "off" })?;
+        if matches!(self.algorithm, Algorithm::Bpt | Algorithm::Vcm) {
+            let c = match self.connect {
+                Connect::Path => "to the vertices of light subpath p = this pixel (--connect path)".to_string(),
+                Connect::Cache(n) => {
+                    format!("to {n} light vertex(es) per camera vertex drawn from all light subpaths (--connect cache)")
+                }
+            };
+            writeln!(f, "  vertex connections: {c}")?;
+        }
         writeln!(f, "  stages per iteration:")?;
         for s in self.stages() {
             writeln!(f, "    {}: {}", s.name, s.detail)?;

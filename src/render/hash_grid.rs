@@ -133,6 +133,22 @@ impl ExclusiveScan {
         self.levels[0].n
     }
 
+    /// The same scan with its kernels named `name` in profiles.
+    pub fn labelled(self, name: &str) -> ExclusiveScan {
+        ExclusiveScan {
+            scan_target: self.scan_target.labelled(name),
+            add_target: self.add_target.labelled(name),
+            scan_scratch: self.scan_scratch.labelled(name),
+            add_scratch: self.add_scratch.labelled(name),
+            ..self
+        }
+    }
+
+    /// The scratch buffer of the block totals (for buffer listings).
+    pub fn buffers(&self) -> Vec<&Buffer> {
+        vec![&self._scratch]
+    }
+
     /// Always false (a scan has at least one element).
     pub fn is_empty(&self) -> bool {
         false

@@ -82,6 +82,9 @@ pub struct RenderSettings {
     pub generic: bool,
     /// Count the rays traced (`Profile::rays`; a few atomics per invocation).
     pub count_rays: bool,
+    /// bpt and vcm: where vertex connections go (SmallVCM's matching light subpath or a
+    /// light-vertex cache); must be `Path` for the other estimators.
+    pub connect: bidir::Connect,
 }
 
 impl RenderSettings {
@@ -95,6 +98,7 @@ impl RenderSettings {
             alpha: radius::DEFAULT_ALPHA,
             generic: false,
             count_rays: false,
+            connect: bidir::Connect::default_for(algorithm),
         }
     }
 }
@@ -159,6 +163,16 @@ fn check_frame(gpu: &Gpu, scene: &Scene, s: &RenderSettings) -> Result<()> {
     if s.frame.max_path_length > 256 && !matches!(s.algorithm, Algorithm::El | Algorithm::Pt) {
         bail!("max path length {} is more than the light-vertex store's 256", s.frame.max_path_length);
     }
+    if s.connect != bidir::Connect::Path && !matches!(s.algorithm, Algorithm::Bpt | Algorithm::Vcm) {
+        bail!(
+            "connections to a light-vertex cache ({}) need an estimator that connects vertices (bpt, vcm), not {}",
+            s.connect.name(),
+            s.algorithm.name()
+        );
+    }
+    if s.connect == bidir::Connect::Cache(0) {
+        bail!("the light-vertex cache needs at least 1 connection per camera vertex");
+    }
     if let Budget::Iterations(0) = s.budget {
         bail!("iterations must be at least 1");
     }
@@ -208,8 +222,9 @@ impl Renderer {
     pub fn new(gpu: &Arc<Gpu>, scene: &Scene, settings: &RenderSettings) -> Result<Renderer> {
         check_frame(gpu, scene, settings)?;
         let frame = &settings.frame;
-        let features =
-            features::FeatureSet::new(scene, settings.algorithm, settings.generic).with_count_rays(settings.count_rays);
+        let features = features::FeatureSet::new(scene, settings.algorithm, settings.generic)
+            .with_count_rays(settings.count_rays)
+            .with_connect(settings.connect);
         let scene_gpu = SceneGpu::with_features(gpu, scene, frame, &features)?;
         let film = Film::new(gpu, frame.width, frame.height)?;
         let pixels = frame.width * frame.height;
@@ -235,6 +250,7 @@ impl Renderer {
                     mode,
                     frame.max_path_length,
                     schedule,
+                    settings.connect,
                 )?))
             }
             Algorithm::El => {

@@ -63,11 +63,10 @@ pub fn estimate(scene: &Scene, s: &RenderSettings) -> Vec<BufferNeed> {
         BufferNeed { name: "light_vertices_b", bytes: lv.saturating_mul(LV_HALF_BYTES) },
         BufferNeed { name: "light_vertex_counts", bytes: if store { px.saturating_mul(4) } else { 4 } },
     ]);
-    if merge {
-        // bidir.rs: grid_buckets(light subpaths); scan scratch of the block totals.
-        let buckets = super::bidir::grid_buckets(px) as u64;
+    // hash_grid.rs ExclusiveScan of n elements: its own scratch of the block totals.
+    let scan_scratch = |n: u64| {
         let mut scratch = 0u64;
-        let mut n = buckets + 1;
+        let mut n = n;
         loop {
             n = n.div_ceil(SCAN_BLOCK);
             scratch += n;
@@ -75,11 +74,23 @@ pub fn estimate(scene: &Scene, s: &RenderSettings) -> Vec<BufferNeed> {
                 break;
             }
         }
+        scratch
+    };
+    if s.connect != super::bidir::Connect::Path {
+        // bidir.rs: the light-vertex cache's prefix sum of the per-path counts.
+        v.extend([
+            BufferNeed { name: "light_vertex_prefix", bytes: (px + 1).saturating_mul(4) },
+            BufferNeed { name: "hash_grid_scan_scratch", bytes: scan_scratch(px + 1) * 4 },
+        ]);
+    }
+    if merge {
+        // bidir.rs: grid_buckets(light subpaths) buckets.
+        let buckets = super::bidir::grid_buckets(px) as u64;
         v.extend([
             BufferNeed { name: "grid_start", bytes: (buckets + 1).saturating_mul(4) },
             BufferNeed { name: "grid_indices", bytes: lv.saturating_mul(4) },
             BufferNeed { name: "grid_keys", bytes: lv.saturating_mul(8) },
-            BufferNeed { name: "hash_grid_scan_scratch", bytes: scratch * 4 },
+            BufferNeed { name: "hash_grid_scan_scratch", bytes: scan_scratch(buckets + 1) * 4 },
         ]);
     }
     v

@@ -62,6 +62,8 @@ pub struct SavedRender {
     pub nee: bool,
     pub radius_factor: f32,
     pub alpha: f32,
+    /// bpt, vcm: `Connect::name` (renders saved before the option: "path").
+    pub connect: String,
     pub iterations: u64,
     pub seconds: f64,
     pub rejected_samples: u64,
@@ -89,6 +91,7 @@ pub fn render_metadata(out: &RenderOutput, s: &RenderSettings, p: &Provenance) -
         // Rust prints the shortest string that parses back to the same f32.
         kv("radius_factor", s.radius_factor.to_string()),
         kv("alpha", s.alpha.to_string()),
+        kv("connect", s.connect.name()),
         kv("device", p.device.clone()),
         kv("rejected_samples", out.rejected_samples.to_string()),
         kv("overflow_splats", out.overflow_splats.to_string()),
@@ -153,6 +156,8 @@ pub fn read_render_exr(path: &Path) -> Result<SavedRender> {
         nee: parse(&shown, "nee", get("nee")?)?,
         radius_factor: parse(&shown, "radius_factor", get("radius_factor")?)?,
         alpha: parse(&shown, "alpha", get("alpha")?)?,
+        // Renders saved before --connect existed connected to the matching light subpath.
+        connect: get("connect").unwrap_or("path").to_string(),
         iterations,
         seconds: if seconds.is_finite() && seconds >= 0.0 { seconds } else { 0.0 },
         rejected_samples: parse(&shown, "rejected_samples", get("rejected_samples")?)?,
@@ -193,6 +198,7 @@ impl SavedRender {
         diff("next-event estimation", self.nee.to_string(), s.nee.to_string())?;
         diff("--radius-factor", self.radius_factor.to_string(), s.radius_factor.to_string())?;
         diff("--alpha", self.alpha.to_string(), s.alpha.to_string())?;
+        diff("--connect", self.connect.clone(), s.connect.name())?;
         Ok(())
     }
 
