@@ -134,7 +134,7 @@ impl Bidir {
             let mut cam_bind = bind.clone();
             if let Some(g) = &grid {
                 cam_bind.push(&g.cell_start);
-                cam_bind.push(&g.cell_indices);
+                cam_bind.push(&g.cell_points);
             }
             gpu.kernel("camera_subpath.comp", &define_refs(&d), &cam_bind)?
         };
