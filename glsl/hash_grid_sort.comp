@@ -9,8 +9,8 @@
 // vertices share a cell) costs O(n log n) in its invocation, not O(n^2).
 // Then the bucket's entries are written out as grid_points[i] = (position bits, slot):
 // the merge query reads one contiguous uvec4 per candidate from there instead of
-// grid_indices[i] and then the scattered lv_a[2 slot] (on lavapipe bpm +9%, vcm +8%
-// samples per CPU-second: docs/performance.md, "Performance work"). The position is
+// grid_indices[i] and then the scattered lv_a[2 slot] (on lavapipe bpm +6-10%, vcm
+// +7-9% samples per CPU-second: docs/performance.md, "Performance work"). The position is
 // stored as bits (uvec4), so no float operation can touch it (the slot in a float
 // would be a denormal).
 #extension GL_GOOGLE_include_directive : require
