@@ -26,7 +26,7 @@ layout(local_size_x = 64) in;
 
 #if USE_VM
 layout(std430, binding = 14) readonly buffer GridStartBuf { uint grid_start[]; };
-layout(std430, binding = 15) readonly buffer GridIndicesBuf { uint grid_indices[]; };
+layout(std430, binding = 15) readonly buffer GridPointsBuf { uvec4 grid_points[]; };
 #include "hash_grid.glsl"
 #endif
 
@@ -131,7 +131,9 @@ vec3 connect_cache(SubpathState st, Surface s, Bsdf b, inout uint rng) {
 // Merging (vertex merging / photon density estimation) at camera vertex `s` with every
 // light vertex within the radius: sum of w * f_camera * throughput_light; the caller
 // scales by 1 / (pi r^2 N_L). Buckets are visited once each and hold ascending slot
-// indices, so the sum's order, and hence the image, is deterministic.
+// indices, so the sum's order, and hence the image, is deterministic. Candidates are
+// read from grid_points (position bits, slot), contiguous per bucket: the radius test,
+// which rejects most of them, loads no index and nothing from the light-vertex store.
 vec3 merge(SubpathState st, Surface s, Bsdf b) {
     float r = push.radius;
     float r2 = r * r;
@@ -144,11 +146,10 @@ vec3 merge(SubpathState st, Surface s, Bsdf b) {
     for (uint i = 0u; i < nb; ++i) {
         uint bucket = buckets[i];
         for (uint j = grid_start[bucket]; j < grid_start[bucket + 1u]; ++j) {
-            uint slot = grid_indices[j];
-            vec3 p = lv_a[2u * slot].xyz;
-            vec3 d = p - s.p;
+            uvec4 e = grid_points[j];
+            vec3 d = uintBitsToFloat(e.xyz) - s.p;
             if (dot(d, d) > r2) continue;
-            LightVertex v = lv_load(slot);
+            LightVertex v = lv_load(e.w);
             uint total = v.len + st.len;
             if (total > max_len || total < min_len) continue;
             float w;

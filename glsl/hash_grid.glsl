@@ -5,10 +5,11 @@
 // in wrapping 32-bit unsigned arithmetic. After the build (hash_grid_count.comp,
 // hash_grid_scan.comp, hash_grid_scatter.comp, hash_grid_sort.comp; driven by
 // src/render/hash_grid.rs) bucket b holds the ascending light-vertex slot indices
-// grid_indices[grid_start[b] .. grid_start[b + 1]).
+// grid_indices[grid_start[b] .. grid_start[b + 1]), and grid_points[i] holds
+// (floatBitsToUint(position), slot) of the slot grid_indices[i] (written by the sort pass).
 //
 // This file declares no bindings: the including kernel owns the buffers (the camera
-// kernel: `uint grid_start[]` at binding 14, `uint grid_indices[]` at binding 15).
+// kernel: `uint grid_start[]` at binding 14, `uvec4 grid_points[]` at binding 15).
 //
 // A query at q visits the buckets of the 2x2x2 cells nearest q: its own cell and, per axis,
 // the neighbour on the side of the nearer face. With cells of side 2r every vertex within

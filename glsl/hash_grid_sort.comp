@@ -7,6 +7,12 @@
 // faster than insertion sort at SmallVCM's table size); up to SMALL: insertion sort;
 // above: heapsort, so a pathological bucket (a radius so large that thousands of
 // vertices share a cell) costs O(n log n) in its invocation, not O(n^2).
+// Then the bucket's entries are written out as grid_points[i] = (position bits, slot):
+// the merge query reads one contiguous uvec4 per candidate from there instead of
+// grid_indices[i] and then the scattered lv_a[2 slot] (on lavapipe bpm +6-10%, vcm
+// +7-9% samples per CPU-second: docs/performance.md, "Performance work"). The position is
+// stored as bits (uvec4), so no float operation can touch it (the slot in a float
+// would be a denormal).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 
@@ -14,6 +20,8 @@ layout(local_size_x = 64) in;
 
 layout(std430, binding = 0) readonly buffer GridStartBuf { uint grid_start[]; };
 layout(std430, binding = 1) buffer GridIndicesBuf { uint grid_indices[]; };
+layout(std430, binding = 2) readonly buffer LvABuf { vec4 lv_a[]; };
+layout(std430, binding = 3) writeonly buffer GridPointsBuf { uvec4 grid_points[]; };
 
 #include "hash_grid.glsl"
 HASH_GRID_BUILD_PUSH;
@@ -41,11 +49,8 @@ void sift_down(uint base, uint root, uint n) {
     grid_indices[base + root] = v;
 }
 
-void main() {
-    uint b = hash_grid_group_index() * 64u + gl_LocalInvocationID.x;
-    if (b >= push.num_buckets) return;
-    uint begin = grid_start[b];
-    uint n = grid_start[b + 1u] - begin;
+// Sorts grid_indices[begin .. begin + n) ascending.
+void sort_bucket(uint begin, uint n) {
     if (n <= 1u) return;
     if (n <= 16u) {
         // Padding with ~0u sorts to the end and is not written back.
@@ -83,5 +88,17 @@ void main() {
         grid_indices[begin] = grid_indices[begin + m];
         grid_indices[begin + m] = top;
         sift_down(begin, 0u, m);
+    }
+}
+
+void main() {
+    uint b = hash_grid_group_index() * 64u + gl_LocalInvocationID.x;
+    if (b >= push.num_buckets) return;
+    uint begin = grid_start[b];
+    uint end = grid_start[b + 1u];
+    sort_bucket(begin, end - begin);
+    for (uint i = begin; i < end; ++i) {
+        uint slot = grid_indices[i];
+        grid_points[i] = uvec4(floatBitsToUint(lv_a[2u * slot].xyz), slot);
     }
 }

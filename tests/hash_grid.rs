@@ -101,16 +101,31 @@ fn random_store(rng: &mut Rng32, origin: [f32; 3], radius: f32, light_paths: u32
     Store { light_paths, slots, lv_a, lv_count }
 }
 
-fn build(gpu: &Arc<Gpu>, grid: &HashGrid, radius: f32, origin: [f32; 3]) -> (Vec<u32>, Vec<u32>) {
+/// The grid after a build: cell_start, cell_indices, cell_points.
+type Built = (Vec<u32>, Vec<u32>, Vec<[u32; 4]>);
+
+fn build(gpu: &Arc<Gpu>, grid: &HashGrid, radius: f32, origin: [f32; 3]) -> Built {
     let mut batch = gpu.batch().unwrap();
     grid.record_build(&mut batch, radius, origin).unwrap();
     batch.submit_wait(None).unwrap();
-    (grid.cell_start.read().unwrap(), grid.cell_indices.read().unwrap())
+    (grid.cell_start.read().unwrap(), grid.cell_indices.read().unwrap(), grid.cell_points.read().unwrap())
+}
+
+/// cell_points[i] = (position bits, slot) of the slot in cell_indices[i], for every used
+/// entry (the camera kernel reads positions from there, not from the store).
+fn check_points(store: &Store, start: &[u32], idx: &[u32], points: &[[u32; 4]]) {
+    let used = *start.last().unwrap() as usize;
+    for (i, (&s, pt)) in idx[..used].iter().zip(&points[..used]).enumerate() {
+        let p = store.pos(s);
+        assert_eq!(*pt, [p[0].to_bits(), p[1].to_bits(), p[2].to_bits(), s], "cell_points[{i}] (slot {s})");
+    }
 }
 
 /// (a): cell_start is the exclusive scan of the CPU bucket sizes; every valid slot is
-/// listed exactly once, in its CPU bucket; buckets ascending.
-fn check_structure(store: &Store, num_buckets: u32, radius: f32, origin: [f32; 3], start: &[u32], idx: &[u32]) {
+/// listed exactly once, in its CPU bucket; buckets ascending; cell_points matches.
+fn check_structure(store: &Store, num_buckets: u32, radius: f32, origin: [f32; 3], built: &Built) {
+    let (start, idx, points) = built;
+    check_points(store, start, idx, points);
     let valid = store.valid_slots();
     let mut counts = vec![0u32; num_buckets as usize];
     let mut bucket_of = HashMap::new();
@@ -154,8 +169,9 @@ fn build_matches_cpu_counting_sort_and_is_deterministic() {
             for num_buckets in [light_paths, 97, 1, 1 << 20] {
                 let grid = HashGrid::new(gpu, &lv_a, &lv_count, light_paths, slots, num_buckets).unwrap();
                 assert_eq!(grid.num_buckets(), num_buckets);
-                let (start, idx) = build(gpu, &grid, radius, origin);
-                check_structure(&store, num_buckets, radius, origin, &start, &idx);
+                let built = build(gpu, &grid, radius, origin);
+                check_structure(&store, num_buckets, radius, origin, &built);
+                let start = &built.0;
                 let biggest = (0..num_buckets as usize).map(|b| start[b + 1] - start[b]).max().unwrap();
                 eprintln!(
                     "case {case}: {light_paths} paths x {slots} slots, {} vertices, {num_buckets} buckets, largest bucket {biggest}",
@@ -163,10 +179,11 @@ fn build_matches_cpu_counting_sort_and_is_deterministic() {
                 );
                 // Rebuild after a build at another radius (stale state must not leak in).
                 let _ = build(gpu, &grid, radius * 3.0, origin);
-                let (start2, idx2) = build(gpu, &grid, radius, origin);
-                assert_eq!(start, start2);
+                let (start2, idx2, points2) = build(gpu, &grid, radius, origin);
+                assert_eq!(*start, start2);
                 let n = start[num_buckets as usize] as usize;
-                assert_eq!(idx[..n], idx2[..n], "second build differs");
+                assert_eq!(built.1[..n], idx2[..n], "second build differs");
+                assert_eq!(built.2[..n], points2[..n], "second build's points differ");
             }
         }
     });
@@ -186,9 +203,9 @@ fn build_handles_empty_and_full_stores() {
             }
             let (lv_a, lv_count) = store.upload(gpu);
             let grid = HashGrid::new(gpu, &lv_a, &lv_count, 300, 4, 300).unwrap();
-            let (start, idx) = build(gpu, &grid, radius, origin);
-            check_structure(&store, 300, radius, origin, &start, &idx);
-            assert_eq!(start[300], 300 * fill);
+            let built = build(gpu, &grid, radius, origin);
+            check_structure(&store, 300, radius, origin, &built);
+            assert_eq!(built.0[300], 300 * fill);
         }
     });
 }
@@ -239,13 +256,32 @@ fn sort_pass_sorts_every_bucket() {
         }
         let sb = gpu.buffer_from_slice("start", &start).unwrap();
         let ib = gpu.buffer_from_slice("indices", &values).unwrap();
-        let k = gpu.kernel("hash_grid_sort.comp", &[], &[&sb, &ib]).unwrap();
+        // Light vertex of slot s (two vec4 per slot) at (s, s / 2, -s): the pass copies it
+        // next to the sorted entry.
+        let slots = values.iter().max().unwrap() + 1;
+        let lv: Vec<[f32; 4]> = (0..2 * slots)
+            .map(|i| {
+                if i % 2 == 0 {
+                    [(i / 2) as f32, (i / 2) as f32 * 0.5, -((i / 2) as f32), 0.0]
+                } else {
+                    [f32::NAN; 4]
+                }
+            })
+            .collect();
+        let lb = gpu.buffer_from_slice("lv_a", &lv).unwrap();
+        let pb = gpu.buffer_zeroed::<[u32; 4]>("points", total as usize).unwrap();
+        let k = gpu.kernel("hash_grid_sort.comp", &[], &[&sb, &ib, &lb, &pb]).unwrap();
         // BuildPush: origin, radius, light paths, slots, buckets, pad.
         let push: [u32; 8] = [0, 0, 0, 0, 1, 1, nb, 0];
         let mut batch = gpu.batch().unwrap();
         batch.dispatch(&k, [groups_for(nb, 64), 1, 1], bytemuck::cast_slice(&push)).unwrap();
         batch.submit_wait(None).unwrap();
         let got: Vec<u32> = ib.read().unwrap();
+        let points: Vec<[u32; 4]> = pb.read().unwrap();
+        for (i, (&s, pt)) in got.iter().zip(&points).enumerate() {
+            let p = [s as f32, s as f32 * 0.5, -(s as f32)];
+            assert_eq!(*pt, [p[0].to_bits(), p[1].to_bits(), p[2].to_bits(), s], "points[{i}]");
+        }
         for b in 0..nb as usize {
             let r = start[b] as usize..start[b + 1] as usize;
             let mut want = values[r.clone()].to_vec();
@@ -322,7 +358,7 @@ fn queries_find_exactly_the_vertices_within_radius() {
                     .kernel(
                         "tests/hash_grid_query.comp",
                         &[],
-                        &[&lv_a, &grid.cell_start, &grid.cell_indices, &qbuf, &count, &slots_out, &stats],
+                        &[&grid.cell_start, &grid.cell_points, &qbuf, &count, &slots_out, &stats],
                     )
                     .unwrap();
                 let mut push = Vec::new();

@@ -1,19 +1,19 @@
 #version 460
 // Test kernel: for each query point, the set of valid light-vertex slots within `radius`
-// found through the hash grid (hash_grid.glsl), as the camera kernel gathers merges.
+// found through the hash grid (hash_grid.glsl) and its grid_points, as the camera kernel
+// gathers merges.
 // Writes count[q] and up to `max_out` slots at out_slots[q * max_out ..], in visit order.
 #extension GL_GOOGLE_include_directive : require
 
 layout(local_size_x = 64) in;
 
-layout(std430, binding = 0) readonly buffer LvABuf { vec4 lv_a[]; };
-layout(std430, binding = 1) readonly buffer GridStartBuf { uint grid_start[]; };
-layout(std430, binding = 2) readonly buffer GridIndicesBuf { uint grid_indices[]; };
-layout(std430, binding = 3) readonly buffer QueryBuf { vec4 queries[]; };
-layout(std430, binding = 4) buffer CountBuf { uint out_count[]; };
-layout(std430, binding = 5) buffer SlotBuf { uint out_slots[]; };
+layout(std430, binding = 0) readonly buffer GridStartBuf { uint grid_start[]; };
+layout(std430, binding = 1) readonly buffer GridPointsBuf { uvec4 grid_points[]; };
+layout(std430, binding = 2) readonly buffer QueryBuf { vec4 queries[]; };
+layout(std430, binding = 3) buffer CountBuf { uint out_count[]; };
+layout(std430, binding = 4) buffer SlotBuf { uint out_slots[]; };
 // Per query: number of distinct buckets visited and number of candidates tested.
-layout(std430, binding = 6) buffer StatsBuf { uvec2 out_stats[]; };
+layout(std430, binding = 5) buffer StatsBuf { uvec2 out_stats[]; };
 
 layout(push_constant) uniform Push {
     vec3 origin;
@@ -37,10 +37,11 @@ void main() {
     for (uint i = 0u; i < nb; ++i) {
         uint b = buckets[i];
         for (uint j = grid_start[b]; j < grid_start[b + 1u]; ++j) {
-            uint slot = grid_indices[j];
-            vec3 d = lv_a[2u * slot].xyz - q;
+            uvec4 e = grid_points[j];
+            vec3 d = uintBitsToFloat(e.xyz) - q;
             tested += 1u;
             if (dot(d, d) > r2) continue;
+            uint slot = e.w;
             if (found < push.max_out) out_slots[qi * push.max_out + found] = slot;
             found += 1u;
         }

@@ -123,7 +123,8 @@ const LV_HALF_BYTES: u64 = 32;
 
 /// Hash-grid buckets per light subpath. SmallVCM has one; four cut the candidates that a
 /// merge query rejects (other cells hashed into the same buckets): bpm +6-7%, vcm +4-5%
-/// samples per CPU-second on lavapipe, ppm within noise (docs/performance.md,
+/// samples per CPU-second on lavapipe, ppm within noise; 8 and 16 measured no faster (the
+/// larger table's build costs more than the fewer collisions save; docs/performance.md,
 /// "Performance work").
 const GRID_BUCKETS_PER_LIGHT_PATH: u64 = 4;
 
@@ -219,7 +220,7 @@ impl Bidir {
             let mut cam_bind = bind.clone();
             if let Some(g) = &grid {
                 cam_bind.push(&g.cell_start);
-                cam_bind.push(&g.cell_indices);
+                cam_bind.push(&g.cell_points);
             }
             cam_bind.extend(prefix);
             gpu.kernel("camera_subpath.comp", &define_refs(&d), &cam_bind)?

@@ -10,7 +10,9 @@
 //!    no atomics;
 //! 4. sort (`hash_grid_sort.comp`): one invocation per bucket sorts it ascending
 //!    (insertion sort, heapsort past 32 entries), so the result does not depend on the
-//!    order the atomics happened in: builds are bit-identical.
+//!    order the atomics happened in: builds are bit-identical; then writes each entry's
+//!    (position, slot) to `cell_points`, so that a query's radius test reads one
+//!    contiguous `uvec4` per candidate instead of an index and then the scattered store.
 //!
 //! Queries are in `glsl/hash_grid.glsl`. Details and measurements: docs/hash-grid.md.
 
@@ -187,6 +189,10 @@ pub struct HashGrid {
     pub cell_start: Buffer,
     /// `light_paths * slots` `u32` (the most vertices there can be): slot indices by bucket.
     pub cell_indices: Buffer,
+    /// `light_paths * slots` `uvec4`, parallel to `cell_indices`: entry i is
+    /// (`floatBitsToUint` of the position of slot `cell_indices[i]`, that slot). What the
+    /// camera kernel reads (docs/hash-grid.md).
+    pub cell_points: Buffer,
     /// Per slot: (bucket, arrival rank in the bucket) from the count pass.
     _keys: Buffer,
     count: Kernel,
@@ -240,18 +246,21 @@ impl HashGrid {
         check_range(gpu, "the light-vertex store (lv_a)", total_slots * LV_A_BYTES)?;
         check_range(gpu, "cell_indices (one u32 per light-vertex slot)", total_slots * 4)?;
         check_range(gpu, "the grid's keys (two u32 per light-vertex slot)", total_slots * 8)?;
+        check_range(gpu, "the grid's points (one uvec4 per light-vertex slot)", total_slots * 16)?;
         check_range(gpu, "cell_start (one u32 per bucket + 1)", (num_buckets as u64 + 1) * 4)?;
         let n = total_slots as usize;
         let cell_start = gpu.buffer_zeroed::<u32>("grid_start", num_buckets as usize + 1)?;
         let cell_indices = gpu.buffer_zeroed::<u32>("grid_indices", n)?;
         let keys = gpu.buffer_zeroed::<[u32; 2]>("grid_keys", n)?;
+        let cell_points = gpu.buffer_zeroed::<[u32; 4]>("grid_points", n)?;
         let count = gpu.kernel("hash_grid_count.comp", &[], &[lv_a, lv_count, &cell_start, &keys])?;
         let scatter = gpu.kernel("hash_grid_scatter.comp", &[], &[lv_count, &cell_start, &keys, &cell_indices])?;
-        let sort = gpu.kernel("hash_grid_sort.comp", &[], &[&cell_start, &cell_indices])?;
+        let sort = gpu.kernel("hash_grid_sort.comp", &[], &[&cell_start, &cell_indices, lv_a, &cell_points])?;
         let scan = ExclusiveScan::new(gpu, &cell_start, num_buckets + 1)?;
         Ok(HashGrid {
             cell_start,
             cell_indices,
+            cell_points,
             _keys: keys,
             count,
             scatter,
@@ -296,7 +305,7 @@ impl HashGrid {
 
     /// Every buffer the grid owns (for `vkvcm render --verbose`).
     pub fn buffers(&self) -> Vec<&Buffer> {
-        vec![&self.cell_start, &self.cell_indices, &self._keys, &self.scan._scratch]
+        vec![&self.cell_start, &self.cell_indices, &self.cell_points, &self._keys, &self.scan._scratch]
     }
 
     pub fn light_paths(&self) -> u32 {
