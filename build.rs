@@ -35,8 +35,14 @@ fn embed_glsl() {
     collect(&root, &root, &mut files);
     files.sort();
     let mut out = String::from("pub static SOURCES: &[(&str, &str)] = &[\n");
-    for (rel, abs) in files {
-        out.push_str(&format!("    ({rel:?}, include_str!({abs:?})),\n"));
+    // Paths relative to CARGO_MANIFEST_DIR as the crate sees it when it is compiled, not
+    // absolute paths from this script's run: a checkout moved or copied together with its
+    // target/ dir (where cargo need not re-run this script) still embeds its own shaders.
+    for (rel, _) in files {
+        out.push_str(&format!(
+            "    ({rel:?}, include_str!(concat!(env!(\"CARGO_MANIFEST_DIR\"), {:?}))),\n",
+            format!("/glsl/{rel}")
+        ));
     }
     out.push_str("];\n");
     let dest = std::path::Path::new(&std::env::var("OUT_DIR").unwrap()).join("glsl_sources.rs");
