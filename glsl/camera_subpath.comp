@@ -74,25 +74,6 @@ vec3 connect_vertices(SubpathState st, Surface s, Bsdf b, LightVertex v) {
 #endif
 layout(std430, binding = LV_PREFIX_BINDING) readonly buffer LvPrefixBuf { uint lv_prefix[]; };
 
-// 32 uniform random bits from two 24-bit draws.
-uint rnd_bits(inout uint rng) {
-    uint a = uint(rnd(rng) * 16777216.0);
-    uint b = uint(rnd(rng) * 16777216.0);
-    return (a << 8) | (b & 0xffu);
-}
-
-// Uniform integer in [0, n), n >= 1, exactly: multiply-shift with rejection (Lemire,
-// "Fast Random Integer Generation in an Interval", 2019). Rejects with probability
-// below n / 2^32.
-uint rnd_below(uint n, inout uint rng) {
-    uint threshold = (0u - n) % n;
-    for (;;) {
-        uint hi, lo;
-        umulExtended(rnd_bits(rng), n, hi, lo);
-        if (lo >= threshold) return hi;
-    }
-}
-
 // The light subpath q holding vertex i of all stored ones: the largest q with
 // lv_prefix[q] <= i (paths without vertices have lv_prefix[q] == lv_prefix[q + 1]).
 uint lv_cache_path(uint i) {

@@ -22,12 +22,27 @@ uint rng_init(uint seed, uint iteration, uint index, uint stream) {
     return pcg_hash(seed ^ pcg_hash(iteration ^ pcg_hash(index ^ pcg_hash(stream))));
 }
 
-// Uniform in [0, 1) with 24 random bits.
-float rnd(inout uint state) {
+// The next 32 random bits of the stream: one PCG step (LCG advance, then the RXS-M-XS
+// output permutation, which is pcg_hash of the old state).
+uint rnd_u32(inout uint state) {
+    uint word = pcg_hash(state);
     state = state * 747796405u + 2891336453u;
-    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
-    word = (word >> 22u) ^ word;
-    return float(word >> 8) * (1.0 / 16777216.0);
+    return word;
+}
+
+// Uniform in [0, 1) with 24 random bits.
+float rnd(inout uint state) { return float(rnd_u32(state) >> 8) * (1.0 / 16777216.0); }
+
+// Uniform integer in [0, n), n >= 1, exactly: multiply-shift with rejection (Lemire,
+// "Fast Random Integer Generation in an Interval", ACM TOMACS 2019). Rejects with
+// probability below n / 2^32.
+uint rnd_below(uint n, inout uint state) {
+    uint threshold = (0u - n) % n;
+    for (;;) {
+        uint hi, lo;
+        umulExtended(rnd_u32(state), n, hi, lo);
+        if (lo >= threshold) return hi;
+    }
 }
 
 vec2 rnd2(inout uint s) { float a = rnd(s); return vec2(a, rnd(s)); }

@@ -5,12 +5,11 @@
 //! binary turns those errors into one line and a failing exit status. Cases expected to
 //! load (`ok`) must render a tiny image and exit 0.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
-fn corpus_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/malformed")
-}
+mod common;
+use common::corpus::malformed_cases;
 
 fn render(scene: &Path, out: &Path) -> Output {
     let mut c = Command::new(env!("CARGO_BIN_EXE_vkvcm"));
@@ -63,20 +62,12 @@ fn check(scene: &Path, expect: &str, o: &Output, out: &Path) -> Result<(), Strin
 #[test]
 fn every_malformed_scene_gives_one_error_line_and_fails() {
     let tmp = tempfile::tempdir().unwrap();
-    let mut cases: Vec<PathBuf> = std::fs::read_dir(corpus_dir())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| matches!(p.extension().and_then(|e| e.to_str()), Some("gltf" | "glb")))
-        .collect();
-    cases.sort();
+    let cases = malformed_cases();
     assert!(cases.len() >= 50, "corpus has only {} cases", cases.len());
     let mut failures = Vec::new();
     let (mut errors, mut oks) = (0, 0);
-    for (i, case) in cases.iter().enumerate() {
-        let expect_file = PathBuf::from(format!("{}.expect", case.display()));
-        let expect = std::fs::read_to_string(&expect_file)
-            .unwrap_or_else(|e| panic!("{}: {e} (every case needs its .expect)", expect_file.display()));
-        let expect = expect.trim();
+    for (i, (case, expect)) in cases.iter().enumerate() {
+        let expect = expect.as_str();
         let out = tmp.path().join(format!("out{i}.exr"));
         let o = render(case, &out);
         if expect == "ok" {

@@ -17,9 +17,8 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use vkvcm::scene::{self, LoadOptions, Scene};
 
-fn corpus_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/malformed")
-}
+mod common;
+use common::corpus::{malformed_cases, malformed_dir as corpus_dir};
 
 /// Loads as the CLI does (`load_named`: also refuses scenes with no emitter or geometry).
 fn load_cli(path: &Path) -> anyhow::Result<Scene> {
@@ -56,19 +55,11 @@ fn check_error(path: &Path, r: anyhow::Result<Scene>, expect: &str) -> Result<()
 
 #[test]
 fn corpus() {
-    let mut cases: Vec<PathBuf> = std::fs::read_dir(corpus_dir())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| matches!(p.extension().and_then(|e| e.to_str()), Some("gltf" | "glb")))
-        .collect();
-    cases.sort();
+    let cases = malformed_cases();
     assert!(cases.len() >= 60, "corpus has {} cases", cases.len());
     let mut failures = Vec::new();
-    for path in &cases {
-        let expect_file = PathBuf::from(format!("{}.expect", path.display()));
-        let expect = std::fs::read_to_string(&expect_file)
-            .unwrap_or_else(|e| panic!("{}: {e} (every case needs its .expect)", expect_file.display()));
-        let expect = expect.trim();
+    for (path, expect) in &cases {
+        let expect = expect.as_str();
         let r = catch_unwind(|| load_cli(path)).unwrap_or_else(|_| panic!("{} panicked", path.display()));
         if let Err(f) = check_error(path, r, expect) {
             failures.push(f);

@@ -147,12 +147,6 @@ impl Variant {
     }
 }
 
-impl From<Algorithm> for Variant {
-    fn from(algorithm: Algorithm) -> Variant {
-        Variant { algorithm, connect: Connect::default_for(algorithm) }
-    }
-}
-
 /// One estimator's error after a fixed wall-clock budget (averaged over rounds).
 #[derive(Clone, Debug, Serialize)]
 pub struct EqualTimeRow {

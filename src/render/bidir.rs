@@ -78,14 +78,6 @@ impl Connect {
         }
     }
 
-    /// The connections per camera vertex of the cache, 0 for `Path`.
-    pub fn cache_connections(self) -> u32 {
-        match self {
-            Connect::Path => 0,
-            Connect::Cache(n) => n,
-        }
-    }
-
     /// `path` or `cache:N`, as settings and saved renders show it.
     pub fn name(self) -> String {
         match self {
@@ -140,6 +132,8 @@ pub(crate) fn grid_buckets(light_paths: u64) -> u32 {
 }
 
 impl Bidir {
+    /// `connect` is as `render::check_frame` accepts it (the cache only with vertex
+    /// connections, at least 1 draw): [`super::Renderer::new`] checks before calling this.
     pub fn new(
         gpu: &Arc<Gpu>,
         scene: &SceneGpu,
@@ -149,15 +143,6 @@ impl Bidir {
         radius: RadiusSchedule,
         connect: Connect,
     ) -> Result<Bidir> {
-        if connect != Connect::Path && !mode.use_vc() {
-            bail!(
-                "the light-vertex cache (connect {}) is for estimators that connect vertices (bpt, vcm)",
-                connect.name()
-            );
-        }
-        if connect == Connect::Cache(0) {
-            bail!("the light-vertex cache needs at least 1 connection per camera vertex");
-        }
         let pixels = film.width * film.height;
         let light_paths = pixels;
         let store = mode.stores_vertices();

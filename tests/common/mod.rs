@@ -1,6 +1,7 @@
 //! Shared test helpers: a validated GPU (any validation message fails), small scenes.
 #![allow(dead_code)]
 
+pub mod corpus;
 pub mod scenes;
 
 use std::sync::Arc;
