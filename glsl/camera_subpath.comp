@@ -1,6 +1,6 @@
 #version 460
-// Stage 3 (../shared/DESIGN.md): one invocation per pixel sample. Traces a camera
-// subpath; at each vertex adds emitter hits, next-event estimation and connections to
+// Stage 3 (../shared/DESIGN.md): push.paths_per_invocation pixel samples per invocation
+// (path regeneration, common.glsl regen_stride). Traces a camera subpath; at each vertex adds emitter hits, next-event estimation and connections to
 // the vertices of light subpath p = this pixel, or with LV_CACHE to vertices drawn from
 // all light subpaths (USE_VC), and merges with the light
 // vertices within the radius found in the hash grid (USE_VM), each weighted by the
@@ -66,25 +66,19 @@ vec3 connect_vertices(SubpathState st, Surface s, Bsdf b, LightVertex v) {
 // no longer matched to the cache's connection count (Davidovic et al. adjust them; we do
 // not, docs/estimators.md). Drawing uniformly over vertices (not a path, then one of its
 // vertices) keeps the weight M / (N_L n_c) the same for every vertex. Deterministic: the
-// prefix sum is a fixed-order scan and the draws use this pixel's random sequence.
+// prefix sum is a fixed-order scan, the dense list is in path order and the draws use
+// this pixel's random sequence.
 #if USE_VM
 #define LV_PREFIX_BINDING 16
+#define LV_DENSE_BINDING 17
 #else
 #define LV_PREFIX_BINDING 14
+#define LV_DENSE_BINDING 15
 #endif
 layout(std430, binding = LV_PREFIX_BINDING) readonly buffer LvPrefixBuf { uint lv_prefix[]; };
-
-// The light subpath q holding vertex i of all stored ones: the largest q with
-// lv_prefix[q] <= i (paths without vertices have lv_prefix[q] == lv_prefix[q + 1]).
-uint lv_cache_path(uint i) {
-    uint lo = 0u;
-    uint hi = push.light_paths;  // lv_prefix[lo] <= i < lv_prefix[hi]
-    while (hi - lo > 1u) {
-        uint mid = (lo + hi) >> 1;
-        if (lv_prefix[mid] <= i) lo = mid; else hi = mid;
-    }
-    return lo;
-}
+// lv_dense[i]: the store slot of the i-th of all stored vertices, in path order
+// (glsl/lv_cache_compact.comp).
+layout(std430, binding = LV_DENSE_BINDING) readonly buffer LvDenseBuf { uint lv_dense[]; };
 
 // The connections of camera vertex `s` to the cache, times light throughput and weight
 // (the caller multiplies by the camera throughput).
@@ -97,9 +91,7 @@ vec3 connect_cache(SubpathState st, Surface s, Bsdf b, inout uint rng) {
     if (total == 0u) return vec3(0.0);
     vec3 sum = vec3(0.0);
     for (uint k = 0u; k < uint(LV_CACHE_CONNECTIONS); ++k) {
-        uint i = rnd_below(total, rng);
-        uint q = lv_cache_path(i);
-        LightVertex v = lv_load(q * lv_slots() + (i - lv_prefix[q]));
+        LightVertex v = lv_load(lv_dense[rnd_below(total, rng)]);
         uint len = v.len + 1u + st.len;
         if (len < min_len || len > max_len) continue;  // a draw that contributes 0
         sum += v.thr * connect_vertices(st, s, b, v);
@@ -144,11 +136,9 @@ vec3 merge(SubpathState st, Surface s, Bsdf b) {
 }
 #endif
 
-void main() {
-    uint pixel = invocation_index();
-    if (pixel >= push.count) return;
-    uint rng = rng_init(params.misc.x, push.iteration, pixel, 0u);
-    SubpathState st;
+// Starts the camera subpath of `pixel`.
+void start_path(uint pixel, out SubpathState st, out uint rng) {
+    rng = rng_init(params.misc.x, push.iteration, pixel, 0u);
     st.o = params.cam_pos.xyz;
     st.d = camera_sample(pixel, rng);
     st.thr = vec3(1.0);
@@ -156,11 +146,32 @@ void main() {
     st.specular = true;
     st.finite_light = true;
     mis_camera_start(st, st.d);
+}
+
+void main() {
+    uint stride = regen_stride(push.count, push.paths_per_invocation);
+    uint pixel = invocation_index();
+    if (pixel >= stride) return;
     float pick = 1.0 / float(light_count());
     uint max_len = max_path_length();
     uint min_len = min_path_length();
+    SubpathState st;
+    uint rng;
+    start_path(pixel, st, rng);
     vec3 L = vec3(0.0);
-    for (;; ++st.len) {
+    bool alive = true;
+    // One loop iteration = one vertex of the current subpath; a subpath that ends adds
+    // its pixel's value (and splats) to the film, and the next one starts in the same
+    // iteration.
+    while (true) {
+        if (!alive) {
+            film_add(pixel, L + splat_take(pixel));
+            pixel += stride;
+            if (pixel >= push.count) break;
+            start_path(pixel, st, rng);
+            L = vec3(0.0);
+        }
+        alive = false;
         Hit h;
         if (!trace_closest(st.o, st.d, 0.0, 1e30, h)) {
             uint bg = background_light();
@@ -169,7 +180,7 @@ void main() {
                 vec3 le = background_radiance(bg, dpdf, epdf);
                 L += st.thr * le * mis_weight_hit(st, dpdf, epdf, pick, USE_VC != 0);
             }
-            break;
+            continue;
         }
         Surface s = surface_at(h, st.o, st.d);
         mis_on_hit(st, h.t, abs(dot(s.ng, st.d)), false);
@@ -178,9 +189,9 @@ void main() {
             vec3 le = area_light_radiance(s.light, st.d, dpdf_a, epdf);
             if (max3(le) > 0.0) L += st.thr * le * mis_weight_hit(st, dpdf_a, epdf, pick, USE_VC != 0);
         }
-        if (st.len >= max_len) break;
+        if (st.len >= max_len) continue;
         Bsdf b = bsdf_init(s.material, s.ng, -st.d, false);
-        if (!b.valid) break;
+        if (!b.valid) continue;
 #if USE_VC
         if (!b.delta) {
             if (st.len + 1u >= min_len) L += st.thr * direct_illumination(st, s, b, rng);
@@ -203,11 +214,12 @@ void main() {
         if (!b.delta) {
             float norm = 1.0 / (PI * push.radius * push.radius * float(push.light_paths));
             L += st.thr * merge(st, s, b) * norm;
-            if (PPM != 0) break;
+            if (PPM != 0) continue;
         }
 #endif
-        if (!scatter(st, b, s.p, s.ng, rng)) break;
+        if (!scatter(st, b, s.p, s.ng, rng)) continue;
+        st.len++;
+        alive = true;
     }
-    film_add(pixel, L + splat_take(pixel));
     COUNT_RAYS_FLUSH();
 }

@@ -1,5 +1,6 @@
 #version 460
-// Stage 1 (../shared/DESIGN.md): one invocation per light subpath. Samples an emitter,
+// Stage 1 (../shared/DESIGN.md): push.paths_per_invocation light subpaths per invocation
+// (path regeneration, common.glsl regen_stride). Samples an emitter,
 // traces, stores every non-delta vertex in the light-vertex store (STORE_VERTICES) and
 // connects it to the camera (CONNECT_CAMERA), as SmallVCM's VertexCM light pass.
 // LIGHT_TRACE_ONLY: pure light tracing (weight 1), which also connects the emitting
@@ -23,84 +24,109 @@ layout(local_size_x = 64) in;
 layout(std430, binding = 14) writeonly buffer LvPrefixBuf { uint lv_prefix[]; };
 #endif
 
-void main() {
-    uint path = invocation_index();
-    if (path >= push.count) return;
-    uint rng = rng_init(params.misc.x, push.iteration, path, 1u);
+// Starts light subpath `path`: samples its emitter (and with LIGHT_TRACE_ONLY connects
+// the emitting point to the camera); false when it has nothing to trace.
+bool start_path(uint path, out SubpathState st, out uint rng) {
+    rng = rng_init(params.misc.x, push.iteration, path, 1u);
     uint nl = light_count();
     uint li = pick_light(rng);
     float pick = 1.0 / float(nl);
     vec2 u_pos = rnd2(rng);
     vec2 u_dir = rnd2(rng);
     LightEmission e = light_emit(li, u_pos, u_dir);
-    uint stored = 0u;
     float emission_pdf = e.emission_pdf_w * pick;
     float direct_pdf = e.direct_pdf * pick;
-    if (max3(e.energy) > 0.0 && emission_pdf > 0.0) {
+    st.len = 1u;
+    if (!(max3(e.energy) > 0.0 && emission_pdf > 0.0)) return false;
 #if LIGHT_TRACE_ONLY
-        // The emitting point itself, seen by the camera (area lights only; the others
-        // cannot be seen). Estimator: Le W_e G / (pick pdf_A) / N_L.
-        if (nl > 0u && e.finite && !e.delta && dot(e.normal, e.normal) > 0.0) {
-            vec2 raster;
-            if (camera_raster(e.pos, raster)) {
-                vec3 to_cam = params.cam_pos.xyz - e.pos;
-                float dist = length(to_cam);
-                to_cam /= dist;
-                float cos_l = dot(e.normal, to_cam);
-                if (cos_l > EPS_COSINE_LIGHT && visible(e.pos, e.normal, params.cam_pos.xyz, vec3(0.0))) {
-                    float cos_cam = dot(params.cam_forward.xyz, -to_cam);
-                    float plane = params.cam_pos.w;
-                    float we_g = plane * plane / (cos_cam * cos_cam * cos_cam) * cos_l / (dist * dist);
-                    vec3 le = e.energy / e.cos_light;  // radiance
-                    splat_add(uint(raster.y) * image_width() + uint(raster.x),
-                              le * we_g / (direct_pdf * float(push.light_paths)));
-                }
+    // The emitting point itself, seen by the camera (area lights only; the others
+    // cannot be seen). Estimator: Le W_e G / (pick pdf_A) / N_L.
+    if (nl > 0u && e.finite && !e.delta && dot(e.normal, e.normal) > 0.0) {
+        vec2 raster;
+        if (camera_raster(e.pos, raster)) {
+            vec3 to_cam = params.cam_pos.xyz - e.pos;
+            float dist = length(to_cam);
+            to_cam /= dist;
+            float cos_l = dot(e.normal, to_cam);
+            if (cos_l > EPS_COSINE_LIGHT && visible(e.pos, e.normal, params.cam_pos.xyz, vec3(0.0))) {
+                float cos_cam = dot(params.cam_forward.xyz, -to_cam);
+                float plane = params.cam_pos.w;
+                float we_g = plane * plane / (cos_cam * cos_cam * cos_cam) * cos_l / (dist * dist);
+                vec3 le = e.energy / e.cos_light;  // radiance
+                splat_add(uint(raster.y) * image_width() + uint(raster.x),
+                          le * we_g / (direct_pdf * float(push.light_paths)));
             }
-        }
-#endif
-        SubpathState st;
-        st.o = e.normal != vec3(0.0) ? offset_ray(e.pos, e.normal, e.dir, scene_radius()) : e.pos;
-        st.d = e.dir;
-        st.thr = e.energy / emission_pdf;
-        st.len = 1u;
-        st.finite_light = e.finite;
-        st.specular = true;
-        mis_light_start(st, emission_pdf, direct_pdf, e.cos_light, e.delta, e.finite);
-        uint max_len = max_path_length();
-        for (;; ++st.len) {
-            // A vertex at length len only makes paths of len + 1 segments or more (stored
-            // for connections and merges, or connected to the camera): with max_len = 1
-            // there is nothing to trace (and no slot to store in: lv_slots() = 0).
-            if (st.len + 1u > max_len) break;
-            Hit h;
-            if (!trace_closest(st.o, st.d, 0.0, 1e30, h)) break;
-            Surface s = surface_at(h, st.o, st.d);
-            Bsdf b = bsdf_init(s.material, s.ng, -st.d, true);
-            if (!b.valid) break;
-            mis_on_hit(st, h.t, abs(dot(s.ng, st.d)), st.len == 1u && !st.finite_light);
-            if (!b.delta) {
-#if STORE_VERTICES
-                LightVertex v;
-                v.p = s.p; v.thr = st.thr; v.wo = -st.d; v.n = s.ng;
-                v.material = s.material; v.len = st.len;
-                v.dvcm = st.dvcm; v.dvc = st.dvc; v.dvm = st.dvm;
-                lv_store(path * lv_slots() + stored, v);
-                stored += 1u;
-#endif
-#if CONNECT_CAMERA
-                if (st.len + 1u >= min_path_length())
-                    connect_to_camera(st, s.p, s.ng, b, LIGHT_TRACE_ONLY != 0);
-#endif
-            }
-            if (st.len + 2u > max_len) break;
-            if (!scatter(st, b, s.p, s.ng, rng)) break;
         }
     }
+#endif
+    st.o = e.normal != vec3(0.0) ? offset_ray(e.pos, e.normal, e.dir, scene_radius()) : e.pos;
+    st.d = e.dir;
+    st.thr = e.energy / emission_pdf;
+    st.finite_light = e.finite;
+    st.specular = true;
+    mis_light_start(st, emission_pdf, direct_pdf, e.cos_light, e.delta, e.finite);
+    return true;
+}
+
+// Ends light subpath `path` with `stored` vertices in the store.
+void finish_path(uint path, uint stored) {
 #if STORE_VERTICES
     lv_count[path] = stored;
 #if LV_CACHE
     lv_prefix[path] = stored;  // scanned into prefix sums before the camera pass
 #endif
 #endif
+}
+
+void main() {
+    uint stride = regen_stride(push.count, push.paths_per_invocation);
+    uint path = invocation_index();
+    if (path >= stride) return;
+    uint max_len = max_path_length();
+    SubpathState st;
+    uint rng;
+    uint stored = 0u;
+    bool alive = start_path(path, st, rng);
+    // One loop iteration = one segment of the current subpath; a subpath that ends is
+    // finished and the next one started in the same iteration.
+    while (true) {
+        if (!alive) {
+            finish_path(path, stored);
+            path += stride;
+            if (path >= push.count) break;
+            stored = 0u;
+            alive = start_path(path, st, rng);
+            if (!alive) continue;
+        }
+        alive = false;
+        // A vertex at length len only makes paths of len + 1 segments or more (stored
+        // for connections and merges, or connected to the camera): with max_len = 1
+        // there is nothing to trace (and no slot to store in: lv_slots() = 0).
+        if (st.len + 1u > max_len) continue;
+        Hit h;
+        if (!trace_closest(st.o, st.d, 0.0, 1e30, h)) continue;
+        Surface s = surface_at(h, st.o, st.d);
+        Bsdf b = bsdf_init(s.material, s.ng, -st.d, true);
+        if (!b.valid) continue;
+        mis_on_hit(st, h.t, abs(dot(s.ng, st.d)), st.len == 1u && !st.finite_light);
+        if (!b.delta) {
+#if STORE_VERTICES
+            LightVertex v;
+            v.p = s.p; v.thr = st.thr; v.wo = -st.d; v.n = s.ng;
+            v.material = s.material; v.len = st.len;
+            v.dvcm = st.dvcm; v.dvc = st.dvc; v.dvm = st.dvm;
+            lv_store(path * lv_slots() + stored, v);
+            stored += 1u;
+#endif
+#if CONNECT_CAMERA
+            if (st.len + 1u >= min_path_length())
+                connect_to_camera(st, s.p, s.ng, b, LIGHT_TRACE_ONLY != 0);
+#endif
+        }
+        if (st.len + 2u > max_len) continue;
+        if (!scatter(st, b, s.p, s.ng, rng)) continue;
+        st.len++;
+        alive = true;
+    }
     COUNT_RAYS_FLUSH();
 }

@@ -1,5 +1,6 @@
 #version 460
-// Path tracing (one invocation per pixel sample): BSDF sampling with next-event
+// Path tracing (push.paths_per_invocation pixel samples per invocation: path
+// regeneration, common.glsl regen_stride): BSDF sampling with next-event
 // estimation, combined by the balance heuristic; Russian roulette as bsdf.glsl says.
 // Variants: NEE=0 gives pure BSDF sampling (emitter hits only, weight 1), for tests.
 #extension GL_GOOGLE_include_directive : require
@@ -20,8 +21,12 @@ layout(push_constant) uniform PushBlock { GpuPush push; };
 float balance(float a, float b) { return a / (a + b); }
 
 void main() {
+    uint stride = regen_stride(push.count, push.paths_per_invocation);
     uint pixel = invocation_index();
-    if (pixel >= push.count) return;
+    if (pixel >= stride) return;
+    float pick = 1.0 / float(light_count());
+    uint max_len = max_path_length();
+    uint min_len = min_path_length();
     uint rng = rng_init(params.misc.x, push.iteration, pixel, 0u);
     vec3 o = params.cam_pos.xyz;
     vec3 d = camera_sample(pixel, rng);
@@ -29,10 +34,25 @@ void main() {
     vec3 L = vec3(0.0);
     float last_pdf = 1.0;
     bool last_specular = true;
-    float pick = 1.0 / float(light_count());
-    uint max_len = max_path_length();
-    uint min_len = min_path_length();
-    for (uint len = 1u; ; ++len) {
+    uint len = 1u;
+    bool alive = true;
+    // One loop iteration = one vertex of the current path; a path that ends adds its
+    // pixel's value to the film, and the next one starts in the same iteration.
+    while (true) {
+        if (!alive) {
+            film_add(pixel, L);
+            pixel += stride;
+            if (pixel >= push.count) break;
+            rng = rng_init(params.misc.x, push.iteration, pixel, 0u);
+            o = params.cam_pos.xyz;
+            d = camera_sample(pixel, rng);
+            thr = vec3(1.0);
+            L = vec3(0.0);
+            last_pdf = 1.0;
+            last_specular = true;
+            len = 1u;
+        }
+        alive = false;
         Hit h;
         if (!trace_closest(o, d, 0.0, 1e30, h)) {
             uint bg = background_light();
@@ -42,7 +62,7 @@ void main() {
                 float wgt = (NEE == 0 || last_specular) ? 1.0 : balance(last_pdf, pick * dpdf);
                 L += thr * Le * wgt;
             }
-            break;
+            continue;
         }
         Surface s = surface_at(h, o, d);
         if (s.light != NO_LIGHT && len >= min_len) {
@@ -55,9 +75,9 @@ void main() {
                 L += thr * Le * wgt;
             }
         }
-        if (len >= max_len) break;
+        if (len >= max_len) continue;
         Bsdf b = bsdf_init(s.material, s.ng, -d, false);
-        if (!b.valid) break;
+        if (!b.valid) continue;
 #if NEE
         if (!b.delta && len + 1u >= min_len) {
             LightSample ls = light_illuminate(pick_light(rng), s.p, rnd2(rng));
@@ -75,15 +95,16 @@ void main() {
         }
 #endif
         BsdfSample bs = bsdf_sample(b, vec3(rnd2(rng), rnd(rng)));
-        if (!bs.ok) break;
-        if (rnd(rng) >= b.cont_prob) break;
+        if (!bs.ok) continue;
+        if (rnd(rng) >= b.cont_prob) continue;
         thr *= bs.weight / b.cont_prob;
         last_pdf = bs.pdf * b.cont_prob;
         last_specular = bs.specular;
         o = offset_ray(s.p, s.ng, bs.wi, scene_radius());
         d = bs.wi;
-        if (max3(thr) <= 0.0) break;
+        if (max3(thr) <= 0.0) continue;
+        len++;
+        alive = true;
     }
-    film_add(pixel, L);
     COUNT_RAYS_FLUSH();
 }

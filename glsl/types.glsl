@@ -49,13 +49,13 @@ struct GpuParams {
 
 struct GpuPush {
     uint iteration;    // 0-based iteration index
-    uint count;        // invocations in this dispatch
+    uint count;        // paths (pixels, light subpaths) in this dispatch
     float mis_vm;      // VM weight factor: eta = pi r^2 N_L when merging, else 0
     float mis_vc;      // VC weight factor: 1 / eta when connecting, else 0
     float radius;      // merge radius of this iteration
     uint light_paths;  // N_L, light subpaths per iteration
     uint grid_buckets; // buckets of the light-vertex hash grid (merging estimators)
-    uint pad;
+    uint paths_per_invocation; // path regeneration (common.glsl regen_stride); 0 = 1
 };
 
 #endif

@@ -1,8 +1,9 @@
 #!/bin/bash
 # Interleaved A/B(/C...) runs of `vkvcm bench render` for comparing kernel variants on a
 # shared, loaded machine (docs/performance.md, "Performance work"). Each variant is
-#   NAME:GLSL_DIR:VKVCM_BINARY[:ENV=VALUE[:ENV=VALUE...]]
-# (GLSL_DIR is passed as VKVCM_GLSL_DIR: the shaders are compiled at run time). Every round
+#   NAME:GLSL_DIR:VKVCM_BINARY[:ENV=VALUE|:--OPTION=VALUE ...]
+# (GLSL_DIR is passed as VKVCM_GLSL_DIR: the shaders are compiled at run time; --OPTION
+# items are passed to `bench render`, e.g. :--paths-per-invocation=1). Every round
 # runs each variant once, in an order rotated per round so that no variant always runs
 # first; prints "NAME ROUND ALGO SAMPLES_PER_CPU_SECOND" lines for scripts/ab_summary.py.
 #
@@ -23,11 +24,18 @@ shift 3
 variants=("$@")
 n=${#variants[@]}
 run() {
-    local name dir bin envs
-    IFS=: read -r name dir bin envs <<< "$1"
-    # shellcheck disable=SC2086
-    env VKVCM_GLSL_DIR="$dir" ${envs//:/ } "$bin" bench render --size "${SIZE:-256}" \
-        --iterations "${ITERATIONS:-8}" --scenes "$scene" --algos "$algos" 2>/dev/null |
+    local name dir bin extra item
+    local envs=() opts=()
+    IFS=: read -r name dir bin extra <<< "$1"
+    IFS=: read -r -a items <<< "$extra"
+    for item in "${items[@]}"; do
+        case "$item" in
+            --*) opts+=("$item") ;;
+            ?*) envs+=("$item") ;;
+        esac
+    done
+    env VKVCM_GLSL_DIR="$dir" "${envs[@]}" "$bin" bench render --size "${SIZE:-256}" \
+        --iterations "${ITERATIONS:-8}" --scenes "$scene" --algos "$algos" "${opts[@]}" 2>/dev/null |
         awk -F'|' -v name="$name" -v round="$2" -v scene="$scene" \
             '{ s = $2; a = $3; x = $9; gsub(/ /, "", s); gsub(/ /, "", a); gsub(/ /, "", x);
                if (s == scene) print name, round, a, x }'

@@ -76,7 +76,16 @@ fn rust_and_glsl_layouts_match() {
         rust_layout!(GpuSphere { center_radius, info }),
         rust_layout!(GpuLight { a, b, c, d, radiance }),
         rust_layout!(GpuParams { cam_pos, cam_forward, cam_right, cam_up, scene_sphere, dims, misc }),
-        rust_layout!(GpuPush { iteration, count, mis_vm, mis_vc, radius, light_paths, grid_buckets, pad }),
+        rust_layout!(GpuPush {
+            iteration,
+            count,
+            mis_vm,
+            mis_vc,
+            radius,
+            light_paths,
+            grid_buckets,
+            paths_per_invocation
+        }),
     ];
     for (name, size, fields) in rust {
         let (members, stride) = glsl.get(name).unwrap_or_else(|| panic!("struct {name} not found in SPIR-V"));

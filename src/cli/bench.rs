@@ -107,6 +107,10 @@ pub struct BenchRenderArgs {
     pub size: u32,
     #[arg(long, default_value_t = 8)]
     pub iterations: u64,
+    /// Paths per kernel invocation (`render --paths-per-invocation`; default: chosen for
+    /// the device).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub paths_per_invocation: Option<u32>,
     /// Also write the results as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -217,8 +221,9 @@ fn bench_render(a: BenchRenderArgs) -> Result<()> {
     for name in &a.scenes {
         let scene = scene::load_named(name)?;
         for &algo in &a.algos {
-            let row = render::bench::bench_one(&gpu, &scene, algo, a.size, a.size, a.iterations)
-                .with_context(|| format!("benchmarking {} on {name}", algo.name()))?;
+            let row =
+                render::bench::bench_one(&gpu, &scene, algo, (a.size, a.size), a.iterations, a.paths_per_invocation)
+                    .with_context(|| format!("benchmarking {} on {name}", algo.name()))?;
             eprintln!("{} {}: {:.0} samples/s", row.scene, row.algorithm, row.samples_per_second);
             rows.push(row);
         }

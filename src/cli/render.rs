@@ -86,6 +86,11 @@ pub struct RenderArgs {
     /// comparison: the image agrees within float rounding).
     #[arg(long)]
     pub generic: bool,
+    /// Paths each kernel invocation traces one after another (path regeneration; the image
+    /// does not depend on it). Default: chosen for the device (128 at most on a CPU device
+    /// such as lavapipe, 1 on a GPU; docs/performance.md).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub paths_per_invocation: Option<u32>,
     /// Print the feature set the kernels are compiled with and the buffers allocated.
     #[arg(long)]
     pub verbose: bool,
@@ -201,6 +206,7 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     settings.radius_factor = a.radius_factor;
     settings.alpha = a.alpha;
     settings.generic = a.generic;
+    settings.paths_per_invocation = a.paths_per_invocation;
     settings.connect = connect_setting(a.algo, a.connect, a.cache_connections)?;
     settings.count_rays = a.profile || a.profile_json.is_some();
     if let Some(p) = &a.profile_json {
@@ -250,6 +256,8 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
         .with_context(|| format!("preparing {} with {}", scene.name, a.algo.name()))?;
     if a.verbose {
         eprintln!("{}", r.features());
+        let how = if a.paths_per_invocation.is_some() { "--paths-per-invocation" } else { "chosen for the device" };
+        eprintln!("paths per invocation: {} ({how})", r.paths_per_invocation());
         eprint!("{}", render::features::buffer_table(&r.buffers()));
     }
     if let Some(s) = &saved {

@@ -28,7 +28,7 @@ pub struct Profile {
 pub fn stage_of(kernel: &str) -> &'static str {
     match kernel {
         "light_subpath.comp" => "light subpaths",
-        LIGHT_VERTEX_PREFIX_KERNEL => "light-vertex prefix",
+        LIGHT_VERTEX_PREFIX_KERNEL | "lv_cache_compact.comp" => "light-vertex prefix",
         k if k.starts_with("hash_grid_") => "grid build",
         "camera_subpath.comp" | "pt.comp" | "el.comp" => "camera subpaths",
         "accumulate.comp" => "accumulate",

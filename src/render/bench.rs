@@ -27,6 +27,8 @@ pub struct BenchRow {
     pub cpu_seconds: Option<f64>,
     pub samples_per_second: f64,
     pub samples_per_cpu_second: Option<f64>,
+    /// Paths per kernel invocation (path regeneration, src/render/regen.rs).
+    pub paths_per_invocation: u32,
     /// GPU time per kernel over the timed iterations.
     pub kernels: Vec<KernelTime>,
 }
@@ -43,18 +45,20 @@ pub fn process_cpu_seconds() -> Option<f64> {
     Some(t(u.ru_utime) + t(u.ru_stime))
 }
 
-/// Renders `scene` with `algo` for 1 warm-up iteration, then `iterations` timed ones.
+/// Renders `scene` with `algo` for 1 warm-up iteration, then `iterations` timed ones, with
+/// `paths_per_invocation` (`None`: the device's default, src/render/regen.rs).
 pub fn bench_one(
     gpu: &Arc<Gpu>,
     scene: &Scene,
     algo: Algorithm,
-    width: u32,
-    height: u32,
+    (width, height): (u32, u32),
     iterations: u64,
+    paths_per_invocation: Option<u32>,
 ) -> Result<BenchRow> {
-    let warm = RenderSettings::new(algo, width, height, Budget::Iterations(1));
+    let mut warm = RenderSettings::new(algo, width, height, Budget::Iterations(1));
+    warm.paths_per_invocation = paths_per_invocation;
     render(gpu, scene, &warm, None, &mut |_| {})?;
-    let s = RenderSettings::new(algo, width, height, Budget::Iterations(iterations));
+    let s = RenderSettings { budget: Budget::Iterations(iterations), ..warm };
     let cpu0 = process_cpu_seconds();
     let t0 = Instant::now();
     let out = render(gpu, scene, &s, None, &mut |_| {})?;
@@ -74,6 +78,7 @@ pub fn bench_one(
         cpu_seconds: cpu,
         samples_per_second: samples / wall,
         samples_per_cpu_second: cpu.filter(|&c| c > 0.0).map(|c| samples / c),
+        paths_per_invocation: super::regen::resolve(gpu, algo, paths_per_invocation, width * height),
         kernels: out.profile.kernels,
     })
 }
@@ -81,13 +86,13 @@ pub fn bench_one(
 /// A markdown table of the rows.
 pub fn table(rows: &[BenchRow]) -> String {
     let mut s = String::from(
-        "| scene | algo | size | iterations | wall s | CPU s | samples/s | samples/CPU-s | GPU ms per iteration by kernel |\n|---|---|---|---|---|---|---|---|---|\n",
+        "| scene | algo | size | iterations | wall s | CPU s | samples/s | samples/CPU-s | GPU ms per iteration by kernel | paths per invocation |\n|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let kernels: Vec<String> =
             r.kernels.iter().map(|k| format!("{} {:.2}", k.kernel, k.total_ms / r.iterations.max(1) as f64)).collect();
         s += &format!(
-            "| {} | {} | {}x{} | {} | {:.2} | {} | {:.0} | {} | {} |\n",
+            "| {} | {} | {}x{} | {} | {:.2} | {} | {:.0} | {} | {} | {} |\n",
             r.scene,
             r.algorithm,
             r.width,
@@ -97,7 +102,8 @@ pub fn table(rows: &[BenchRow]) -> String {
             r.cpu_seconds.map(|c| format!("{c:.2}")).unwrap_or_else(|| "-".into()),
             r.samples_per_second,
             r.samples_per_cpu_second.map(|c| format!("{c:.0}")).unwrap_or_else(|| "-".into()),
-            kernels.join(", ")
+            kernels.join(", "),
+            r.paths_per_invocation
         );
     }
     s

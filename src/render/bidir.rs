@@ -10,7 +10,8 @@
 //! light subpath p = this pixel (SmallVCM) or to vertices drawn uniformly from the whole
 //! iteration's store, a light-vertex cache (Davidovic et al. 2014, "Progressive Light
 //! Transport Simulation on the GPU: Survey and Improvements"); for the cache, an exclusive
-//! prefix sum of the per-path vertex counts is built after the light pass.
+//! prefix sum of the per-path vertex counts is built after the light pass, and from it a
+//! dense list of the stored vertices' slots (glsl/lv_cache_compact.comp).
 
 use std::sync::Arc;
 
@@ -20,6 +21,7 @@ use super::film::Film;
 use super::gpu_types::GpuPush;
 use super::hash_grid::{ExclusiveScan, HashGrid};
 use super::radius::RadiusSchedule;
+use super::regen;
 use super::scene_gpu::{define_refs, SceneGpu};
 use crate::gpu::{groups_2d, Batch, Buffer, Gpu, Kernel};
 
@@ -100,14 +102,33 @@ pub struct Bidir {
     light: Kernel,
     resolve: Kernel,
     grid: Option<HashGrid>,
-    /// Light-vertex cache: the scan turning `lv_prefix` into prefix sums of the counts.
-    cache_scan: Option<ExclusiveScan>,
+    /// Light-vertex cache: the passes between the light and camera kernels.
+    cache: Option<LvCache>,
     radius: RadiusSchedule,
     grid_origin: [f32; 3],
     pixels: u32,
     light_paths: u32,
+    /// Paths per invocation of the light and camera kernels (src/render/regen.rs).
+    paths_per_invocation: u32,
     // Owned so they outlive the kernels' descriptor sets.
     _buffers: Vec<Buffer>,
+}
+
+/// The light-vertex cache's passes: the scan turning `lv_prefix` into prefix sums of the
+/// per-path counts, then the compaction writing every stored vertex's slot to
+/// `light_vertex_dense` in path order.
+struct LvCache {
+    scan: ExclusiveScan,
+    compact: Kernel,
+    slots: u32,
+}
+
+/// Push constants of glsl/lv_cache_compact.comp (its `CompactPush`).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct CompactPush {
+    light_paths: u32,
+    slots: u32,
 }
 
 /// Bytes of one light-vertex half (lv_a or lv_b) per vertex.
@@ -131,18 +152,22 @@ pub(crate) fn grid_buckets(light_paths: u64) -> u32 {
     (light_paths.max(1) * GRID_BUCKETS_PER_LIGHT_PATH).next_power_of_two().min(MAX_GRID_BUCKETS) as u32
 }
 
+/// What a [`Bidir`] is built for.
+#[derive(Clone, Copy, Debug)]
+pub struct BidirConfig {
+    pub mode: BidirMode,
+    pub max_path_length: u32,
+    pub radius: RadiusSchedule,
+    /// As `render::check_frame` accepts it (the cache only with vertex connections, at
+    /// least 1 draw): [`super::Renderer::new`] checks before building.
+    pub connect: Connect,
+    /// Paths per invocation of the light and camera kernels (src/render/regen.rs).
+    pub paths_per_invocation: u32,
+}
+
 impl Bidir {
-    /// `connect` is as `render::check_frame` accepts it (the cache only with vertex
-    /// connections, at least 1 draw): [`super::Renderer::new`] checks before calling this.
-    pub fn new(
-        gpu: &Arc<Gpu>,
-        scene: &SceneGpu,
-        film: &Film,
-        mode: BidirMode,
-        max_path_length: u32,
-        radius: RadiusSchedule,
-        connect: Connect,
-    ) -> Result<Bidir> {
+    pub fn new(gpu: &Arc<Gpu>, scene: &SceneGpu, film: &Film, config: BidirConfig) -> Result<Bidir> {
+        let BidirConfig { mode, max_path_length, radius, connect, paths_per_invocation } = config;
         let pixels = film.width * film.height;
         let light_paths = pixels;
         let store = mode.stores_vertices();
@@ -164,17 +189,21 @@ impl Bidir {
             gpu.buffer_zeroed::<[f32; 4]>("light_vertices_b", 2 * lv_vertices as usize)?,
             gpu.buffer_zeroed::<u32>("light_vertex_counts", if store { light_paths as usize } else { 1 })?,
         ];
-        let cache = connect != Connect::Path;
-        if cache {
+        if connect != Connect::Path {
             // light_subpath.comp copies the counts here; scanned in place, entry p is the
             // index of path p's first vertex among all stored ones, entry N_L the total.
             buffers.push(gpu.buffer_zeroed::<u32>("light_vertex_prefix", light_paths as usize + 1)?);
+            // Entry i: the store slot of the i-th of all stored vertices.
+            buffers.push(gpu.buffer_zeroed::<u32>("light_vertex_dense", lv_vertices as usize)?);
         }
-        let cache_scan = match buffers.get(4) {
-            Some(prefix) => {
-                Some(ExclusiveScan::new(gpu, prefix, light_paths + 1)?.labelled(crate::gpu::LIGHT_VERTEX_PREFIX_KERNEL))
-            }
-            None => None,
+        let cache = match (buffers.get(4), buffers.get(5)) {
+            (Some(prefix), Some(dense)) => Some(LvCache {
+                scan: ExclusiveScan::new(gpu, prefix, light_paths + 1)?
+                    .labelled(crate::gpu::LIGHT_VERTEX_PREFIX_KERNEL),
+                compact: gpu.kernel("lv_cache_compact.comp", &[], &[&buffers[3], prefix, dense])?,
+                slots: slots as u32,
+            }),
+            _ => None,
         };
         let grid = if mode.use_vm() {
             let buckets = grid_buckets(light_paths as u64);
@@ -184,7 +213,8 @@ impl Bidir {
         };
         let mut bind = scene.bindings(&[&film.accum, &film.stats]);
         bind.extend(buffers[..4].iter());
-        // The prefix buffer binds after the hash grid's (glsl/vcm_bindings.glsl).
+        // The prefix buffer binds after the hash grid's (glsl/vcm_bindings.glsl), the dense
+        // list after it (camera kernel only).
         let prefix = buffers.get(4);
         let lt = mode == BidirMode::LightTracing;
         let flag = |b: bool| (b as u32).to_string();
@@ -207,7 +237,7 @@ impl Bidir {
                 cam_bind.push(&g.cell_start);
                 cam_bind.push(&g.cell_points);
             }
-            cam_bind.extend(prefix);
+            cam_bind.extend(buffers.get(4..6).into_iter().flatten());
             gpu.kernel("camera_subpath.comp", &define_refs(&d), &cam_bind)?
         };
         let s = scene.params.scene_sphere;
@@ -217,11 +247,12 @@ impl Bidir {
             light,
             resolve,
             grid,
-            cache_scan,
+            cache,
             radius,
             grid_origin,
             pixels,
             light_paths,
+            paths_per_invocation,
             _buffers: buffers,
         })
     }
@@ -234,8 +265,8 @@ impl Bidir {
         if let Some(g) = &self.grid {
             b.extend(g.buffers());
         }
-        if let Some(s) = &self.cache_scan {
-            b.extend(s.buffers());
+        if let Some(c) = &self.cache {
+            b.extend(c.scan.buffers());
         }
         b
     }
@@ -252,17 +283,26 @@ impl Bidir {
             radius,
             light_paths: self.light_paths,
             grid_buckets: self.grid.as_ref().map_or(0, |g| g.num_buckets()),
-            ..Default::default()
+            paths_per_invocation: self.paths_per_invocation,
         };
-        batch.dispatch(&self.light, groups_2d(self.light_paths, 64), bytemuck::bytes_of(&push))?;
+        let k = self.paths_per_invocation;
+        batch.dispatch(
+            &self.light,
+            groups_2d(regen::invocations(self.light_paths, k), 64),
+            bytemuck::bytes_of(&push),
+        )?;
         if let Some(g) = &self.grid {
             g.record_build(batch, radius, self.grid_origin)?;
         }
-        if let Some(s) = &self.cache_scan {
-            s.record(batch)?;
+        if let Some(c) = &self.cache {
+            c.scan.record(batch)?;
+            let p = CompactPush { light_paths: self.light_paths, slots: c.slots };
+            batch.dispatch(&c.compact, groups_2d(self.light_paths, 64), bytemuck::bytes_of(&p))?;
         }
         push.count = self.pixels;
-        batch.dispatch(&self.resolve, groups_2d(self.pixels, 64), bytemuck::bytes_of(&push))
+        // accumulate.comp (lt) takes one pixel per invocation; the camera kernel k.
+        let k = if self.mode == BidirMode::LightTracing { 1 } else { k };
+        batch.dispatch(&self.resolve, groups_2d(regen::invocations(self.pixels, k), 64), bytemuck::bytes_of(&push))
     }
 }
 

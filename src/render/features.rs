@@ -216,7 +216,7 @@ impl FeatureSet {
         if let Connect::Cache(_) = self.connect {
             let prefix = Stage {
                 name: "light-vertex prefix",
-                detail: "hash_grid_scan.comp: exclusive prefix sum of the per-path vertex counts (light-vertex cache)",
+                detail: "hash_grid_scan.comp: exclusive prefix sum of the per-path vertex counts, lv_cache_compact.comp: the stored vertices' slots in one list (light-vertex cache)",
             };
             v.insert(1, prefix);
         }

@@ -100,7 +100,7 @@ pub struct GpuParams {
 pub struct GpuPush {
     /// 0-based iteration index (selects random numbers and the merge radius).
     pub iteration: u32,
-    /// Invocations in this dispatch.
+    /// Paths (pixels, light subpaths) in this dispatch.
     pub count: u32,
     /// MIS weight factor of merging, eta = pi r^2 N_L (0 when the estimator does not merge).
     pub mis_vm: f32,
@@ -112,7 +112,8 @@ pub struct GpuPush {
     pub light_paths: u32,
     /// Buckets of the light-vertex hash grid (estimators that merge; else 0).
     pub grid_buckets: u32,
-    pub pad: u32,
+    /// Paths per invocation (path regeneration, src/render/regen.rs); 0 means 1.
+    pub paths_per_invocation: u32,
 }
 
 impl GpuPush {

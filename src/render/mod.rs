@@ -10,6 +10,7 @@ pub mod gpu_types;
 pub mod hash_grid;
 pub mod pt;
 pub mod radius;
+pub mod regen;
 pub mod resources;
 pub mod saved;
 pub mod scene_gpu;
@@ -85,6 +86,9 @@ pub struct RenderSettings {
     /// bpt and vcm: where vertex connections go (SmallVCM's matching light subpath or a
     /// light-vertex cache); must be `Path` for the other estimators.
     pub connect: bidir::Connect,
+    /// Paths per kernel invocation (path regeneration, [`regen`]); `None` chooses by
+    /// device ([`regen::auto`]). The image does not depend on it.
+    pub paths_per_invocation: Option<u32>,
 }
 
 impl RenderSettings {
@@ -99,6 +103,7 @@ impl RenderSettings {
             generic: false,
             count_rays: false,
             connect: bidir::Connect::default_for(algorithm),
+            paths_per_invocation: None,
         }
     }
 }
@@ -173,6 +178,9 @@ fn check_frame(gpu: &Gpu, scene: &Scene, s: &RenderSettings) -> Result<()> {
     if s.connect == bidir::Connect::Cache(0) {
         bail!("the light-vertex cache needs at least 1 connection per camera vertex");
     }
+    if s.paths_per_invocation == Some(0) {
+        bail!("paths per invocation must be at least 1");
+    }
     if let Budget::Iterations(0) = s.budget {
         bail!("iterations must be at least 1");
     }
@@ -203,6 +211,8 @@ pub struct Renderer {
     film: Film,
     _scene_gpu: SceneGpu,
     features: features::FeatureSet,
+    /// Paths per kernel invocation (path regeneration, [`regen`]).
+    paths_per_invocation: u32,
     batch: Batch,
     profile: Profile,
     /// Iterations accumulated in the film (including resumed ones).
@@ -228,8 +238,9 @@ impl Renderer {
         let scene_gpu = SceneGpu::with_features(gpu, scene, frame, &features)?;
         let film = Film::new(gpu, frame.width, frame.height)?;
         let pixels = frame.width * frame.height;
+        let k = regen::resolve(gpu, settings.algorithm, settings.paths_per_invocation, pixels);
         let est = match settings.algorithm {
-            Algorithm::Pt => Estimator::Pt(pt::PathTracer::new(gpu, &scene_gpu, &film, settings.nee)?),
+            Algorithm::Pt => Estimator::Pt(pt::PathTracer::new(gpu, &scene_gpu, &film, settings.nee, k)?),
             Algorithm::Lt | Algorithm::Bpt | Algorithm::Ppm | Algorithm::Bpm | Algorithm::Vcm => {
                 let mode = match settings.algorithm {
                     Algorithm::Lt => bidir::BidirMode::LightTracing,
@@ -243,15 +254,14 @@ impl Renderer {
                     scene_gpu.params.scene_sphere[3],
                     settings.alpha,
                 );
-                Estimator::Bidir(Box::new(bidir::Bidir::new(
-                    gpu,
-                    &scene_gpu,
-                    &film,
+                let config = bidir::BidirConfig {
                     mode,
-                    frame.max_path_length,
-                    schedule,
-                    settings.connect,
-                )?))
+                    max_path_length: frame.max_path_length,
+                    radius: schedule,
+                    connect: settings.connect,
+                    paths_per_invocation: k,
+                };
+                Estimator::Bidir(Box::new(bidir::Bidir::new(gpu, &scene_gpu, &film, config)?))
             }
             Algorithm::El => {
                 let defines = scene_gpu::define_refs(&scene_gpu.defines);
@@ -261,6 +271,7 @@ impl Renderer {
         };
         Ok(Renderer {
             settings: settings.clone(),
+            paths_per_invocation: k,
             est,
             film,
             _scene_gpu: scene_gpu,
@@ -283,6 +294,11 @@ impl Renderer {
     /// Wall-clock seconds rendered so far.
     pub fn seconds(&self) -> f64 {
         self.seconds
+    }
+
+    /// Paths per kernel invocation (path regeneration, [`regen`]).
+    pub fn paths_per_invocation(&self) -> u32 {
+        self.paths_per_invocation
     }
 
     /// What the kernels were compiled with.

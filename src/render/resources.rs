@@ -77,9 +77,11 @@ pub fn estimate(scene: &Scene, s: &RenderSettings) -> Vec<BufferNeed> {
         scratch
     };
     if s.connect != super::bidir::Connect::Path {
-        // bidir.rs: the light-vertex cache's prefix sum of the per-path counts.
+        // bidir.rs: the light-vertex cache's prefix sum of the per-path counts and the
+        // dense list of the stored vertices' slots.
         v.extend([
             BufferNeed { name: "light_vertex_prefix", bytes: (px + 1).saturating_mul(4) },
+            BufferNeed { name: "light_vertex_dense", bytes: lv.saturating_mul(4) },
             BufferNeed { name: "hash_grid_scan_scratch", bytes: scan_scratch(px + 1) * 4 },
         ]);
     }

@@ -1,0 +1,90 @@
+//! Path regeneration (Novák, Havran & Dachsbacher, "Path Regeneration for Interactive Path
+//! Tracing", Eurographics 2010 short papers): the path tracer's, light tracer's and
+//! camera kernels trace `k` paths per invocation, starting the next path of an invocation
+//! in the loop iteration in which its current one ends (glsl/common.glsl `regen_stride`).
+//! A SIMD group then runs until its lanes' total work is done, instead of once per path
+//! until its longest path is. The image does not depend on `k`: every path keeps its
+//! index, random sequence and outputs (tests/render_regen.rs checks equality).
+//!
+//! On a CPU device (lavapipe: 8 lanes per SIMD group) more paths per invocation measured
+//! faster up to the largest tried, 128 (docs/performance.md, "Path regeneration"), as long
+//! as each of the device's threads still gets several workgroups. GPUs are left at one
+//! path per invocation: they hide divergence differently and need many invocations in
+//! flight, and no GPU measurement backs another choice yet.
+
+use ash::vk;
+
+/// The most paths per invocation [`auto`] chooses.
+pub const MAX_AUTO: u32 = 128;
+
+/// Workgroups per CPU thread [`auto`] keeps at least, so that the device's threads share
+/// the dispatch evenly.
+const WORKGROUPS_PER_THREAD: u32 = 4;
+
+/// Invocations per workgroup of the render kernels (`local_size_x`).
+pub const WORKGROUP_SIZE: u32 = 64;
+
+/// Paths per invocation for `paths` paths per dispatch on a device of type
+/// `device_type`: 1 on GPUs; on a CPU device as many as keep
+/// [`WORKGROUPS_PER_THREAD`] workgroups per thread, at most [`MAX_AUTO`].
+pub fn auto(device_type: vk::PhysicalDeviceType, cpu_threads: u32, paths: u32) -> u32 {
+    if device_type != vk::PhysicalDeviceType::CPU {
+        return 1;
+    }
+    let per_dispatch = WORKGROUP_SIZE * WORKGROUPS_PER_THREAD * cpu_threads.max(1);
+    (paths / per_dispatch).clamp(1, MAX_AUTO)
+}
+
+/// Paths per invocation of `algorithm`'s kernels for `paths` paths per dispatch on `gpu`:
+/// `requested` (`--paths-per-invocation`) or else [`auto`]; 1 for `el` (one short ray per
+/// pixel, nothing to regenerate).
+pub fn resolve(gpu: &crate::gpu::Gpu, algorithm: super::Algorithm, requested: Option<u32>, paths: u32) -> u32 {
+    if algorithm == super::Algorithm::El {
+        return 1;
+    }
+    requested.unwrap_or_else(|| auto(gpu.info.device_type, cpu_threads(), paths))
+}
+
+/// The threads a CPU device (lavapipe) runs a dispatch on: `LP_NUM_THREADS` when set,
+/// else the machine's available parallelism (lavapipe's default).
+pub fn cpu_threads() -> u32 {
+    let set = std::env::var("LP_NUM_THREADS").ok().and_then(|v| v.trim().parse::<u32>().ok());
+    set.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get() as u32)).max(1)
+}
+
+/// Invocations of a dispatch over `paths` paths with `k` per invocation (as the kernels'
+/// `regen_stride`).
+pub fn invocations(paths: u32, k: u32) -> u32 {
+    paths.div_ceil(k.max(1))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gpus_take_one_path_per_invocation() {
+        for t in [vk::PhysicalDeviceType::DISCRETE_GPU, vk::PhysicalDeviceType::INTEGRATED_GPU] {
+            assert_eq!(auto(t, 16, 1 << 20), 1);
+        }
+    }
+
+    #[test]
+    fn cpus_keep_workgroups_for_every_thread() {
+        let cpu = vk::PhysicalDeviceType::CPU;
+        assert_eq!(auto(cpu, 2, 65_536), 128);
+        assert_eq!(auto(cpu, 16, 65_536), 16);
+        assert_eq!(auto(cpu, 2, 1 << 22), MAX_AUTO);
+        assert_eq!(auto(cpu, 2, 100), 1);
+        assert_eq!(auto(cpu, 0, 0), 1);
+    }
+
+    #[test]
+    fn invocations_cover_every_path() {
+        for (paths, k) in [(0, 1), (1, 1), (10, 3), (65_536, 128), (65_537, 128), (7, 0)] {
+            let n = invocations(paths, k);
+            assert!(n as u64 * k.max(1) as u64 >= paths as u64);
+            assert!(n == 0 || (n as u64 - 1) * (k.max(1) as u64) < paths as u64);
+        }
+    }
+}
