@@ -4,9 +4,8 @@
 //   (uint(x) * 73856093 ^ uint(y) * 19349663 ^ uint(z) * 83492791) % num_buckets
 // in wrapping 32-bit unsigned arithmetic. After the build (hash_grid_count.comp,
 // hash_grid_scan.comp, hash_grid_scatter.comp, hash_grid_sort.comp; driven by
-// src/render/hash_grid.rs) bucket b holds the ascending light-vertex slot indices
-// grid_indices[grid_start[b] .. grid_start[b + 1]), and grid_points[i] holds
-// (floatBitsToUint(position), slot) of the slot grid_indices[i] (written by the sort pass).
+// src/render/hash_grid.rs) bucket b holds the entries grid_points[grid_start[b] ..
+// grid_start[b + 1]), each (floatBitsToUint(position), slot), ascending by slot.
 //
 // This file declares no bindings: the including kernel owns the buffers (the camera
 // kernel: `uint grid_start[]` at binding 14, `uvec4 grid_points[]` at binding 15).

@@ -1,62 +1,71 @@
 #version 460
-// Hash-grid build, pass 4 of 4: sorts each bucket's slots ascending, so the build (and
-// every sum over a bucket) is deterministic whatever order the count pass's atomics
-// took. One invocation per bucket; a bucket holds about (light vertices / buckets)
-// entries, a few. Up to 16 entries: Batcher's odd-even merge sorting network in
-// registers (63 compare-exchanges, no divergence between invocations: on lavapipe ~35%
-// faster than insertion sort at SmallVCM's table size); up to SMALL: insertion sort;
-// above: heapsort, so a pathological bucket (a radius so large that thousands of
-// vertices share a cell) costs O(n log n) in its invocation, not O(n^2).
-// Then the bucket's entries are written out as grid_points[i] = (position bits, slot):
-// the merge query reads one contiguous uvec4 per candidate from there instead of
-// grid_indices[i] and then the scattered lv_a[2 slot] (on lavapipe bpm +6-10%, vcm
-// +7-9% samples per CPU-second: docs/performance.md, "Performance work"). The position is
-// stored as bits (uvec4), so no float operation can touch it (the slot in a float
-// would be a denormal).
+// Hash-grid build, pass 4 of 4: sorts each bucket's entries grid_points[i] = (position
+// bits, slot) ascending by slot, so the build (and every sum over a bucket) is
+// deterministic whatever order the count pass's atomics took. One invocation per bucket;
+// a bucket holds about (light vertices / buckets) entries, a few. Up to 4 entries: a
+// 5-comparator sorting network; up to 16: Batcher's odd-even merge sorting network
+// (63 compare-exchanges); both in registers, without divergence between invocations
+// that take the same one (on lavapipe the 16-network was ~35% faster than insertion sort
+// at SmallVCM's table size, and most buckets need only the 4-network); up to SMALL:
+// insertion sort; above: heapsort, so a pathological bucket (a radius so large that
+// thousands of vertices share a cell) costs O(n log n) in its invocation, not O(n^2).
+// The merge query reads one contiguous uvec4 per candidate from grid_points (its radius
+// test loads no index and nothing from the light-vertex store: on lavapipe bpm +6-10%,
+// vcm +7-9% samples per CPU-second, docs/performance.md, "Performance work"). The
+// position is stored as bits (uvec4), so no float operation can touch it (the slot in a
+// float would be a denormal). Slots are unique, so comparing them orders entries fully.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 
 layout(local_size_x = 64) in;
 
 layout(std430, binding = 0) readonly buffer GridStartBuf { uint grid_start[]; };
-layout(std430, binding = 1) buffer GridIndicesBuf { uint grid_indices[]; };
-layout(std430, binding = 2) readonly buffer LvABuf { vec4 lv_a[]; };
-layout(std430, binding = 3) writeonly buffer GridPointsBuf { uvec4 grid_points[]; };
+layout(std430, binding = 1) buffer GridPointsBuf { uvec4 grid_points[]; };
 
 #include "hash_grid.glsl"
 HASH_GRID_BUILD_PUSH;
 
 const uint SMALL = 32u;
+// Padding that sorts after every entry and is not written back.
+const uvec4 PAD = uvec4(0u, 0u, 0u, 0xffffffffu);
 
-// Restores the max-heap property below `root` in grid_indices[base .. base + n).
+// Restores the max-heap property (by slot) below `root` in grid_points[base .. base + n).
 void sift_down(uint base, uint root, uint n) {
-    uint v = grid_indices[base + root];
+    uvec4 v = grid_points[base + root];
     for (;;) {
         uint child = 2u * root + 1u;
         if (child >= n) break;
-        uint c = grid_indices[base + child];
+        uvec4 c = grid_points[base + child];
         if (child + 1u < n) {
-            uint c2 = grid_indices[base + child + 1u];
-            if (c2 > c) {
+            uvec4 c2 = grid_points[base + child + 1u];
+            if (c2.w > c.w) {
                 child += 1u;
                 c = c2;
             }
         }
-        if (c <= v) break;
-        grid_indices[base + root] = c;
+        if (c.w <= v.w) break;
+        grid_points[base + root] = c;
         root = child;
     }
-    grid_indices[base + root] = v;
+    grid_points[base + root] = v;
 }
 
-// Sorts grid_indices[begin .. begin + n) ascending.
+// Compare-exchange of v[a] and v[b] by slot.
+#define CE(a, b) { bool sw = v[a].w > v[b].w; uvec4 lo = sw ? v[b] : v[a]; v[b] = sw ? v[a] : v[b]; v[a] = lo; }
+
+// Sorts grid_points[begin .. begin + n) ascending by slot.
 void sort_bucket(uint begin, uint n) {
     if (n <= 1u) return;
+    if (n <= 4u) {
+        uvec4 v[4];
+        [[unroll]] for (uint i = 0u; i < 4u; ++i) v[i] = i < n ? grid_points[begin + i] : PAD;
+        CE(0, 1) CE(2, 3) CE(0, 2) CE(1, 3) CE(1, 2)
+        [[unroll]] for (uint i = 0u; i < 4u; ++i) if (i < n) grid_points[begin + i] = v[i];
+        return;
+    }
     if (n <= 16u) {
-        // Padding with ~0u sorts to the end and is not written back.
-        uint v[16];
-        [[unroll]] for (uint i = 0u; i < 16u; ++i) v[i] = i < n ? grid_indices[begin + i] : 0xffffffffu;
-#define CE(a, b) { uint lo = min(v[a], v[b]); v[b] = max(v[a], v[b]); v[a] = lo; }
+        uvec4 v[16];
+        [[unroll]] for (uint i = 0u; i < 16u; ++i) v[i] = i < n ? grid_points[begin + i] : PAD;
         CE(0, 1) CE(2, 3) CE(0, 2) CE(1, 3) CE(1, 2) CE(4, 5) CE(6, 7) CE(4, 6)
         CE(5, 7) CE(5, 6) CE(0, 4) CE(2, 6) CE(2, 4) CE(1, 5) CE(3, 7) CE(3, 5)
         CE(1, 2) CE(3, 4) CE(5, 6) CE(8, 9) CE(10, 11) CE(8, 10) CE(9, 11) CE(9, 10)
@@ -65,40 +74,35 @@ void sort_bucket(uint begin, uint n) {
         CE(4, 8) CE(2, 10) CE(6, 14) CE(6, 10) CE(2, 4) CE(6, 8) CE(10, 12) CE(1, 9)
         CE(5, 13) CE(5, 9) CE(3, 11) CE(7, 15) CE(7, 11) CE(3, 5) CE(7, 9) CE(11, 13)
         CE(1, 2) CE(3, 4) CE(5, 6) CE(7, 8) CE(9, 10) CE(11, 12) CE(13, 14)
-#undef CE
-        [[unroll]] for (uint i = 0u; i < 16u; ++i) if (i < n) grid_indices[begin + i] = v[i];
+        [[unroll]] for (uint i = 0u; i < 16u; ++i) if (i < n) grid_points[begin + i] = v[i];
         return;
     }
     if (n <= SMALL) {
         uint end = begin + n;
         for (uint i = begin + 1u; i < end; ++i) {
-            uint v = grid_indices[i];
+            uvec4 v = grid_points[i];
             uint j = i;
-            while (j > begin && grid_indices[j - 1u] > v) {
-                grid_indices[j] = grid_indices[j - 1u];
+            while (j > begin && grid_points[j - 1u].w > v.w) {
+                grid_points[j] = grid_points[j - 1u];
                 j -= 1u;
             }
-            if (j != i) grid_indices[j] = v;
+            if (j != i) grid_points[j] = v;
         }
         return;
     }
     for (uint i = n / 2u; i > 0u; --i) sift_down(begin, i - 1u, n);
     for (uint m = n - 1u; m > 0u; --m) {
-        uint top = grid_indices[begin];
-        grid_indices[begin] = grid_indices[begin + m];
-        grid_indices[begin + m] = top;
+        uvec4 top = grid_points[begin];
+        grid_points[begin] = grid_points[begin + m];
+        grid_points[begin + m] = top;
         sift_down(begin, 0u, m);
     }
 }
+#undef CE
 
 void main() {
     uint b = hash_grid_group_index() * 64u + gl_LocalInvocationID.x;
     if (b >= push.num_buckets) return;
     uint begin = grid_start[b];
-    uint end = grid_start[b + 1u];
-    sort_bucket(begin, end - begin);
-    for (uint i = begin; i < end; ++i) {
-        uint slot = grid_indices[i];
-        grid_points[i] = uvec4(floatBitsToUint(lv_a[2u * slot].xyz), slot);
-    }
+    sort_bucket(begin, grid_start[b + 1u] - begin);
 }

@@ -101,18 +101,20 @@ fn random_store(rng: &mut Rng32, origin: [f32; 3], radius: f32, light_paths: u32
     Store { light_paths, slots, lv_a, lv_count }
 }
 
-/// The grid after a build: cell_start, cell_indices, cell_points.
+/// The grid after a build: cell_start, the slots of cell_points (cell_points[i].w), and
+/// cell_points.
 type Built = (Vec<u32>, Vec<u32>, Vec<[u32; 4]>);
 
 fn build(gpu: &Arc<Gpu>, grid: &HashGrid, radius: f32, origin: [f32; 3]) -> Built {
     let mut batch = gpu.batch().unwrap();
     grid.record_build(&mut batch, radius, origin).unwrap();
     batch.submit_wait(None).unwrap();
-    (grid.cell_start.read().unwrap(), grid.cell_indices.read().unwrap(), grid.cell_points.read().unwrap())
+    let points: Vec<[u32; 4]> = grid.cell_points.read().unwrap();
+    (grid.cell_start.read().unwrap(), points.iter().map(|p| p[3]).collect(), points)
 }
 
-/// cell_points[i] = (position bits, slot) of the slot in cell_indices[i], for every used
-/// entry (the camera kernel reads positions from there, not from the store).
+/// cell_points[i] = (position bits, slot) of its slot, for every used entry (the camera
+/// kernel reads positions from there, not from the store).
 fn check_points(store: &Store, start: &[u32], idx: &[u32], points: &[[u32; 4]]) {
     let used = *start.last().unwrap() as usize;
     for (i, (&s, pt)) in idx[..used].iter().zip(&points[..used]).enumerate() {
@@ -231,7 +233,8 @@ fn new_and_build_reject_bad_arguments() {
 
 /// The sort pass on its own with adversarial input (the build's atomics often deliver a
 /// bucket nearly in order on lavapipe): random permutations, descending runs, bucket
-/// sizes 0..=40 around the insertion-sort limit (32) and a few large (heapsort) ones.
+/// sizes 0..=40 across the sorting networks' limits (4, 16) and the insertion-sort limit
+/// (32), and a few large (heapsort) ones.
 #[test]
 fn sort_pass_sorts_every_bucket() {
     with_gpu(|gpu| {
@@ -255,38 +258,30 @@ fn sort_pass_sorts_every_bucket() {
             }
         }
         let sb = gpu.buffer_from_slice("start", &start).unwrap();
-        let ib = gpu.buffer_from_slice("indices", &values).unwrap();
-        // Light vertex of slot s (two vec4 per slot) at (s, s / 2, -s): the pass copies it
-        // next to the sorted entry.
-        let slots = values.iter().max().unwrap() + 1;
-        let lv: Vec<[f32; 4]> = (0..2 * slots)
-            .map(|i| {
-                if i % 2 == 0 {
-                    [(i / 2) as f32, (i / 2) as f32 * 0.5, -((i / 2) as f32), 0.0]
-                } else {
-                    [f32::NAN; 4]
-                }
-            })
-            .collect();
-        let lb = gpu.buffer_from_slice("lv_a", &lv).unwrap();
-        let pb = gpu.buffer_zeroed::<[u32; 4]>("points", total as usize).unwrap();
-        let k = gpu.kernel("hash_grid_sort.comp", &[], &[&sb, &ib, &lb, &pb]).unwrap();
+        // Entry of slot s: (position (s, s / 2, -s) as bits, s); the pass must move the
+        // position with its slot.
+        let entry = |s: u32| {
+            let p = [s as f32, s as f32 * 0.5, -(s as f32)];
+            [p[0].to_bits(), p[1].to_bits(), p[2].to_bits(), s]
+        };
+        let input: Vec<[u32; 4]> = values.iter().map(|&s| entry(s)).collect();
+        let pb = gpu.buffer_from_slice("points", &input).unwrap();
+        let k = gpu.kernel("hash_grid_sort.comp", &[], &[&sb, &pb]).unwrap();
         // BuildPush: origin, radius, light paths, slots, buckets, pad.
         let push: [u32; 8] = [0, 0, 0, 0, 1, 1, nb, 0];
         let mut batch = gpu.batch().unwrap();
         batch.dispatch(&k, [groups_for(nb, 64), 1, 1], bytemuck::cast_slice(&push)).unwrap();
         batch.submit_wait(None).unwrap();
-        let got: Vec<u32> = ib.read().unwrap();
         let points: Vec<[u32; 4]> = pb.read().unwrap();
-        for (i, (&s, pt)) in got.iter().zip(&points).enumerate() {
-            let p = [s as f32, s as f32 * 0.5, -(s as f32)];
-            assert_eq!(*pt, [p[0].to_bits(), p[1].to_bits(), p[2].to_bits(), s], "points[{i}]");
+        for (i, pt) in points.iter().enumerate() {
+            assert_eq!(*pt, entry(pt[3]), "points[{i}]");
         }
         for b in 0..nb as usize {
             let r = start[b] as usize..start[b + 1] as usize;
             let mut want = values[r.clone()].to_vec();
             want.sort_unstable();
-            assert_eq!(got[r], want[..], "bucket {b} of {} entries", sizes[b]);
+            let got: Vec<u32> = points[r].iter().map(|p| p[3]).collect();
+            assert_eq!(got, want, "bucket {b} of {} entries", sizes[b]);
         }
     });
 }

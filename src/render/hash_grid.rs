@@ -2,17 +2,19 @@
 //! built on the GPU every iteration with no host round trip: SmallVCM's counting sort
 //! (../shared/SCENES.md 4.3) as passes recorded into the caller's batch:
 //!
-//! 1. count (`hash_grid_count.comp`): one invocation per light-vertex slot; a valid slot
-//!    does `rank = atomicAdd(cell_start[b], 1)` on its bucket b and keeps (b, rank);
+//! 1. count (`hash_grid_count.comp`): one invocation per light path, over its stored
+//!    vertices; each does `rank = atomicAdd(cell_start[b], 1)` on its bucket b and keeps
+//!    (b, rank);
 //! 2. exclusive prefix sum of `cell_start[0..=num_buckets]` in place ([`ExclusiveScan`],
 //!    `hash_grid_scan.comp`), so `cell_start[num_buckets]` is the vertex total;
-//! 3. scatter (`hash_grid_scatter.comp`): slot -> `cell_indices[cell_start[b] + rank]`,
-//!    no atomics;
-//! 4. sort (`hash_grid_sort.comp`): one invocation per bucket sorts it ascending
-//!    (insertion sort, heapsort past 32 entries), so the result does not depend on the
-//!    order the atomics happened in: builds are bit-identical; then writes each entry's
-//!    (position, slot) to `cell_points`, so that a query's radius test reads one
-//!    contiguous `uvec4` per candidate instead of an index and then the scattered store.
+//! 3. scatter (`hash_grid_scatter.comp`): one invocation per light path; each stored
+//!    vertex writes (position bits, slot) to `cell_points[cell_start[b] + rank]`, no
+//!    atomics; a query's radius test reads one contiguous `uvec4` per candidate instead
+//!    of an index and then the scattered store;
+//! 4. sort (`hash_grid_sort.comp`): one invocation per bucket sorts its entries ascending
+//!    by slot (sorting networks up to 16 entries, then insertion sort, heapsort past 32),
+//!    so the result does not depend on the order the atomics happened in: builds are
+//!    bit-identical.
 //!
 //! Queries are in `glsl/hash_grid.glsl`. Details and measurements: docs/hash-grid.md.
 
@@ -181,17 +183,15 @@ impl ExclusiveScan {
 }
 
 /// The GPU hash grid over the light-vertex store. After [`HashGrid::record_build`] has
-/// run, bucket `b` holds the valid light-vertex slots
-/// `cell_indices[cell_start[b] .. cell_start[b + 1]]`, ascending, and
+/// run, bucket `b` holds the valid light vertices
+/// `cell_points[cell_start[b] .. cell_start[b + 1]]`, ascending by slot, and
 /// `cell_start[num_buckets]` is the number of valid vertices.
 pub struct HashGrid {
     /// `num_buckets + 1` `u32`: exclusive prefix sum of the bucket sizes.
     pub cell_start: Buffer,
-    /// `light_paths * slots` `u32` (the most vertices there can be): slot indices by bucket.
-    pub cell_indices: Buffer,
-    /// `light_paths * slots` `uvec4`, parallel to `cell_indices`: entry i is
-    /// (`floatBitsToUint` of the position of slot `cell_indices[i]`, that slot). What the
-    /// camera kernel reads (docs/hash-grid.md).
+    /// `light_paths * slots` `uvec4` (the most vertices there can be), by bucket: entry i
+    /// is (`floatBitsToUint` of a vertex's position, its slot). What the camera kernel
+    /// reads (docs/hash-grid.md).
     pub cell_points: Buffer,
     /// Per slot: (bucket, arrival rank in the bucket) from the count pass.
     _keys: Buffer,
@@ -244,22 +244,19 @@ impl HashGrid {
             );
         }
         check_range(gpu, "the light-vertex store (lv_a)", total_slots * LV_A_BYTES)?;
-        check_range(gpu, "cell_indices (one u32 per light-vertex slot)", total_slots * 4)?;
         check_range(gpu, "the grid's keys (two u32 per light-vertex slot)", total_slots * 8)?;
         check_range(gpu, "the grid's points (one uvec4 per light-vertex slot)", total_slots * 16)?;
         check_range(gpu, "cell_start (one u32 per bucket + 1)", (num_buckets as u64 + 1) * 4)?;
         let n = total_slots as usize;
         let cell_start = gpu.buffer_zeroed::<u32>("grid_start", num_buckets as usize + 1)?;
-        let cell_indices = gpu.buffer_zeroed::<u32>("grid_indices", n)?;
         let keys = gpu.buffer_zeroed::<[u32; 2]>("grid_keys", n)?;
         let cell_points = gpu.buffer_zeroed::<[u32; 4]>("grid_points", n)?;
         let count = gpu.kernel("hash_grid_count.comp", &[], &[lv_a, lv_count, &cell_start, &keys])?;
-        let scatter = gpu.kernel("hash_grid_scatter.comp", &[], &[lv_count, &cell_start, &keys, &cell_indices])?;
-        let sort = gpu.kernel("hash_grid_sort.comp", &[], &[&cell_start, &cell_indices, lv_a, &cell_points])?;
+        let scatter = gpu.kernel("hash_grid_scatter.comp", &[], &[lv_a, lv_count, &cell_start, &keys, &cell_points])?;
+        let sort = gpu.kernel("hash_grid_sort.comp", &[], &[&cell_start, &cell_points])?;
         let scan = ExclusiveScan::new(gpu, &cell_start, num_buckets + 1)?;
         Ok(HashGrid {
             cell_start,
-            cell_indices,
             cell_points,
             _keys: keys,
             count,
@@ -290,12 +287,12 @@ impl HashGrid {
             num_buckets: self.num_buckets,
             _pad: 0,
         };
-        let slot_groups = folded((self.light_paths * self.slots).div_ceil(LOCAL));
+        let path_groups = folded(self.light_paths.div_ceil(LOCAL));
         let push = bytemuck::bytes_of(&push);
         batch.fill(&self.cell_start, 0)?;
-        batch.dispatch(&self.count, slot_groups, push)?;
+        batch.dispatch(&self.count, path_groups, push)?;
         self.scan.record(batch)?;
-        batch.dispatch(&self.scatter, slot_groups, push)?;
+        batch.dispatch(&self.scatter, path_groups, push)?;
         batch.dispatch(&self.sort, folded(self.num_buckets.div_ceil(LOCAL)), push)
     }
 
@@ -305,7 +302,7 @@ impl HashGrid {
 
     /// Every buffer the grid owns (for `vkvcm render --verbose`).
     pub fn buffers(&self) -> Vec<&Buffer> {
-        vec![&self.cell_start, &self.cell_indices, &self.cell_points, &self._keys, &self.scan._scratch]
+        vec![&self.cell_start, &self.cell_points, &self._keys, &self.scan._scratch]
     }
 
     pub fn light_paths(&self) -> u32 {

@@ -90,7 +90,6 @@ pub fn estimate(scene: &Scene, s: &RenderSettings) -> Vec<BufferNeed> {
         let buckets = super::bidir::grid_buckets(px) as u64;
         v.extend([
             BufferNeed { name: "grid_start", bytes: (buckets + 1).saturating_mul(4) },
-            BufferNeed { name: "grid_indices", bytes: lv.saturating_mul(4) },
             BufferNeed { name: "grid_points", bytes: lv.saturating_mul(16) },
             BufferNeed { name: "grid_keys", bytes: lv.saturating_mul(8) },
             BufferNeed { name: "hash_grid_scan_scratch", bytes: scan_scratch(buckets + 1) * 4 },
