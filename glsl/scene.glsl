@@ -136,24 +136,40 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
 
 // Shadow ray between two points, each offset off its surface (`na`, `nb` may be zero
 // for point-like ends). True when nothing blocks it.
-bool visible(vec3 a, vec3 na, vec3 b, vec3 nb) {
-    vec3 d = b - a;
-    vec3 o = dot(na, na) > 0.0 ? offset_ray(a, na, d, scene_radius()) : a;
-    vec3 e = dot(nb, nb) > 0.0 ? offset_ray(b, nb, -d, scene_radius()) : b;
+// The shadow ray between a (normal na) and b (normal nb), each end offset along its
+// normal unless the normal is zero: origin o, unit direction d and length tmax; false
+// when the ends coincide (nothing to test).
+bool shadow_ray(vec3 a, vec3 na, vec3 b, vec3 nb, out vec3 o, out vec3 d, out float tmax) {
+    vec3 ab = b - a;
+    o = dot(na, na) > 0.0 ? offset_ray(a, na, ab, scene_radius()) : a;
+    vec3 e = dot(nb, nb) > 0.0 ? offset_ray(b, nb, -ab, scene_radius()) : b;
     vec3 de = e - o;
-    float len = length(de);
-    if (len <= 0.0) return true;
-    return !trace_any(o, de / len, 0.0, len);
+    tmax = length(de);
+    d = de / tmax;
+    return tmax > 0.0;
 }
 
-// Shadow ray towards an infinite light in direction `w`.
-bool visible_dir(vec3 a, vec3 na, vec3 w) {
-    return !trace_any(offset_ray(a, na, w, scene_radius()), w, 0.0, 1e30);
+bool visible(vec3 a, vec3 na, vec3 b, vec3 nb) {
+    vec3 o, d;
+    float tmax;
+    if (!shadow_ray(a, na, b, nb, o, d, tmax)) return true;
+    return !trace_any(o, d, 0.0, tmax);
 }
 
-// Shadow ray for a direct-illumination sample taken at p (geometric normal ng).
+// Shadow ray for a direct-illumination sample taken at p (geometric normal ng): towards
+// an infinite light along ls.wi, else to ls.light_point; one trace_any call site for
+// both.
 bool light_sample_visible(vec3 p, vec3 ng, LightSample ls) {
-    return ls.dist >= 1e29 ? visible_dir(p, ng, ls.wi) : visible(p, ng, ls.light_point, ls.light_normal);
+    vec3 o, d;
+    float tmax;
+    if (ls.dist >= 1e29) {
+        o = offset_ray(p, ng, ls.wi, scene_radius());
+        d = ls.wi;
+        tmax = 1e30;
+    } else if (!shadow_ray(p, ng, ls.light_point, ls.light_normal, o, d, tmax)) {
+        return true;
+    }
+    return !trace_any(o, d, 0.0, tmax);
 }
 
 #endif
