@@ -99,9 +99,10 @@ pub struct BenchRenderArgs {
     /// Scenes (built-in names or glTF paths), comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "gbs_s,glm_c,gbs_p,gbs_b")]
     pub scenes: Vec<String>,
-    /// Estimators, comma-separated.
-    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm")]
-    pub algos: Vec<Algorithm>,
+    /// Estimators, comma-separated, each `algo` or, for bpt and vcm, `algo:path` /
+    /// `algo:cache:N` (the connection strategy, `render --connect`), e.g. bpt:path.
+    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm", value_parser = render::bench::Variant::parse)]
+    pub algos: Vec<render::bench::Variant>,
     /// Image width and height.
     #[arg(long, default_value_t = 256)]
     pub size: u32,
@@ -220,10 +221,10 @@ fn bench_render(a: BenchRenderArgs) -> Result<()> {
     let mut rows = Vec::new();
     for name in &a.scenes {
         let scene = scene::load_named(name)?;
-        for &algo in &a.algos {
-            let row =
-                render::bench::bench_one(&gpu, &scene, algo, (a.size, a.size), a.iterations, a.paths_per_invocation)
-                    .with_context(|| format!("benchmarking {} on {name}", algo.name()))?;
+        for &variant in &a.algos {
+            let size = (a.size, a.size);
+            let row = render::bench::bench_one(&gpu, &scene, variant, size, a.iterations, a.paths_per_invocation)
+                .with_context(|| format!("benchmarking {} on {name}", variant.name()))?;
             eprintln!("{} {}: {:.0} samples/s", row.scene, row.algorithm, row.samples_per_second);
             rows.push(row);
         }

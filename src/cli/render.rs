@@ -87,7 +87,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub generic: bool,
     /// Paths each kernel invocation traces one after another (path regeneration; the image
-    /// does not depend on it). Default: chosen for the device (128 at most on a CPU device
+    /// does not depend on it). Default: chosen for the device (256 at most on a CPU device
     /// such as lavapipe, 1 on a GPU; docs/performance.md).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub paths_per_invocation: Option<u32>,

@@ -45,17 +45,18 @@ pub fn process_cpu_seconds() -> Option<f64> {
     Some(t(u.ru_utime) + t(u.ru_stime))
 }
 
-/// Renders `scene` with `algo` for 1 warm-up iteration, then `iterations` timed ones, with
-/// `paths_per_invocation` (`None`: the device's default, src/render/regen.rs).
+/// Renders `scene` with `variant` for 1 warm-up iteration, then `iterations` timed ones,
+/// with `paths_per_invocation` (`None`: the device's default, src/render/regen.rs).
 pub fn bench_one(
     gpu: &Arc<Gpu>,
     scene: &Scene,
-    algo: Algorithm,
+    variant: Variant,
     (width, height): (u32, u32),
     iterations: u64,
     paths_per_invocation: Option<u32>,
 ) -> Result<BenchRow> {
-    let mut warm = RenderSettings::new(algo, width, height, Budget::Iterations(1));
+    let algo = variant.algorithm;
+    let mut warm = variant.settings(width, height, Budget::Iterations(1));
     warm.paths_per_invocation = paths_per_invocation;
     render(gpu, scene, &warm, None, &mut |_| {})?;
     let s = RenderSettings { budget: Budget::Iterations(iterations), ..warm };
@@ -70,7 +71,7 @@ pub fn bench_one(
     let samples = (width as u64 * height as u64 * out.iterations) as f64;
     Ok(BenchRow {
         scene: scene.name.clone(),
-        algorithm: algo.name().to_string(),
+        algorithm: variant.name(),
         width,
         height,
         iterations: out.iterations,

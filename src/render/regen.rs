@@ -7,19 +7,19 @@
 //! index, random sequence and outputs (tests/render_regen.rs checks equality).
 //!
 //! On a CPU device (lavapipe: 8 lanes per SIMD group) more paths per invocation measured
-//! faster up to the largest tried, 128 (docs/performance.md, "Path regeneration"), as long
-//! as each of the device's threads still gets several workgroups. GPUs are left at one
+//! faster up to 256 at 256x256 on 2 threads, that is 2 workgroups of 64 invocations per
+//! thread (512 was no faster; docs/performance.md, "Path regeneration"). GPUs are left at one
 //! path per invocation: they hide divergence differently and need many invocations in
 //! flight, and no GPU measurement backs another choice yet.
 
 use ash::vk;
 
 /// The most paths per invocation [`auto`] chooses.
-pub const MAX_AUTO: u32 = 128;
+pub const MAX_AUTO: u32 = 256;
 
 /// Workgroups per CPU thread [`auto`] keeps at least, so that the device's threads share
 /// the dispatch evenly.
-const WORKGROUPS_PER_THREAD: u32 = 4;
+const WORKGROUPS_PER_THREAD: u32 = 2;
 
 /// Invocations per workgroup of the render kernels (`local_size_x`).
 pub const WORKGROUP_SIZE: u32 = 64;
@@ -72,8 +72,8 @@ mod tests {
     #[test]
     fn cpus_keep_workgroups_for_every_thread() {
         let cpu = vk::PhysicalDeviceType::CPU;
-        assert_eq!(auto(cpu, 2, 65_536), 128);
-        assert_eq!(auto(cpu, 16, 65_536), 16);
+        assert_eq!(auto(cpu, 2, 65_536), 256);
+        assert_eq!(auto(cpu, 16, 65_536), 32);
         assert_eq!(auto(cpu, 2, 1 << 22), MAX_AUTO);
         assert_eq!(auto(cpu, 2, 100), 1);
         assert_eq!(auto(cpu, 0, 0), 1);
