@@ -108,6 +108,11 @@ pub struct BenchRenderArgs {
     pub size: u32,
     #[arg(long, default_value_t = 8)]
     pub iterations: u64,
+    /// Repeat the whole list this many times (each round runs every scene and estimator
+    /// once, so a drift of the machine's speed spreads over all rows); each row is the
+    /// round with the median samples per CPU-second, with the range over the rounds.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    pub rounds: u32,
     /// Paths per kernel invocation (`render --paths-per-invocation`; default: chosen for
     /// the device).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
@@ -218,17 +223,26 @@ fn bench_render(a: BenchRenderArgs) -> Result<()> {
         bail!("--size and --iterations must be at least 1");
     }
     let gpu = open_bench_gpu(a.device.clone())?;
-    let mut rows = Vec::new();
-    for name in &a.scenes {
-        let scene = scene::load_named(name)?;
-        for &variant in &a.algos {
-            let size = (a.size, a.size);
-            let row = render::bench::bench_one(&gpu, &scene, variant, size, a.iterations, a.paths_per_invocation)
-                .with_context(|| format!("benchmarking {} on {name}", variant.name()))?;
-            eprintln!("{} {}: {:.0} samples/s", row.scene, row.algorithm, row.samples_per_second);
-            rows.push(row);
+    let scenes = a.scenes.iter().map(|n| Ok((n, scene::load_named(n)?))).collect::<Result<Vec<_>>>()?;
+    let mut runs = Vec::new();
+    for round in 1..=a.rounds {
+        let mut rows = Vec::new();
+        for (name, scene) in &scenes {
+            for &variant in &a.algos {
+                let size = (a.size, a.size);
+                let row = render::bench::bench_one(&gpu, scene, variant, size, a.iterations, a.paths_per_invocation)
+                    .with_context(|| format!("benchmarking {} on {name}", variant.name()))?;
+                let cpu = row.samples_per_cpu_second.map_or("-".into(), |c| format!("{c:.0}"));
+                eprintln!(
+                    "round {round}/{}: {} {}: {:.0} samples/s, {cpu} samples/CPU-s",
+                    a.rounds, row.scene, row.algorithm, row.samples_per_second
+                );
+                rows.push(row);
+            }
         }
+        runs.push(rows);
     }
+    let rows = render::bench::median_of_rounds(&runs);
     print!("{}", render::bench::table(&rows));
     if let Some(p) = &a.json {
         write_json(p, &rows)?;

@@ -31,6 +31,31 @@ pub struct BenchRow {
     pub paths_per_invocation: u32,
     /// GPU time per kernel over the timed iterations.
     pub kernels: Vec<KernelTime>,
+    /// Runs this row summarises ([`median_of_rounds`]; 1 for a single run).
+    pub rounds: u32,
+    /// Smallest and largest samples per CPU-second over those runs.
+    pub samples_per_cpu_second_range: Option<[f64; 2]>,
+}
+
+/// Rows of `rounds` repeats of the same list of runs (`runs[r][i]`: run i of round r),
+/// summarised per run: the round with the median samples per CPU-second (the lower
+/// middle one for an even count; wall-clock samples/s when CPU time is unknown), with the
+/// range of that figure over the rounds.
+pub fn median_of_rounds(runs: &[Vec<BenchRow>]) -> Vec<BenchRow> {
+    let Some(first) = runs.first() else { return Vec::new() };
+    (0..first.len())
+        .map(|i| {
+            let mut rows: Vec<&BenchRow> = runs.iter().filter_map(|r| r.get(i)).collect();
+            let key = |r: &BenchRow| r.samples_per_cpu_second.unwrap_or(r.samples_per_second);
+            rows.sort_by(|a, b| key(a).total_cmp(&key(b)));
+            let mut row = rows[(rows.len() - 1) / 2].clone();
+            row.rounds = rows.len() as u32;
+            let cpu: Vec<f64> = rows.iter().filter_map(|r| r.samples_per_cpu_second).collect();
+            row.samples_per_cpu_second_range = (cpu.len() == rows.len())
+                .then(|| [cpu.iter().copied().fold(f64::INFINITY, f64::min), cpu.iter().copied().fold(0.0, f64::max)]);
+            row
+        })
+        .collect()
 }
 
 /// User + system CPU time of this process in seconds (getrusage), `None` if unavailable.
@@ -81,19 +106,21 @@ pub fn bench_one(
         samples_per_cpu_second: cpu.filter(|&c| c > 0.0).map(|c| samples / c),
         paths_per_invocation: super::regen::resolve(gpu, algo, paths_per_invocation, width * height),
         kernels: out.profile.kernels,
+        rounds: 1,
+        samples_per_cpu_second_range: None,
     })
 }
 
 /// A markdown table of the rows.
 pub fn table(rows: &[BenchRow]) -> String {
     let mut s = String::from(
-        "| scene | algo | size | iterations | wall s | CPU s | samples/s | samples/CPU-s | GPU ms per iteration by kernel | paths per invocation |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        "| scene | algo | size | iterations | wall s | CPU s | samples/s | samples/CPU-s | GPU ms per iteration by kernel | paths per invocation | samples/CPU-s range (rounds) |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let kernels: Vec<String> =
             r.kernels.iter().map(|k| format!("{} {:.2}", k.kernel, k.total_ms / r.iterations.max(1) as f64)).collect();
         s += &format!(
-            "| {} | {} | {}x{} | {} | {:.2} | {} | {:.0} | {} | {} | {} |\n",
+            "| {} | {} | {}x{} | {} | {:.2} | {} | {:.0} | {} | {} | {} | {} |\n",
             r.scene,
             r.algorithm,
             r.width,
@@ -104,7 +131,11 @@ pub fn table(rows: &[BenchRow]) -> String {
             r.samples_per_second,
             r.samples_per_cpu_second.map(|c| format!("{c:.0}")).unwrap_or_else(|| "-".into()),
             kernels.join(", "),
-            r.paths_per_invocation
+            r.paths_per_invocation,
+            match r.samples_per_cpu_second_range {
+                Some([lo, hi]) if r.rounds > 1 => format!("{lo:.0}-{hi:.0} ({})", r.rounds),
+                _ => format!("- ({})", r.rounds),
+            }
         );
     }
     s
@@ -497,6 +528,42 @@ pub fn suite_table(rows: &[SuiteRow]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn row(name: &str, per_cpu: f64) -> BenchRow {
+        BenchRow {
+            scene: "s".into(),
+            algorithm: name.into(),
+            width: 1,
+            height: 1,
+            iterations: 1,
+            wall_seconds: 1.0,
+            cpu_seconds: Some(1.0),
+            samples_per_second: 1.0,
+            samples_per_cpu_second: Some(per_cpu),
+            paths_per_invocation: 1,
+            kernels: Vec::new(),
+            rounds: 1,
+            samples_per_cpu_second_range: None,
+        }
+    }
+
+    #[test]
+    fn median_of_rounds_takes_each_rows_median_round_and_range() {
+        let runs = vec![
+            vec![row("pt", 5.0), row("lt", 10.0)],
+            vec![row("pt", 1.0), row("lt", 30.0)],
+            vec![row("pt", 3.0), row("lt", 20.0)],
+        ];
+        let m = median_of_rounds(&runs);
+        assert_eq!(m.len(), 2);
+        assert_eq!((m[0].algorithm.as_str(), m[0].samples_per_cpu_second), ("pt", Some(3.0)));
+        assert_eq!(m[0].samples_per_cpu_second_range, Some([1.0, 5.0]));
+        assert_eq!((m[1].samples_per_cpu_second, m[1].rounds), (Some(20.0), 3));
+        assert_eq!(m[1].samples_per_cpu_second_range, Some([10.0, 30.0]));
+        // An even count takes the lower middle round.
+        assert_eq!(median_of_rounds(&runs[..2])[0].samples_per_cpu_second, Some(1.0));
+        assert!(median_of_rounds(&[]).is_empty());
+    }
 
     #[test]
     fn variant_names_parse_back() {
