@@ -120,8 +120,8 @@ uint invocation_index() {
 // Each path keeps its own index, random sequence and outputs, so the image does not
 // depend on k (tests/render_regen.rs). src/render/regen.rs chooses k.
 uint regen_stride(uint paths, uint k) {
-    k = max(k, 1u);
-    return (paths + k - 1u) / k;
+    // ceil(paths / k) without overflow for any k (--paths-per-invocation takes any u32).
+    return paths == 0u ? 0u : (paths - 1u) / max(k, 1u) + 1u;
 }
 
 #endif

@@ -55,6 +55,26 @@ fn images_do_not_depend_on_paths_per_invocation() {
     });
 }
 
+/// The largest count (`--paths-per-invocation` takes any u32): one invocation traces every
+/// path. The stride ceil(paths / k) must not overflow (paths + k - 1 would wrap and leave
+/// the image black). 8x4 pixels: one lane traces all 32 paths in turn.
+#[test]
+fn the_largest_paths_per_invocation_gives_the_same_image() {
+    with_gpu(|gpu| {
+        let scene = vkvcm::scene::load_named("glm_c").unwrap();
+        for algo in [Algorithm::Pt, Algorithm::Vcm] {
+            let render_with = |k: u32| {
+                let mut s = RenderSettings::new(algo, 8, 4, Budget::Iterations(2));
+                s.paths_per_invocation = Some(k);
+                render::render(gpu, &scene, &s, None, &mut |_| {}).unwrap()
+            };
+            let (one, all) = (render_with(1), render_with(u32::MAX));
+            assert!(one.sum.iter().any(|p| p.iter().any(|&c| c > 0.0)), "{algo:?}: black image");
+            assert!(one.sum == all.sum && one.sum_sq == all.sum_sq, "{algo:?}: u32::MAX paths per invocation");
+        }
+    });
+}
+
 #[test]
 fn zero_paths_per_invocation_is_refused() {
     with_gpu(|gpu| {
