@@ -1,9 +1,10 @@
 #version 460
 // Stage 3 (../shared/DESIGN.md): push.paths_per_invocation pixel samples per invocation
-// (path regeneration, common.glsl regen_stride). Traces a camera subpath; at each vertex adds emitter hits, next-event estimation and connections to
-// the vertices of light subpath p = this pixel, or with LV_CACHE to vertices drawn from
-// all light subpaths (USE_VC), and merges with the light
-// vertices within the radius found in the hash grid (USE_VM), each weighted by the
+// (path regeneration, common.glsl regen_stride). Traces a camera subpath; at each vertex
+// adds emitter hits, next-event estimation and connections to the vertices of light
+// subpath p = this pixel, or with LV_CACHE to vertices drawn from all light subpaths
+// (USE_VC), and merges with the light vertices within the radius found in the hash grid
+// (USE_VM), each weighted by the
 // recursive MIS of ../shared/SCENES.md 4.4. Then takes this pixel's splats (light-to-
 // camera connections of stage 1) and adds the sum to the film (stage 4).
 // USE_VC=1 USE_VM=0: bpt; 0 1: bpm; 1 1: vcm; PPM=1 (with USE_VM=1, USE_VC=0): merge at

@@ -116,7 +116,8 @@ uint invocation_index() {
 // i traces paths i, i + stride, i + 2 stride, ... (below `paths`), starting the next one
 // in the same loop iteration in which the current one ends. A SIMD group then runs until
 // its lanes' total work is done instead of once per path until its longest path is: on
-// lavapipe (8 lanes per group) 1.12-1.32x samples per CPU-second (docs/performance.md).
+// lavapipe (8 lanes per group) 1.15-1.37x samples per CPU-second at 256x256
+// (docs/performance.md, "Third round").
 // Each path keeps its own index, random sequence and outputs, so the image does not
 // depend on k (tests/render_regen.rs). src/render/regen.rs chooses k.
 uint regen_stride(uint paths, uint k) {

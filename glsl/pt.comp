@@ -27,22 +27,22 @@ void main() {
     float pick = 1.0 / float(light_count());
     uint max_len = max_path_length();
     uint min_len = min_path_length();
-    uint rng = rng_init(params.misc.x, push.iteration, pixel, 0u);
-    vec3 o = params.cam_pos.xyz;
-    vec3 d = camera_sample(pixel, rng);
-    vec3 thr = vec3(1.0);
-    vec3 L = vec3(0.0);
-    float last_pdf = 1.0;
-    bool last_specular = true;
-    uint len = 1u;
-    bool alive = true;
+    uint rng, len;
+    vec3 o, d, thr, L;
+    float last_pdf;
+    bool last_specular;
+    bool alive = false;
+    bool started = false;
     // One loop iteration = one vertex of the current path; a path that ends adds its
     // pixel's value to the film, and the next one starts in the same iteration.
     while (true) {
         if (!alive) {
-            film_add(pixel, L);
-            pixel += stride;
-            if (pixel >= push.count) break;
+            if (started) {
+                film_add(pixel, L);
+                pixel += stride;
+                if (pixel >= push.count) break;
+            }
+            started = true;
             rng = rng_init(params.misc.x, push.iteration, pixel, 0u);
             o = params.cam_pos.xyz;
             d = camera_sample(pixel, rng);

@@ -134,8 +134,6 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
     return s;
 }
 
-// Shadow ray between two points, each offset off its surface (`na`, `nb` may be zero
-// for point-like ends). True when nothing blocks it.
 // The shadow ray between a (normal na) and b (normal nb), each end offset along its
 // normal unless the normal is zero: origin o, unit direction d and length tmax; false
 // when the ends coincide (nothing to test).
@@ -149,6 +147,8 @@ bool shadow_ray(vec3 a, vec3 na, vec3 b, vec3 nb, out vec3 o, out vec3 d, out fl
     return tmax > 0.0;
 }
 
+// Shadow ray between two points, each offset off its surface (`na`, `nb` may be zero
+// for point-like ends). True when nothing blocks it.
 bool visible(vec3 a, vec3 na, vec3 b, vec3 nb) {
     vec3 o, d;
     float tmax;
