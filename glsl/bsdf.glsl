@@ -21,7 +21,7 @@
 // HAS_GGX, HAS_MIRROR, HAS_DIELECTRIC: glsl/features.glsl); the branches taken and the
 // arithmetic done for the components present are the same as with all of them.
 //
-// Requires: `materials[]` (GpuMaterial) declared by the kernel, common.glsl, types.glsl.
+// Requires: `material_at(i)` (GpuMaterial) declared by the kernel (scene.glsl), common.glsl, types.glsl.
 #ifndef BSDF_GLSL
 #define BSDF_GLSL
 
@@ -98,7 +98,7 @@ vec3 ggx_eval(vec3 n, vec3 wo, vec3 wi, float cos_o, float cos_i, vec3 f0, float
 // `ng`: geometric normal (for a dielectric it must point outwards).
 Bsdf bsdf_init(uint material, vec3 ng, vec3 wo, bool from_light) {
     Bsdf b;
-    GpuMaterial m = materials[material];
+    GpuMaterial m = material_at(material);
     float ior = m.phong.w;
     b.material = material;
     b.wo = wo;
@@ -165,7 +165,7 @@ vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
     float cos_o = dot(b.n, b.wo);
     float cos_i = dot(b.n, wi);
     if (b.delta || cos_o < EPS_COSINE || cos_i < EPS_COSINE) return vec3(0.0);
-    GpuMaterial m = materials[b.material];
+    GpuMaterial m = material_at(b.material);
     vec3 f = vec3(0.0);
 #if HAS_DIFFUSE
     if (b.prob_diffuse > 0.0) {
@@ -219,7 +219,7 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
     s.wi = vec3(0.0);
     s.cos_wi = 0.0;
     if (!b.valid) return s;
-    GpuMaterial m = materials[b.material];
+    GpuMaterial m = material_at(b.material);
     float cos_o = dot(b.n, b.wo);
     float x = u.z;
     float p_nonspec = b.prob_diffuse + b.prob_phong + b.prob_glossy;

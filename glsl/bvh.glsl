@@ -13,6 +13,8 @@
 //      #define BVH_NODES_BINDING 1
 //      #define BVH_PRIMS_BINDING 2
 //      // optional: #define BVH_SET 0
+//      // optional: #define BVH_TEXEL 1: bound as uniform texel buffers of uvec4 texels
+//      //   (usamplerBuffer) instead (src/render/reads.rs)
 //
 // 2. (compatible) declare them itself as vec4 arrays with these names:
 //
@@ -51,11 +53,24 @@
 #define BVH_DONE 0xffffffffu
 #define BVH_ROBUST_SCALE 1.000002
 
-#ifdef BVH_NODES_BINDING
-#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #ifndef BVH_SET
 #define BVH_SET 0
 #endif
+#ifndef BVH_TEXEL
+#define BVH_TEXEL 0
+#endif
+#if defined(BVH_NODES_BINDING) && BVH_TEXEL
+// Uniform texel buffers of uvec4 texels (scene.glsl's TEXEL_READS).
+layout(set = BVH_SET, binding = BVH_NODES_BINDING) uniform usamplerBuffer bvh_nodes_t;
+layout(set = BVH_SET, binding = BVH_PRIMS_BINDING) uniform usamplerBuffer bvh_prims_t;
+uvec4 bvh_node_elem(uint i) {
+    return texelFetch(bvh_nodes_t, int(i));
+}
+uvec4 bvh_prim_elem(uint i) {
+    return texelFetch(bvh_prims_t, int(i));
+}
+#elif defined(BVH_NODES_BINDING)
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 layout(std430, set = BVH_SET, binding = BVH_NODES_BINDING) readonly buffer BvhNodes {
     u64vec2 bvh_nodes[];
 };

@@ -7,7 +7,7 @@
 // has its own `if (kind == ...)` block, and the blocks present do the same arithmetic in
 // every variant.
 //
-// Requires: `lights[]` (GpuLight), `params` (GpuParams), common.glsl, types.glsl.
+// Requires: `light_at(i)` (GpuLight, scene.glsl), `params` (GpuParams), common.glsl, types.glsl.
 #ifndef LIGHTS_GLSL
 #define LIGHTS_GLSL
 
@@ -52,7 +52,7 @@ struct LightSample {
 };
 
 LightSample light_illuminate(uint index, vec3 x, vec2 u) {
-    GpuLight l = lights[index];
+    GpuLight l = light_at(index);
     uint kind = light_kind(l);
     LightSample s;
     s.ok = false;
@@ -122,7 +122,7 @@ LightSample light_illuminate(uint index, vec3 x, vec2 u) {
 // it), with the pdfs of producing that point by direct sampling (area measure, no pick
 // probability) and by emission sampling (solid angle).
 vec3 area_light_radiance(uint index, vec3 dir, out float direct_pdf_a, out float emission_pdf_w) {
-    GpuLight l = lights[index];
+    GpuLight l = light_at(index);
     vec3 nl = area_light_normal(l);
     float c = dot(nl, -dir);
     direct_pdf_a = 0.0;
@@ -138,7 +138,7 @@ vec3 background_radiance(uint index, out float direct_pdf_w, out float emission_
     float r = params.scene_sphere.w;
     direct_pdf_w = INV_4PI;
     emission_pdf_w = INV_4PI / (PI * r * r);
-    return lights[index].radiance.rgb;
+    return light_at(index).radiance.rgb;
 }
 
 // ---- Emission: a ray leaving a light (light subpaths). Pdfs exclude the pick
@@ -158,7 +158,7 @@ struct LightEmission {
 };
 
 LightEmission light_emit(uint index, vec2 u_pos, vec2 u_dir) {
-    GpuLight l = lights[index];
+    GpuLight l = light_at(index);
     uint kind = light_kind(l);
     LightEmission e;
     e.delta = light_is_delta(kind);

@@ -11,14 +11,68 @@
 
 layout(std430, binding = 0) readonly buffer ParamsBuf { GpuParams params; };
 // Bindings 1 and 2: the BVH; bvh.glsl declares them itself (64-bit loads, ~10% faster on
-// lavapipe than vec4 arrays: docs/bvh.md).
+// lavapipe than vec4 arrays: docs/bvh.md; with TEXEL_READS uniform texel buffers).
 #define BVH_NODES_BINDING 1
 #define BVH_PRIMS_BINDING 2
+// Bindings 3-7, read through triangle_at(i), sphere_at(i), material_at(i), light_at(i)
+// and shading_normal_at(i). TEXEL_READS (src/render/reads.rs): as uniform texel buffers of
+// uvec4 texels, one per vec4 of the struct in field order (each struct is whole vec4s:
+// src/render/gpu_types.rs); else as storage buffers.
+#ifndef TEXEL_READS
+#define TEXEL_READS 0
+#endif
+#if TEXEL_READS
+#define BVH_TEXEL 1
+layout(binding = 3) uniform usamplerBuffer triangles_t;
+layout(binding = 4) uniform usamplerBuffer spheres_t;
+layout(binding = 5) uniform usamplerBuffer materials_t;
+layout(binding = 6) uniform usamplerBuffer lights_t;
+layout(binding = 7) uniform usamplerBuffer shading_normals_t;
+vec4 texel_vec4(usamplerBuffer b, uint i) { return uintBitsToFloat(texelFetch(b, int(i))); }
+GpuTriangle triangle_at(uint i) {
+    GpuTriangle t;
+    t.p0 = texel_vec4(triangles_t, 3u * i);
+    t.p1 = texel_vec4(triangles_t, 3u * i + 1u);
+    t.p2 = texel_vec4(triangles_t, 3u * i + 2u);
+    return t;
+}
+GpuSphere sphere_at(uint i) {
+    GpuSphere s;
+    s.center_radius = texel_vec4(spheres_t, 2u * i);
+    s.info = texelFetch(spheres_t, int(2u * i + 1u));
+    return s;
+}
+GpuMaterial material_at(uint i) {
+    GpuMaterial m;
+    m.diffuse = texel_vec4(materials_t, 5u * i);
+    m.phong = texel_vec4(materials_t, 5u * i + 1u);
+    m.mirror = texel_vec4(materials_t, 5u * i + 2u);
+    m.emission = texel_vec4(materials_t, 5u * i + 3u);
+    m.glossy = texel_vec4(materials_t, 5u * i + 4u);
+    return m;
+}
+GpuLight light_at(uint i) {
+    GpuLight l;
+    l.a = texel_vec4(lights_t, 5u * i);
+    l.b = texel_vec4(lights_t, 5u * i + 1u);
+    l.c = texel_vec4(lights_t, 5u * i + 2u);
+    l.d = texel_vec4(lights_t, 5u * i + 3u);
+    l.radiance = texel_vec4(lights_t, 5u * i + 4u);
+    return l;
+}
+vec4 shading_normal_at(uint i) { return texel_vec4(shading_normals_t, i); }
+#else
 layout(std430, binding = 3) readonly buffer TrianglesBuf { GpuTriangle triangles[]; };
 layout(std430, binding = 4) readonly buffer SpheresBuf { GpuSphere spheres[]; };
 layout(std430, binding = 5) readonly buffer MaterialsBuf { GpuMaterial materials[]; };
 layout(std430, binding = 6) readonly buffer LightsBuf { GpuLight lights[]; };
 layout(std430, binding = 7) readonly buffer NormalsBuf { vec4 shading_normals[]; };
+GpuTriangle triangle_at(uint i) { return triangles[i]; }
+GpuSphere sphere_at(uint i) { return spheres[i]; }
+GpuMaterial material_at(uint i) { return materials[i]; }
+GpuLight light_at(uint i) { return lights[i]; }
+vec4 shading_normal_at(uint i) { return shading_normals[i]; }
+#endif
 
 #include "bvh.glsl"
 
@@ -96,7 +150,7 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
     Surface s;
 #if HAS_SPHERES
     if (h.is_sphere) {
-        GpuSphere sp = spheres[h.prim];
+        GpuSphere sp = sphere_at(h.prim);
         vec3 c = sp.center_radius.xyz;
         float r = sp.center_radius.w;
         vec3 n = normalize(o + h.t * d - c);
@@ -108,7 +162,7 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
     } else
 #endif
     {
-        GpuTriangle tri = triangles[h.prim];
+        GpuTriangle tri = triangle_at(h.prim);
         vec3 e1 = tri.p1.xyz - tri.p0.xyz;
         vec3 e2 = tri.p2.xyz - tri.p0.xyz;
         s.p = tri.p0.xyz + h.u * e1 + h.v * e2;
@@ -117,9 +171,9 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
 #if HAS_SHADING_NORMALS
         uint first_normal = floatBitsToUint(tri.p2.w);
         if (first_normal != 0xffffffffu) {
-            vec3 n = (1.0 - h.u - h.v) * shading_normals[first_normal].xyz
-                   + h.u * shading_normals[first_normal + 1u].xyz
-                   + h.v * shading_normals[first_normal + 2u].xyz;
+            vec3 n = (1.0 - h.u - h.v) * shading_normal_at(first_normal).xyz
+                   + h.u * shading_normal_at(first_normal + 1u).xyz
+                   + h.v * shading_normal_at(first_normal + 2u).xyz;
             float len = length(n);
             if (len > 0.0) s.ns = (dot(n, s.ng) < 0.0 ? -n : n) / len;
         }

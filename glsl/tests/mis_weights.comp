@@ -53,9 +53,9 @@ vec3 dir_to(uint i, uint j) {
 // a sampled one (the pdfs of the other lights do not depend on the sample).
 LightSample light_sample_fixed(uint li, vec3 x) {
     LightSample s = light_illuminate(li, x, vec2(0.5));
-    uint kind = light_kind(lights[li]);
+    uint kind = light_kind(light_at(li));
     if (kind == LIGHT_AREA) {
-        GpuLight l = lights[li];
+        GpuLight l = light_at(li);
         vec3 d = vp[0] - x;
         float d2 = dot(d, d);
         s.dist = sqrt(d2);
@@ -189,7 +189,7 @@ void main() {
         if (max3(bsdf_eval(bl, dir_to(a, k), pf, pr)) <= 0.0) return;
         if (!visible(vp[a], vn[a], params.cam_pos.xyz, vec3(0.0))) return;
     }
-    uint kind = light_kind(lights[li]);
+    uint kind = light_kind(light_at(li));
     // The start of a light subpath leaving y_0 towards y_1: light_emit's pdfs, whose
     // only dependence on the sample is an area light's cosine.
     LightEmission e = light_emit(li, vec2(0.5), vec2(0.5));

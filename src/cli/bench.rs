@@ -117,6 +117,10 @@ pub struct BenchRenderArgs {
     /// the device).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub paths_per_invocation: Option<u32>,
+    /// How the kernels read their read-only buffers (`render --reads`; default: chosen
+    /// for the device).
+    #[arg(long, value_enum)]
+    pub reads: Option<render::reads::Reads>,
     /// Also write the results as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -224,13 +228,14 @@ fn bench_render(a: BenchRenderArgs) -> Result<()> {
     }
     let gpu = open_bench_gpu(a.device.clone())?;
     let scenes = a.scenes.iter().map(|n| Ok((n, scene::load_named(n)?))).collect::<Result<Vec<_>>>()?;
+    let overrides = render::bench::Overrides { paths_per_invocation: a.paths_per_invocation, reads: a.reads };
     let mut runs = Vec::new();
     for round in 1..=a.rounds {
         let mut rows = Vec::new();
         for (name, scene) in &scenes {
             for &variant in &a.algos {
                 let size = (a.size, a.size);
-                let row = render::bench::bench_one(&gpu, scene, variant, size, a.iterations, a.paths_per_invocation)
+                let row = render::bench::bench_one(&gpu, scene, variant, size, a.iterations, overrides)
                     .with_context(|| format!("benchmarking {} on {name}", variant.name()))?;
                 let cpu = row.samples_per_cpu_second.map_or("-".into(), |c| format!("{c:.0}"));
                 eprintln!(

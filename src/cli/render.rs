@@ -91,6 +91,12 @@ pub struct RenderArgs {
     /// such as lavapipe, 1 on a GPU; docs/performance.md).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     pub paths_per_invocation: Option<u32>,
+    /// How the kernels read the buffers they only read (scene, light vertices, hash grid):
+    /// as storage buffers or as uniform texel buffers (the image does not depend on it).
+    /// Default: chosen for the device (texel on a CPU device such as lavapipe, where it
+    /// is faster; storage on a GPU; docs/performance.md).
+    #[arg(long, value_enum)]
+    pub reads: Option<render::reads::Reads>,
     /// Print the feature set the kernels are compiled with and the buffers allocated.
     #[arg(long)]
     pub verbose: bool,
@@ -207,6 +213,7 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     settings.alpha = a.alpha;
     settings.generic = a.generic;
     settings.paths_per_invocation = a.paths_per_invocation;
+    settings.reads = a.reads;
     settings.connect = connect_setting(a.algo, a.connect, a.cache_connections)?;
     settings.count_rays = a.profile || a.profile_json.is_some();
     if let Some(p) = &a.profile_json {
@@ -258,6 +265,8 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
         eprintln!("{}", r.features());
         let how = if a.paths_per_invocation.is_some() { "--paths-per-invocation" } else { "chosen for the device" };
         eprintln!("paths per invocation: {} ({how})", r.paths_per_invocation());
+        let how = if a.reads.is_some() { "--reads" } else { "chosen for the device" };
+        eprintln!("read-only buffers read as: {} buffers ({how})", r.reads().name());
         eprint!("{}", render::features::buffer_table(&r.buffers()));
     }
     if let Some(s) = &saved {

@@ -1,4 +1,5 @@
-//! Storage buffers owned through gpu-allocator; Drop frees them.
+//! Device buffers (storage and uniform texel buffers) owned through gpu-allocator; Drop
+//! frees them.
 
 use std::sync::Arc;
 
@@ -11,7 +12,8 @@ use gpu_allocator::MemoryLocation;
 use super::batch::vk_error_text;
 use super::Gpu;
 
-/// A device buffer usable as a storage buffer and as a transfer source/destination.
+/// A device buffer usable as a storage buffer, a uniform texel buffer and a transfer
+/// source/destination.
 pub struct Buffer {
     gpu: Arc<Gpu>,
     pub(crate) raw: vk::Buffer,
@@ -28,6 +30,7 @@ impl Gpu {
             .size(alloc_size)
             .usage(
                 vk::BufferUsageFlags::STORAGE_BUFFER
+                    | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
                     | vk::BufferUsageFlags::TRANSFER_SRC
                     | vk::BufferUsageFlags::TRANSFER_DST,
             )

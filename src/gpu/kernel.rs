@@ -1,5 +1,6 @@
-//! Compute kernels: pipeline, layout and one descriptor set of storage buffers, created
-//! once and reused for every dispatch.
+//! Compute kernels: pipeline, layout and one descriptor set of buffers (storage buffers,
+//! or uniform texel buffers for data a kernel only reads), created once and reused for
+//! every dispatch.
 
 use std::sync::Arc;
 
@@ -11,7 +12,46 @@ use super::{Buffer, Gpu};
 /// Push-constant bytes every kernel may use (the Vulkan guaranteed minimum).
 pub const PUSH_CONSTANT_BYTES: u32 = 128;
 
-/// A compute pipeline whose bindings 0..n are storage buffers.
+/// How a kernel sees the buffer at one binding.
+#[derive(Clone, Copy)]
+pub enum Binding<'a> {
+    /// A storage buffer (GLSL `buffer`).
+    Storage(&'a Buffer),
+    /// A read-only uniform texel buffer of `R32G32B32A32_UINT` texels (GLSL
+    /// `usamplerBuffer`, 16 bytes per texel; the buffer's size must be a multiple of 16).
+    /// On lavapipe a divergent texel fetch is one 16-byte load per lane where a storage
+    /// buffer load is a bounds-checked branch per lane and component
+    /// (docs/performance.md, "Texel-buffer reads").
+    Texel(&'a Buffer),
+    /// The same with `R32_UINT` texels (`usamplerBuffer`, one `uint` per texel).
+    TexelU32(&'a Buffer),
+}
+
+impl<'a> Binding<'a> {
+    fn buffer(&self) -> &'a Buffer {
+        match *self {
+            Binding::Storage(b) | Binding::Texel(b) | Binding::TexelU32(b) => b,
+        }
+    }
+
+    fn descriptor_type(&self) -> vk::DescriptorType {
+        match self {
+            Binding::Storage(_) => vk::DescriptorType::STORAGE_BUFFER,
+            Binding::Texel(_) | Binding::TexelU32(_) => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
+        }
+    }
+
+    /// The texel format and size in bytes, for texel buffers.
+    fn texel(&self) -> Option<(vk::Format, u64)> {
+        match self {
+            Binding::Storage(_) => None,
+            Binding::Texel(_) => Some((vk::Format::R32G32B32A32_UINT, 16)),
+            Binding::TexelU32(_) => Some((vk::Format::R32_UINT, 4)),
+        }
+    }
+}
+
+/// A compute pipeline with buffers at bindings 0..n.
 pub struct Kernel {
     gpu: Arc<Gpu>,
     name: String,
@@ -20,20 +60,31 @@ pub struct Kernel {
     set_layout: vk::DescriptorSetLayout,
     pool: vk::DescriptorPool,
     pub(crate) set: vk::DescriptorSet,
-    bindings: usize,
+    /// The views of the texel-buffer bindings (null for storage buffers), destroyed with
+    /// the kernel.
+    views: Vec<vk::BufferView>,
 }
 
 impl Gpu {
     /// Builds the kernel `name` (a .comp file under glsl/) with `defines`, binding
-    /// `buffers` to bindings 0, 1, ... in order.
+    /// `buffers` as storage buffers to bindings 0, 1, ... in order.
     pub fn kernel(self: &Arc<Self>, name: &str, defines: &[(&str, &str)], buffers: &[&Buffer]) -> Result<Kernel> {
+        let bindings: Vec<Binding> = buffers.iter().map(|b| Binding::Storage(b)).collect();
+        self.kernel_with(name, defines, &bindings)
+    }
+
+    /// Builds the kernel `name` with `defines`, binding `bindings` to bindings 0, 1, ...
+    /// in order, each as the kind of descriptor it names.
+    pub fn kernel_with(self: &Arc<Self>, name: &str, defines: &[(&str, &str)], bindings: &[Binding]) -> Result<Kernel> {
         let module = self.shaders.module(&self.device, name, defines)?;
         let dev = &self.device;
-        let binding_info: Vec<_> = (0..buffers.len() as u32)
-            .map(|i| {
+        let binding_info: Vec<_> = bindings
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
                 vk::DescriptorSetLayoutBinding::default()
-                    .binding(i)
-                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .binding(i as u32)
+                    .descriptor_type(b.descriptor_type())
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })
@@ -54,7 +105,7 @@ impl Gpu {
                 set_layout,
                 pool: vk::DescriptorPool::null(),
                 set: vk::DescriptorSet::null(),
-                bindings: buffers.len(),
+                views: Vec::new(),
             };
             let set_layouts = [set_layout];
             let push =
@@ -72,10 +123,13 @@ impl Gpu {
                 .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
                 .map_err(|(_, e)| e)
                 .with_context(|| format!("cannot create the pipeline of kernel {name}"))?[0];
-            if !buffers.is_empty() {
-                let sizes = [vk::DescriptorPoolSize::default()
-                    .ty(vk::DescriptorType::STORAGE_BUFFER)
-                    .descriptor_count(buffers.len() as u32)];
+            if !bindings.is_empty() {
+                let sizes: Vec<_> = [vk::DescriptorType::STORAGE_BUFFER, vk::DescriptorType::UNIFORM_TEXEL_BUFFER]
+                    .into_iter()
+                    .map(|ty| (ty, bindings.iter().filter(|b| b.descriptor_type() == ty).count() as u32))
+                    .filter(|&(_, n)| n > 0)
+                    .map(|(ty, n)| vk::DescriptorPoolSize::default().ty(ty).descriptor_count(n))
+                    .collect();
                 k.pool = dev.create_descriptor_pool(
                     &vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes),
                     None,
@@ -83,7 +137,7 @@ impl Gpu {
                 k.set = dev.allocate_descriptor_sets(
                     &vk::DescriptorSetAllocateInfo::default().descriptor_pool(k.pool).set_layouts(&set_layouts),
                 )?[0];
-                k.bind(buffers)?;
+                k.bind(bindings)?;
             }
             Ok(k)
         }
@@ -102,37 +156,65 @@ impl Kernel {
         self
     }
 
-    /// Re-points the bindings at other buffers (same count). Not while a batch that
-    /// uses this kernel is in flight.
-    pub fn bind(&self, buffers: &[&Buffer]) -> Result<()> {
-        if buffers.len() != self.bindings {
-            bail!("kernel {} has {} bindings, got {} buffers", self.name, self.bindings, buffers.len());
-        }
-        let max = self.gpu.limits.max_storage_buffer_range as u64;
-        for b in buffers {
-            if b.size() > max {
+    /// Points the descriptor set at `bindings` (once, at creation: the set layout fixes
+    /// each binding's kind).
+    fn bind(&mut self, bindings: &[Binding]) -> Result<()> {
+        let limits = &self.gpu.limits;
+        for b in bindings {
+            let buf = b.buffer();
+            let (max, what) = match b.texel() {
+                None => (limits.max_storage_buffer_range as u64, "bytes (maxStorageBufferRange)"),
+                Some((_, texel)) => {
+                    if buf.size() % texel != 0 {
+                        bail!(
+                            "buffer {:?} ({} bytes) is read as {texel}-byte texels but is not a whole number of them",
+                            buf.name(),
+                            buf.size()
+                        );
+                    }
+                    (limits.max_texel_buffer_elements as u64 * texel, "bytes as texels (maxTexelBufferElements)")
+                }
+            };
+            if buf.size() > max {
                 bail!(
-                    "buffer {:?} needs {} bytes but this device binds at most {} bytes (maxStorageBufferRange); use a smaller image or scene",
-                    b.name(),
-                    b.size(),
-                    max
+                    "buffer {:?} needs {} bytes but this device binds at most {max} {what}; use a smaller image or scene",
+                    buf.name(),
+                    buf.size(),
                 );
             }
         }
-        let infos: Vec<[vk::DescriptorBufferInfo; 1]> =
-            buffers.iter().map(|b| [vk::DescriptorBufferInfo::default().buffer(b.raw).range(vk::WHOLE_SIZE)]).collect();
-        let writes: Vec<_> = infos
+        for b in bindings {
+            if let Some((format, _)) = b.texel() {
+                let info =
+                    vk::BufferViewCreateInfo::default().buffer(b.buffer().raw).format(format).range(vk::WHOLE_SIZE);
+                // SAFETY: valid buffer created with UNIFORM_TEXEL_BUFFER usage; the view is
+                // destroyed with the kernel.
+                let view = unsafe { self.gpu.device.create_buffer_view(&info, None) }
+                    .with_context(|| format!("cannot create a texel view of buffer {:?}", b.buffer().name()))?;
+                self.views.push(view);
+            } else {
+                self.views.push(vk::BufferView::null());
+            }
+        }
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
+            .iter()
+            .map(|b| [vk::DescriptorBufferInfo::default().buffer(b.buffer().raw).range(vk::WHOLE_SIZE)])
+            .collect();
+        let writes: Vec<_> = bindings
             .iter()
             .enumerate()
-            .map(|(i, info)| {
-                vk::WriteDescriptorSet::default()
+            .map(|(i, b)| {
+                let w = vk::WriteDescriptorSet::default()
                     .dst_set(self.set)
                     .dst_binding(i as u32)
-                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                    .buffer_info(info)
+                    .descriptor_type(b.descriptor_type());
+                match b {
+                    Binding::Storage(_) => w.buffer_info(&infos[i]),
+                    _ => w.texel_buffer_view(std::slice::from_ref(&self.views[i])),
+                }
             })
             .collect();
-        // SAFETY: the set is not in use by a pending batch (documented precondition).
+        // SAFETY: the set was just allocated and is not in use.
         unsafe { self.gpu.device.update_descriptor_sets(&writes, &[]) };
         Ok(())
     }
@@ -144,6 +226,9 @@ impl Drop for Kernel {
         // SAFETY: batches wait for completion, so nothing uses these objects; destroying
         // null handles is a no-op.
         unsafe {
+            for &v in &self.views {
+                dev.destroy_buffer_view(v, None);
+            }
             dev.destroy_descriptor_pool(self.pool, None);
             dev.destroy_pipeline(self.pipeline, None);
             dev.destroy_pipeline_layout(self.layout, None);

@@ -13,7 +13,7 @@ mod validation;
 pub use batch::Batch;
 pub use buffer::Buffer;
 pub use context::{list_devices, DeviceInfo, FeatureStatus, Gpu, GpuOptions};
-pub use kernel::{Kernel, PUSH_CONSTANT_BYTES};
+pub use kernel::{Binding, Kernel, PUSH_CONSTANT_BYTES};
 pub use profile::{stage_of, KernelTime, Profile, ProfileReport, StageTime, LIGHT_VERTEX_PREFIX_KERNEL};
 pub use validation::Messages;
 

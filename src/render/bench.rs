@@ -29,6 +29,8 @@ pub struct BenchRow {
     pub samples_per_cpu_second: Option<f64>,
     /// Paths per kernel invocation (path regeneration, src/render/regen.rs).
     pub paths_per_invocation: u32,
+    /// How the kernels read their read-only buffers (src/render/reads.rs).
+    pub reads: String,
     /// GPU time per kernel over the timed iterations.
     pub kernels: Vec<KernelTime>,
     /// Runs this row summarises ([`median_of_rounds`]; 1 for a single run).
@@ -70,19 +72,29 @@ pub fn process_cpu_seconds() -> Option<f64> {
     Some(t(u.ru_utime) + t(u.ru_stime))
 }
 
+/// Settings of `bench render` that override the device's defaults (`None`: the default).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Overrides {
+    /// Paths per kernel invocation (src/render/regen.rs).
+    pub paths_per_invocation: Option<u32>,
+    /// How the kernels read their read-only buffers (src/render/reads.rs).
+    pub reads: Option<super::reads::Reads>,
+}
+
 /// Renders `scene` with `variant` for 1 warm-up iteration, then `iterations` timed ones,
-/// with `paths_per_invocation` (`None`: the device's default, src/render/regen.rs).
+/// with `overrides` of the device's defaults.
 pub fn bench_one(
     gpu: &Arc<Gpu>,
     scene: &Scene,
     variant: Variant,
     (width, height): (u32, u32),
     iterations: u64,
-    paths_per_invocation: Option<u32>,
+    overrides: Overrides,
 ) -> Result<BenchRow> {
     let algo = variant.algorithm;
     let mut warm = variant.settings(width, height, Budget::Iterations(1));
-    warm.paths_per_invocation = paths_per_invocation;
+    warm.paths_per_invocation = overrides.paths_per_invocation;
+    warm.reads = overrides.reads;
     render(gpu, scene, &warm, None, &mut |_| {})?;
     let s = RenderSettings { budget: Budget::Iterations(iterations), ..warm };
     let cpu0 = process_cpu_seconds();
@@ -104,7 +116,8 @@ pub fn bench_one(
         cpu_seconds: cpu,
         samples_per_second: samples / wall,
         samples_per_cpu_second: cpu.filter(|&c| c > 0.0).map(|c| samples / c),
-        paths_per_invocation: super::regen::resolve(gpu, algo, paths_per_invocation, width * height),
+        paths_per_invocation: super::regen::resolve(gpu, algo, overrides.paths_per_invocation, width * height),
+        reads: super::reads::Reads::resolve(gpu, overrides.reads).name().to_string(),
         kernels: out.profile.kernels,
         rounds: 1,
         samples_per_cpu_second_range: None,
@@ -114,13 +127,13 @@ pub fn bench_one(
 /// A markdown table of the rows.
 pub fn table(rows: &[BenchRow]) -> String {
     let mut s = String::from(
-        "| scene | algo | size | iterations | wall s | CPU s | samples/s | samples/CPU-s | GPU ms per iteration by kernel | paths per invocation | samples/CPU-s range (rounds) |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| scene | algo | size | iterations | wall s | CPU s | samples/s | samples/CPU-s | GPU ms per iteration by kernel | paths per invocation | reads | samples/CPU-s range (rounds) |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let kernels: Vec<String> =
             r.kernels.iter().map(|k| format!("{} {:.2}", k.kernel, k.total_ms / r.iterations.max(1) as f64)).collect();
         s += &format!(
-            "| {} | {} | {}x{} | {} | {:.2} | {} | {:.0} | {} | {} | {} | {} |\n",
+            "| {} | {} | {}x{} | {} | {:.2} | {} | {:.0} | {} | {} | {} | {} | {} |\n",
             r.scene,
             r.algorithm,
             r.width,
@@ -132,6 +145,7 @@ pub fn table(rows: &[BenchRow]) -> String {
             r.samples_per_cpu_second.map(|c| format!("{c:.0}")).unwrap_or_else(|| "-".into()),
             kernels.join(", "),
             r.paths_per_invocation,
+            r.reads,
             match r.samples_per_cpu_second_range {
                 Some([lo, hi]) if r.rounds > 1 => format!("{lo:.0}-{hi:.0} ({})", r.rounds),
                 _ => format!("- ({})", r.rounds),
@@ -541,6 +555,7 @@ mod tests {
             samples_per_second: 1.0,
             samples_per_cpu_second: Some(per_cpu),
             paths_per_invocation: 1,
+            reads: "storage".into(),
             kernels: Vec::new(),
             rounds: 1,
             samples_per_cpu_second_range: None,

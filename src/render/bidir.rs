@@ -23,7 +23,7 @@ use super::hash_grid::{ExclusiveScan, HashGrid};
 use super::radius::RadiusSchedule;
 use super::regen;
 use super::scene_gpu::{define_refs, SceneGpu};
-use crate::gpu::{groups_2d, Batch, Buffer, Gpu, Kernel};
+use crate::gpu::{groups_2d, Batch, Binding, Buffer, Gpu, Kernel};
 
 /// Which light-subpath estimator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -212,7 +212,7 @@ impl Bidir {
             None
         };
         let mut bind = scene.bindings(&[&film.accum, &film.stats]);
-        bind.extend(buffers[..4].iter());
+        bind.extend(buffers[..4].iter().map(Binding::Storage));
         // The prefix buffer binds after the hash grid's (glsl/vcm_bindings.glsl), the dense
         // list after it (camera kernel only).
         let prefix = buffers.get(4);
@@ -223,10 +223,10 @@ impl Bidir {
         light_defines.push(("LIGHT_TRACE_ONLY".into(), flag(lt)));
         light_defines.push(("CONNECT_CAMERA".into(), flag(lt || mode.use_vc())));
         let mut light_bind = bind.clone();
-        light_bind.extend(prefix);
-        let light = gpu.kernel("light_subpath.comp", &define_refs(&light_defines), &light_bind)?;
+        light_bind.extend(prefix.map(Binding::Storage));
+        let light = gpu.kernel_with("light_subpath.comp", &define_refs(&light_defines), &light_bind)?;
         let resolve = if lt {
-            gpu.kernel("accumulate.comp", &define_refs(&scene.defines), &bind)?
+            gpu.kernel_with("accumulate.comp", &define_refs(&scene.defines), &bind)?
         } else {
             let mut d = scene.defines.clone();
             d.push(("USE_VC".into(), flag(mode.use_vc())));
@@ -234,11 +234,11 @@ impl Bidir {
             d.push(("PPM".into(), flag(mode == BidirMode::Ppm)));
             let mut cam_bind = bind.clone();
             if let Some(g) = &grid {
-                cam_bind.push(&g.cell_start);
-                cam_bind.push(&g.cell_points);
+                cam_bind.push(Binding::Storage(&g.cell_start));
+                cam_bind.push(Binding::Storage(&g.cell_points));
             }
-            cam_bind.extend(buffers.get(4..6).into_iter().flatten());
-            gpu.kernel("camera_subpath.comp", &define_refs(&d), &cam_bind)?
+            cam_bind.extend(buffers.get(4..6).into_iter().flatten().map(Binding::Storage));
+            gpu.kernel_with("camera_subpath.comp", &define_refs(&d), &cam_bind)?
         };
         let s = scene.params.scene_sphere;
         let grid_origin = [s[0] - s[3], s[1] - s[3], s[2] - s[3]];

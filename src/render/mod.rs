@@ -10,6 +10,7 @@ pub mod gpu_types;
 pub mod hash_grid;
 pub mod pt;
 pub mod radius;
+pub mod reads;
 pub mod regen;
 pub mod resources;
 pub mod saved;
@@ -89,6 +90,9 @@ pub struct RenderSettings {
     /// Paths per kernel invocation (path regeneration, [`regen`]); `None` chooses by
     /// device ([`regen::auto`]). The image does not depend on it.
     pub paths_per_invocation: Option<u32>,
+    /// How the kernels read their read-only buffers ([`reads`]); `None` chooses by device
+    /// ([`reads::Reads::auto`]). The image does not depend on it.
+    pub reads: Option<reads::Reads>,
 }
 
 impl RenderSettings {
@@ -104,6 +108,7 @@ impl RenderSettings {
             count_rays: false,
             connect: bidir::Connect::default_for(algorithm),
             paths_per_invocation: None,
+            reads: None,
         }
     }
 }
@@ -235,7 +240,8 @@ impl Renderer {
         let features = features::FeatureSet::new(scene, settings.algorithm, settings.generic)
             .with_count_rays(settings.count_rays)
             .with_connect(settings.connect);
-        let scene_gpu = SceneGpu::with_features(gpu, scene, frame, &features)?;
+        let reads = reads::Reads::resolve(gpu, settings.reads);
+        let scene_gpu = SceneGpu::with_features(gpu, scene, frame, &features, reads)?;
         let film = Film::new(gpu, frame.width, frame.height)?;
         let pixels = frame.width * frame.height;
         let k = regen::resolve(gpu, settings.algorithm, settings.paths_per_invocation, pixels);
@@ -265,7 +271,7 @@ impl Renderer {
             }
             Algorithm::El => {
                 let defines = scene_gpu::define_refs(&scene_gpu.defines);
-                let k = gpu.kernel("el.comp", &defines, &scene_gpu.bindings(&[&film.accum, &film.stats]))?;
+                let k = gpu.kernel_with("el.comp", &defines, &scene_gpu.bindings(&[&film.accum, &film.stats]))?;
                 Estimator::El(k, pixels)
             }
         };
@@ -299,6 +305,11 @@ impl Renderer {
     /// Paths per kernel invocation (path regeneration, [`regen`]).
     pub fn paths_per_invocation(&self) -> u32 {
         self.paths_per_invocation
+    }
+
+    /// How the kernels read their read-only buffers ([`reads`]).
+    pub fn reads(&self) -> reads::Reads {
+        self._scene_gpu.reads
     }
 
     /// What the kernels were compiled with.

@@ -29,7 +29,8 @@ impl PathTracer {
     ) -> Result<PathTracer> {
         let mut defines = scene.defines.clone();
         defines.push(("NEE".into(), if nee { "1" } else { "0" }.into()));
-        let kernel = gpu.kernel("pt.comp", &define_refs(&defines), &scene.bindings(&[&film.accum, &film.stats]))?;
+        let kernel =
+            gpu.kernel_with("pt.comp", &define_refs(&defines), &scene.bindings(&[&film.accum, &film.stats]))?;
         Ok(PathTracer { kernel, pixels: film.width * film.height, paths_per_invocation })
     }
 

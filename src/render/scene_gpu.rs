@@ -1,5 +1,6 @@
 //! A scene uploaded to the GPU: BVH, shading data, materials, lights and per-render
-//! parameters, in the fixed bindings 0-7 every render kernel declares (glsl/scene.glsl).
+//! parameters, in the fixed bindings 0-7 every render kernel declares (glsl/scene.glsl);
+//! bindings 1-7 are read as storage or texel buffers ([`Reads`]).
 
 use std::sync::Arc;
 
@@ -8,8 +9,9 @@ use glam::Vec3;
 
 use super::features::FeatureSet;
 use super::gpu_types::*;
+use super::reads::Reads;
 use crate::bvh;
-use crate::gpu::{Buffer, Gpu};
+use crate::gpu::{Binding, Buffer, Gpu};
 use crate::scene::{Light, Scene};
 
 /// Settings that shape the kernels' per-render constants.
@@ -28,8 +30,11 @@ pub struct SceneGpu {
     pub params: GpuParams,
     pub buffers: Vec<Buffer>,
     /// Defines every kernel that traces rays must be compiled with: the feature set's
-    /// (src/render/features.rs), which include the BVH layout's BVH_NO_SPHERES.
+    /// (src/render/features.rs), which include the BVH layout's BVH_NO_SPHERES, and
+    /// `reads`' TEXEL_READS.
     pub defines: Vec<(String, String)>,
+    /// How the kernels read bindings 1-7.
+    pub reads: Reads,
 }
 
 fn v4(v: Vec3, w: f32) -> [f32; 4] {
@@ -112,9 +117,9 @@ pub fn gpu_params(scene: &Scene, frame: &FrameSettings, background: u32) -> GpuP
 
 impl SceneGpu {
     /// The scene with kernels specialised to it (the features of a `vcm` render: all but
-    /// shading normals, which only `el` reads).
-    pub fn new(gpu: &Arc<Gpu>, scene: &Scene, frame: &FrameSettings) -> Result<SceneGpu> {
-        Self::with_features(gpu, scene, frame, &FeatureSet::new(scene, super::Algorithm::Vcm, false))
+    /// shading normals, which only `el` reads), read as `reads`.
+    pub fn new(gpu: &Arc<Gpu>, scene: &Scene, frame: &FrameSettings, reads: Reads) -> Result<SceneGpu> {
+        Self::with_features(gpu, scene, frame, &FeatureSet::new(scene, super::Algorithm::Vcm, false), reads)
     }
 
     /// The scene for kernels compiled with `features`: shading normals are uploaded only
@@ -124,6 +129,7 @@ impl SceneGpu {
         scene: &Scene,
         frame: &FrameSettings,
         features: &FeatureSet,
+        reads: Reads,
     ) -> Result<SceneGpu> {
         if scene.lights.is_empty() {
             bail!("scene {:?} has no light source (no emissive material, punctual light or background)", scene.name);
@@ -133,7 +139,8 @@ impl SceneGpu {
         }
         let tree = bvh::build(&scene.triangles, &scene.spheres);
         let gb = tree.into_gpu();
-        let defines = features.defines();
+        let mut defines = features.defines();
+        defines.push(reads.define());
         // The feature set's BVH_NO_SPHERES is the BVH layout's (sphere code compiled in for a
         // sphere-free layout is fine: that is the generic variant).
         debug_assert_eq!(gb.glsl_defines().is_empty(), !scene.spheres.is_empty());
@@ -193,12 +200,15 @@ impl SceneGpu {
             gpu.buffer_from_slice("lights", &lights)?,
             gpu.buffer_from_slice("shading_normals", &normals)?,
         ];
-        Ok(SceneGpu { params, buffers, defines })
+        Ok(SceneGpu { params, buffers, defines, reads })
     }
 
-    /// Bindings 0-7 followed by `extra` (bindings 8, 9, ...).
-    pub fn bindings<'a>(&'a self, extra: &[&'a Buffer]) -> Vec<&'a Buffer> {
-        self.buffers.iter().chain(extra.iter().copied()).collect()
+    /// Bindings 0-7 (1-7 as `reads` says) followed by `extra` as storage buffers
+    /// (bindings 8, 9, ...).
+    pub fn bindings<'a>(&'a self, extra: &[&'a Buffer]) -> Vec<Binding<'a>> {
+        let scene =
+            self.buffers.iter().enumerate().map(|(i, b)| if i == 0 { Binding::Storage(b) } else { self.reads.bind(b) });
+        scene.chain(extra.iter().map(|b| Binding::Storage(b))).collect()
     }
 }
 
