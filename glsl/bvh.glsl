@@ -14,7 +14,7 @@
 //      #define BVH_PRIMS_BINDING 2
 //      // optional: #define BVH_SET 0
 //      // optional: #define BVH_TEXEL 1: bound as uniform texel buffers of uvec4 texels
-//      //   (usamplerBuffer) instead (src/render/reads.rs)
+//      //   (utextureBuffer) instead (src/render/reads.rs)
 //
 // 2. (compatible) declare them itself as vec4 arrays with these names:
 //
@@ -60,9 +60,10 @@
 #define BVH_TEXEL 0
 #endif
 #if defined(BVH_NODES_BINDING) && BVH_TEXEL
+#extension GL_EXT_samplerless_texture_functions : require
 // Uniform texel buffers of uvec4 texels (scene.glsl's TEXEL_READS).
-layout(set = BVH_SET, binding = BVH_NODES_BINDING) uniform usamplerBuffer bvh_nodes_t;
-layout(set = BVH_SET, binding = BVH_PRIMS_BINDING) uniform usamplerBuffer bvh_prims_t;
+layout(set = BVH_SET, binding = BVH_NODES_BINDING) uniform utextureBuffer bvh_nodes_t;
+layout(set = BVH_SET, binding = BVH_PRIMS_BINDING) uniform utextureBuffer bvh_prims_t;
 uvec4 bvh_node_elem(uint i) {
     return texelFetch(bvh_nodes_t, int(i));
 }

@@ -26,8 +26,17 @@ layout(local_size_x = 64) in;
 #include "vcm_bindings.glsl"
 
 #if USE_VM
+#if LV_TEXEL
+layout(binding = 14) uniform utextureBuffer grid_start_t;
+layout(binding = 15) uniform utextureBuffer grid_points_t;
+uint grid_start_at(uint b) { return texelFetch(grid_start_t, int(b)).x; }
+uvec4 grid_point_at(uint j) { return texelFetch(grid_points_t, int(j)); }
+#else
 layout(std430, binding = 14) readonly buffer GridStartBuf { uint grid_start[]; };
 layout(std430, binding = 15) readonly buffer GridPointsBuf { uvec4 grid_points[]; };
+uint grid_start_at(uint b) { return grid_start[b]; }
+uvec4 grid_point_at(uint j) { return grid_points[j]; }
+#endif
 #include "hash_grid.glsl"
 #endif
 
@@ -76,10 +85,19 @@ vec3 connect_vertices(SubpathState st, Surface s, Bsdf b, LightVertex v) {
 #define LV_PREFIX_BINDING 14
 #define LV_DENSE_BINDING 15
 #endif
-layout(std430, binding = LV_PREFIX_BINDING) readonly buffer LvPrefixBuf { uint lv_prefix[]; };
-// lv_dense[i]: the store slot of the i-th of all stored vertices, in path order
+// lv_dense_at(i): the store slot of the i-th of all stored vertices, in path order
 // (glsl/lv_cache_compact.comp).
+#if LV_TEXEL
+layout(binding = LV_PREFIX_BINDING) uniform utextureBuffer lv_prefix_t;
+layout(binding = LV_DENSE_BINDING) uniform utextureBuffer lv_dense_t;
+uint lv_prefix_at(uint p) { return texelFetch(lv_prefix_t, int(p)).x; }
+uint lv_dense_at(uint i) { return texelFetch(lv_dense_t, int(i)).x; }
+#else
+layout(std430, binding = LV_PREFIX_BINDING) readonly buffer LvPrefixBuf { uint lv_prefix[]; };
 layout(std430, binding = LV_DENSE_BINDING) readonly buffer LvDenseBuf { uint lv_dense[]; };
+uint lv_prefix_at(uint p) { return lv_prefix[p]; }
+uint lv_dense_at(uint i) { return lv_dense[i]; }
+#endif
 
 // The connections of camera vertex `s` to the cache, times light throughput and weight
 // (the caller multiplies by the camera throughput).
@@ -88,11 +106,11 @@ vec3 connect_cache(SubpathState st, Surface s, Bsdf b, inout uint rng) {
     uint min_len = min_path_length();
     // Light vertices have len >= 1: no path of this camera vertex fits (no draws).
     if (st.len + 2u > max_len) return vec3(0.0);
-    uint total = lv_prefix[push.light_paths];
+    uint total = lv_prefix_at(push.light_paths);
     if (total == 0u) return vec3(0.0);
     vec3 sum = vec3(0.0);
     for (uint k = 0u; k < uint(LV_CACHE_CONNECTIONS); ++k) {
-        LightVertex v = lv_load(lv_dense[rnd_below(total, rng)]);
+        LightVertex v = lv_load(lv_dense_at(rnd_below(total, rng)));
         uint len = v.len + 1u + st.len;
         if (len < min_len || len > max_len) continue;  // a draw that contributes 0
         sum += v.thr * connect_vertices(st, s, b, v);
@@ -119,8 +137,8 @@ vec3 merge(SubpathState st, Surface s, Bsdf b) {
     uint min_len = min_path_length();
     for (uint i = 0u; i < nb; ++i) {
         uint bucket = buckets[i];
-        for (uint j = grid_start[bucket]; j < grid_start[bucket + 1u]; ++j) {
-            uvec4 e = grid_points[j];
+        for (uint j = grid_start_at(bucket); j < grid_start_at(bucket + 1u); ++j) {
+            uvec4 e = grid_point_at(j);
             vec3 d = uintBitsToFloat(e.xyz) - s.p;
             if (dot(d, d) > r2) continue;
             LightVertex v = lv_load(e.w);
@@ -199,7 +217,7 @@ void main() {
 #if LV_CACHE
             L += st.thr * connect_cache(st, s, b, rng);
 #else
-            uint n = lv_count[pixel];
+            uint n = lv_count_at(pixel);
             uint base = pixel * lv_slots();
             for (uint k = 0u; k < n; ++k) {
                 LightVertex v = lv_load(base + k);

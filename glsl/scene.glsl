@@ -22,13 +22,14 @@ layout(std430, binding = 0) readonly buffer ParamsBuf { GpuParams params; };
 #define TEXEL_READS 0
 #endif
 #if TEXEL_READS
+#extension GL_EXT_samplerless_texture_functions : require
 #define BVH_TEXEL 1
-layout(binding = 3) uniform usamplerBuffer triangles_t;
-layout(binding = 4) uniform usamplerBuffer spheres_t;
-layout(binding = 5) uniform usamplerBuffer materials_t;
-layout(binding = 6) uniform usamplerBuffer lights_t;
-layout(binding = 7) uniform usamplerBuffer shading_normals_t;
-vec4 texel_vec4(usamplerBuffer b, uint i) { return uintBitsToFloat(texelFetch(b, int(i))); }
+layout(binding = 3) uniform utextureBuffer triangles_t;
+layout(binding = 4) uniform utextureBuffer spheres_t;
+layout(binding = 5) uniform utextureBuffer materials_t;
+layout(binding = 6) uniform utextureBuffer lights_t;
+layout(binding = 7) uniform utextureBuffer shading_normals_t;
+vec4 texel_vec4(utextureBuffer b, uint i) { return uintBitsToFloat(texelFetch(b, int(i))); }
 GpuTriangle triangle_at(uint i) {
     GpuTriangle t;
     t.p0 = texel_vec4(triangles_t, 3u * i);

@@ -4,7 +4,8 @@
 // vertex store. Technique weights follow ../shared/SCENES.md 4.4 (balance heuristic).
 //
 // Requires: scene.glsl, film.glsl with HAS_SPLAT, `push` (GpuPush), and the buffers
-//   lv_a[] / lv_b[] (vec4, two per vertex), lv_count[] (uint per light path).
+//   lv_a[] / lv_b[] (vec4, two per vertex), lv_count[] (uint per light path), read through
+//   lv_a_at / lv_b_at / lv_count_at (vcm_bindings.glsl).
 #ifndef VCM_GLSL
 #define VCM_GLSL
 
@@ -35,17 +36,19 @@ struct LightVertex {
 
 uint lv_slots() { return max_path_length() - 1u; }
 
+#if !LV_TEXEL
 void lv_store(uint slot, LightVertex v) {
     lv_a[2u * slot] = vec4(v.p, v.dvcm);
     lv_a[2u * slot + 1u] = vec4(v.thr, v.dvc);
     lv_b[2u * slot] = vec4(v.wo, v.dvm);
     lv_b[2u * slot + 1u] = vec4(v.n, uintBitsToFloat(v.material | (v.len << 24)));
 }
+#endif
 
 LightVertex lv_load(uint slot) {
     LightVertex v;
-    vec4 a0 = lv_a[2u * slot], a1 = lv_a[2u * slot + 1u];
-    vec4 b0 = lv_b[2u * slot], b1 = lv_b[2u * slot + 1u];
+    vec4 a0 = lv_a_at(2u * slot), a1 = lv_a_at(2u * slot + 1u);
+    vec4 b0 = lv_b_at(2u * slot), b1 = lv_b_at(2u * slot + 1u);
     v.p = a0.xyz; v.dvcm = a0.w;
     v.thr = a1.xyz; v.dvc = a1.w;
     v.wo = b0.xyz; v.dvm = b0.w;

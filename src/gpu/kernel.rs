@@ -18,12 +18,12 @@ pub enum Binding<'a> {
     /// A storage buffer (GLSL `buffer`).
     Storage(&'a Buffer),
     /// A read-only uniform texel buffer of `R32G32B32A32_UINT` texels (GLSL
-    /// `usamplerBuffer`, 16 bytes per texel; the buffer's size must be a multiple of 16).
+    /// `utextureBuffer`, 16 bytes per texel; the buffer's size must be a multiple of 16).
     /// On lavapipe a divergent texel fetch is one 16-byte load per lane where a storage
     /// buffer load is a bounds-checked branch per lane and component
     /// (docs/performance.md, "Texel-buffer reads").
     Texel(&'a Buffer),
-    /// The same with `R32_UINT` texels (`usamplerBuffer`, one `uint` per texel).
+    /// The same with `R32_UINT` texels (`utextureBuffer`, one `uint` per texel).
     TexelU32(&'a Buffer),
 }
 
@@ -76,6 +76,7 @@ impl Gpu {
     /// Builds the kernel `name` with `defines`, binding `bindings` to bindings 0, 1, ...
     /// in order, each as the kind of descriptor it names.
     pub fn kernel_with(self: &Arc<Self>, name: &str, defines: &[(&str, &str)], bindings: &[Binding]) -> Result<Kernel> {
+        check_bindings(&self.limits, bindings).with_context(|| format!("kernel {name}"))?;
         let module = self.shaders.module(&self.device, name, defines)?;
         let dev = &self.device;
         let binding_info: Vec<_> = bindings
@@ -157,32 +158,8 @@ impl Kernel {
     }
 
     /// Points the descriptor set at `bindings` (once, at creation: the set layout fixes
-    /// each binding's kind).
+    /// each binding's kind), checked by [`check_bindings`].
     fn bind(&mut self, bindings: &[Binding]) -> Result<()> {
-        let limits = &self.gpu.limits;
-        for b in bindings {
-            let buf = b.buffer();
-            let (max, what) = match b.texel() {
-                None => (limits.max_storage_buffer_range as u64, "bytes (maxStorageBufferRange)"),
-                Some((_, texel)) => {
-                    if buf.size() % texel != 0 {
-                        bail!(
-                            "buffer {:?} ({} bytes) is read as {texel}-byte texels but is not a whole number of them",
-                            buf.name(),
-                            buf.size()
-                        );
-                    }
-                    (limits.max_texel_buffer_elements as u64 * texel, "bytes as texels (maxTexelBufferElements)")
-                }
-            };
-            if buf.size() > max {
-                bail!(
-                    "buffer {:?} needs {} bytes but this device binds at most {max} {what}; use a smaller image or scene",
-                    buf.name(),
-                    buf.size(),
-                );
-            }
-        }
         for b in bindings {
             if let Some((format, _)) = b.texel() {
                 let info =
@@ -218,6 +195,36 @@ impl Kernel {
         unsafe { self.gpu.device.update_descriptor_sets(&writes, &[]) };
         Ok(())
     }
+}
+
+/// Refuses a binding the device cannot bind: a storage buffer over
+/// maxStorageBufferRange, a texel buffer over maxTexelBufferElements or not a whole
+/// number of texels.
+fn check_bindings(limits: &vk::PhysicalDeviceLimits, bindings: &[Binding]) -> Result<()> {
+    for b in bindings {
+        let buf = b.buffer();
+        let (max, what) = match b.texel() {
+            None => (limits.max_storage_buffer_range as u64, "bytes (maxStorageBufferRange)"),
+            Some((_, texel)) => {
+                if buf.size() % texel != 0 {
+                    bail!(
+                        "buffer {:?} ({} bytes) is read as {texel}-byte texels but is not a whole number of them",
+                        buf.name(),
+                        buf.size()
+                    );
+                }
+                (limits.max_texel_buffer_elements as u64 * texel, "bytes as texels (maxTexelBufferElements)")
+            }
+        };
+        if buf.size() > max {
+            bail!(
+                "buffer {:?} needs {} bytes but this device binds at most {max} {what}; use a smaller image or scene",
+                buf.name(),
+                buf.size(),
+            );
+        }
+    }
+    Ok(())
 }
 
 impl Drop for Kernel {

@@ -21,6 +21,7 @@ use super::film::Film;
 use super::gpu_types::GpuPush;
 use super::hash_grid::{ExclusiveScan, HashGrid};
 use super::radius::RadiusSchedule;
+use super::reads::Reads;
 use super::regen;
 use super::scene_gpu::{define_refs, SceneGpu};
 use crate::gpu::{groups_2d, Batch, Binding, Buffer, Gpu, Kernel};
@@ -232,12 +233,17 @@ impl Bidir {
             d.push(("USE_VC".into(), flag(mode.use_vc())));
             d.push(("USE_VM".into(), flag(mode.use_vm())));
             d.push(("PPM".into(), flag(mode == BidirMode::Ppm)));
-            let mut cam_bind = bind.clone();
+            // The camera kernel only reads the light vertices, the grid and the cache's
+            // index: as texel buffers when the scene's reads are (src/render/reads.rs).
+            let reads = scene.reads;
+            d.push(("LV_TEXEL".into(), flag(reads == Reads::Texel)));
+            let mut cam_bind = scene.bindings(&[&film.accum, &film.stats, &buffers[0]]);
+            cam_bind.extend([reads.bind(&buffers[1]), reads.bind(&buffers[2]), reads.bind_u32(&buffers[3])]);
             if let Some(g) = &grid {
-                cam_bind.push(Binding::Storage(&g.cell_start));
-                cam_bind.push(Binding::Storage(&g.cell_points));
+                cam_bind.push(reads.bind_u32(&g.cell_start));
+                cam_bind.push(reads.bind(&g.cell_points));
             }
-            cam_bind.extend(buffers.get(4..6).into_iter().flatten().map(Binding::Storage));
+            cam_bind.extend(buffers.get(4..6).into_iter().flatten().map(|b| reads.bind_u32(b)));
             gpu.kernel_with("camera_subpath.comp", &define_refs(&d), &cam_bind)?
         };
         let s = scene.params.scene_sphere;

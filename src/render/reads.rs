@@ -4,7 +4,7 @@
 //!
 //! * [`Reads::Storage`]: as storage buffers.
 //! * [`Reads::Texel`]: as uniform texel buffers of `uvec4` (or `uint`) texels
-//!   (`usamplerBuffer`, `texelFetch`).
+//!   (`utextureBuffer`, `texelFetch`).
 //!
 //! Both read the same bytes, so the image is bit-identical (tests/render_reads.rs). On
 //! lavapipe (Mesa 25.0) a load from a storage buffer at an address that differs between
