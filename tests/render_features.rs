@@ -141,13 +141,15 @@ fn counting_rays_changes_nothing_and_counts() {
 #[test]
 fn profile_json_has_the_stages_and_rays() {
     let dir = tempfile::tempdir().unwrap();
-    for (algo, stages) in [
-        ("vcm", &["light subpaths", "grid build", "camera subpaths"][..]),
-        ("lt", &["light subpaths", "accumulate"][..]),
+    // vcm with the device's choice of reads (texel on lavapipe), lt with --reads storage.
+    for (algo, stages, reads) in [
+        ("vcm", &["light subpaths", "grid build", "camera subpaths"][..], None),
+        ("lt", &["light subpaths", "accumulate"][..], Some("storage")),
     ] {
         let json = dir.path().join(format!("{algo}.json"));
         let out = std::process::Command::new(env!("CARGO_BIN_EXE_vkvcm"))
             .args(["render", "gbs_p", "-a", algo, "--width", "16", "--height", "16", "-i", "2", "--profile"])
+            .args(reads.map(|r| ["--reads", r]).into_iter().flatten())
             .arg("--profile-json")
             .arg(&json)
             .arg("-o")
@@ -168,6 +170,12 @@ fn profile_json_has_the_stages_and_rays() {
         }
         assert!(v["rays"].as_u64().unwrap() > 0);
         assert!(v["rays_per_second"].as_f64().unwrap() > 0.0);
+        assert!(v["paths_per_invocation"].as_u64().unwrap() >= 1);
+        let got = v["reads"].as_str().unwrap();
+        match reads {
+            Some(r) => assert_eq!(got, r),
+            None => assert!(["texel", "storage"].contains(&got), "{got}"),
+        }
     }
 }
 

@@ -372,7 +372,9 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
         eprint!("{}", out.profile.report());
     }
     if let Some(p) = &a.profile_json {
-        let report = vkvcm::gpu::ProfileReport::new(&out.profile, &scene.name, a.algo.name(), a.width, a.height);
+        let mut report = vkvcm::gpu::ProfileReport::new(&out.profile, &scene.name, a.algo.name(), a.width, a.height);
+        report.paths_per_invocation = Some(r.paths_per_invocation());
+        report.reads = Some(r.reads().name().to_string());
         super::write_json(p, &report).context("--profile-json")?;
         eprintln!("wrote {}", p.display());
     }

@@ -221,6 +221,11 @@ pub struct ProfileReport {
     pub rays: Option<u64>,
     pub rays_per_second: Option<f64>,
     pub rays_per_gpu_second: Option<f64>,
+    /// How the render ran, when the caller says (`vkvcm render` does): paths per kernel
+    /// invocation (src/render/regen.rs) and how the kernels read their read-only buffers
+    /// (src/render/reads.rs). Neither changes the image; both change the time.
+    pub paths_per_invocation: Option<u32>,
+    pub reads: Option<String>,
 }
 
 impl ProfileReport {
@@ -240,6 +245,8 @@ impl ProfileReport {
             rays: p.rays,
             rays_per_second: p.rays_per_second(),
             rays_per_gpu_second: p.rays_per_gpu_second(),
+            paths_per_invocation: None,
+            reads: None,
         }
     }
 }
