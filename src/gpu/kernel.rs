@@ -21,7 +21,7 @@ pub enum Binding<'a> {
     /// `utextureBuffer`, 16 bytes per texel; the buffer's size must be a multiple of 16).
     /// On lavapipe a divergent texel fetch is one 16-byte load per lane where a storage
     /// buffer load is a bounds-checked branch per lane and component
-    /// (docs/performance.md, "Texel-buffer reads").
+    /// (docs/performance.md, "Fourth round (texel-buffer reads)").
     Texel(&'a Buffer),
     /// The same with `R32_UINT` texels (`utextureBuffer`, one `uint` per texel).
     TexelU32(&'a Buffer),

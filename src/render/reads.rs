@@ -10,9 +10,9 @@
 //! lavapipe (Mesa 25.0) a load from a storage buffer at an address that differs between
 //! the lanes of a SIMD group is compiled into a loop over the lanes with a bounds check,
 //! a branch and a scalar load per lane and per 32- or 64-bit component, while a texel
-//! fetch is one 16-byte load per lane without branches; texel reads measured 1.3-1.6x the
-//! samples per CPU-second (docs/performance.md, "Texel-buffer reads"). GPUs are left
-//! on storage buffers: no GPU measurement backs another choice yet.
+//! fetch is one 16-byte load per lane without branches; texel reads measured 1.3-1.9x the
+//! samples per CPU-second (docs/performance.md, "Fourth round (texel-buffer reads)").
+//! GPUs are left on storage buffers: no GPU measurement backs another choice yet.
 
 use ash::vk;
 
