@@ -26,8 +26,9 @@ pub enum BenchCommand {
     EqualTime(BenchEqualTimeArgs),
     /// Scene-specialised against generic kernels (`render --generic`): the four reference
     /// scenes x pt, lt, bpt, ppm, bpm, vcm at 128x128, 8 rounds of 4 timed iterations per
-    /// variant, the variants alternating; GPU ms per iteration, samples/s, rays/s, ms per
-    /// stage, and the speedup (docs/performance.md).
+    /// variant, the variants alternating, the renderers built in one order for the first
+    /// half of the rounds and in the other for the second; GPU ms per iteration,
+    /// samples/s, rays/s, ms per stage, and the speedup (docs/performance.md).
     Suite(BenchSuiteArgs),
 }
 
@@ -41,7 +42,8 @@ pub struct BenchSuiteArgs {
     pub algos: Vec<Algorithm>,
     #[arg(long, default_value_t = render::bench::SUITE_SIZE)]
     pub size: u32,
-    /// Rounds; each runs both variants, alternating which goes first.
+    /// Rounds; each runs both variants, alternating which goes first (the renderers are
+    /// rebuilt in the other order after half of them).
     #[arg(long, default_value_t = render::bench::SUITE_ROUNDS)]
     pub rounds: u32,
     /// Timed iterations per variant and round.

@@ -432,7 +432,12 @@ fn variant_stats(total: &crate::gpu::Profile, round_ms: &mut [f64], pixels: f64)
 /// Renders `scene` with `algo` with specialised and with generic kernels (both counting
 /// rays), after one untimed warm-up iteration each (the driver compiles there), in
 /// `rounds` rounds of `per_round` iterations that alternate which variant runs first, so
-/// that a change of load on the machine affects both alike.
+/// that a change of load on the machine affects both alike. The renderers are built
+/// twice, in both orders: the first half of the rounds with the specialised one built
+/// first, the second half with the generic one built first. On lavapipe the renderer
+/// built first ran 2-5% slower than the second with identical kernels (an A/A test of
+/// bpm on gbs_s at 256x256, docs/performance.md), a bias that the two orders cancel in
+/// the median ratio.
 pub fn suite_row(
     gpu: &Arc<Gpu>,
     scene: &Scene,
@@ -449,7 +454,17 @@ pub fn suite_row(
         r.run(Budget::Iterations(1), None, &mut |_| {})?;
         Ok(r)
     };
-    let mut renderers = [make(false)?, make(true)?];
+    // Index 0: specialised, 1: generic; built in `first_generic` order.
+    let build = |first_generic: bool| -> Result<[super::Renderer; 2]> {
+        Ok(if first_generic {
+            let g = make(true)?;
+            [make(false)?, g]
+        } else {
+            let sp = make(false)?;
+            [sp, make(true)?]
+        })
+    };
+    let mut renderers = build(false)?;
     let compiled_out = {
         let f = renderers[0].features();
         let all = [
@@ -471,6 +486,10 @@ pub fn suite_row(
     let mut totals = [crate::gpu::Profile::default(), crate::gpu::Profile::default()];
     let mut round_ms: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
     for round in 0..rounds {
+        if round == rounds / 2 && round > 0 {
+            drop(renderers);
+            renderers = build(true)?;
+        }
         let order = if round % 2 == 0 { [0, 1] } else { [1, 0] };
         for v in order {
             let r = &mut renderers[v];
