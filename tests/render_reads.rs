@@ -16,7 +16,7 @@
 
 mod common;
 
-use common::with_gpu;
+use common::{invariance_cases, with_gpu};
 use glam::Vec3;
 use vkvcm::gpu::{Binding, Gpu};
 use vkvcm::render::bidir::Connect;
@@ -55,17 +55,12 @@ fn check_same_image_with(
 
 #[test]
 fn images_do_not_depend_on_reads() {
-    use Algorithm::*;
-    let all = [Pt, Lt, Bpt, Bpt, Ppm, Bpm, Vcm, El];
-    let cases: [(&str, &[Algorithm]); 3] = [("glm_c", &all), ("gbs_s", &[Lt, Bpt, Vcm]), ("gbs_b", &[Pt, Vcm])];
+    let mut cases = invariance_cases();
+    cases.push(("glm_c", Algorithm::El, Connect::Path));
     with_gpu(|gpu| {
-        for (name, algos) in cases {
+        for (name, algo, connect) in cases {
             let scene = vkvcm::scene::load_named(name).unwrap();
-            for (v, &algo) in algos.iter().enumerate() {
-                // bpt twice on glm_c: SmallVCM's connections, then the light-vertex cache.
-                let connect = if algo == Bpt && v == 2 { Connect::Path } else { Connect::default_for(algo) };
-                check_same_image(gpu, name, &scene, algo, connect);
-            }
+            check_same_image(gpu, name, &scene, algo, connect);
         }
     });
 }

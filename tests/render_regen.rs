@@ -17,40 +17,30 @@
 
 mod common;
 
-use common::with_gpu;
-use vkvcm::render::bidir::Connect;
+use common::{invariance_cases, with_gpu};
 use vkvcm::render::{self, Algorithm, Budget, RenderSettings};
 
 #[test]
 fn images_do_not_depend_on_paths_per_invocation() {
-    use Algorithm::*;
-    let all = [Pt, Lt, Bpt, Bpt, Ppm, Bpm, Vcm];
-    let cases: [(&str, &[Algorithm]); 3] = [("glm_c", &all), ("gbs_s", &[Lt, Bpt, Vcm]), ("gbs_b", &[Pt, Vcm])];
     with_gpu(|gpu| {
-        for (name, algos) in cases {
+        for (name, algo, connect) in invariance_cases() {
             let scene = vkvcm::scene::load_named(name).unwrap();
-            for (v, &algo) in algos.iter().enumerate() {
-                // bpt twice on glm_c: SmallVCM's connections, then the light-vertex cache.
-                let connect = if algo == Bpt && v == 2 { Connect::Path } else { Connect::default_for(algo) };
-                let render_with = |k: u32| {
-                    let mut s = RenderSettings::new(algo, 23, 17, Budget::Iterations(2));
-                    s.connect = connect;
-                    s.count_rays = true;
-                    s.paths_per_invocation = Some(k);
-                    render::render(gpu, &scene, &s, None, &mut |_| {}).unwrap()
-                };
-                let one = render_with(1);
-                assert!(one.sum.iter().any(|p| p.iter().any(|&c| c > 0.0)), "{name} {algo:?}: black image");
-                {
-                    let k = 5;
-                    let other = render_with(k);
-                    let what = format!("{name} {algo:?} {connect:?}, {k} paths per invocation against 1");
-                    assert!(one.sum == other.sum, "{what}: the per-pixel sums differ");
-                    assert!(one.sum_sq == other.sum_sq, "{what}: the per-pixel sums of squares differ");
-                    assert_eq!(one.profile.rays, other.profile.rays, "{what}: traced rays");
-                    assert!(one.profile.rays.unwrap_or(0) > 0, "{what}: no rays counted");
-                }
-            }
+            let render_with = |k: u32| {
+                let mut s = RenderSettings::new(algo, 23, 17, Budget::Iterations(2));
+                s.connect = connect;
+                s.count_rays = true;
+                s.paths_per_invocation = Some(k);
+                render::render(gpu, &scene, &s, None, &mut |_| {}).unwrap()
+            };
+            let one = render_with(1);
+            assert!(one.sum.iter().any(|p| p.iter().any(|&c| c > 0.0)), "{name} {algo:?}: black image");
+            let k = 5;
+            let other = render_with(k);
+            let what = format!("{name} {algo:?} {connect:?}, {k} paths per invocation against 1");
+            assert!(one.sum == other.sum, "{what}: the per-pixel sums differ");
+            assert!(one.sum_sq == other.sum_sq, "{what}: the per-pixel sums of squares differ");
+            assert_eq!(one.profile.rays, other.profile.rays, "{what}: traced rays");
+            assert!(one.profile.rays.unwrap_or(0) > 0, "{what}: no rays counted");
         }
     });
 }

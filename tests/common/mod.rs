@@ -37,3 +37,29 @@ pub fn render_stats(out: &vkvcm::render::RenderOutput, mask: Option<&[bool]>) ->
     vkvcm::image::stats::PixelStats::from_sums(out.width, out.height, out.iterations as usize, &sum, &sum_sq)
         .expect("render statistics")
 }
+
+/// The reference-scene x estimator cases of the tests that check an image does not depend
+/// on a setting which must not change it (tests/render_regen.rs, tests/render_reads.rs):
+/// every light-subpath and camera estimator on glm_c (area light: light tracing's emitter
+/// connections), bpt there with both connection strategies; lt, bpt and vcm on gbs_s
+/// (directional light); pt and vcm on gbs_b (camera paths that escape to the
+/// background). `(scene name, estimator, where bpt and vcm connect)`.
+pub fn invariance_cases() -> Vec<(&'static str, vkvcm::render::Algorithm, vkvcm::render::bidir::Connect)> {
+    use vkvcm::render::bidir::Connect;
+    use vkvcm::render::Algorithm::*;
+    let d = Connect::default_for;
+    vec![
+        ("glm_c", Pt, d(Pt)),
+        ("glm_c", Lt, d(Lt)),
+        ("glm_c", Bpt, Connect::Path),
+        ("glm_c", Bpt, d(Bpt)),
+        ("glm_c", Ppm, d(Ppm)),
+        ("glm_c", Bpm, d(Bpm)),
+        ("glm_c", Vcm, d(Vcm)),
+        ("gbs_s", Lt, d(Lt)),
+        ("gbs_s", Bpt, d(Bpt)),
+        ("gbs_s", Vcm, d(Vcm)),
+        ("gbs_b", Pt, d(Pt)),
+        ("gbs_b", Vcm, d(Vcm)),
+    ]
+}
