@@ -91,7 +91,6 @@ pub fn bench_one(
     iterations: u64,
     overrides: Overrides,
 ) -> Result<BenchRow> {
-    let algo = variant.algorithm;
     let mut warm = variant.settings(width, height, Budget::Iterations(1));
     warm.paths_per_invocation = overrides.paths_per_invocation;
     warm.reads = overrides.reads;
@@ -116,8 +115,8 @@ pub fn bench_one(
         cpu_seconds: cpu,
         samples_per_second: samples / wall,
         samples_per_cpu_second: cpu.filter(|&c| c > 0.0).map(|c| samples / c),
-        paths_per_invocation: super::regen::resolve(gpu, algo, overrides.paths_per_invocation, width * height),
-        reads: super::reads::Reads::resolve(gpu, overrides.reads).name().to_string(),
+        paths_per_invocation: out.paths_per_invocation,
+        reads: out.reads.name().to_string(),
         kernels: out.profile.kernels,
         rounds: 1,
         samples_per_cpu_second_range: None,

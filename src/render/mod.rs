@@ -139,6 +139,10 @@ pub struct RenderOutput {
     /// Light-tracing splats rejected because they could overflow the fixed-point sum.
     pub overflow_splats: u64,
     pub profile: Profile,
+    /// Paths per kernel invocation the render ran with ([`regen`]).
+    pub paths_per_invocation: u32,
+    /// How its kernels read their read-only buffers ([`reads`]).
+    pub reads: reads::Reads,
     /// True when stopped early by the cancel flag.
     pub interrupted: bool,
 }
@@ -459,6 +463,8 @@ impl Renderer {
             rejected_samples,
             overflow_splats,
             profile,
+            paths_per_invocation: self.paths_per_invocation,
+            reads: self._scene_gpu.reads,
             interrupted: self.interrupted,
         })
     }
