@@ -1,5 +1,5 @@
 // Link shaderc against Debian's static glslang / SPIRV-Tools libraries (see
-// ../shared/TOOLCHAIN.md): Debian's libshaderc.so is unusable and building shaderc from
+// docs/toolchain.md, 3): Debian's libshaderc.so is unusable and building shaderc from
 // source takes ~23 minutes. Elsewhere the shaderc crate's own discovery is used.
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs what vkvcm needs on a fresh Debian 12 (bookworm) machine, as root.
-# Idempotent: a second run installs nothing new. See ../shared/TOOLCHAIN.md for why
+# Idempotent: a second run installs nothing new. See docs/toolchain.md (1, 2) for why
 # Mesa comes from bookworm-backports (lavapipe's storage-buffer reads are ~9x faster).
 set -euo pipefail
 

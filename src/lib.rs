@@ -1,8 +1,8 @@
 //! vkvcm: a light-transport renderer running in Vulkan compute shaders.
 //!
-//! Layout (see ../shared/DESIGN.md): `gpu` is the Vulkan core, `scene` the glTF import
-//! and built-in scenes, `bvh` the acceleration structure, `render` the estimators,
-//! `image` file output and error metrics.
+//! Layout (the design behind it: docs/design.md): `gpu` is the Vulkan core, `scene` the
+//! glTF import and built-in scenes, `bvh` the acceleration structure, `render` the
+//! estimators, `image` file output and error metrics.
 
 pub mod bvh;
 pub mod gpu;

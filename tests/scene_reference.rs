@@ -1,4 +1,4 @@
-//! The four reference scenes (scenes/*.gltf) against the numbers of ../shared/SCENES.md.
+//! The four reference scenes (scenes/*.gltf) against the numbers of docs/smallvcm.md 2-3.
 
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -34,7 +34,7 @@ fn v(x: f32) -> Vec3 {
 }
 
 fn expected_materials() -> Vec<(Vec3, Vec3, f32, Vec3, f32)> {
-    // (diffuse, phong, exponent, mirror, ior) of SCENES.md 2.4
+    // (diffuse, phong, exponent, mirror, ior) of docs/smallvcm.md 2.4
     let z = Vec3::ZERO;
     vec![
         (z, z, 1.0, z, -1.0),
