@@ -23,7 +23,8 @@ pub struct Sphere {
 }
 
 /// vkvcm's material model: a sum of components, each selected with probability
-/// proportional to its luminance albedo (../shared/SCENES.md 2.4).
+/// proportional to its luminance albedo (docs/smallvcm.md, the materials of the
+/// predefined scenes).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
@@ -155,8 +156,8 @@ pub use validate::check_renderable;
 
 use std::path::{Path, PathBuf};
 
-/// Names of the four built-in reference scenes (`../shared/SCENES.md` section 2), in
-/// SmallVCM's scene-id order 0..3. `"default"` is an alias of `gbs_s`.
+/// Names of the four built-in reference scenes (`docs/smallvcm.md`, the predefined
+/// scenes), in SmallVCM's scene-id order 0..3. `"default"` is an alias of `gbs_s`.
 pub const BUILTIN_SCENES: [&str; 4] = ["gbs_s", "glm_c", "gbs_p", "gbs_b"];
 
 /// Loads a glTF 2.0 scene (`.gltf` or `.glb`) with the first perspective camera.

@@ -1,6 +1,7 @@
 //! Generator of the four reference scenes (`scenes/gbs_s.gltf`, `glm_c`, `gbs_p`,
-//! `gbs_b`): SmallVCM's Cornell box configurations as stated in `../shared/SCENES.md`
-//! section 2, written as self-contained glTF files (buffers embedded as `data:` URIs).
+//! `gbs_b`): SmallVCM's Cornell box configurations as stated in `docs/smallvcm.md` (the
+//! predefined scenes), written as self-contained glTF files (buffers embedded as `data:`
+//! URIs).
 //!
 //! All numbers are taken in SmallVCM's z-up frame and converted to glTF's y-up frame with
 //! the rotation (x, y, z) -> (x, z, -y), which leaves the image unchanged. Geometry is

@@ -1,0 +1,96 @@
+//! Cameras: the perspective cameras of the walked nodes and the choice of the one that is
+//! rendered (by name, else the first in node order).
+
+use super::{Importer, LoadOptions};
+use crate::scene::Camera;
+use anyhow::{anyhow, bail, Result};
+use glam::{DMat4, DVec3, Mat4, Vec3};
+
+/// A perspective camera met during the node walk.
+pub(super) struct CameraCandidate {
+    node_name: Option<String>,
+    camera_name: Option<String>,
+    /// The node's world transform (re-centred, f32).
+    world: Mat4,
+    yfov: f32,
+    /// The node's index.
+    node: usize,
+}
+
+impl Importer<'_> {
+    /// Records the camera `cam` of `node` (placed by `world`) as a candidate; orthographic
+    /// cameras are skipped with a warning.
+    pub(super) fn add_camera(&mut self, node: &gltf::Node, cam: &gltf::Camera, world: Mat4, label: &str) {
+        match cam.projection() {
+            gltf::camera::Projection::Perspective(p) => self.cameras.push(CameraCandidate {
+                node_name: node.name().map(str::to_string),
+                camera_name: cam.name().map(str::to_string),
+                world,
+                yfov: p.yfov(),
+                node: node.index(),
+            }),
+            gltf::camera::Projection::Orthographic(_) => self
+                .warnings
+                .warn("orthographic cameras are not supported (skipped)", format!("camera {} on {label}", cam.index())),
+        }
+    }
+
+    /// The rendered camera: the candidate whose node or camera name is `options.camera`,
+    /// else the first one. Its up vector is made orthogonal to its forward vector; a
+    /// degenerate transform or a yfov outside (0, pi) is an error.
+    pub(super) fn choose_camera(&self, options: &LoadOptions) -> Result<Camera> {
+        let chosen = match &options.camera {
+            Some(want) => self
+                .cameras
+                .iter()
+                .find(|c| {
+                    c.node_name.as_deref() == Some(want.as_str()) || c.camera_name.as_deref() == Some(want.as_str())
+                })
+                .ok_or_else(|| {
+                    let names: Vec<String> = self
+                        .cameras
+                        .iter()
+                        .map(|c| {
+                            c.node_name.clone().or(c.camera_name.clone()).unwrap_or_else(|| format!("node {}", c.node))
+                        })
+                        .collect();
+                    anyhow!(
+                        "no perspective camera named '{want}' (available: {})",
+                        if names.is_empty() { "none".to_string() } else { names.join(", ") }
+                    )
+                })?,
+            None => self.cameras.first().ok_or_else(|| anyhow!("no perspective camera in the default scene"))?,
+        };
+        let w = chosen.world;
+        let position = w.transform_point3(Vec3::ZERO);
+        let forward = w.transform_vector3(Vec3::NEG_Z).normalize();
+        let up_raw = w.transform_vector3(Vec3::Y);
+        let up = (up_raw - forward * forward.dot(up_raw)).normalize();
+        if !(position.is_finite() && forward.is_finite() && up.is_finite()) {
+            bail!("camera node {} has a degenerate world transform", chosen.node);
+        }
+        if !(chosen.yfov > 0.0 && chosen.yfov < std::f32::consts::PI) {
+            bail!("camera node {}: yfov {} is not in (0, pi)", chosen.node, chosen.yfov);
+        }
+        Ok(Camera { position, forward, up, yfov: chosen.yfov })
+    }
+}
+
+/// World position of the camera the importer will choose (the one named `want`, else the
+/// first perspective camera in traversal order), or the origin when there is none: the
+/// scene is translated so that this point becomes (0, 0, 0). `order` is the node walk with
+/// f64 world transforms, before re-centring.
+pub(super) fn camera_origin(order: &[(gltf::Node, DMat4)], want: Option<&str>) -> DVec3 {
+    let is_persp =
+        |n: &gltf::Node| n.camera().is_some_and(|c| matches!(c.projection(), gltf::camera::Projection::Perspective(_)));
+    let matches = |n: &gltf::Node| match want {
+        None => true,
+        Some(w) => n.name() == Some(w) || n.camera().and_then(|c| c.name().map(str::to_string)).as_deref() == Some(w),
+    };
+    order
+        .iter()
+        .find(|(n, _)| is_persp(n) && matches(n))
+        .map(|(_, w)| w.transform_point3(DVec3::ZERO))
+        .filter(|p| p.is_finite())
+        .unwrap_or(DVec3::ZERO)
+}

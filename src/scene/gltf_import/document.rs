@@ -1,0 +1,73 @@
+//! Parsing and validation of the glTF JSON, done before the `gltf` crate builds its
+//! [`gltf::Document`] (which is then created without its own validation).
+
+use super::extensions::check_extensions;
+use super::sources::read_container;
+use super::warnings::Warnings;
+use anyhow::{bail, Result};
+use gltf::json;
+
+/// The validated JSON of `bytes` (`.gltf` or `.glb`) and the GLB binary chunk, if any.
+pub(super) fn parse_document(bytes: &[u8], warnings: &mut Warnings) -> Result<(json::Root, Option<Vec<u8>>)> {
+    let (mut root, blob) = read_container(bytes)?;
+    check_extensions(&mut root, warnings)?;
+    check_attribute_indices(&root)?;
+    validate(&root, warnings)?;
+    Ok((root, blob))
+}
+
+/// Refuses mesh attributes that refer to a missing accessor. gltf-json's primitive check
+/// indexes the POSITION accessor without a bounds check, so this must run before
+/// [`validate`].
+fn check_attribute_indices(root: &json::Root) -> Result<()> {
+    for (mi, mesh) in root.meshes.iter().enumerate() {
+        for (pi, prim) in mesh.primitives.iter().enumerate() {
+            for (sem, index) in &prim.attributes {
+                if index.value() >= root.accessors.len() {
+                    let sem = match sem {
+                        json::validation::Checked::Valid(s) => s.to_string(),
+                        json::validation::Checked::Invalid => "?".to_string(),
+                    };
+                    bail!(
+                        "invalid glTF: meshes[{mi}].primitives[{pi}].attributes[\"{sem}\"] refers to accessor {}, but there are {} accessors",
+                        index.value(),
+                        root.accessors.len()
+                    );
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// gltf-json's validation; the first 8 errors are reported together. A POSITION accessor
+/// without min/max is required by the spec but not needed here: tolerated with a warning.
+fn validate(root: &json::Root, warnings: &mut Warnings) -> Result<()> {
+    use json::validation::{Error as VError, Validate};
+    let mut errors = Vec::new();
+    let mut missing_bounds = None;
+    root.validate(root, json::Path::new, &mut |path, error| {
+        let path = path().to_string();
+        if matches!(error, VError::Missing)
+            && path.contains("[\"POSITION\"]")
+            && (path.ends_with(".min") || path.ends_with(".max"))
+        {
+            missing_bounds.get_or_insert(path);
+            return;
+        }
+        let hint = match error {
+            VError::IndexOutOfBounds => " (refers to an object that does not exist)",
+            _ => "",
+        };
+        errors.push(format!("{path}: {error}{hint}"));
+    });
+    if let Some(path) = missing_bounds {
+        warnings.warn("POSITION accessor without the required min/max (tolerated)", path);
+    }
+    if !errors.is_empty() {
+        let shown = errors.iter().take(8).cloned().collect::<Vec<_>>().join("; ");
+        let more = if errors.len() > 8 { format!(" (and {} more)", errors.len() - 8) } else { String::new() };
+        bail!("invalid glTF: {shown}{more}");
+    }
+    Ok(())
+}

@@ -1,0 +1,93 @@
+//! The glTF extensions the importer understands, the policy for the others, and readers
+//! for the JSON payloads of vkvcm's own extensions.
+
+use super::warnings::Warnings;
+use anyhow::{anyhow, bail, Result};
+use glam::Vec3;
+use gltf::json;
+use serde_json::Value;
+
+/// Extension names understood by the importer.
+pub const EXT_SPHERES: &str = "VKVCM_spheres";
+pub const EXT_MATERIALS_PHONG: &str = "VKVCM_materials_phong";
+pub const EXT_BACKGROUND: &str = "VKVCM_background";
+
+/// All extensions the importer interprets; any other one in `extensionsUsed` or
+/// `extensionsRequired` is reported as a warning.
+pub const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "KHR_lights_punctual",
+    "KHR_materials_transmission",
+    "KHR_materials_ior",
+    "KHR_materials_emissive_strength",
+    EXT_SPHERES,
+    EXT_MATERIALS_PHONG,
+    EXT_BACKGROUND,
+];
+
+/// Applies the extension policy to `root`. glTF 2.0 (section 3.12): a loader that does not
+/// support an extension listed in `extensionsRequired` must not load the asset, so those
+/// are errors; unknown extensions that are only used become warnings (one per name).
+/// Afterwards `extensionsRequired` keeps only the extensions the `gltf` crate knows, since
+/// its validation refuses required extensions it does not know (vkvcm's own extensions are
+/// read here, from the raw JSON).
+pub(super) fn check_extensions(root: &mut json::Root, warnings: &mut Warnings) -> Result<()> {
+    let unsupported: Vec<&str> =
+        root.extensions_required.iter().map(String::as_str).filter(|e| !SUPPORTED_EXTENSIONS.contains(e)).collect();
+    if !unsupported.is_empty() {
+        bail!(
+            "unsupported required extension(s) {} (extensionsRequired; supported: {})",
+            unsupported.join(", "),
+            SUPPORTED_EXTENSIONS.join(", ")
+        );
+    }
+    let mut seen = Vec::new();
+    for ext in &root.extensions_used {
+        if SUPPORTED_EXTENSIONS.contains(&ext.as_str()) || seen.contains(ext) {
+            continue;
+        }
+        seen.push(ext.clone());
+        warnings.warn(format!("extension {ext} is not supported and was ignored"), "");
+    }
+    root.extensions_required.retain(|e| json::extensions::ENABLED_EXTENSIONS.contains(&e.as_str()));
+    Ok(())
+}
+
+/// The 3-vector `v[field]` of an extension payload, `default` when absent; `ctx` is the
+/// JSON path of `v` used in errors.
+pub(super) fn ext_vec3(v: &Value, field: &str, default: Vec3, ctx: &str) -> Result<Vec3> {
+    match v.get(field) {
+        None => Ok(default),
+        Some(Value::Array(a)) if a.len() == 3 => {
+            let mut out = [0f32; 3];
+            for (k, x) in a.iter().enumerate() {
+                out[k] = x
+                    .as_f64()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| anyhow!("{ctx}.{field}[{k}] must be a finite number"))?
+                    as f32;
+            }
+            Ok(Vec3::from_array(out))
+        }
+        Some(_) => bail!("{ctx}.{field} must be an array of 3 numbers"),
+    }
+}
+
+/// The finite number `v[field]` of an extension payload, `default` when absent; `ctx` is
+/// the JSON path of `v` used in errors.
+pub(super) fn ext_f32(v: &Value, field: &str, default: f32, ctx: &str) -> Result<f32> {
+    match v.get(field) {
+        None => Ok(default),
+        Some(x) => {
+            Ok(x.as_f64().filter(|x| x.is_finite()).ok_or_else(|| anyhow!("{ctx}.{field} must be a finite number"))?
+                as f32)
+        }
+    }
+}
+
+/// `v` if no component is negative, else an error naming `what`.
+pub(super) fn non_negative(v: Vec3, what: &str) -> Result<Vec3> {
+    if v.min_element() < 0.0 {
+        bail!("{what} must not be negative, is {v}");
+    }
+    Ok(v)
+}

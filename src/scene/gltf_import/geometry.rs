@@ -1,0 +1,197 @@
+//! Geometry: mesh primitives triangulated into world-space triangles, and the spheres of
+//! vkvcm's `VKVCM_spheres` node extension.
+
+use super::accessors::{read_indices, read_vec3};
+use super::extensions::{ext_vec3, EXT_SPHERES};
+use super::Importer;
+use crate::scene::{Sphere, Triangle};
+use anyhow::{anyhow, bail, Context, Result};
+use glam::{Mat3, Mat4, Vec3};
+use gltf::mesh::{Mode, Semantic};
+use serde_json::Value;
+
+impl Importer<'_> {
+    /// Adds the triangles of every primitive of `mesh`, transformed by `world`. Triangles
+    /// that are degenerate after the transform are counted in the report and dropped; a
+    /// mirroring transform keeps each triangle's geometric normal on the authored side.
+    pub(super) fn add_mesh(&mut self, mesh: &gltf::Mesh, world: Mat4, label: &str) -> Result<()> {
+        let mi = mesh.index();
+        let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+        let flip = Mat3::from_mat4(world).determinant() < 0.0;
+        for prim in mesh.primitives() {
+            let pi = prim.index();
+            let where_ = format!("mesh {mi} primitive {pi} (on {label})");
+            let mode = prim.mode();
+            if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+                let name = match mode {
+                    Mode::Points => "POINTS",
+                    Mode::Lines => "LINES",
+                    Mode::LineLoop => "LINE_LOOP",
+                    Mode::LineStrip => "LINE_STRIP",
+                    _ => "?",
+                };
+                self.warnings.warn(format!("primitive mode {name} is not supported (primitive skipped)"), where_);
+                continue;
+            }
+            if prim.morph_targets().len() > 0 {
+                self.warnings.warn("morph targets are not supported (base geometry used)", where_.clone());
+            }
+            if prim.get(&Semantic::Colors(0)).is_some() {
+                self.warnings.warn("vertex colors (COLOR_0) are not supported (ignored)", where_.clone());
+            }
+            let Some(pos_acc) = prim.get(&Semantic::Positions) else {
+                self.warnings.warn("primitive without POSITION (skipped)", where_.clone());
+                continue;
+            };
+            let normal_acc = prim.get(&Semantic::Normals);
+            let index_acc = prim.indices();
+            let sparse = [Some(&pos_acc), normal_acc.as_ref(), index_acc.as_ref()]
+                .into_iter()
+                .flatten()
+                .find(|a| a.sparse().is_some());
+            if let Some(a) = sparse {
+                self.warnings.warn(
+                    "sparse accessors are not supported (primitive skipped)",
+                    format!("accessor {} of {where_}", a.index()),
+                );
+                continue;
+            }
+            let positions = read_vec3(&self.buffers, &pos_acc, "POSITION").with_context(|| where_.clone())?;
+            let normals = match &normal_acc {
+                Some(a) => {
+                    let n = read_vec3(&self.buffers, a, "NORMAL").with_context(|| where_.clone())?;
+                    if n.len() != positions.len() {
+                        bail!(
+                            "{where_}: NORMAL accessor {} has {} elements, POSITION accessor {} has {}",
+                            a.index(),
+                            n.len(),
+                            pos_acc.index(),
+                            positions.len()
+                        );
+                    }
+                    Some(n)
+                }
+                None => None,
+            };
+            let indices: Vec<u32> = match &index_acc {
+                Some(a) => {
+                    let idx = read_indices(&self.buffers, a).with_context(|| where_.clone())?;
+                    if let Some((k, &v)) = idx.iter().enumerate().find(|(_, &v)| v as usize >= positions.len()) {
+                        bail!(
+                            "{where_}: index accessor {} element {k} = {v} is out of range (POSITION accessor {} has {} vertices)",
+                            a.index(),
+                            pos_acc.index(),
+                            positions.len()
+                        );
+                    }
+                    idx
+                }
+                None => (0..positions.len() as u32).collect(),
+            };
+            let tris: Vec<[u32; 3]> = match mode {
+                Mode::Triangles => {
+                    if !indices.len().is_multiple_of(3) {
+                        self.warnings.warn(
+                            "TRIANGLES primitive whose vertex/index count is not a multiple of 3 (trailing vertices ignored)",
+                            where_.clone(),
+                        );
+                    }
+                    indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+                }
+                Mode::TriangleStrip => (0..indices.len().saturating_sub(2))
+                    .map(|i| {
+                        if i % 2 == 0 {
+                            [indices[i], indices[i + 1], indices[i + 2]]
+                        } else {
+                            [indices[i + 1], indices[i], indices[i + 2]]
+                        }
+                    })
+                    .collect(),
+                _ => (1..indices.len().saturating_sub(1)).map(|i| [indices[i], indices[i + 1], indices[0]]).collect(),
+            };
+            let material = match prim.material().index() {
+                Some(i) => i as u32,
+                None => self.default_material(),
+            };
+            for t in tris {
+                let mut p = t.map(|i| world.transform_point3(positions[i as usize]));
+                let mut n = normals.as_ref().map(|ns| t.map(|i| (normal_matrix * ns[i as usize]).normalize_or_zero()));
+                if flip {
+                    // A mirroring transform reverses the winding; keep the geometric normal
+                    // on the side the author meant.
+                    p.swap(1, 2);
+                    if let Some(n) = n.as_mut() {
+                        n.swap(1, 2);
+                    }
+                }
+                let area2 = (p[1] - p[0]).cross(p[2] - p[0]);
+                let zero_area = area2.length_squared().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater);
+                if !p.iter().all(|q| q.is_finite()) || zero_area || !area2.normalize().is_finite() {
+                    self.scene.report.degenerate_triangles += 1;
+                    continue;
+                }
+                if let Some(ns) = &n {
+                    if ns.iter().any(|v| *v == Vec3::ZERO || !v.is_finite()) {
+                        self.warnings.warn(
+                            "zero-length or invalid vertex normals (that triangle uses its geometric normal)",
+                            where_.clone(),
+                        );
+                        n = None;
+                    }
+                }
+                self.scene.triangles.push(Triangle { p, n, material });
+            }
+        }
+        Ok(())
+    }
+
+    /// Adds the spheres of a node's `VKVCM_spheres` payload `v`, transformed by `world`
+    /// (which must scale uniformly); `ni` is the node's index.
+    pub(super) fn add_spheres(&mut self, v: &Value, world: Mat4, ni: usize) -> Result<()> {
+        let ctx = format!("nodes[{ni}].extensions.{EXT_SPHERES}");
+        let list =
+            v.get("spheres").and_then(Value::as_array).ok_or_else(|| anyhow!("{ctx}.spheres must be an array"))?;
+        let m3 = Mat3::from_mat4(world);
+        let s = [m3.x_axis.length(), m3.y_axis.length(), m3.z_axis.length()];
+        let smax = s[0].max(s[1]).max(s[2]);
+        let gram = m3.transpose() * m3;
+        let uniform = smax > 0.0
+            && (gram - Mat3::from_diagonal(Vec3::splat(smax * smax)))
+                .to_cols_array()
+                .iter()
+                .all(|x| x.abs() <= 1e-5 * smax * smax);
+        if !uniform {
+            bail!(
+                "{ctx}: spheres need a uniform scale, but the node's world matrix scales by ({}, {}, {}) or shears",
+                s[0],
+                s[1],
+                s[2]
+            );
+        }
+        for (k, sp) in list.iter().enumerate() {
+            let c = format!("{ctx}.spheres[{k}]");
+            if sp.get("center").is_none() {
+                bail!("{c}.center is missing");
+            }
+            let center = ext_vec3(sp, "center", Vec3::ZERO, &c)?;
+            let radius = sp
+                .get("radius")
+                .and_then(Value::as_f64)
+                .filter(|r| *r > 0.0 && r.is_finite())
+                .ok_or_else(|| anyhow!("{c}.radius must be a positive number"))? as f32;
+            let material = match sp.get("material") {
+                None => self.default_material(),
+                Some(m) => {
+                    let n = self.doc.materials().len() as u64;
+                    let i = m.as_u64().ok_or_else(|| anyhow!("{c}.material must be a material index"))?;
+                    if i >= n {
+                        bail!("{c}.material = {i} is out of range ({n} materials)");
+                    }
+                    i as u32
+                }
+            };
+            self.scene.spheres.push(Sphere { center: world.transform_point3(center), radius: radius * smax, material });
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,152 @@
+//! glTF materials mapped to vkvcm's material model: metallic/roughness to diffuse + GGX
+//! (+ mirror), `KHR_materials_transmission`/`KHR_materials_ior` to smooth glass,
+//! `KHR_materials_emissive_strength`, and vkvcm's own `VKVCM_materials_phong`.
+
+use super::extensions::{ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG};
+use super::Importer;
+use crate::scene::Material;
+use anyhow::{bail, Result};
+use glam::Vec3;
+
+/// Specular reflectance of dielectrics at normal incidence used by the
+/// metallic/roughness mapping (glTF's fixed F0).
+const DIELECTRIC_F0: f32 = 0.04;
+
+impl Importer<'_> {
+    /// Index of glTF's default material (for primitives and spheres without one), added
+    /// to the scene's materials on first use.
+    pub(super) fn default_material(&mut self) -> u32 {
+        if let Some(i) = self.default_material {
+            return i;
+        }
+        // glTF's default material: baseColor 1, metallic 1, roughness 1.
+        let mut m = metallic_roughness(Vec3::ONE, 1.0, 1.0);
+        m.name = "gltf-default".into();
+        let i = self.scene.materials.len() as u32;
+        self.scene.materials.push(m);
+        self.default_material = Some(i);
+        i
+    }
+
+    /// The vkvcm material of `m`: `VKVCM_materials_phong` if present, else clear glass for
+    /// a transmissive material, else the metallic/roughness mapping; plus emission.
+    /// Textures and alpha modes are reported as warnings (the constant factors are used).
+    pub(super) fn convert_material(&mut self, m: &gltf::Material) -> Result<Material> {
+        let index = m.index().unwrap_or(0);
+        let name = m.name().map(str::to_string).unwrap_or_else(|| format!("material{index}"));
+        let label = format!("material {index} '{name}'");
+        let pbr = m.pbr_metallic_roughness();
+        let bc = pbr.base_color_factor();
+        let base = Vec3::new(bc[0], bc[1], bc[2]).clamp(Vec3::ZERO, Vec3::ONE);
+        let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
+        let roughness = pbr.roughness_factor().clamp(0.0, 1.0);
+
+        let mut textures = Vec::new();
+        if pbr.base_color_texture().is_some() {
+            textures.push("baseColorTexture");
+        }
+        if pbr.metallic_roughness_texture().is_some() {
+            textures.push("metallicRoughnessTexture");
+        }
+        if m.normal_texture().is_some() {
+            textures.push("normalTexture");
+        }
+        if m.occlusion_texture().is_some() {
+            textures.push("occlusionTexture");
+        }
+        if m.emissive_texture().is_some() {
+            textures.push("emissiveTexture");
+        }
+        if m.transmission().and_then(|t| t.transmission_texture()).is_some() {
+            textures.push("transmissionTexture");
+        }
+        for t in textures {
+            self.warnings.warn("textures are not supported (the constant factors are used)", format!("{label} {t}"));
+        }
+        if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
+            self.warnings.warn("alphaMode MASK/BLEND is not supported (materials are opaque)", label.clone());
+        }
+
+        let phong_ext = m.extensions().and_then(|e| e.get(EXT_MATERIALS_PHONG));
+        let mut out = if let Some(v) = phong_ext {
+            let ctx = format!("materials[{index}].extensions.{EXT_MATERIALS_PHONG}");
+            if !v.is_object() {
+                bail!("{ctx} must be an object");
+            }
+            let c =
+                |f: &str| -> Result<Vec3> { non_negative(ext_vec3(v, f, Vec3::ZERO, &ctx)?, &format!("{ctx}.{f}")) };
+            let exponent = ext_f32(v, "exponent", 1.0, &ctx)?;
+            if exponent < 0.0 {
+                bail!("{ctx}.exponent must not be negative");
+            }
+            Material {
+                name: String::new(),
+                diffuse: c("diffuse")?,
+                phong: c("phong")?,
+                phong_exponent: exponent,
+                mirror: c("mirror")?,
+                ior: ext_f32(v, "ior", -1.0, &ctx)?,
+                emission: Vec3::ZERO,
+                glossy: Vec3::ZERO,
+                roughness: 1.0,
+            }
+        } else if let Some(t) = m.transmission().filter(|t| t.transmission_factor() > 0.0) {
+            if t.transmission_factor() < 1.0 || roughness > 0.0 || base != Vec3::ONE {
+                self.warnings
+                    .warn("partial, rough or tinted transmission is approximated by clear smooth glass", label.clone());
+            }
+            let ior = m.ior().unwrap_or(1.5);
+            if !(ior >= 1.0 && ior.is_finite()) {
+                bail!("{label}: KHR_materials_ior ior = {ior} is not supported (need >= 1)");
+            }
+            Material { mirror: Vec3::ONE, ior, ..Material::default() }
+        } else {
+            metallic_roughness(base, metallic, roughness)
+        };
+        let strength = m.emissive_strength().unwrap_or(1.0);
+        let ef = m.emissive_factor();
+        out.emission = non_negative(Vec3::from_array(ef) * strength, &format!("{label} emission"))?;
+        if !out.emission.is_finite() {
+            bail!("{label}: emission is not finite");
+        }
+        out.name = name;
+        Ok(out)
+    }
+}
+
+/// The metallic/roughness -> diffuse + GGX (+ mirror) mapping of docs/scene-format.md.
+fn metallic_roughness(base: Vec3, metallic: f32, roughness: f32) -> Material {
+    if metallic >= 1.0 && roughness <= 0.0 {
+        return Material { mirror: base, ..Material::default() };
+    }
+    let diffuse = base * (1.0 - metallic);
+    let glossy = Vec3::splat(DIELECTRIC_F0).lerp(base, metallic);
+    Material { diffuse, glossy, roughness, ..Material::default() }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn metallic_roughness_mapping() {
+        let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-6;
+        let m = metallic_roughness(Vec3::splat(0.5), 0.0, 1.0);
+        assert!(close(m.diffuse, Vec3::splat(0.5)));
+        assert!(close(m.glossy, Vec3::splat(0.04)));
+        assert_eq!(m.roughness, 1.0);
+        assert_eq!(m.phong, Vec3::ZERO);
+        let m = metallic_roughness(Vec3::new(1.0, 0.5, 0.25), 1.0, 0.0);
+        assert_eq!(m.mirror, Vec3::new(1.0, 0.5, 0.25));
+        assert_eq!(m.diffuse, Vec3::ZERO);
+        assert_eq!(m.glossy, Vec3::ZERO);
+        let m = metallic_roughness(Vec3::new(1.0, 0.5, 0.25), 1.0, 0.5);
+        assert!(close(m.glossy, Vec3::new(1.0, 0.5, 0.25)));
+        assert_eq!(m.diffuse, Vec3::ZERO);
+        assert_eq!(m.roughness, 0.5);
+        let m = metallic_roughness(Vec3::ONE, 0.5, 0.0);
+        assert!(close(m.diffuse, Vec3::splat(0.5)));
+        assert!(close(m.glossy, Vec3::splat(0.52)));
+        assert_eq!(m.mirror, Vec3::ZERO);
+    }
+}

@@ -1,0 +1,260 @@
+//! glTF 2.0 import (`.gltf` with external or embedded buffers, `.glb`) into [`Scene`].
+//!
+//! What is read, what is approximated and what is refused is specified in
+//! `docs/scene-format.md`; in short: the default scene's node hierarchy with world
+//! transforms, triangle primitives (TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN; indexed or
+//! not) with optional normals, the metallic/roughness material mapped to vkvcm's
+//! diffuse + GGX + mirror/dielectric model, emission (one area light per emitting
+//! triangle), `KHR_lights_punctual`, the first perspective camera, and the vkvcm
+//! extensions `VKVCM_spheres`, `VKVCM_materials_phong` and `VKVCM_background`.
+//!
+//! Everything that is not represented produces one warning per kind in
+//! [`LoadReport::warnings`]; malformed input produces an error that names the file and the
+//! offending object. Buffers are resolved here (not by `gltf::import`) so that relative
+//! URIs cannot leave the scene's folder.
+//!
+//! This module holds the entry points and the node walk; the rest is split by concern:
+//!
+//! - `sources.rs`: the file container (`.gltf` JSON or `.glb` chunks), buffer URIs, `data:`
+//!   URIs and the folder sandbox;
+//! - `document.rs`: validation of the parsed JSON before the `gltf` crate's reader sees it;
+//! - `extensions.rs`: the extensions the importer understands and readers for their payloads;
+//! - `accessors.rs`: bounds-checked accessor reads (positions, normals, indices);
+//! - `geometry.rs`: meshes (triangulation, transforms) and `VKVCM_spheres`;
+//! - `materials.rs`: the glTF material -> vkvcm material mapping;
+//! - `lights.rs`: punctual lights, area lights from emission and the background;
+//! - `cameras.rs`: camera candidates and the choice of the rendered camera;
+//! - `warnings.rs`: warnings collected once per kind.
+
+mod accessors;
+mod cameras;
+mod document;
+mod extensions;
+mod geometry;
+mod lights;
+mod materials;
+mod sources;
+mod warnings;
+
+pub use extensions::{EXT_BACKGROUND, EXT_MATERIALS_PHONG, EXT_SPHERES, SUPPORTED_EXTENSIONS};
+pub use sources::{decode_data_uri, encode_data_uri};
+
+use super::{Camera, Light, LoadReport, Scene};
+use anyhow::{anyhow, bail, Result};
+use cameras::CameraCandidate;
+use glam::{DMat4, DQuat, DVec3, Mat4, Vec3};
+use std::path::Path;
+use warnings::Warnings;
+
+/// Options of [`load_gltf`].
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// Select the camera whose node name or camera name equals this; `None`: the first
+    /// perspective camera in node order.
+    pub camera: Option<String>,
+}
+
+/// Loads a `.gltf` or `.glb` file. Errors name the file and the offending object.
+pub fn load_gltf(path: &Path, options: &LoadOptions) -> Result<Scene> {
+    let bytes = std::fs::read(path).map_err(|e| one_line(path, &anyhow!("cannot read scene file: {e}")))?;
+    load_gltf_bytes(&bytes, path, options)
+}
+
+/// Imports `bytes` as if they were the contents of the `.gltf`/`.glb` file `path`: external
+/// buffers are resolved in `path`'s folder, the scene is named after its file stem, and an
+/// error is one line that starts with `path`. The entry point of the fuzz target
+/// (`fuzz/fuzz_targets/gltf_load.rs`); it never panics on malformed input.
+pub fn load_gltf_bytes(bytes: &[u8], path: &Path, options: &LoadOptions) -> Result<Scene> {
+    let base_dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    import_bytes(bytes, base_dir, name, options).map_err(|e| one_line(path, &e))
+}
+
+/// `"<path>: <error chain>"` on one line (the CLI prints errors as one `error: ...` line;
+/// a newline in a file name or a nested message must not break that).
+pub(crate) fn one_line(path: &Path, e: &anyhow::Error) -> anyhow::Error {
+    let msg = format!("{}: {e:#}", path.display());
+    anyhow!(msg.replace(['\n', '\r'], " "))
+}
+
+/// Parses and validates the document, loads its buffers from `base_dir`, converts it and
+/// attaches the collected warnings (the importer's own and the camera checks of
+/// [`super::validate`]) to the scene's report.
+fn import_bytes(bytes: &[u8], base_dir: &Path, name: String, options: &LoadOptions) -> Result<Scene> {
+    let mut warnings = Warnings::default();
+    let (root, blob) = document::parse_document(bytes, &mut warnings)?;
+    let doc = gltf::Document::from_json_without_validation(root);
+    let buffers = sources::load_buffers(&doc, blob, base_dir)?;
+    let mut importer = Importer {
+        doc: &doc,
+        buffers,
+        warnings,
+        scene: Scene {
+            name,
+            triangles: Vec::new(),
+            spheres: Vec::new(),
+            materials: Vec::new(),
+            lights: Vec::new(),
+            camera: Camera {
+                position: Vec3::ZERO,
+                forward: Vec3::NEG_Z,
+                up: Vec3::Y,
+                yfov: std::f32::consts::FRAC_PI_4,
+            },
+            report: LoadReport::default(),
+        },
+        default_material: None,
+        cameras: Vec::new(),
+        punctual: Vec::new(),
+    };
+    importer.run(options)?;
+    let Importer { mut scene, mut warnings, .. } = importer;
+    for (kind, detail) in super::validate::camera_warnings(&scene) {
+        warnings.warn(kind, detail);
+    }
+    scene.report.warnings = warnings.finish();
+    Ok(scene)
+}
+
+/// The conversion of one validated document into a [`Scene`]. Its methods are spread over
+/// the submodules by concern; [`Importer::run`] is the order in which they are applied.
+struct Importer<'d> {
+    doc: &'d gltf::Document,
+    /// The document's buffers, indexed like `doc.buffers()`, each at least `byteLength` long.
+    buffers: Vec<Vec<u8>>,
+    warnings: Warnings,
+    /// The scene being built; its camera is a placeholder until [`Importer::run`] chooses one.
+    scene: Scene,
+    /// Index of glTF's default material in `scene.materials`, added on first use.
+    default_material: Option<u32>,
+    /// Perspective cameras met in node order.
+    cameras: Vec<CameraCandidate>,
+    /// Punctual lights met in node order; appended after the area lights.
+    punctual: Vec<Light>,
+}
+
+impl<'d> Importer<'d> {
+    fn run(&mut self, options: &LoadOptions) -> Result<()> {
+        let doc = self.doc;
+        for m in doc.materials() {
+            let mat = self.convert_material(&m)?;
+            self.scene.materials.push(mat);
+        }
+        if doc.animations().len() > 0 {
+            self.warnings.warn(
+                "animations are not supported (the static pose is used)",
+                format!("{} animation(s)", doc.animations().len()),
+            );
+        }
+
+        let scene = self.scene_to_render()?;
+        // World transforms are composed in f64 and the scene is re-centred on the chosen
+        // camera before it is rounded to f32 (camera-relative coordinates,
+        // docs/numerics.md): a scene 1e5 units from the origin keeps the precision it has
+        // near the origin.
+        let order = walk_nodes(&scene, doc.nodes().len())?;
+        let origin = cameras::camera_origin(&order, options.camera.as_deref());
+        self.scene.report.origin = origin.to_array();
+        let rebase = DMat4::from_translation(-origin);
+        for (node, world) in &order {
+            self.visit_node(node, (rebase * *world).as_mat4())?;
+        }
+
+        self.scene.camera = self.choose_camera(options)?;
+        self.collect_lights()
+    }
+
+    /// The default scene, or else the first scene (with a warning when there are several).
+    fn scene_to_render(&mut self) -> Result<gltf::Scene<'d>> {
+        let doc = self.doc;
+        if let Some(s) = doc.default_scene() {
+            return Ok(s);
+        }
+        let s = doc.scenes().next().ok_or_else(|| anyhow!("the file has no scene"))?;
+        if doc.scenes().len() > 1 {
+            self.warnings
+                .warn("no default scene: the first scene is rendered", format!("{} scenes", doc.scenes().len()));
+        }
+        Ok(s)
+    }
+
+    /// Converts what one node carries (camera, light, mesh, spheres), placed by its world
+    /// transform `world` (already re-centred and rounded to f32).
+    fn visit_node(&mut self, node: &gltf::Node, world: Mat4) -> Result<()> {
+        let ni = node.index();
+        let label = match node.name() {
+            Some(n) => format!("node {ni} '{n}'"),
+            None => format!("node {ni}"),
+        };
+        if !world.is_finite() {
+            bail!("{label}: world transform is not finite");
+        }
+        if node.skin().is_some() {
+            self.warnings
+                .warn("skins are not supported (meshes are placed by their node transform, unskinned)", label.clone());
+        }
+        if node.weights().is_some() {
+            self.warnings.warn("morph targets are not supported (base geometry used)", label.clone());
+        }
+        if let Some(cam) = node.camera() {
+            self.add_camera(node, &cam, world, &label);
+        }
+        if let Some(light) = node.light() {
+            self.add_light(&light, world, &label)?;
+        }
+        if let Some(mesh) = node.mesh() {
+            self.add_mesh(&mesh, world, &label)?;
+        }
+        if let Some(v) = node.extensions().and_then(|e| e.get(EXT_SPHERES)) {
+            self.add_spheres(v, world, ni)?;
+        }
+        Ok(())
+    }
+}
+
+/// The nodes of `scene` in depth-first order (parents before children, siblings in
+/// document order) with their world transforms in f64. glTF requires the hierarchy to be
+/// a forest, so a node reached twice is an error rather than an infinite loop; `node_count`
+/// is the number of nodes in the document.
+fn walk_nodes<'a>(scene: &gltf::Scene<'a>, node_count: usize) -> Result<Vec<(gltf::Node<'a>, DMat4)>> {
+    let mut visited = vec![false; node_count];
+    let mut order: Vec<(gltf::Node, DMat4)> = Vec::new();
+    let mut stack: Vec<(gltf::Node, DMat4)> =
+        scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect::<Vec<_>>().into_iter().rev().collect();
+    while let Some((node, parent)) = stack.pop() {
+        if std::mem::replace(&mut visited[node.index()], true) {
+            bail!(
+                "node {} is reached twice in scene {}: the node hierarchy is not a tree",
+                node.index(),
+                scene.index()
+            );
+        }
+        let world = parent * local_transform_f64(&node);
+        let children: Vec<_> = node.children().collect();
+        for child in children.into_iter().rev() {
+            stack.push((child, world));
+        }
+        order.push((node, world));
+    }
+    Ok(order)
+}
+
+/// A node's local transform in f64 (TRS composed in f64, so a large translation stays exact).
+fn local_transform_f64(node: &gltf::Node) -> DMat4 {
+    match node.transform() {
+        gltf::scene::Transform::Matrix { matrix } => DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from))),
+        gltf::scene::Transform::Decomposed { translation, rotation, scale } => {
+            let q = DQuat::from_array(rotation.map(f64::from));
+            // glTF rotations are unit quaternions; normalising guards against rounding in the file.
+            let q = if q.length_squared() > 0.0 { q.normalize() } else { DQuat::IDENTITY };
+            DMat4::from_scale_rotation_translation(
+                DVec3::from_array(scale.map(f64::from)),
+                q,
+                DVec3::from_array(translation.map(f64::from)),
+            )
+        }
+    }
+}
