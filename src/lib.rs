@@ -4,6 +4,7 @@
 //! glTF import and built-in scenes, `bvh` the acceleration structure, `render` the
 //! estimators, `image` file output and error metrics.
 
+pub mod bench;
 pub mod bvh;
 pub mod gpu;
 pub mod image;

@@ -8,7 +8,7 @@
 //! `VKVCM_BENCH_LOCAL_SIZE` sets the workgroup size, `VKVCM_BENCH_REPEATS` the timed
 //! dispatches, `VKVCM_BENCH_CT` / `_BINS` / `_LEAF` the SAH build options. Validation is off (it would time the layer, not the traversal).
 
-use vkvcm::bvh::bench::{bench_scene, bench_traverse, TraverseBenchOptions};
+use vkvcm::bench::traverse::{bench_scene, bench_traverse, TraverseBenchOptions};
 use vkvcm::gpu::{Gpu, GpuOptions};
 
 #[test]

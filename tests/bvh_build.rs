@@ -280,7 +280,7 @@ fn icosphere_is_watertight_on_cpu() {
 
 #[test]
 fn build_one_million_triangles() {
-    let scene = vkvcm::bvh::bench::scene_spheres();
+    let scene = vkvcm::bench::traverse::scene_spheres();
     assert_eq!(scene.triangles.len(), 1 << 20);
     let serial = build_with(&scene.triangles, &scene.spheres, &BuildOptions { threads: 1, ..Default::default() });
     let bvh = build(&scene.triangles, &scene.spheres);

@@ -1,12 +1,12 @@
 //! vkvcm's BVH traversal (`glsl/bvh_bench.comp`, as in `vkvcm bench traverse`) against
 //! the driver's VK_KHR_ray_query on the same triangles and the same rays
-//! (`vkvcm::bvh::bench::{bench_scene, bench_ray_sets}`), interleaved per ray set so that
+//! (`vkvcm::bench::traverse::{bench_scene, bench_ray_sets}`), interleaved per ray set so that
 //! other load on the machine hits both alike.
 
 use std::sync::Arc;
 
 use anyhow::{anyhow, Result};
-use vkvcm::bvh::bench::{bench_ray_sets, bench_scene, BenchRay, BenchScene};
+use vkvcm::bench::traverse::{bench_ray_sets, bench_scene, BenchRay, BenchScene};
 use vkvcm::bvh::{build_with, BuildOptions, GpuBvh, Ray};
 use vkvcm::gpu::{groups_for, Gpu, GpuOptions, Profile};
 

@@ -13,7 +13,7 @@ use std::time::Instant;
 
 use anyhow::{anyhow, bail, Context, Result};
 use ash::vk;
-use vkvcm::bvh::bench::BenchRay;
+use vkvcm::bench::traverse::BenchRay;
 use vkvcm::scene::Triangle;
 
 const SHADER: &str = include_str!("rayquery_bench.comp");

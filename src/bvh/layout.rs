@@ -19,7 +19,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use super::build::Aabb;
+use super::aabb::Aabb;
 
 /// Bit 31 of a child reference: the child is a leaf.
 pub const LEAF_FLAG: u32 = 0x8000_0000;

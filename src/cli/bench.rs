@@ -150,11 +150,11 @@ fn open_bench_gpu(device: Option<String>) -> Result<Arc<Gpu>> {
 
 fn bench_traverse(a: BenchTraverseArgs) -> Result<()> {
     let gpu = open_bench_gpu(a.device.clone())?;
-    let opts = vkvcm::bvh::bench::TraverseBenchOptions { rays: a.rays.max(1), ..Default::default() };
+    let opts = vkvcm::bench::traverse::TraverseBenchOptions { rays: a.rays.max(1), ..Default::default() };
     for name in &a.scenes {
-        let scene = vkvcm::bvh::bench::bench_scene(name)
+        let scene = vkvcm::bench::traverse::bench_scene(name)
             .with_context(|| format!("unknown traversal scene {name:?} (cornell, spheres, displaced)"))?;
-        let report = vkvcm::bvh::bench::bench_traverse(&gpu, &scene, &opts)?;
+        let report = vkvcm::bench::traverse::bench_traverse(&gpu, &scene, &opts)?;
         println!("{report}");
     }
     Ok(())

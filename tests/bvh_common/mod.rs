@@ -4,7 +4,7 @@
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
-use vkvcm::bvh::bench::icosphere;
+use vkvcm::bench::traverse::icosphere;
 use vkvcm::bvh::{Hit, Ray};
 use vkvcm::scene::{Sphere, Triangle};
 

@@ -1,13 +1,14 @@
 //! Traversal benchmark (`vkvcm bench traverse`) and the scenes it runs on.
 //!
-//! [`bench_traverse`] builds the BVH (timed), uploads it, and measures closest-hit
-//! traversal on the GPU for 2^20 camera rays (a pinhole camera, one ray per pixel of a
-//! 1024 x 1024 image in scanline order) and 2^20 random rays (origin uniform in the scene
-//! box, direction uniform on the sphere), after a warm-up dispatch, with GPU timestamps.
+//! [`bench_traverse`] builds the BVH (timed), uploads it, and measures closest-hit and
+//! any-hit traversal on the GPU for 2^20 camera rays (a pinhole camera, one ray per pixel
+//! of a 1024 x 1024 image in scanline order) and 2^20 random rays (origin uniform in the
+//! scene box, direction uniform on the sphere), after a warm-up dispatch, with GPU
+//! timestamps.
 //! Scenes ([`bench_scene`]): `cornell` (open Cornell box + 2 tessellated spheres, 3,978
 //! triangles), `spheres` (4,096 UV spheres of 256 triangles: 1,048,576 triangles),
-//! `displaced` (a noise-displaced cube-sphere, 1,002,252 triangles), the three scenes of
-//! the traversal table in DESIGN.md.
+//! `displaced` (a noise-displaced cube-sphere, 1,002,252 triangles); their results:
+//! docs/bvh.md, Benchmark.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -17,9 +18,8 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use serde::Serialize;
 
-use super::build::{build_with, Aabb, BuildOptions};
-use super::intersect::Ray;
-use super::traverse::{any_hit_counted, closest_hit_counted};
+use crate::bvh::traverse::{any_hit_counted, closest_hit_counted};
+use crate::bvh::{build_with, Aabb, BuildOptions, Ray};
 use crate::gpu::{groups_for, Gpu, Profile};
 use crate::scene::{Sphere, Triangle};
 
