@@ -1,7 +1,7 @@
 // vkvcm's material model, written once for every estimator: Lambert + normalised Phong
 // lobe + GGX microfacet reflection + Fresnel-weighted mirror / smooth dielectric.
 // Component choice and Russian roulette follow SmallVCM (Georgiev & Davidovic), as
-// ../shared/SCENES.md 2.4 states: component probabilities proportional to luminance
+// docs/smallvcm.md 2.4 states: component probabilities proportional to luminance
 // albedo, continuation probability = clamp(max RGB of (diffuse + phong + glossy +
 // F mirror) + (1 - F), 0, 1) (glossy is zero for SmallVCM's materials, so their rule is
 // unchanged).

@@ -3,23 +3,20 @@
 // of Ray Traversal on GPUs", HPG 2009, quantised to 8 bits). Mirrored on the CPU by
 // src/bvh/traverse.rs; layout in src/bvh/layout.rs; measurements in docs/bvh.md.
 //
-// The including kernel provides the two buffers in one of two ways, before
+// The two buffers are the bindings `bvh_nodes` and `bvh_prims` (bound by name,
+// src/gpu/reflect.rs). The including kernel provides them in one of two ways, before
 // `#include "bvh.glsl"`:
 //
-// 1. (fast) define the bindings and let this file declare the buffers, as arrays of
+// 1. (fast) `#define BVH_DECLARES_BUFFERS` and let this file declare them, as arrays of
 //    u64vec2 (64-bit loads: on lavapipe a 64-bit gather moves twice the data of a 32-bit
-//    one per instruction; the device must have shaderInt64, which vkvcm requires):
-//
-//      #define BVH_NODES_BINDING 1
-//      #define BVH_PRIMS_BINDING 2
-//      // optional: #define BVH_SET 0
-//      // optional: #define BVH_TEXEL 1: bound as uniform texel buffers of uvec4 texels
-//      //   (utextureBuffer) instead (src/render/reads.rs)
+//    one per instruction; the device must have shaderInt64, which vkvcm requires);
+//    with `#define BVH_TEXEL 1` as uniform texel buffers of uvec4 texels (utextureBuffer)
+//    instead (src/render/reads.rs).
 //
 // 2. (compatible) declare them itself as vec4 arrays with these names:
 //
-//      layout(std430, binding = 1) readonly buffer BvhNodes { vec4 bvh_nodes[]; };
-//      layout(std430, binding = 2) readonly buffer BvhPrims { vec4 bvh_prims[]; };
+//      layout(std430) readonly buffer bvh_nodes { vec4 bvh_node_data[]; };
+//      layout(std430) readonly buffer bvh_prims { vec4 bvh_prim_data[]; };
 //
 // Optional: `#define BVH_NO_SPHERES` when the scene has no spheres (GpuBvh::glsl_defines
 // says so): the sphere test is compiled out.
@@ -53,45 +50,42 @@
 #define BVH_DONE 0xffffffffu
 #define BVH_ROBUST_SCALE 1.000002
 
-#ifndef BVH_SET
-#define BVH_SET 0
-#endif
 #ifndef BVH_TEXEL
 #define BVH_TEXEL 0
 #endif
-#if defined(BVH_NODES_BINDING) && BVH_TEXEL
+#if defined(BVH_DECLARES_BUFFERS) && BVH_TEXEL
 #extension GL_EXT_samplerless_texture_functions : require
 // Uniform texel buffers of uvec4 texels (scene.glsl's TEXEL_READS).
-layout(set = BVH_SET, binding = BVH_NODES_BINDING) uniform utextureBuffer bvh_nodes_t;
-layout(set = BVH_SET, binding = BVH_PRIMS_BINDING) uniform utextureBuffer bvh_prims_t;
+uniform utextureBuffer bvh_nodes;
+uniform utextureBuffer bvh_prims;
 uvec4 bvh_node_elem(uint i) {
-    return texelFetch(bvh_nodes_t, int(i));
+    return texelFetch(bvh_nodes, int(i));
 }
 uvec4 bvh_prim_elem(uint i) {
-    return texelFetch(bvh_prims_t, int(i));
+    return texelFetch(bvh_prims, int(i));
 }
-#elif defined(BVH_NODES_BINDING)
+#elif defined(BVH_DECLARES_BUFFERS)
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
-layout(std430, set = BVH_SET, binding = BVH_NODES_BINDING) readonly buffer BvhNodes {
-    u64vec2 bvh_nodes[];
+layout(std430) readonly buffer bvh_nodes {
+    u64vec2 bvh_node_data[];
 };
-layout(std430, set = BVH_SET, binding = BVH_PRIMS_BINDING) readonly buffer BvhPrims {
-    u64vec2 bvh_prims[];
+layout(std430) readonly buffer bvh_prims {
+    u64vec2 bvh_prim_data[];
 };
 uvec4 bvh_node_elem(uint i) {
-    u64vec2 v = bvh_nodes[i];
+    u64vec2 v = bvh_node_data[i];
     return uvec4(unpackUint2x32(v.x), unpackUint2x32(v.y));
 }
 uvec4 bvh_prim_elem(uint i) {
-    u64vec2 v = bvh_prims[i];
+    u64vec2 v = bvh_prim_data[i];
     return uvec4(unpackUint2x32(v.x), unpackUint2x32(v.y));
 }
 #else
 uvec4 bvh_node_elem(uint i) {
-    return floatBitsToUint(bvh_nodes[i]);
+    return floatBitsToUint(bvh_node_data[i]);
 }
 uvec4 bvh_prim_elem(uint i) {
-    return floatBitsToUint(bvh_prims[i]);
+    return floatBitsToUint(bvh_prim_data[i]);
 }
 #endif
 

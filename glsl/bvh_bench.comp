@@ -1,20 +1,19 @@
 #version 460
-// Traversal benchmark kernel (src/bvh/bench.rs): one ray per invocation, writes the hit
+// Traversal benchmark kernel (src/bench/traverse.rs): one ray per invocation, writes the hit
 // primitive (closest hit; 0xffffffff = miss) or 1/0 (any hit, MODE 1).
 #ifndef LOCAL_SIZE
 #define LOCAL_SIZE 64
 #endif
 layout(local_size_x = LOCAL_SIZE) in;
 
-#define BVH_NODES_BINDING 0
-#define BVH_PRIMS_BINDING 1
+#define BVH_DECLARES_BUFFERS
 
 struct BenchRay {
     vec4 o;  // w unused
     vec4 d;
 };
-layout(std430, binding = 2) readonly buffer Rays { BenchRay rays[]; };
-layout(std430, binding = 3) writeonly buffer Results { uint results[]; };
+layout(std430) readonly buffer bench_rays { BenchRay rays[]; };
+layout(std430) writeonly buffer bench_results { uint results[]; };
 
 layout(push_constant) uniform Push { uint count; } pc;
 

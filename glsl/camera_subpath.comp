@@ -1,41 +1,37 @@
 #version 460
-// Stage 3 (../shared/DESIGN.md): push.paths_per_invocation pixel samples per invocation
-// (path regeneration, common.glsl regen_stride). Traces a camera subpath; at each vertex
+// The camera-subpaths pass of bpt, ppm, bpm and vcm (docs/design.md;
+// src/render/passes/camera_subpaths.rs): push.paths_per_invocation pixel samples per
+// invocation (path regeneration, common.glsl regen_stride). Traces a camera subpath; at each vertex
 // adds emitter hits, next-event estimation and connections to the vertices of light
 // subpath p = this pixel, or with LV_CACHE to vertices drawn from all light subpaths
 // (USE_VC), and merges with the light vertices within the radius found in the hash grid
 // (USE_VM), each weighted by the
-// recursive MIS of ../shared/SCENES.md 4.4. Then takes this pixel's splats (light-to-
-// camera connections of stage 1) and adds the sum to the film (stage 4).
+// recursive MIS of docs/smallvcm.md. Then takes this pixel's splats (light-to-camera
+// connections of the light-subpaths pass) and adds the sum to the film.
 // USE_VC=1 USE_VM=0: bpt; 0 1: bpm; 1 1: vcm; PPM=1 (with USE_VM=1, USE_VC=0): merge at
-// the first non-specular vertex only, without MIS.
+// the first non-specular vertex only, without MIS. The variant is always set by the Rust
+// side (src/render/variants.rs, CameraKernel).
 #extension GL_GOOGLE_include_directive : require
 
-#ifndef USE_VC
-#define USE_VC 1
-#endif
-#ifndef USE_VM
-#define USE_VM 0
-#endif
-#ifndef PPM
-#define PPM 0
+#if !defined(USE_VC) || !defined(USE_VM) || !defined(PPM)
+#error "USE_VC, USE_VM and PPM must be defined (src/render/variants.rs)"
 #endif
 
-layout(local_size_x = 64) in;
+layout(local_size_x = WORKGROUP_SIZE) in;
 #include "scene.glsl"
-#include "vcm_bindings.glsl"
+#include "light_vertex_store.glsl"
 
 #if USE_VM
 #if LV_TEXEL
-layout(binding = 14) uniform utextureBuffer grid_start_t;
-layout(binding = 15) uniform utextureBuffer grid_points_t;
-uint grid_start_at(uint b) { return texelFetch(grid_start_t, int(b)).x; }
-uvec4 grid_point_at(uint j) { return texelFetch(grid_points_t, int(j)); }
+uniform utextureBuffer grid_start;
+uniform utextureBuffer grid_points;
+uint grid_start_at(uint b) { return texelFetch(grid_start, int(b)).x; }
+uvec4 grid_point_at(uint j) { return texelFetch(grid_points, int(j)); }
 #else
-layout(std430, binding = 14) readonly buffer GridStartBuf { uint grid_start[]; };
-layout(std430, binding = 15) readonly buffer GridPointsBuf { uvec4 grid_points[]; };
-uint grid_start_at(uint b) { return grid_start[b]; }
-uvec4 grid_point_at(uint j) { return grid_points[j]; }
+layout(std430) readonly buffer grid_start { uint bucket_start[]; };
+layout(std430) readonly buffer grid_points { uvec4 bucket_points[]; };
+uint grid_start_at(uint b) { return bucket_start[b]; }
+uvec4 grid_point_at(uint j) { return bucket_points[j]; }
 #endif
 #include "hash_grid.glsl"
 #endif
@@ -78,23 +74,16 @@ vec3 connect_vertices(SubpathState st, Surface s, Bsdf b, LightVertex v) {
 // vertices) keeps the weight M / (N_L n_c) the same for every vertex. Deterministic: the
 // prefix sum is a fixed-order scan, the dense list is in path order and the draws use
 // this pixel's random sequence.
-#if USE_VM
-#define LV_PREFIX_BINDING 16
-#define LV_DENSE_BINDING 17
-#else
-#define LV_PREFIX_BINDING 14
-#define LV_DENSE_BINDING 15
-#endif
 // lv_dense_at(i): the store slot of the i-th of all stored vertices, in path order
 // (glsl/lv_cache_compact.comp).
 #if LV_TEXEL
-layout(binding = LV_PREFIX_BINDING) uniform utextureBuffer lv_prefix_t;
-layout(binding = LV_DENSE_BINDING) uniform utextureBuffer lv_dense_t;
-uint lv_prefix_at(uint p) { return texelFetch(lv_prefix_t, int(p)).x; }
-uint lv_dense_at(uint i) { return texelFetch(lv_dense_t, int(i)).x; }
+uniform utextureBuffer light_vertex_prefix;
+uniform utextureBuffer light_vertex_dense;
+uint lv_prefix_at(uint p) { return texelFetch(light_vertex_prefix, int(p)).x; }
+uint lv_dense_at(uint i) { return texelFetch(light_vertex_dense, int(i)).x; }
 #else
-layout(std430, binding = LV_PREFIX_BINDING) readonly buffer LvPrefixBuf { uint lv_prefix[]; };
-layout(std430, binding = LV_DENSE_BINDING) readonly buffer LvDenseBuf { uint lv_dense[]; };
+layout(std430) readonly buffer light_vertex_prefix { uint lv_prefix[]; };
+layout(std430) readonly buffer light_vertex_dense { uint lv_dense[]; };
 uint lv_prefix_at(uint p) { return lv_prefix[p]; }
 uint lv_dense_at(uint i) { return lv_dense[i]; }
 #endif

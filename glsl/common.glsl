@@ -101,6 +101,11 @@ vec3 offset_ray(vec3 p, vec3 n, vec3 dir, float scene_radius) {
     return p + (dot(n, dir) >= 0.0 ? eps : -eps) * n;
 }
 
+// Balance-heuristic weight (Veach 1997, sec. 9.2) of a technique with pdf a against one
+// with pdf b. The VCM family weighs its techniques through the recursive quantities of
+// vcm.glsl instead (docs/smallvcm.md); path tracing uses this directly.
+float balance(float a, float b) { return a / (a + b); }
+
 bool finite3(vec3 v) { return !any(isnan(v)) && !any(isinf(v)); }
 
 // Index of this invocation in a 1-D problem dispatched as a 2-D grid of workgroups
@@ -108,6 +113,12 @@ bool finite3(vec3 v) { return !any(isnan(v)) && !any(isinf(v)); }
 // maxComputeWorkGroupCount[0]) fit.
 uint invocation_index() {
     return gl_GlobalInvocationID.y * (gl_NumWorkGroups.x * gl_WorkGroupSize.x) + gl_GlobalInvocationID.x;
+}
+
+// Index of this workgroup in a dispatch folded into 2-D the same way (kernels whose
+// workgroups, not invocations, are the unit of work: exclusive_scan.comp).
+uint workgroup_index() {
+    return gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
 }
 
 // Path regeneration (Novak, Havran & Dachsbacher, "Path Regeneration for Interactive Path

@@ -2,11 +2,9 @@
 // Eye light (`el`): |cos(normal, view ray)| of the first hit, a preview and not a
 // radiance estimate (as SmallVCM's EyeLight). Back faces are not distinguished.
 #extension GL_GOOGLE_include_directive : require
-layout(local_size_x = 64) in;
+layout(local_size_x = WORKGROUP_SIZE) in;
 #include "scene.glsl"
-layout(std430, binding = 8) buffer FilmBuf { vec4 film[]; };
-layout(std430, binding = 9) buffer StatsBuf { uint stats[]; };
-layout(push_constant) uniform PushBlock { GpuPush push; };
+#include "push.glsl"
 #include "film.glsl"
 
 void main() {

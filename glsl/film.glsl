@@ -2,24 +2,29 @@
 // square (for per-pixel variance: error estimates and statistical tests), both float32
 // with Kahan compensation (Kahan 1965), so long renders lose no precision without float64.
 // Each pixel has one writer per dispatch, so the result is deterministic.
-// Requires `film[]` (vec4, four per pixel: sum, its compensation, sum of squares, its
-// compensation) and `stats[]` (uint: [0] rejected samples, [1] overflowing splats, [2..3]
-// the 64-bit count of traced rays when profiling: COUNT_RAYS in glsl/scene.glsl).
+// Declares the bindings `film` (film_sums[]: vec4, four per pixel: sum, its
+// compensation, sum of squares, its compensation) and `film_stats` (stats[], uint: [0]
+// rejected samples, [1] overflowing splats, [2..3] the 64-bit count of traced rays when
+// profiling: COUNT_RAYS in glsl/scene.glsl), src/render/film.rs; with HAS_SPLAT also
+// `splat` (below).
 #ifndef FILM_GLSL
 #define FILM_GLSL
 
-// Kahan step: adds `v` to the sum at film[i] with compensation at film[i + 1].
+layout(std430) buffer film { vec4 film_sums[]; };
+layout(std430) buffer film_stats { uint stats[]; };
+
+// Kahan step: adds `v` to the sum at film_sums[i] with compensation at film_sums[i + 1].
 // `precise` forbids the compiler from reassociating these operations, which would cancel
 // the compensation to zero (seen on lavapipe: 2048 iterations of a constant 0.5294118
 // summed to 0.5294181 without it; tests/render_pt.rs catches this).
 void film_kahan_add(uint i, vec4 v) {
-    vec4 sum = film[i];
-    vec4 c = film[i + 1u];
+    vec4 sum = film_sums[i];
+    vec4 c = film_sums[i + 1u];
     precise vec4 y = v - c;
     precise vec4 t = sum + y;
     precise vec4 comp = (t - sum) - y;
-    film[i + 1u] = comp;
-    film[i] = t;
+    film_sums[i + 1u] = comp;
+    film_sums[i] = t;
 }
 
 // Adds this iteration's value `v` of `pixel`; rejects (and counts) NaN, Inf and negative
@@ -41,6 +46,9 @@ void film_add(uint pixel, vec3 v) {
 // splats): it is rejected and counted in stats[1]. The camera kernel (or accumulate.comp)
 // takes the sums into the film once per iteration and zeroes them.
 #ifdef HAS_SPLAT
+#extension GL_EXT_shader_atomic_int64 : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+layout(std430) buffer splat { uint64_t splat_sums[]; };
 #define SPLAT_SCALE 16777216.0
 #define SPLAT_MAX 134217728.0
 
@@ -55,7 +63,7 @@ void splat_add(uint pixel, vec3 v) {
     }
     for (int c = 0; c < 3; ++c) {
         uint64_t q = uint64_t(v[c] * SPLAT_SCALE + 0.5);
-        if (q != 0ul) atomicAdd(splat[3u * pixel + uint(c)], q);
+        if (q != 0ul) atomicAdd(splat_sums[3u * pixel + uint(c)], q);
     }
 }
 
@@ -63,8 +71,8 @@ void splat_add(uint pixel, vec3 v) {
 vec3 splat_take(uint pixel) {
     vec3 v;
     for (int c = 0; c < 3; ++c) {
-        v[c] = float(splat[3u * pixel + uint(c)]) * (1.0 / SPLAT_SCALE);
-        splat[3u * pixel + uint(c)] = 0ul;
+        v[c] = float(splat_sums[3u * pixel + uint(c)]) * (1.0 / SPLAT_SCALE);
+        splat_sums[3u * pixel + uint(c)] = 0ul;
     }
     return v;
 }

@@ -1,14 +1,15 @@
-// Hash grid over the iteration's light vertices (stage 2 of ../shared/DESIGN.md; SmallVCM's
-// hashgrid.hxx, ../shared/SCENES.md 4.3). Cells are cubes of side 2r (r = merge radius)
+// Hash grid over the iteration's light vertices (the grid-build pass, docs/design.md;
+// SmallVCM's hashgrid.hxx, docs/smallvcm.md 4.3). Cells are cubes of side 2r (r = merge radius)
 // anchored at `origin`; cell (x, y, z) maps to bucket
 //   (uint(x) * 73856093 ^ uint(y) * 19349663 ^ uint(z) * 83492791) % num_buckets
 // in wrapping 32-bit unsigned arithmetic. After the build (hash_grid_count.comp,
-// hash_grid_scan.comp, hash_grid_scatter.comp, hash_grid_sort.comp; driven by
-// src/render/hash_grid.rs) bucket b holds the entries grid_points[grid_start[b] ..
+// exclusive_scan.comp, hash_grid_scatter.comp, hash_grid_sort.comp; driven by
+// src/render/passes/hash_grid.rs) bucket b holds the entries grid_points[grid_start[b] ..
 // grid_start[b + 1]), each (floatBitsToUint(position), slot), ascending by slot.
 //
-// This file declares no bindings: the including kernel owns the buffers (the camera
-// kernel: `uint grid_start[]` at binding 14, `uvec4 grid_points[]` at binding 15).
+// This file declares no bindings: the including kernel owns the buffers (the bindings
+// grid_start and grid_points; the camera kernel reads them through grid_start_at and
+// grid_point_at).
 //
 // A query at q visits the buckets of the 2x2x2 cells nearest q: its own cell and, per axis,
 // the neighbour on the side of the nearer face. With cells of side 2r every vertex within
@@ -81,7 +82,7 @@ uint hash_grid_query_cells(vec3 q, vec3 origin, float radius, uint num_buckets, 
 
 // ---- Build kernels only ----
 
-// Push constants of the build passes (mirrored by BuildPush in src/render/hash_grid.rs).
+// Push constants of the build passes (mirrored by BuildPush in src/render/passes/hash_grid.rs).
 #define HASH_GRID_BUILD_PUSH                                                              \
     layout(push_constant) uniform HashGridBuildPush {                                     \
         vec3 origin;                                                                      \
@@ -90,11 +91,5 @@ uint hash_grid_query_cells(vec3 q, vec3 origin, float radius, uint num_buckets, 
         uint slots;                                                                       \
         uint num_buckets;                                                                 \
     } push
-
-// Index of this workgroup in a dispatch folded into 2D (x up to 65,535
-// groups, the guaranteed maxComputeWorkGroupCount) so that any size can be covered.
-uint hash_grid_group_index() {
-    return gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
-}
 
 #endif

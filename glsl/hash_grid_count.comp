@@ -1,29 +1,30 @@
 #version 460
-// Hash-grid build, pass 1 of 4 (see hash_grid.glsl, src/render/hash_grid.rs): one
+// Hash-grid build, pass 1 of 4 (see hash_grid.glsl, src/render/passes/hash_grid.rs): one
 // invocation per light path p, over its lv_count[p] stored vertices (slots p * slots + k).
-// Each counts itself into its bucket, grid_start[b] += 1 (grid_start is zeroed before and
+// Each counts itself into its bucket, bucket_start[b] += 1 (grid_start is zeroed before and
 // scanned after), and keeps its bucket and its arrival rank in the bucket,
-// grid_keys[slot] = (b, rank), for the scatter. (One invocation per path rather than per
+// vertex_keys[slot] = (b, rank), for the scatter. (One invocation per path rather than per
 // slot: most slots are empty; ppm's grid build on lavapipe, docs/performance.md.)
 #extension GL_GOOGLE_include_directive : require
 
-layout(local_size_x = 64) in;
+layout(local_size_x = WORKGROUP_SIZE) in;
 
-layout(std430, binding = 0) readonly buffer LvABuf { vec4 lv_a[]; };
-layout(std430, binding = 1) readonly buffer LvCountBuf { uint lv_count[]; };
-layout(std430, binding = 2) buffer GridStartBuf { uint grid_start[]; };
-layout(std430, binding = 3) writeonly buffer GridKeysBuf { uvec2 grid_keys[]; };
+layout(std430) readonly buffer light_vertices_a { vec4 lv_a[]; };
+layout(std430) readonly buffer light_vertex_counts { uint lv_count[]; };
+layout(std430) buffer grid_start { uint bucket_start[]; };
+layout(std430) writeonly buffer grid_keys { uvec2 vertex_keys[]; };
 
+#include "common.glsl"
 #include "hash_grid.glsl"
 HASH_GRID_BUILD_PUSH;
 
 void main() {
-    uint path = hash_grid_group_index() * 64u + gl_LocalInvocationID.x;
+    uint path = invocation_index();
     if (path >= push.light_paths) return;
     uint n = min(lv_count[path], push.slots);
     for (uint slot = path * push.slots; slot < path * push.slots + n; ++slot) {
         uint b = hash_grid_point_bucket(lv_a[2u * slot].xyz, push.origin, push.radius, push.num_buckets);
-        uint rank = atomicAdd(grid_start[b], 1u);
-        grid_keys[slot] = uvec2(b, rank);
+        uint rank = atomicAdd(bucket_start[b], 1u);
+        vertex_keys[slot] = uvec2(b, rank);
     }
 }

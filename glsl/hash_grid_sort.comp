@@ -1,5 +1,5 @@
 #version 460
-// Hash-grid build, pass 4 of 4: sorts each bucket's entries grid_points[i] = (position
+// Hash-grid build, pass 4 of 4: sorts each bucket's entries bucket_points[i] = (position
 // bits, slot) ascending by slot, so the build (and every sum over a bucket) is
 // deterministic whatever order the count pass's atomics took. One invocation per bucket;
 // a bucket holds about (light vertices / buckets) entries, a few. Up to 4 entries: a
@@ -17,11 +17,12 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 
-layout(local_size_x = 64) in;
+layout(local_size_x = WORKGROUP_SIZE) in;
 
-layout(std430, binding = 0) readonly buffer GridStartBuf { uint grid_start[]; };
-layout(std430, binding = 1) buffer GridPointsBuf { uvec4 grid_points[]; };
+layout(std430) readonly buffer grid_start { uint bucket_start[]; };
+layout(std430) buffer grid_points { uvec4 bucket_points[]; };
 
+#include "common.glsl"
 #include "hash_grid.glsl"
 HASH_GRID_BUILD_PUSH;
 
@@ -29,43 +30,43 @@ const uint SMALL = 32u;
 // Padding that sorts after every entry and is not written back.
 const uvec4 PAD = uvec4(0u, 0u, 0u, 0xffffffffu);
 
-// Restores the max-heap property (by slot) below `root` in grid_points[base .. base + n).
+// Restores the max-heap property (by slot) below `root` in bucket_points[base .. base + n).
 void sift_down(uint base, uint root, uint n) {
-    uvec4 v = grid_points[base + root];
+    uvec4 v = bucket_points[base + root];
     for (;;) {
         uint child = 2u * root + 1u;
         if (child >= n) break;
-        uvec4 c = grid_points[base + child];
+        uvec4 c = bucket_points[base + child];
         if (child + 1u < n) {
-            uvec4 c2 = grid_points[base + child + 1u];
+            uvec4 c2 = bucket_points[base + child + 1u];
             if (c2.w > c.w) {
                 child += 1u;
                 c = c2;
             }
         }
         if (c.w <= v.w) break;
-        grid_points[base + root] = c;
+        bucket_points[base + root] = c;
         root = child;
     }
-    grid_points[base + root] = v;
+    bucket_points[base + root] = v;
 }
 
 // Compare-exchange of v[a] and v[b] by slot.
 #define CE(a, b) { bool sw = v[a].w > v[b].w; uvec4 lo = sw ? v[b] : v[a]; v[b] = sw ? v[a] : v[b]; v[a] = lo; }
 
-// Sorts grid_points[begin .. begin + n) ascending by slot.
+// Sorts bucket_points[begin .. begin + n) ascending by slot.
 void sort_bucket(uint begin, uint n) {
     if (n <= 1u) return;
     if (n <= 4u) {
         uvec4 v[4];
-        [[unroll]] for (uint i = 0u; i < 4u; ++i) v[i] = i < n ? grid_points[begin + i] : PAD;
+        [[unroll]] for (uint i = 0u; i < 4u; ++i) v[i] = i < n ? bucket_points[begin + i] : PAD;
         CE(0, 1) CE(2, 3) CE(0, 2) CE(1, 3) CE(1, 2)
-        [[unroll]] for (uint i = 0u; i < 4u; ++i) if (i < n) grid_points[begin + i] = v[i];
+        [[unroll]] for (uint i = 0u; i < 4u; ++i) if (i < n) bucket_points[begin + i] = v[i];
         return;
     }
     if (n <= 16u) {
         uvec4 v[16];
-        [[unroll]] for (uint i = 0u; i < 16u; ++i) v[i] = i < n ? grid_points[begin + i] : PAD;
+        [[unroll]] for (uint i = 0u; i < 16u; ++i) v[i] = i < n ? bucket_points[begin + i] : PAD;
         CE(0, 1) CE(2, 3) CE(0, 2) CE(1, 3) CE(1, 2) CE(4, 5) CE(6, 7) CE(4, 6)
         CE(5, 7) CE(5, 6) CE(0, 4) CE(2, 6) CE(2, 4) CE(1, 5) CE(3, 7) CE(3, 5)
         CE(1, 2) CE(3, 4) CE(5, 6) CE(8, 9) CE(10, 11) CE(8, 10) CE(9, 11) CE(9, 10)
@@ -74,35 +75,35 @@ void sort_bucket(uint begin, uint n) {
         CE(4, 8) CE(2, 10) CE(6, 14) CE(6, 10) CE(2, 4) CE(6, 8) CE(10, 12) CE(1, 9)
         CE(5, 13) CE(5, 9) CE(3, 11) CE(7, 15) CE(7, 11) CE(3, 5) CE(7, 9) CE(11, 13)
         CE(1, 2) CE(3, 4) CE(5, 6) CE(7, 8) CE(9, 10) CE(11, 12) CE(13, 14)
-        [[unroll]] for (uint i = 0u; i < 16u; ++i) if (i < n) grid_points[begin + i] = v[i];
+        [[unroll]] for (uint i = 0u; i < 16u; ++i) if (i < n) bucket_points[begin + i] = v[i];
         return;
     }
     if (n <= SMALL) {
         uint end = begin + n;
         for (uint i = begin + 1u; i < end; ++i) {
-            uvec4 v = grid_points[i];
+            uvec4 v = bucket_points[i];
             uint j = i;
-            while (j > begin && grid_points[j - 1u].w > v.w) {
-                grid_points[j] = grid_points[j - 1u];
+            while (j > begin && bucket_points[j - 1u].w > v.w) {
+                bucket_points[j] = bucket_points[j - 1u];
                 j -= 1u;
             }
-            if (j != i) grid_points[j] = v;
+            if (j != i) bucket_points[j] = v;
         }
         return;
     }
     for (uint i = n / 2u; i > 0u; --i) sift_down(begin, i - 1u, n);
     for (uint m = n - 1u; m > 0u; --m) {
-        uvec4 top = grid_points[begin];
-        grid_points[begin] = grid_points[begin + m];
-        grid_points[begin + m] = top;
+        uvec4 top = bucket_points[begin];
+        bucket_points[begin] = bucket_points[begin + m];
+        bucket_points[begin + m] = top;
         sift_down(begin, 0u, m);
     }
 }
 #undef CE
 
 void main() {
-    uint b = hash_grid_group_index() * 64u + gl_LocalInvocationID.x;
+    uint b = invocation_index();
     if (b >= push.num_buckets) return;
-    uint begin = grid_start[b];
-    sort_bucket(begin, grid_start[b + 1u] - begin);
+    uint begin = bucket_start[b];
+    sort_bucket(begin, bucket_start[b + 1u] - begin);
 }

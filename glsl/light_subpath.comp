@@ -1,27 +1,23 @@
 #version 460
-// Stage 1 (../shared/DESIGN.md): push.paths_per_invocation light subpaths per invocation
-// (path regeneration, common.glsl regen_stride). Samples an emitter,
-// traces, stores every non-delta vertex in the light-vertex store (STORE_VERTICES) and
-// connects it to the camera (CONNECT_CAMERA), as SmallVCM's VertexCM light pass.
-// LIGHT_TRACE_ONLY: pure light tracing (weight 1), which also connects the emitting
-// point of area lights to the camera so that directly visible emitters are rendered.
+// The light-subpaths pass (docs/design.md; src/render/passes/light_subpaths.rs):
+// push.paths_per_invocation light subpaths per invocation (path regeneration,
+// common.glsl regen_stride). Samples an emitter, traces, stores every non-delta vertex in
+// the light-vertex store (STORE_VERTICES) and connects it to the camera
+// (CONNECT_CAMERA), as SmallVCM's VertexCM light pass. LIGHT_TRACE_ONLY: pure light
+// tracing (weight 1), which also connects the emitting point of area lights to the
+// camera so that directly visible emitters are rendered. The variant is always set by
+// the Rust side (src/render/variants.rs, LightKernel).
 #extension GL_GOOGLE_include_directive : require
 
-#ifndef STORE_VERTICES
-#define STORE_VERTICES 1
-#endif
-#ifndef CONNECT_CAMERA
-#define CONNECT_CAMERA 1
-#endif
-#ifndef LIGHT_TRACE_ONLY
-#define LIGHT_TRACE_ONLY 0
+#if !defined(STORE_VERTICES) || !defined(CONNECT_CAMERA) || !defined(LIGHT_TRACE_ONLY)
+#error "STORE_VERTICES, CONNECT_CAMERA and LIGHT_TRACE_ONLY must be defined (src/render/variants.rs)"
 #endif
 
-layout(local_size_x = 64) in;
+layout(local_size_x = WORKGROUP_SIZE) in;
 #include "scene.glsl"
-#include "vcm_bindings.glsl"
+#include "light_vertex_store.glsl"
 #if LV_CACHE && STORE_VERTICES
-layout(std430, binding = 14) writeonly buffer LvPrefixBuf { uint lv_prefix[]; };
+layout(std430) writeonly buffer light_vertex_prefix { uint lv_prefix[]; };
 #endif
 
 // Starts light subpath `path`: samples its emitter (and with LIGHT_TRACE_ONLY connects

@@ -1,6 +1,6 @@
 // Light sources, written once for every estimator: direct-illumination sampling (next-
 // event estimation) and the pdfs of hitting an emitter, with the quantities the MIS of
-// ../shared/SCENES.md 4.4 needs. Lights are picked uniformly (1 / #lights).
+// docs/smallvcm.md 4.4 needs. Lights are picked uniformly (1 / #lights).
 //
 // Light kinds the scene lacks are compiled out (HAS_AREA_LIGHTS, HAS_POINT_LIGHTS,
 // HAS_SPOT_LIGHTS, HAS_DIRECTIONAL_LIGHTS, HAS_BACKGROUND: glsl/features.glsl): each kind

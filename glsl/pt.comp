@@ -2,23 +2,19 @@
 // Path tracing (push.paths_per_invocation pixel samples per invocation: path
 // regeneration, common.glsl regen_stride): BSDF sampling with next-event
 // estimation, combined by the balance heuristic; Russian roulette as bsdf.glsl says.
-// Variants: NEE=0 gives pure BSDF sampling (emitter hits only, weight 1), for tests.
+// Variants (src/render/variants.rs, PtKernel): NEE=1 the estimator, NEE=0 pure BSDF
+// sampling (emitter hits only, weight 1), for tests.
 #extension GL_GOOGLE_include_directive : require
 
 #ifndef NEE
-#define NEE 1
+#error "NEE must be defined (src/render/variants.rs)"
 #endif
 
-layout(local_size_x = 64) in;
+layout(local_size_x = WORKGROUP_SIZE) in;
 
 #include "scene.glsl"
-layout(std430, binding = 8) buffer FilmBuf { vec4 film[]; };
-layout(std430, binding = 9) buffer StatsBuf { uint stats[]; };
-layout(push_constant) uniform PushBlock { GpuPush push; };
+#include "push.glsl"
 #include "film.glsl"
-
-// Balance-heuristic weight of a technique with pdf a against one with pdf b.
-float balance(float a, float b) { return a / (a + b); }
 
 void main() {
     uint stride = regen_stride(push.count, push.paths_per_invocation);

@@ -1,5 +1,7 @@
-// Scene buffers shared by every render kernel (fixed bindings 0-7), the camera, and the
-// conversion of a BVH hit into a shading point. Kernel-specific buffers use bindings 8+.
+// Scene buffers shared by every render kernel (the bindings scene_params, bvh_nodes,
+// bvh_prims, triangles, spheres, materials, lights and shading_normals, bound by name:
+// src/render/scene_gpu.rs), the camera, and the conversion of a BVH hit into a shading
+// point.
 // Scene features the scene lacks compile out (glsl/features.glsl): spheres, shading
 // normals, area lights (then no surface is an emitter) and the background.
 #ifndef SCENE_GLSL
@@ -9,12 +11,11 @@
 #include "types.glsl"
 #include "common.glsl"
 
-layout(std430, binding = 0) readonly buffer ParamsBuf { GpuParams params; };
-// Bindings 1 and 2: the BVH; bvh.glsl declares them itself (64-bit loads, ~10% faster on
-// lavapipe than vec4 arrays: docs/bvh.md; with TEXEL_READS uniform texel buffers).
-#define BVH_NODES_BINDING 1
-#define BVH_PRIMS_BINDING 2
-// Bindings 3-7, read through triangle_at(i), sphere_at(i), material_at(i), light_at(i)
+layout(std430) readonly buffer scene_params { GpuParams params; };
+// The BVH: bvh.glsl declares it (64-bit loads, faster on lavapipe than vec4 arrays:
+// docs/bvh.md; with TEXEL_READS uniform texel buffers).
+#define BVH_DECLARES_BUFFERS
+// The rest, read through triangle_at(i), sphere_at(i), material_at(i), light_at(i)
 // and shading_normal_at(i). TEXEL_READS (src/render/reads.rs): as uniform texel buffers of
 // uvec4 texels, one per vec4 of the struct in field order (each struct is whole vec4s:
 // src/render/gpu_types.rs); else as storage buffers.
@@ -24,55 +25,55 @@ layout(std430, binding = 0) readonly buffer ParamsBuf { GpuParams params; };
 #if TEXEL_READS
 #extension GL_EXT_samplerless_texture_functions : require
 #define BVH_TEXEL 1
-layout(binding = 3) uniform utextureBuffer triangles_t;
-layout(binding = 4) uniform utextureBuffer spheres_t;
-layout(binding = 5) uniform utextureBuffer materials_t;
-layout(binding = 6) uniform utextureBuffer lights_t;
-layout(binding = 7) uniform utextureBuffer shading_normals_t;
+uniform utextureBuffer triangles;
+uniform utextureBuffer spheres;
+uniform utextureBuffer materials;
+uniform utextureBuffer lights;
+uniform utextureBuffer shading_normals;
 vec4 texel_vec4(utextureBuffer b, uint i) { return uintBitsToFloat(texelFetch(b, int(i))); }
 GpuTriangle triangle_at(uint i) {
     GpuTriangle t;
-    t.p0 = texel_vec4(triangles_t, 3u * i);
-    t.p1 = texel_vec4(triangles_t, 3u * i + 1u);
-    t.p2 = texel_vec4(triangles_t, 3u * i + 2u);
+    t.p0 = texel_vec4(triangles, 3u * i);
+    t.p1 = texel_vec4(triangles, 3u * i + 1u);
+    t.p2 = texel_vec4(triangles, 3u * i + 2u);
     return t;
 }
 GpuSphere sphere_at(uint i) {
     GpuSphere s;
-    s.center_radius = texel_vec4(spheres_t, 2u * i);
-    s.info = texelFetch(spheres_t, int(2u * i + 1u));
+    s.center_radius = texel_vec4(spheres, 2u * i);
+    s.info = texelFetch(spheres, int(2u * i + 1u));
     return s;
 }
 GpuMaterial material_at(uint i) {
     GpuMaterial m;
-    m.diffuse = texel_vec4(materials_t, 5u * i);
-    m.phong = texel_vec4(materials_t, 5u * i + 1u);
-    m.mirror = texel_vec4(materials_t, 5u * i + 2u);
-    m.emission = texel_vec4(materials_t, 5u * i + 3u);
-    m.glossy = texel_vec4(materials_t, 5u * i + 4u);
+    m.diffuse = texel_vec4(materials, 5u * i);
+    m.phong = texel_vec4(materials, 5u * i + 1u);
+    m.mirror = texel_vec4(materials, 5u * i + 2u);
+    m.emission = texel_vec4(materials, 5u * i + 3u);
+    m.glossy = texel_vec4(materials, 5u * i + 4u);
     return m;
 }
 GpuLight light_at(uint i) {
     GpuLight l;
-    l.a = texel_vec4(lights_t, 5u * i);
-    l.b = texel_vec4(lights_t, 5u * i + 1u);
-    l.c = texel_vec4(lights_t, 5u * i + 2u);
-    l.d = texel_vec4(lights_t, 5u * i + 3u);
-    l.radiance = texel_vec4(lights_t, 5u * i + 4u);
+    l.a = texel_vec4(lights, 5u * i);
+    l.b = texel_vec4(lights, 5u * i + 1u);
+    l.c = texel_vec4(lights, 5u * i + 2u);
+    l.d = texel_vec4(lights, 5u * i + 3u);
+    l.radiance = texel_vec4(lights, 5u * i + 4u);
     return l;
 }
-vec4 shading_normal_at(uint i) { return texel_vec4(shading_normals_t, i); }
+vec4 shading_normal_at(uint i) { return texel_vec4(shading_normals, i); }
 #else
-layout(std430, binding = 3) readonly buffer TrianglesBuf { GpuTriangle triangles[]; };
-layout(std430, binding = 4) readonly buffer SpheresBuf { GpuSphere spheres[]; };
-layout(std430, binding = 5) readonly buffer MaterialsBuf { GpuMaterial materials[]; };
-layout(std430, binding = 6) readonly buffer LightsBuf { GpuLight lights[]; };
-layout(std430, binding = 7) readonly buffer NormalsBuf { vec4 shading_normals[]; };
-GpuTriangle triangle_at(uint i) { return triangles[i]; }
-GpuSphere sphere_at(uint i) { return spheres[i]; }
-GpuMaterial material_at(uint i) { return materials[i]; }
-GpuLight light_at(uint i) { return lights[i]; }
-vec4 shading_normal_at(uint i) { return shading_normals[i]; }
+layout(std430) readonly buffer triangles { GpuTriangle triangle_data[]; };
+layout(std430) readonly buffer spheres { GpuSphere sphere_data[]; };
+layout(std430) readonly buffer materials { GpuMaterial material_data[]; };
+layout(std430) readonly buffer lights { GpuLight light_data[]; };
+layout(std430) readonly buffer shading_normals { vec4 shading_normal_data[]; };
+GpuTriangle triangle_at(uint i) { return triangle_data[i]; }
+GpuSphere sphere_at(uint i) { return sphere_data[i]; }
+GpuMaterial material_at(uint i) { return material_data[i]; }
+GpuLight light_at(uint i) { return light_data[i]; }
+vec4 shading_normal_at(uint i) { return shading_normal_data[i]; }
 #endif
 
 #include "bvh.glsl"

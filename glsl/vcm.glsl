@@ -1,11 +1,12 @@
 // The light-transport state shared by the bidirectional estimators (lt, bpt, and later
 // ppm, bpm, vcm): subpath state with the recursive MIS quantities dVCM, dVC, dVM of
 // Georgiev et al., "Implementing Vertex Connection and Merging" (2012), and the light-
-// vertex store. Technique weights follow ../shared/SCENES.md 4.4 (balance heuristic).
+// vertex store. Technique weights follow docs/smallvcm.md 4.4 (balance heuristic).
 //
-// Requires: scene.glsl, film.glsl with HAS_SPLAT, `push` (GpuPush), and the buffers
-//   lv_a[] / lv_b[] (vec4, two per vertex), lv_count[] (uint per light path), read through
-//   lv_a_at / lv_b_at / lv_count_at (vcm_bindings.glsl).
+// Included by light_vertex_store.glsl, which provides what it requires: scene.glsl,
+// film.glsl with HAS_SPLAT, `push` (GpuPush), and the store lv_a[] / lv_b[] (vec4, two
+// per vertex), lv_count[] (uint per light path), read through lv_a_at / lv_b_at /
+// lv_count_at.
 #ifndef VCM_GLSL
 #define VCM_GLSL
 
@@ -59,12 +60,15 @@ LightVertex lv_load(uint slot) {
     return v;
 }
 
-// ---- MIS bookkeeping (../shared/SCENES.md 4.4). Every technique's weight is a small
-// function below, used by the production kernels and by the debug kernel
+// ---- MIS bookkeeping (docs/smallvcm.md 4.4). "eq. N" below is equation N of Georgiev,
+// "Implementing Vertex Connection and Merging" (2012), as SmallVCM's vertexcm.hxx tags
+// them; every weight is 1 / (w_light + 1 + w_camera) (eq. 37). Every technique's weight
+// is a small function below, used by the production kernels and by the debug kernel
 // glsl/tests/mis_weights.comp, which checks that the weights of all techniques that can
 // sample one path sum to 1 (docs/estimators.md).
 
-// Light subpath start. `emission_pdf` and `direct_pdf` include the light-pick probability.
+// Light subpath start (eq. 31-33; delta lights eq. 48-50; docs/smallvcm.md 4.4.2).
+// `emission_pdf` and `direct_pdf` include the light-pick probability.
 void mis_light_start(inout SubpathState st, float emission_pdf, float direct_pdf, float cos_light, bool delta,
                      bool finite) {
     st.dvcm = direct_pdf / emission_pdf;
@@ -72,14 +76,15 @@ void mis_light_start(inout SubpathState st, float emission_pdf, float direct_pdf
     st.dvm = st.dvc * push.mis_vc;
 }
 
-// Camera subpath start along the primary direction `d`.
+// Camera subpath start along the primary direction `d` (eq. 31-33; docs/smallvcm.md 4.4.3).
 void mis_camera_start(inout SubpathState st, vec3 d) {
     st.dvcm = float(push.light_paths) / camera_pdf_w(d);
     st.dvc = 0.0;
     st.dvm = 0.0;
 }
 
-// MIS update on reaching a new vertex at distance `dist` with |cos| `cos_fix` there.
+// MIS update on reaching a new vertex at distance `dist` with |cos| `cos_fix` there: the
+// part of eq. 31-33 and 34-36 that needs the new vertex (docs/smallvcm.md 4.4.4).
 void mis_on_hit(inout SubpathState st, float dist, float cos_fix, bool first_from_infinite) {
     if (!first_from_infinite) st.dvcm *= dist * dist;
     float inv = 1.0 / max(cos_fix, 1e-30);
@@ -88,8 +93,9 @@ void mis_on_hit(inout SubpathState st, float dist, float cos_fix, bool first_fro
     st.dvm *= inv;
 }
 
-// MIS update after scattering into a direction with |cos| `cos_wi`: `pdf` and `pdf_rev`
-// are the solid-angle pdfs of that direction and of the reverse one, both times the
+// MIS update after scattering into a direction with |cos| `cos_wi` (non-specular: eq.
+// 34-36; specular: eq. 53-55; docs/smallvcm.md 4.4.5-4.4.6): `pdf` and `pdf_rev` are the
+// solid-angle pdfs of that direction and of the reverse one, both times the
 // Russian-roulette continuation probability.
 void mis_on_scatter(inout SubpathState st, float pdf, float pdf_rev, float cos_wi, bool specular) {
     if (specular) {
@@ -119,8 +125,8 @@ void mis_on_scatter_to(inout SubpathState st, Bsdf b, vec3 wi) {
     mis_on_scatter(st, pf * b.cont_prob, pr * b.cont_prob, cos_wi, false);
 }
 
-// Camera subpath hits an emitter (area light or background), pdfs without the pick
-// probability: weight 1 / (1 + w_camera), 1 for the primary ray. Without connections
+// Camera subpath hits an emitter (area light or background; eq. 42-43, docs/smallvcm.md
+// 4.4.8), pdfs without the pick probability: weight 1 / (1 + w_camera), 1 for the primary ray. Without connections
 // (ppm, bpm) only purely specular camera paths may see emitters, with weight 1.
 float mis_weight_hit(SubpathState st, float direct_pdf, float emission_pdf, float pick, bool use_vc) {
     if (st.len == 1u) return 1.0;
@@ -129,7 +135,8 @@ float mis_weight_hit(SubpathState st, float direct_pdf, float emission_pdf, floa
     return 1.0 / (1.0 + w_camera);
 }
 
-// Next-event estimation at a camera vertex with BSDF `b` towards light sample `ls`:
+// Next-event estimation at a camera vertex with BSDF `b` towards light sample `ls` (eq.
+// 44-45, docs/smallvcm.md 4.4.9):
 // returns the MIS weight, with f the BSDF value (zero: no contribution) and cos_x the
 // cosine at the camera vertex.
 float nee_eval(SubpathState st, Bsdf b, LightSample ls, float pick, out vec3 f, out float cos_x) {
@@ -145,7 +152,7 @@ float nee_eval(SubpathState st, Bsdf b, LightSample ls, float pick, out vec3 f, 
 }
 
 // Vertex connection between camera vertex `p` (BSDF `b`, state `st`) and light vertex
-// `v`: returns the MIS weight with both BSDF values and the geometry term g (fc or fl
+// `v` (eq. 40-41, docs/smallvcm.md 4.4.11): returns the MIS weight with both BSDF values and the geometry term g (fc or fl
 // zero: no contribution). Visibility is the caller's.
 float connection_eval(SubpathState st, vec3 p, Bsdf b, LightVertex v, out vec3 fc, out vec3 fl, out float g) {
     fl = vec3(0.0);
@@ -173,8 +180,9 @@ float connection_eval(SubpathState st, vec3 p, Bsdf b, LightVertex v, out vec3 f
     return 1.0 / (w_light + 1.0 + w_camera);
 }
 
-// Merging camera vertex (BSDF `b`, state `st`) with light vertex `v`: returns the camera
-// BSDF value towards v's predecessor, and in `w` the MIS weight.
+// Merging camera vertex (BSDF `b`, state `st`) with light vertex `v` (eq. 38-39,
+// docs/smallvcm.md 4.4.12): returns the camera BSDF value towards v's predecessor, and in
+// `w` the MIS weight.
 vec3 merge_eval(SubpathState st, Bsdf b, LightVertex v, out float w) {
     float pf, pr;
     vec3 f = bsdf_eval(b, v.wo, pf, pr);
@@ -243,8 +251,9 @@ bool camera_connection_eval(SubpathState st, vec3 p, Bsdf b, bool weight_one, ou
     return true;
 }
 
-// Connects a light-subpath surface vertex to the camera and splats the contribution.
-// `weight_one` disables MIS (pure light tracing).
+// Connects a light-subpath surface vertex to the camera and splats the contribution,
+// weighted by eq. 46-47 (docs/smallvcm.md 4.4.10). `weight_one` disables MIS (pure light
+// tracing).
 void connect_to_camera(SubpathState st, vec3 p, vec3 ng, Bsdf b, bool weight_one) {
     float w, camera_pdf_a;
     vec3 f;

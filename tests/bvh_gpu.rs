@@ -11,7 +11,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use rand::Rng;
 use vkvcm::bvh::{brute_force_closest, build, GpuBvh, Hit, Ray};
-use vkvcm::gpu::{groups_for, Gpu};
+use vkvcm::gpu::{groups_for, Bind, Gpu};
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -56,7 +56,13 @@ fn trace_on_gpu_with(gpu: &Arc<Gpu>, bvh: &GpuBvh, rays: &[(Ray, f32, f32)], vec
     if vec4 {
         defines.push(("BVH_VEC4", "1"));
     }
-    let k = gpu.kernel("tests/test_bvh_trace.comp", &defines, &[&nodes, &prims, &ray_buf, &out]).unwrap();
+    let k = gpu
+        .kernel(
+            "tests/test_bvh_trace.comp",
+            &defines,
+            &[Bind::own(&nodes), Bind::own(&prims), Bind::vec4("test_rays", &ray_buf), Bind::vec4("test_hits", &out)],
+        )
+        .unwrap();
     let n = data.len() as u32;
     let mut batch = gpu.batch().unwrap();
     batch.dispatch(&k, [groups_for(n, 64), 1, 1], bytemuck::bytes_of(&n)).unwrap();

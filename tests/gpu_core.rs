@@ -5,7 +5,7 @@ mod common;
 
 use common::with_gpu;
 use rand::{Rng, SeedableRng};
-use vkvcm::gpu::{self, groups_for, shader, Profile};
+use vkvcm::gpu::{self, groups_for, shader, Bind, Profile};
 
 #[test]
 fn roundtrip_matches_cpu_on_random_data() {
@@ -19,7 +19,7 @@ fn roundtrip_matches_cpu_on_random_data() {
         let out = gpu.buffer_zeroed::<f32>("out", n + 5).unwrap();
         for scale in [3, -2] {
             let s = scale.to_string();
-            let k = gpu.kernel("tests/roundtrip.comp", &[("SCALE", &s)], &[&ba, &bb, &out]).unwrap();
+            let k = gpu.kernel("tests/roundtrip.comp", &[("SCALE", &s)], &roundtrip(&ba, &bb, &out)).unwrap();
             let mut batch = gpu.batch().unwrap();
             batch.dispatch(&k, [groups_for(n as u32, 64), 1, 1], bytemuck::bytes_of(&(n as u32))).unwrap();
             batch.submit_wait(None).unwrap();
@@ -43,7 +43,7 @@ fn dispatch_beyond_the_workgroup_count_limit() {
         let a: Vec<f32> = (0..n).map(|i| (i % 1000) as f32).collect();
         let ba = gpu.buffer_from_slice("a", &a).unwrap();
         let out = gpu.buffer_zeroed::<f32>("out", n).unwrap();
-        let k = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "2")], &[&ba, &ba, &out]).unwrap();
+        let k = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "2")], &roundtrip(&ba, &ba, &out)).unwrap();
         let mut batch = gpu.batch().unwrap();
         let groups = vkvcm::gpu::groups_2d(n as u32, 64);
         assert!(groups[1] > 1, "the test must need a 2-D dispatch");
@@ -64,7 +64,13 @@ fn atomics_count_exactly() {
         let bk = gpu.buffer_from_slice("keys", &keys).unwrap();
         let hist = gpu.buffer_zeroed::<u32>("hist", bins as usize).unwrap();
         let sum = gpu.buffer_zeroed::<u64>("sum", 1).unwrap();
-        let k = gpu.kernel("tests/atomics.comp", &[], &[&bk, &hist, &sum]).unwrap();
+        let k = gpu
+            .kernel(
+                "tests/atomics.comp",
+                &[],
+                &[Bind::u32("Keys", &bk), Bind::u32("Hist", &hist), Bind::u32("Sum", &sum)],
+            )
+            .unwrap();
         let mut batch = gpu.batch().unwrap();
         batch.dispatch(&k, [groups_for(n, 64), 1, 1], bytemuck::cast_slice(&[n, bins])).unwrap();
         batch.submit_wait(None).unwrap();
@@ -85,7 +91,7 @@ fn timestamps_are_monotonic_and_profiled() {
         let n = 1 << 16;
         let a = gpu.buffer_from_slice("a", &vec![1.0f32; n]).unwrap();
         let out = gpu.buffer_zeroed::<f32>("out", n).unwrap();
-        let k = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "2")], &[&a, &a, &out]).unwrap();
+        let k = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "2")], &roundtrip(&a, &a, &out)).unwrap();
         let mut batch = gpu.batch().unwrap();
         let mut profile = Profile::default();
         for _ in 0..5 {
@@ -108,10 +114,10 @@ fn kernels_are_compiled_once_per_variant() {
     with_gpu(|gpu| {
         let a = gpu.buffer_zeroed::<f32>("a", 64).unwrap();
         let before = shader::compile_count();
-        let _k1 = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "5")], &[&a, &a, &a]).unwrap();
-        let _k2 = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "5")], &[&a, &a, &a]).unwrap();
+        let _k1 = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "5")], &roundtrip(&a, &a, &a)).unwrap();
+        let _k2 = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "5")], &roundtrip(&a, &a, &a)).unwrap();
         let after_same = shader::compile_count();
-        let _k3 = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "6")], &[&a, &a, &a]).unwrap();
+        let _k3 = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "6")], &roundtrip(&a, &a, &a)).unwrap();
         // Other tests may compile concurrently, so count at least, and compare deltas.
         assert!(after_same - before >= 1);
         assert!(shader::compile_count() > after_same);
@@ -166,13 +172,78 @@ fn unknown_device_is_a_clear_error() {
 
 #[test]
 fn validation_layer_reports_misuse() {
-    // A kernel that declares three bindings, built with none: the pipeline layout does
-    // not match the shader, which the validation layer must report. This proves that
-    // `with_gpu` would fail on a real message.
+    // A dispatch of more workgroups than maxComputeWorkGroupCount allows, recorded but
+    // never submitted: the validation layer must report it. This proves that `with_gpu`
+    // would fail on a real message.
     let gpu = vkvcm::gpu::Gpu::new(&vkvcm::gpu::GpuOptions::for_tests()).unwrap();
     let messages = gpu.validation_messages();
-    let k = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "1")], &[]);
+    let a = gpu.buffer_zeroed::<f32>("a", 64).unwrap();
+    let k = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "1")], &roundtrip(&a, &a, &a)).unwrap();
+    let mut batch = gpu.batch().unwrap();
+    batch.dispatch(&k, [u32::MAX, 1, 1], bytemuck::bytes_of(&0u32)).unwrap();
+    drop(batch);
     drop(k);
+    drop(a);
     drop(gpu);
     assert!(!messages.list().is_empty(), "the validation layer reported nothing");
+}
+
+/// tests/roundtrip.comp's bindings A, B (inputs) and O (output).
+fn roundtrip<'a>(a: &'a gpu::Buffer, b: &'a gpu::Buffer, o: &'a gpu::Buffer) -> [Bind<'a>; 3] {
+    [Bind::vec4("A", a), Bind::vec4("B", b), Bind::vec4("O", o)]
+}
+
+/// Buffers are bound by the names the compiled kernel declares, in any order; a buffer
+/// the kernel does not declare is ignored, a declared binding without a buffer is refused
+/// with its name, and the workgroup size is read from the SPIR-V.
+#[test]
+fn kernels_bind_buffers_by_reflected_name() {
+    with_gpu(|gpu| {
+        let n = 100usize;
+        let a = gpu.buffer_from_slice("a", &vec![1.5f32; n]).unwrap();
+        let b = gpu.buffer_from_slice("b", &vec![0.25f32; n]).unwrap();
+        let out = gpu.buffer_zeroed::<f32>("out", n).unwrap();
+        let spare = gpu.buffer_zeroed::<f32>("spare", 4).unwrap();
+        let binds = [Bind::vec4("O", &out), Bind::vec4("unused", &spare), Bind::vec4("B", &b), Bind::vec4("A", &a)];
+        let k = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "2")], &binds).unwrap();
+        assert_eq!(k.local_size(), [64, 1, 1]);
+        let mut batch = gpu.batch().unwrap();
+        batch.dispatch(&k, k.groups_for(n as u32), bytemuck::bytes_of(&(n as u32))).unwrap();
+        batch.submit_wait(None).unwrap();
+        assert!(out.read::<f32>().unwrap().iter().all(|&x| x == 3.25));
+        let e = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "2")], &[Bind::vec4("A", &a), Bind::vec4("B", &b)]);
+        let e = format!("{:#}", e.err().expect("binding O has no buffer"));
+        assert!(e.contains("\"O\"") && e.contains("tests/roundtrip.comp"), "{e}");
+    });
+}
+
+/// Reflection names a storage buffer by its block and a texel buffer by its variable,
+/// with the descriptor kind each declares, and bindings the compiler assigned.
+#[test]
+fn reflection_reads_names_kinds_and_workgroup_size() {
+    let src = "#version 460\n#extension GL_EXT_samplerless_texture_functions : require\n\
+               layout(local_size_x = 32, local_size_y = 2) in;\n\
+               layout(std430) buffer results { uint r[]; };\n\
+               uniform utextureBuffer texels;\n\
+               void main() { r[gl_LocalInvocationIndex] = texelFetch(texels, 0).x; }\n";
+    let spirv = shader::compile_glsl("reflect.comp", src, &[]).unwrap();
+    let i = gpu::reflect::reflect("reflect.comp", &spirv).unwrap();
+    assert_eq!(i.local_size, [32, 2, 1]);
+    let mut names: Vec<(String, ash::vk::DescriptorType)> =
+        i.bindings.iter().map(|b| (b.name.clone(), b.descriptor_type)).collect();
+    names.sort_by(|x, y| x.0.cmp(&y.0));
+    assert_eq!(
+        names,
+        [
+            ("results".to_string(), ash::vk::DescriptorType::STORAGE_BUFFER),
+            ("texels".to_string(), ash::vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
+        ]
+    );
+    let mut numbers: Vec<u32> = i.bindings.iter().map(|b| b.binding).collect();
+    numbers.sort();
+    assert_eq!(numbers, [0, 1]);
+    // What the driver gets has no debug instructions left: not even the names.
+    let stripped = shader::strip_debug_info(&spirv);
+    assert!(stripped.len() < spirv.len());
+    assert!(gpu::reflect::reflect("reflect.comp", &stripped).is_err());
 }

@@ -1,4 +1,4 @@
-//! The GPU hash grid (stage 2, src/render/hash_grid.rs, glsl/hash_grid*.{glsl,comp}) on
+//! The GPU hash grid (stage 2, src/render/passes/hash_grid.rs, glsl/hash_grid*.{glsl,comp}) on
 //! lavapipe (or VKVCM_TEST_DEVICE), validation on: the built structure against a CPU
 //! counting sort, radius queries through hash_grid.glsl against CPU brute force, the
 //! multi-level scan against a CPU scan, and (ignored by default) the build's speed.
@@ -11,8 +11,9 @@ use std::time::Instant;
 
 use common::with_gpu;
 use rand::{Rng, SeedableRng};
-use vkvcm::gpu::{groups_for, Buffer, Gpu, Profile};
-use vkvcm::render::hash_grid::{ExclusiveScan, HashGrid};
+use vkvcm::gpu::{groups_for, Bind, Buffer, Gpu, Profile};
+use vkvcm::render::passes::exclusive_scan::ExclusiveScan;
+use vkvcm::render::passes::hash_grid::HashGrid;
 
 type Rng32 = rand_pcg::Pcg32;
 
@@ -266,7 +267,13 @@ fn sort_pass_sorts_every_bucket() {
         };
         let input: Vec<[u32; 4]> = values.iter().map(|&s| entry(s)).collect();
         let pb = gpu.buffer_from_slice("points", &input).unwrap();
-        let k = gpu.kernel("hash_grid_sort.comp", &[], &[&sb, &pb]).unwrap();
+        let k = gpu
+            .kernel(
+                "hash_grid_sort.comp",
+                &[("WORKGROUP_SIZE", "64")],
+                &[Bind::u32("grid_start", &sb), Bind::vec4("grid_points", &pb)],
+            )
+            .unwrap();
         // BuildPush: origin, radius, light paths, slots, buckets, pad.
         let push: [u32; 8] = [0, 0, 0, 0, 1, 1, nb, 0];
         let mut batch = gpu.batch().unwrap();
@@ -353,7 +360,14 @@ fn queries_find_exactly_the_vertices_within_radius() {
                     .kernel(
                         "tests/hash_grid_query.comp",
                         &[],
-                        &[&grid.cell_start, &grid.cell_points, &qbuf, &count, &slots_out, &stats],
+                        &[
+                            Bind::u32("grid_start", &grid.cell_start),
+                            Bind::vec4("grid_points", &grid.cell_points),
+                            Bind::vec4("queries", &qbuf),
+                            Bind::vec4("out_count", &count),
+                            Bind::vec4("out_slots", &slots_out),
+                            Bind::vec4("out_stats", &stats),
+                        ],
                     )
                     .unwrap();
                 let mut push = Vec::new();
@@ -531,7 +545,7 @@ fn build_speed_one_million_vertices() {
         eprintln!(
             "per build (min of {runs}): count {:.2} ms, scan {:.2} ms, scatter {:.2} ms, sort {:.2} ms",
             min_ms(&builds, "hash_grid_count.comp"),
-            min_ms(&builds, "hash_grid_scan.comp"),
+            min_ms(&builds, "exclusive_scan.comp"),
             min_ms(&builds, "hash_grid_scatter.comp"),
             min_ms(&builds, "hash_grid_sort.comp"),
         );

@@ -13,11 +13,10 @@ use bytemuck::{Pod, Zeroable};
 use common::scenes::*;
 use common::with_gpu;
 use glam::Vec3;
-use vkvcm::gpu::{groups_2d, Buffer, Gpu, Kernel};
+use vkvcm::gpu::{groups_2d, Bind, Buffer, Gpu, Kernel};
 use vkvcm::render::gpu_types::GpuPush;
 use vkvcm::render::radius::{RadiusSchedule, DEFAULT_ALPHA, DEFAULT_RADIUS_FACTOR};
 use vkvcm::render::reads::Reads;
-use vkvcm::render::scene_gpu::define_refs;
 use vkvcm::render::{FrameSettings, SceneGpu};
 use vkvcm::scene::{Light, Material, Scene};
 
@@ -162,14 +161,15 @@ impl Bench {
         let frame =
             FrameSettings { width: RES, height: RES, seed, max_path_length: MAX_PATH_LENGTH, min_path_length: 0 };
         let sg = SceneGpu::new(gpu, scene, &frame, Reads::resolve(gpu, None)).unwrap();
-        // Bindings 8-13 (film, stats, splats, light vertices) are declared by
-        // vcm_bindings.glsl but not used by the debug kernel.
-        let dummy: Vec<_> = (0..6).map(|i| gpu.buffer_zeroed::<[u32; 4]>(&format!("unused{i}"), 4).unwrap()).collect();
-        let out = gpu.buffer_zeroed::<PathOut>("mis_weights", PATHS as usize).unwrap();
-        let mut extra: Vec<_> = dummy.iter().collect();
-        extra.push(&out);
-        let kernel =
-            gpu.kernel_with("tests/mis_weights.comp", &define_refs(&sg.defines), &sg.bindings(&extra)).unwrap();
+        // The film, splats and light-vertex store are declared by light_vertex_store.glsl
+        // but not used by the debug kernel.
+        let names = ["film", "film_stats", "splat", "light_vertices_a", "light_vertices_b", "light_vertex_counts"];
+        let dummy: Vec<_> = names.iter().map(|n| gpu.buffer_zeroed::<[u32; 4]>(n, 4).unwrap()).collect();
+        let out = gpu.buffer_zeroed::<PathOut>("mis_results", PATHS as usize).unwrap();
+        let mut binds = sg.binds();
+        binds.extend(dummy.iter().map(Bind::own));
+        binds.push(Bind::own(&out));
+        let kernel = gpu.kernel("tests/mis_weights.comp", &sg.variant.defines().pairs(), &binds).unwrap();
         Bench { scene: sg, kernel, out, _dummy: dummy }
     }
 

@@ -181,7 +181,7 @@ fn profile_json_has_the_stages_and_rays() {
 
 /// `name=value` defines of a feature set, without COUNT_RAYS.
 fn defines(f: &FeatureSet) -> Vec<String> {
-    f.defines().into_iter().filter(|(k, _)| k != "COUNT_RAYS").map(|(k, v)| format!("{k}={v}")).collect()
+    f.defines().list().iter().filter(|(k, _)| k != "COUNT_RAYS").map(|(k, v)| format!("{k}={v}")).collect()
 }
 
 #[test]
@@ -198,7 +198,7 @@ fn feature_derivation() {
     ] {
         let scene = load_named(name).unwrap();
         for algo in [Algorithm::El, Algorithm::Pt, Algorithm::Bpt, Algorithm::Vcm] {
-            let f = FeatureSet::new(&scene, algo, false);
+            let f = FeatureSet::new(&scene, algo.info().reads_shading_normals, false);
             let mut want: Vec<&str> = mats.to_vec();
             if glass {
                 want.push("HAS_DIELECTRIC");
@@ -213,32 +213,32 @@ fn feature_derivation() {
             assert!(text.contains("textures: none"), "{text}");
             assert!(text.contains("compiled out: ggx"), "{text}");
             // Generic: everything on, whatever the scene.
-            let g = FeatureSet::new(&scene, algo, true);
+            let g = FeatureSet::new(&scene, algo.info().reads_shading_normals, true);
             assert!(defines(&g).iter().all(|d| d.ends_with("=1")), "{:?}", defines(&g));
         }
     }
     // GGX, triangles only, and shading normals that only el reads.
     let mut scene = glossy_scene();
-    let f = FeatureSet::new(&scene, Algorithm::Vcm, false);
+    let f = FeatureSet::new(&scene, Algorithm::Vcm.info().reads_shading_normals, false);
     assert!(f.ggx && f.diffuse && !f.phong && !f.mirror && !f.dielectric && f.area_lights && !f.spheres);
     assert!(defines(&f).contains(&"BVH_NO_SPHERES=1".to_string()));
     assert!(!f.shading_normals && !f.scene_has_shading_normals);
     let n = glam::Vec3::Z;
     scene.triangles[0].n = Some([n, n, n]);
-    assert!(!FeatureSet::new(&scene, Algorithm::Pt, false).shading_normals);
-    assert!(FeatureSet::new(&scene, Algorithm::El, false).shading_normals);
+    assert!(!FeatureSet::new(&scene, Algorithm::Pt.info().reads_shading_normals, false).shading_normals);
+    assert!(FeatureSet::new(&scene, Algorithm::El.info().reads_shading_normals, false).shading_normals);
     // A material no primitive uses does not count.
     scene.materials.push(vkvcm::scene::Material { mirror: glam::Vec3::ONE, ior: 1.5, ..Default::default() });
-    let f = FeatureSet::new(&scene, Algorithm::Pt, false);
+    let f = FeatureSet::new(&scene, Algorithm::Pt.info().reads_shading_normals, false);
     assert!(!f.mirror && !f.dielectric);
-    assert!(f.with_count_rays(true).defines().contains(&("COUNT_RAYS".to_string(), "1".to_string())));
+    assert!(f.with_count_rays(true).defines().list().contains(&("COUNT_RAYS".to_string(), "1".to_string())));
 }
 
 #[test]
 fn bench_suite_row_measures_both_variants() {
     let scene = load_named("glm_c").unwrap();
     with_gpu(|gpu| {
-        let row = vkvcm::render::bench::suite_row(gpu, &scene, Algorithm::Bpt, 16, 2, 1).unwrap();
+        let row = vkvcm::bench::render::suite_row(gpu, &scene, Algorithm::Bpt, 16, 2, 1).unwrap();
         assert_eq!(row.iterations, 2);
         for v in [&row.specialised, &row.generic] {
             assert!(v.gpu_ms_per_iteration > 0.0 && v.rays_per_second > 0.0 && v.rays_per_iteration > 0.0);
@@ -250,6 +250,6 @@ fn bench_suite_row_measures_both_variants() {
         assert_eq!(row.specialised.rays_per_iteration, row.generic.rays_per_iteration);
         assert!(row.speedup.is_finite() && row.speedup > 0.0);
         assert!(row.compiled_out.contains(&"dielectric".to_string()), "{:?}", row.compiled_out);
-        assert!(vkvcm::render::bench::suite_table(&[row]).contains("| glm_c | bpt |"));
+        assert!(vkvcm::bench::render::suite_table(&[row]).contains("| glm_c | bpt |"));
     });
 }

@@ -1,5 +1,5 @@
 //! Bidirectional path tracing with connections to a light-vertex cache (`--connect cache`,
-//! src/render/bidir.rs `Connect::Cache`; Davidovic et al. 2014) against independent
+//! src/render/passes/light_vertex_cache.rs, `Connect::Cache`; Davidovic et al. 2014) against independent
 //! estimators, and its determinism. Lavapipe, validation on.
 //!
 //! What is compared (the reasons are those of tests/render_bidir.rs):
@@ -32,7 +32,7 @@ use std::sync::Arc;
 use common::{render_stats, with_gpu};
 use vkvcm::gpu::Gpu;
 use vkvcm::image::stats::{welch_test, PixelStats};
-use vkvcm::render::bidir::Connect;
+use vkvcm::render::Connect;
 use vkvcm::render::{self, Algorithm, Budget, RenderOutput, RenderSettings};
 use vkvcm::scene::Scene;
 

@@ -18,9 +18,9 @@ mod common;
 
 use common::{invariance_cases, with_gpu};
 use glam::Vec3;
-use vkvcm::gpu::{Binding, Gpu};
-use vkvcm::render::bidir::Connect;
+use vkvcm::gpu::{Bind, Gpu};
 use vkvcm::render::reads::Reads;
+use vkvcm::render::Connect;
 use vkvcm::render::{self, Algorithm, Budget, RenderSettings};
 use vkvcm::scene::Scene;
 
@@ -65,7 +65,7 @@ fn images_do_not_depend_on_reads() {
     });
 }
 
-/// Shading normals (binding 7) are read by el, and by every estimator's generic kernels:
+/// Shading normals (the binding `shading_normals`) are read by el, and by every estimator's generic kernels:
 /// glm_c with per-vertex normals tilted off the faces' normals.
 #[test]
 fn shading_normals_read_the_same_as_texels() {
@@ -85,9 +85,18 @@ fn shading_normals_read_the_same_as_texels() {
 fn a_partial_texel_is_refused() {
     with_gpu(|gpu| {
         let b = gpu.buffer_zeroed::<u32>("odd", 5).unwrap();
-        let e =
-            gpu.kernel_with("accumulate.comp", &[], &[Binding::Texel(&b)]).err().expect("20-byte texel buffer bound");
+        let out = gpu.buffer_zeroed::<u32>("out", 5).unwrap();
+        let binds = [Bind::vec4("texels", &b), Bind::u32("results", &out)];
+        let e = gpu.kernel("tests/texel_read.comp", &[], &binds).err().expect("20-byte texel buffer bound");
         let e = format!("{e:#}");
         assert!(e.contains("\"odd\"") && e.contains("whole number"), "{e}");
+        // The same buffer read as uint texels is whole, and reads what it holds.
+        b.write(&[7u32, 8, 9, 10, 11]).unwrap();
+        let k =
+            gpu.kernel("tests/texel_read.comp", &[], &[Bind::u32("texels", &b), Bind::u32("results", &out)]).unwrap();
+        let mut batch = gpu.batch().unwrap();
+        batch.dispatch(&k, k.groups_for(5), bytemuck::bytes_of(&5u32)).unwrap();
+        batch.submit_wait(None).unwrap();
+        assert_eq!(out.read::<u32>().unwrap(), [7, 8, 9, 10, 11]);
     });
 }

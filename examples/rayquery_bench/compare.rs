@@ -8,7 +8,7 @@ use std::sync::Arc;
 use anyhow::{anyhow, Result};
 use vkvcm::bench::traverse::{bench_ray_sets, bench_scene, BenchRay, BenchScene};
 use vkvcm::bvh::{build_with, BuildOptions, GpuBvh, Ray};
-use vkvcm::gpu::{groups_for, Gpu, GpuOptions, Profile};
+use vkvcm::gpu::{groups_for, Bind, Gpu, GpuOptions, Profile};
 
 use crate::rq::RqDevice;
 
@@ -156,7 +156,8 @@ fn compare_scene(gpu: &Arc<Gpu>, rq: &RqDevice, scene: &BenchScene, opts: &Optio
         let n = data.len() as u32;
         let ray_buf = gpu.buffer_from_slice("bench_rays", &data)?;
         let out = gpu.buffer_zeroed::<u32>("bench_results", data.len())?;
-        let kernel = gpu.kernel("bvh_bench.comp", &defines, &[&nodes, &prims, &ray_buf, &out])?;
+        let binds = [Bind::own(&nodes), Bind::own(&prims), Bind::own(&ray_buf), Bind::own(&out)];
+        let kernel = gpu.kernel("bvh_bench.comp", &defines, &binds)?;
         let mut batch = gpu.batch()?;
         let groups = [groups_for(n, 64), 1, 1];
         let mut vkvcm_dispatch = || -> Result<f64> {

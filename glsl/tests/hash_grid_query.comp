@@ -7,13 +7,13 @@
 
 layout(local_size_x = 64) in;
 
-layout(std430, binding = 0) readonly buffer GridStartBuf { uint grid_start[]; };
-layout(std430, binding = 1) readonly buffer GridPointsBuf { uvec4 grid_points[]; };
-layout(std430, binding = 2) readonly buffer QueryBuf { vec4 queries[]; };
-layout(std430, binding = 3) buffer CountBuf { uint out_count[]; };
-layout(std430, binding = 4) buffer SlotBuf { uint out_slots[]; };
+layout(std430) readonly buffer grid_start { uint bucket_start[]; };
+layout(std430) readonly buffer grid_points { uvec4 bucket_points[]; };
+layout(std430) readonly buffer queries { vec4 query_points[]; };
+layout(std430) buffer out_count { uint counts[]; };
+layout(std430) buffer out_slots { uint slots[]; };
 // Per query: number of distinct buckets visited and number of candidates tested.
-layout(std430, binding = 5) buffer StatsBuf { uvec2 out_stats[]; };
+layout(std430) buffer out_stats { uvec2 stats[]; };
 
 layout(push_constant) uniform Push {
     vec3 origin;
@@ -28,7 +28,7 @@ layout(push_constant) uniform Push {
 void main() {
     uint qi = gl_GlobalInvocationID.x;
     if (qi >= push.num_queries) return;
-    vec3 q = queries[qi].xyz;
+    vec3 q = query_points[qi].xyz;
     float r2 = push.radius * push.radius;
     uint buckets[8];
     uint nb = hash_grid_query_cells(q, push.origin, push.radius, push.num_buckets, buckets);
@@ -36,16 +36,16 @@ void main() {
     uint tested = 0u;
     for (uint i = 0u; i < nb; ++i) {
         uint b = buckets[i];
-        for (uint j = grid_start[b]; j < grid_start[b + 1u]; ++j) {
-            uvec4 e = grid_points[j];
+        for (uint j = bucket_start[b]; j < bucket_start[b + 1u]; ++j) {
+            uvec4 e = bucket_points[j];
             vec3 d = uintBitsToFloat(e.xyz) - q;
             tested += 1u;
             if (dot(d, d) > r2) continue;
             uint slot = e.w;
-            if (found < push.max_out) out_slots[qi * push.max_out + found] = slot;
+            if (found < push.max_out) slots[qi * push.max_out + found] = slot;
             found += 1u;
         }
     }
-    out_count[qi] = found;
-    out_stats[qi] = uvec2(nb, tested);
+    counts[qi] = found;
+    stats[qi] = uvec2(nb, tested);
 }

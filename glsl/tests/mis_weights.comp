@@ -22,14 +22,16 @@
 
 layout(local_size_x = 64) in;
 #include "scene.glsl"
-#include "vcm_bindings.glsl"
+#define LV_TEXEL 0
+#define LV_CACHE 0
+#include "light_vertex_store.glsl"
 
 // Per path: [0] 1 if a path was built, else 0; [1] k (segments); [2] generating s;
 // [3] number of techniques that can sample the path; [4] sum of their weights;
 // [5] number of weights that are negative or not finite; [6] specular inner vertices;
 // [7] light kind of y_0; [8 + s] weight of connection technique s (s = 0..k; -1 if it
 // does not apply); [8 + MAXV + i] weight of merging at y_i (i = 1..k-1; -1 if none).
-layout(std430, binding = 14) buffer OutBuf { float result[]; };
+layout(std430) buffer mis_results { float result[]; };
 
 #define MAXV 12u  // vertices y_0..y_k, k <= 11
 #define OUT_STRIDE 32u

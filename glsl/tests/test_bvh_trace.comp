@@ -5,18 +5,17 @@
 layout(local_size_x = 64) in;
 
 #ifdef BVH_VEC4
-layout(std430, binding = 0) readonly buffer BvhNodes { vec4 bvh_nodes[]; };
-layout(std430, binding = 1) readonly buffer BvhPrims { vec4 bvh_prims[]; };
+layout(std430) readonly buffer bvh_nodes { vec4 bvh_node_data[]; };
+layout(std430) readonly buffer bvh_prims { vec4 bvh_prim_data[]; };
 #else
-#define BVH_NODES_BINDING 0
-#define BVH_PRIMS_BINDING 1
+#define BVH_DECLARES_BUFFERS
 #endif
 
 struct TestRay {
     vec4 o;  // w = tmin
     vec4 d;  // w = tmax
 };
-layout(std430, binding = 2) readonly buffer Rays { TestRay rays[]; };
+layout(std430) readonly buffer test_rays { TestRay rays[]; };
 
 struct TestHit {
     float t;
@@ -28,7 +27,7 @@ struct TestHit {
     uint pad0;
     uint pad1;
 };
-layout(std430, binding = 3) writeonly buffer Hits { TestHit hits[]; };
+layout(std430) writeonly buffer test_hits { TestHit hits[]; };
 
 layout(push_constant) uniform Push { uint count; } pc;
 

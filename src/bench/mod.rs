@@ -1,5 +1,8 @@
 //! Benchmark harnesses: not used by rendering.
 //!
+//! * [`render`]: samples per CPU-second of whole renders (`vkvcm bench render`,
+//!   `bench equal-time`, `bench suite`).
 //! * [`traverse`]: the BVH traversal benchmark (`vkvcm bench traverse`) and its scenes.
 
+pub mod render;
 pub mod traverse;

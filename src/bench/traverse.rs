@@ -20,7 +20,7 @@ use serde::Serialize;
 
 use crate::bvh::traverse::{any_hit_counted, closest_hit_counted};
 use crate::bvh::{build_with, Aabb, BuildOptions, Ray};
-use crate::gpu::{groups_for, Gpu, Profile};
+use crate::gpu::{groups_for, Bind, Gpu, Profile};
 use crate::scene::{Sphere, Triangle};
 
 /// Small deterministic generator (PCG32, O'Neill 2014) so the library needs no `rand`.
@@ -537,7 +537,8 @@ pub fn bench_traverse(gpu: &Arc<Gpu>, scene: &BenchScene, opts: &TraverseBenchOp
             let m = mode.to_string();
             let mut defines = vec![("MODE", m.as_str()), ("LOCAL_SIZE", ls.as_str())];
             defines.extend(bvh_defines.iter().map(|(k, v)| (*k, v.as_str())));
-            let k = gpu.kernel("bvh_bench.comp", &defines, &[&nodes, &prims, &ray_buf, &out])?;
+            let binds = [Bind::own(&nodes), Bind::own(&prims), Bind::own(&ray_buf), Bind::own(&out)];
+            let k = gpu.kernel("bvh_bench.comp", &defines, &binds)?;
             let groups = [groups_for(n, opts.local_size), 1, 1];
             let mut batch = gpu.batch()?;
             // Warm-up: pays lavapipe's shader compile and faults the buffers in.

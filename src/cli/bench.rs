@@ -40,14 +40,14 @@ pub struct BenchSuiteArgs {
     /// Estimators (the suite: all but el).
     #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm")]
     pub algos: Vec<Algorithm>,
-    #[arg(long, default_value_t = render::bench::SUITE_SIZE)]
+    #[arg(long, default_value_t = vkvcm::bench::render::SUITE_SIZE)]
     pub size: u32,
     /// Rounds; each runs both variants, alternating which goes first (the renderers are
     /// rebuilt in the other order after half of them).
-    #[arg(long, default_value_t = render::bench::SUITE_ROUNDS)]
+    #[arg(long, default_value_t = vkvcm::bench::render::SUITE_ROUNDS)]
     pub rounds: u32,
     /// Timed iterations per variant and round.
-    #[arg(long, default_value_t = render::bench::SUITE_ITERATIONS_PER_ROUND)]
+    #[arg(long, default_value_t = vkvcm::bench::render::SUITE_ITERATIONS_PER_ROUND)]
     pub iterations: u64,
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -61,8 +61,8 @@ pub struct BenchEqualTimeArgs {
     pub scenes: Vec<String>,
     /// Estimators, each `algo` or, for bpt and vcm, `algo:path` / `algo:cache:N` (the
     /// connection strategy, `render --connect`), e.g. bpt:path,bpt:cache:1.
-    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm", value_parser = render::bench::Variant::parse)]
-    pub algos: Vec<render::bench::Variant>,
+    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm", value_parser = vkvcm::bench::render::Variant::parse)]
+    pub algos: Vec<vkvcm::bench::render::Variant>,
     #[arg(long, default_value_t = 128)]
     pub size: u32,
     /// Wall-clock seconds per estimator and round.
@@ -103,8 +103,8 @@ pub struct BenchRenderArgs {
     pub scenes: Vec<String>,
     /// Estimators, comma-separated, each `algo` or, for bpt and vcm, `algo:path` /
     /// `algo:cache:N` (the connection strategy, `render --connect`), e.g. bpt:path.
-    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm", value_parser = render::bench::Variant::parse)]
-    pub algos: Vec<render::bench::Variant>,
+    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm", value_parser = vkvcm::bench::render::Variant::parse)]
+    pub algos: Vec<vkvcm::bench::render::Variant>,
     /// Image width and height.
     #[arg(long, default_value_t = 256)]
     pub size: u32,
@@ -169,7 +169,7 @@ fn bench_equal_time(a: BenchEqualTimeArgs) -> Result<()> {
     for name in &a.scenes {
         let scene = scene::load_named(name)?;
         eprintln!("{name}: reference, {} x {} iterations ...", a.reference_algo.name(), a.reference_iterations);
-        let r = render::bench::reference(&gpu, &scene, a.reference_algo, a.size, a.reference_iterations)?;
+        let r = vkvcm::bench::render::reference(&gpu, &scene, a.reference_algo, a.size, a.reference_iterations)?;
         println!(
             "{name}: reference {} x {} iterations at {}x{}, its own noise (RMS standard error) {:.5}",
             r.algorithm.name(),
@@ -178,12 +178,14 @@ fn bench_equal_time(a: BenchEqualTimeArgs) -> Result<()> {
             a.size,
             r.noise_rms
         );
-        let mut log = |row: &render::bench::EqualTimeRow| {
+        let mut log = |row: &vkvcm::bench::render::EqualTimeRow| {
             eprintln!("{name} {}: RMSE {:.5}, {} iterations", row.algorithm, row.rmse, row.iterations)
         };
-        rows.extend(render::bench::equal_time_rounds(&gpu, &scene, &a.algos, a.seconds, a.rounds, &r, &mut log)?);
+        rows.extend(vkvcm::bench::render::equal_time_rounds(
+            &gpu, &scene, &a.algos, a.seconds, a.rounds, &r, &mut log,
+        )?);
     }
-    print!("{}", render::bench::equal_time_table(&rows));
+    print!("{}", vkvcm::bench::render::equal_time_table(&rows));
     if let Some(p) = &a.json {
         write_json(p, &rows)?;
     }
@@ -202,7 +204,7 @@ fn bench_suite(a: BenchSuiteArgs) -> Result<()> {
     for name in &a.scenes {
         let scene = scene::load_named(name)?;
         for &algo in &a.algos {
-            let row = render::bench::suite_row(&gpu, &scene, algo, a.size, a.rounds, a.iterations)
+            let row = vkvcm::bench::render::suite_row(&gpu, &scene, algo, a.size, a.rounds, a.iterations)
                 .with_context(|| format!("benchmarking {} on {name}", algo.name()))?;
             eprintln!(
                 "{} {}: specialised {:.2} ms/it, generic {:.2} ms/it, speedup {:.3} ({:.2}-{:.2})",
@@ -217,7 +219,7 @@ fn bench_suite(a: BenchSuiteArgs) -> Result<()> {
             rows.push(row);
         }
     }
-    print!("{}", render::bench::suite_table(&rows));
+    print!("{}", vkvcm::bench::render::suite_table(&rows));
     if let Some(p) = &a.json {
         write_json(p, &rows)?;
     }
@@ -230,14 +232,14 @@ fn bench_render(a: BenchRenderArgs) -> Result<()> {
     }
     let gpu = open_bench_gpu(a.device.clone())?;
     let scenes = a.scenes.iter().map(|n| Ok((n, scene::load_named(n)?))).collect::<Result<Vec<_>>>()?;
-    let overrides = render::bench::Overrides { paths_per_invocation: a.paths_per_invocation, reads: a.reads };
+    let overrides = vkvcm::bench::render::Overrides { paths_per_invocation: a.paths_per_invocation, reads: a.reads };
     let mut runs = Vec::new();
     for round in 1..=a.rounds {
         let mut rows = Vec::new();
         for (name, scene) in &scenes {
             for &variant in &a.algos {
                 let size = (a.size, a.size);
-                let row = render::bench::bench_one(&gpu, scene, variant, size, a.iterations, overrides)
+                let row = vkvcm::bench::render::bench_one(&gpu, scene, variant, size, a.iterations, overrides)
                     .with_context(|| format!("benchmarking {} on {name}", variant.name()))?;
                 let cpu = row.samples_per_cpu_second.map_or("-".into(), |c| format!("{c:.0}"));
                 eprintln!(
@@ -249,8 +251,8 @@ fn bench_render(a: BenchRenderArgs) -> Result<()> {
         }
         runs.push(rows);
     }
-    let rows = render::bench::median_of_rounds(&runs);
-    print!("{}", render::bench::table(&rows));
+    let rows = vkvcm::bench::render::median_of_rounds(&runs);
+    print!("{}", vkvcm::bench::render::table(&rows));
     if let Some(p) = &a.json {
         write_json(p, &rows)?;
     }

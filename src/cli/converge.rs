@@ -136,14 +136,15 @@ pub fn reference_cmd(a: ReferenceArgs) -> Result<()> {
         (Some(n), None) => Budget::Iterations(n),
         (None, None) => Budget::Iterations(256),
     };
-    match a.algo {
-        Algorithm::El => bail!("--algo el is a preview (|cos| at the first hit), not radiance: use bpt or pt"),
-        Algorithm::Vcm | Algorithm::Ppm | Algorithm::Bpm => eprintln!(
+    let info = a.algo.info();
+    match (info.radiance, info.consistent_only) {
+        (false, _) => bail!("--algo {} is a preview, not radiance: use bpt or pt", info.name),
+        (true, true) => eprintln!(
             "warning: {} is consistent but biased at any finite time (merging); the reference's error \
              estimate from two halves does not include that bias",
             a.algo.name()
         ),
-        Algorithm::Pt | Algorithm::Lt | Algorithm::Bpt => {
+        (true, false) => {
             if let Some(light) = sds_hazard(&scene) {
                 eprintln!(
                     "warning: {} has {light} and specular surfaces: {} cannot sample SDS paths \
@@ -216,8 +217,8 @@ pub fn converge_cmd(a: ConvergeArgs) -> Result<()> {
     if a.algos.is_empty() {
         bail!("--algos: name at least one estimator");
     }
-    if a.algos.contains(&Algorithm::El) {
-        bail!("--algos: el is a preview (|cos| at the first hit), not radiance; it has no error to measure");
+    if let Some(p) = a.algos.iter().find(|algo| !algo.info().radiance) {
+        bail!("--algos: {} is a preview, not radiance; it has no error to measure", p.name());
     }
     let (reference, meta) = image::read_exr(&a.reference)?;
     let (w, h) = (a.width.unwrap_or(reference.width), a.height.unwrap_or(reference.height));

@@ -23,6 +23,11 @@ pub struct DiffArgs {
     /// of the image's error).
     #[arg(long)]
     pub scale: Option<f32>,
+    /// Only check that the two files hold the same pixels bit for bit, in every channel
+    /// (colour and the sums a render saves to resume), ignoring attributes such as the
+    /// render time; exits with an error when any value differs.
+    #[arg(long, conflicts_with_all = ["false_colour", "scale"])]
+    pub exact: bool,
 }
 
 pub fn diff_cmd(a: DiffArgs) -> Result<()> {
@@ -30,6 +35,9 @@ pub fn diff_cmd(a: DiffArgs) -> Result<()> {
         if !(s > 0.0 && s.is_finite()) {
             bail!("--scale must be a positive number (got {s})");
         }
+    }
+    if a.exact {
+        return exact_cmd(&a);
     }
     if let Some(p) = &a.false_colour {
         check_writable(p)?;
@@ -70,5 +78,45 @@ pub fn diff_cmd(a: DiffArgs) -> Result<()> {
         image::write_png(p, &img, 1.0)?;
         eprintln!("wrote {}", p.display());
     }
+    Ok(())
+}
+
+/// `--exact`: every channel of `a` equal to `b`'s bit for bit.
+fn exact_cmd(a: &DiffArgs) -> Result<()> {
+    let (ia, ea, _) = image::read_exr_channels(&a.a)?;
+    let (ib, eb, _) = image::read_exr_channels(&a.b)?;
+    let (sa, sb) = (a.a.display(), a.b.display());
+    if !ia.same_size(&ib) {
+        bail!("{sa} is {}x{}, {sb} is {}x{}: not identical", ia.width, ia.height, ib.width, ib.height);
+    }
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
+    let mut channels: Vec<(String, Vec<f32>, Vec<f32>)> = ["R", "G", "B"]
+        .iter()
+        .enumerate()
+        .map(|(c, n)| (n.to_string(), ia.data.iter().map(|p| p[c]).collect(), ib.data.iter().map(|p| p[c]).collect()))
+        .collect();
+    let names = |e: &[image::ExtraChannel]| {
+        let mut v: Vec<String> = e.iter().map(|(n, _)| n.clone()).collect();
+        v.sort();
+        v
+    };
+    if names(&ea) != names(&eb) {
+        bail!("{sa} has channels {:?}, {sb} has {:?}: not identical", names(&ea), names(&eb));
+    }
+    for (name, va) in ea {
+        let vb = eb.iter().find(|(n, _)| *n == name).map(|(_, v)| v.clone()).unwrap_or_default();
+        channels.push((name, va, vb));
+    }
+    let mut differing = Vec::new();
+    for (name, va, vb) in &channels {
+        let n = bits(va).iter().zip(bits(vb)).filter(|(x, y)| *x != y).count();
+        if n > 0 {
+            differing.push(format!("{name}: {n} of {} values", va.len()));
+        }
+    }
+    if !differing.is_empty() {
+        bail!("{sa} and {sb} differ: {}", differing.join(", "));
+    }
+    println!("{sa} and {sb}: bit-identical ({} channels of {}x{})", channels.len(), ia.width, ia.height);
     Ok(())
 }

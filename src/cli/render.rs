@@ -11,8 +11,7 @@ use clap::Args;
 use super::progress::Reporter;
 use vkvcm::gpu::{Gpu, GpuOptions};
 use vkvcm::image::{self, Image};
-use vkvcm::render::bidir::Connect;
-use vkvcm::render::{self, saved, Algorithm, Budget, Progress, RenderOutput, RenderSettings, Renderer};
+use vkvcm::render::{self, saved, Algorithm, Budget, Connect, Progress, RenderOutput, RenderSettings, Renderer};
 use vkvcm::scene::{self, LoadOptions};
 
 #[derive(Args)]
@@ -53,7 +52,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum)]
     pub connect: Option<ConnectKind>,
     /// With --connect cache: light vertices connected to per camera vertex.
-    #[arg(long, default_value_t = vkvcm::render::bidir::DEFAULT_CACHE_CONNECTIONS)]
+    #[arg(long, default_value_t = vkvcm::render::DEFAULT_CACHE_CONNECTIONS)]
     pub cache_connections: u32,
     /// Camera to use, by node or camera name (default: the first one).
     #[arg(long)]
@@ -114,17 +113,14 @@ pub enum ConnectKind {
 
 /// The connection strategy `--connect` / `--cache-connections` ask for with `algo`.
 pub fn connect_setting(algo: Algorithm, kind: Option<ConnectKind>, cache_connections: u32) -> Result<Connect> {
-    if kind.is_some() && !matches!(algo, Algorithm::Bpt | Algorithm::Vcm) {
-        bail!("--connect is for bpt and vcm (the estimators that connect vertices), not {}", algo.name());
-    }
     if cache_connections == 0 {
         bail!("--cache-connections 0: must be at least 1");
     }
-    Ok(match kind {
-        None => Connect::default_for(algo),
-        Some(ConnectKind::Path) => Connect::Path,
-        Some(ConnectKind::Cache) => Connect::Cache(cache_connections),
-    })
+    let requested = kind.map(|k| match k {
+        ConnectKind::Path => Connect::Path,
+        ConnectKind::Cache => Connect::Cache(cache_connections),
+    });
+    algo.info().connect(requested).map_err(|e| anyhow!("--connect: {e}"))
 }
 
 /// Ctrl-C once: finish the current batch and write what was rendered. Twice: abort.
@@ -251,18 +247,18 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     let gpu = Gpu::new(&GpuOptions::from_env(a.device.clone()))?;
     eprintln!("device: {} ({})", gpu.info.name, gpu.info.driver);
     provenance.device = gpu.info.name.clone();
-    render::resources::check(&gpu, &scene, &settings).map_err(|e| {
-        let mpl = if matches!(a.algo, Algorithm::El | Algorithm::Pt) {
-            String::new()
-        } else {
+    Renderer::plan_for(&gpu, &scene, &settings).map_err(|e| {
+        let mpl = if a.algo.info().techniques.light_subpaths {
             format!(" --max-path-length {}", a.max_path_length)
+        } else {
+            String::new()
         };
         anyhow!("--width {} --height {}{mpl}: {e:#}", a.width, a.height)
     })?;
     let mut r = Renderer::new(&gpu, &scene, &settings)
         .with_context(|| format!("preparing {} with {}", scene.name, a.algo.name()))?;
     if a.verbose {
-        eprintln!("{}", r.features());
+        eprintln!("{}", r.describe());
         let how = if a.paths_per_invocation.is_some() { "--paths-per-invocation" } else { "chosen for the device" };
         eprintln!("paths per invocation: {} ({how})", r.paths_per_invocation());
         let how = if a.reads.is_some() { "--reads" } else { "chosen for the device" };

@@ -1,13 +1,15 @@
 //! Command batches: record dispatches (each wrapped in timestamp queries when the device
 //! supports them), submit, wait, and fold the timings into a `Profile`.
 
-use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 
 use anyhow::{anyhow, bail, Context, Result};
 use ash::vk;
 
-use super::{Buffer, Gpu, Kernel, Profile, PUSH_CONSTANT_BYTES};
+use super::{fault_injection, Buffer, Gpu, Kernel, Profile, PUSH_CONSTANT_BYTES};
+
+/// The pass of dispatches recorded before any [`Batch::begin_pass`].
+pub const UNNAMED_PASS: &str = "other";
 
 /// Most timed dispatches per batch.
 const MAX_TIMED: u32 = 256;
@@ -24,25 +26,6 @@ pub(crate) fn vk_error_text(e: vk::Result) -> String {
     format!("{what} (VK_{e:?})")
 }
 
-/// Test hook: with `VKVCM_TEST_FAIL_AFTER_BATCHES=N`, the (N+1)-th and every later
-/// `Batch::submit_wait` of the process, and every one-shot transfer after that, fail with
-/// `VK_ERROR_DEVICE_LOST` as a lost device would (tests/cli_render.rs uses it).
-pub(crate) fn simulated_device_loss(counts_as_batch: bool) -> Result<(), vk::Result> {
-    static LIMIT: OnceLock<Option<u64>> = OnceLock::new();
-    static SUBMITS: AtomicU64 = AtomicU64::new(0);
-    let Some(limit) =
-        *LIMIT.get_or_init(|| std::env::var("VKVCM_TEST_FAIL_AFTER_BATCHES").ok().and_then(|v| v.trim().parse().ok()))
-    else {
-        return Ok(());
-    };
-    let n = if counts_as_batch { SUBMITS.fetch_add(1, Ordering::SeqCst) } else { SUBMITS.load(Ordering::SeqCst) };
-    if n >= limit {
-        Err(vk::Result::ERROR_DEVICE_LOST)
-    } else {
-        Ok(())
-    }
-}
-
 /// A reusable command buffer. Every dispatch is preceded by a compute->compute memory
 /// barrier, so consecutive kernels see each other's writes.
 pub struct Batch {
@@ -51,7 +34,10 @@ pub struct Batch {
     cmd: vk::CommandBuffer,
     fence: vk::Fence,
     queries: vk::QueryPool,
-    timed: Vec<String>,
+    /// The (pass, kernel) of each timed dispatch, in recording order.
+    timed: Vec<(String, String)>,
+    /// The pass that the next dispatches belong to ([`Batch::begin_pass`]).
+    pass: String,
     /// Kernels recorded since the last submit, each once, for error messages.
     kernels: Vec<String>,
     recording: bool,
@@ -69,6 +55,7 @@ impl Gpu {
                 fence: vk::Fence::null(),
                 queries: vk::QueryPool::null(),
                 timed: Vec::new(),
+                pass: UNNAMED_PASS.to_string(),
                 kernels: Vec::new(),
                 recording: false,
             };
@@ -139,6 +126,12 @@ impl Batch {
         };
     }
 
+    /// Names the pass that the following dispatches belong to: profiles report their
+    /// time under this name (until the next call).
+    pub fn begin_pass(&mut self, name: &str) {
+        name.clone_into(&mut self.pass);
+    }
+
     /// Records `kernel` over `groups` workgroups with `push` as push constants.
     pub fn dispatch(&mut self, kernel: &Kernel, groups: [u32; 3], push: &[u8]) -> Result<()> {
         if push.len() as u32 > PUSH_CONSTANT_BYTES {
@@ -179,7 +172,7 @@ impl Batch {
             }
         }
         if timed {
-            self.timed.push(kernel.name().to_string());
+            self.timed.push((self.pass.clone(), kernel.name().to_string()));
         }
         if !self.kernels.iter().any(|k| k == kernel.name()) {
             self.kernels.push(kernel.name().to_string());
@@ -210,7 +203,7 @@ impl Batch {
             dev.end_command_buffer(self.cmd).map_err(|e| fail("recording", e))?;
             let cmds = [self.cmd];
             let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
-            simulated_device_loss(true).map_err(|e| fail("vkQueueSubmit", e))?;
+            fault_injection::simulated_device_loss(true).map_err(|e| fail("vkQueueSubmit", e))?;
             dev.queue_submit(self.gpu.queue, &submit, self.fence).map_err(|e| fail("vkQueueSubmit", e))?;
             dev.wait_for_fences(&[self.fence], true, u64::MAX).map_err(|e| fail("waiting for the GPU", e))?;
             dev.reset_fences(&[self.fence]).map_err(|e| fail("vkResetFences", e))?;
@@ -228,9 +221,9 @@ impl Batch {
                     )
                 }
                 .context("reading timestamps failed")?;
-                for (i, name) in self.timed.iter().enumerate() {
+                for (i, (pass, kernel)) in self.timed.iter().enumerate() {
                     let ns = ts[2 * i + 1].saturating_sub(ts[2 * i]) as f64 * self.gpu.timestamp_period_ns;
-                    p.add(name, ns);
+                    p.add(pass, kernel, ns);
                 }
             }
         }

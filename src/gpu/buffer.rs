@@ -67,8 +67,12 @@ impl Gpu {
 
     /// A zero-filled storage buffer of `count` elements of `T`.
     pub fn buffer_zeroed<T: Pod>(self: &Arc<Self>, name: &str, count: usize) -> Result<Buffer> {
-        let size = (count * std::mem::size_of::<T>()) as u64;
-        let b = self.raw_buffer(name, size, MemoryLocation::GpuOnly)?;
+        self.buffer_zeroed_bytes(name, (count * std::mem::size_of::<T>()) as u64)
+    }
+
+    /// A zero-filled storage buffer of `bytes` bytes.
+    pub fn buffer_zeroed_bytes(self: &Arc<Self>, name: &str, bytes: u64) -> Result<Buffer> {
+        let b = self.raw_buffer(name, bytes, MemoryLocation::GpuOnly)?;
         b.fill_zero()?;
         Ok(b)
     }
@@ -102,7 +106,7 @@ impl Gpu {
                 let cmds = [cmd];
                 let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
                 let fail = |step: &str, e: vk::Result| anyhow!("{step} of a buffer transfer: {}", vk_error_text(e));
-                super::batch::simulated_device_loss(false).map_err(|e| fail("vkQueueSubmit", e))?;
+                super::fault_injection::simulated_device_loss(false).map_err(|e| fail("vkQueueSubmit", e))?;
                 dev.queue_submit(self.queue, &submit, vk::Fence::null()).map_err(|e| fail("vkQueueSubmit", e))?;
                 dev.queue_wait_idle(self.queue).map_err(|e| fail("waiting for the GPU", e))?;
                 Ok(())

@@ -1,91 +1,102 @@
-//! Compute kernels: pipeline, layout and one descriptor set of buffers (storage buffers,
-//! or uniform texel buffers for data a kernel only reads), created once and reused for
-//! every dispatch.
+//! Compute kernels: pipeline, layout and one descriptor set, created once and reused for
+//! every dispatch. A kernel's bindings and workgroup size are read from its SPIR-V
+//! (src/gpu/reflect.rs) and its buffers are bound by those names: the GLSL declares a
+//! buffer once, without a binding number (shaderc assigns them), and the Rust side names
+//! the buffer it binds there.
 
 use std::sync::Arc;
 
 use anyhow::{bail, Context, Result};
 use ash::vk;
 
+use super::reflect::{KernelInterface, ReflectedBinding};
 use super::{Buffer, Gpu};
 
 /// Push-constant bytes every kernel may use (the Vulkan guaranteed minimum).
 pub const PUSH_CONSTANT_BYTES: u32 = 128;
 
-/// How a kernel sees the buffer at one binding.
+/// How a buffer's bytes are seen when the kernel declares its binding as a uniform texel
+/// buffer (`utextureBuffer`); storage-buffer bindings ignore it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Texels {
+    /// `R32G32B32A32_UINT`: one `uvec4` per 16 bytes (the buffer's size must be a multiple
+    /// of 16).
+    Vec4,
+    /// `R32_UINT`: one `uint` per 4 bytes.
+    U32,
+}
+
+impl Texels {
+    fn format_and_size(self) -> (vk::Format, u64) {
+        match self {
+            Texels::Vec4 => (vk::Format::R32G32B32A32_UINT, 16),
+            Texels::U32 => (vk::Format::R32_UINT, 4),
+        }
+    }
+}
+
+/// A buffer for the kernel binding named `name`.
 #[derive(Clone, Copy)]
-pub enum Binding<'a> {
-    /// A storage buffer (GLSL `buffer`).
-    Storage(&'a Buffer),
-    /// A read-only uniform texel buffer of `R32G32B32A32_UINT` texels (GLSL
-    /// `utextureBuffer`, 16 bytes per texel; the buffer's size must be a multiple of 16).
-    /// On lavapipe a divergent texel fetch is one 16-byte load per lane where a storage
-    /// buffer load is a bounds-checked branch per lane and component
-    /// (docs/performance.md, "Fourth round (texel-buffer reads)").
-    Texel(&'a Buffer),
-    /// The same with `R32_UINT` texels (`utextureBuffer`, one `uint` per texel).
-    TexelU32(&'a Buffer),
+pub struct Bind<'a> {
+    pub name: &'a str,
+    pub buffer: &'a Buffer,
+    /// How a texel-buffer binding of that name reads it.
+    pub texels: Texels,
 }
 
-impl<'a> Binding<'a> {
-    fn buffer(&self) -> &'a Buffer {
-        match *self {
-            Binding::Storage(b) | Binding::Texel(b) | Binding::TexelU32(b) => b,
-        }
+impl<'a> Bind<'a> {
+    /// `buffer` at the binding `name`; as a texel buffer it is read as `uvec4` texels.
+    pub fn vec4(name: &'a str, buffer: &'a Buffer) -> Bind<'a> {
+        Bind { name, buffer, texels: Texels::Vec4 }
     }
 
-    fn descriptor_type(&self) -> vk::DescriptorType {
-        match self {
-            Binding::Storage(_) => vk::DescriptorType::STORAGE_BUFFER,
-            Binding::Texel(_) | Binding::TexelU32(_) => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
-        }
+    /// `buffer` at the binding `name`; as a texel buffer it is read as `uint` texels.
+    pub fn u32(name: &'a str, buffer: &'a Buffer) -> Bind<'a> {
+        Bind { name, buffer, texels: Texels::U32 }
     }
 
-    /// The texel format and size in bytes, for texel buffers.
-    fn texel(&self) -> Option<(vk::Format, u64)> {
-        match self {
-            Binding::Storage(_) => None,
-            Binding::Texel(_) => Some((vk::Format::R32G32B32A32_UINT, 16)),
-            Binding::TexelU32(_) => Some((vk::Format::R32_UINT, 4)),
-        }
+    /// `buffer` at the binding of the buffer's own name, read as `uvec4` texels.
+    pub fn own(buffer: &'a Buffer) -> Bind<'a> {
+        Bind::vec4(buffer.name(), buffer)
+    }
+
+    /// `buffer` at the binding of the buffer's own name, read as `uint` texels.
+    pub fn own_u32(buffer: &'a Buffer) -> Bind<'a> {
+        Bind::u32(buffer.name(), buffer)
     }
 }
 
-/// A compute pipeline with buffers at bindings 0..n.
+/// A compute pipeline with its buffers bound.
 pub struct Kernel {
     gpu: Arc<Gpu>,
     name: String,
+    local_size: [u32; 3],
     pub(crate) pipeline: vk::Pipeline,
     pub(crate) layout: vk::PipelineLayout,
     set_layout: vk::DescriptorSetLayout,
     pool: vk::DescriptorPool,
     pub(crate) set: vk::DescriptorSet,
-    /// The views of the texel-buffer bindings (null for storage buffers), destroyed with
-    /// the kernel.
+    /// The views of the texel-buffer bindings, destroyed with the kernel.
     views: Vec<vk::BufferView>,
 }
 
 impl Gpu {
-    /// Builds the kernel `name` (a .comp file under glsl/) with `defines`, binding
-    /// `buffers` as storage buffers to bindings 0, 1, ... in order.
-    pub fn kernel(self: &Arc<Self>, name: &str, defines: &[(&str, &str)], buffers: &[&Buffer]) -> Result<Kernel> {
-        let bindings: Vec<Binding> = buffers.iter().map(|b| Binding::Storage(b)).collect();
-        self.kernel_with(name, defines, &bindings)
-    }
-
-    /// Builds the kernel `name` with `defines`, binding `bindings` to bindings 0, 1, ...
-    /// in order, each as the kind of descriptor it names.
-    pub fn kernel_with(self: &Arc<Self>, name: &str, defines: &[(&str, &str)], bindings: &[Binding]) -> Result<Kernel> {
-        check_bindings(&self.limits, bindings).with_context(|| format!("kernel {name}"))?;
-        let module = self.shaders.module(&self.device, name, defines)?;
+    /// Builds the kernel `source` (a .comp file under glsl/) with `defines`. Every binding
+    /// the compiled kernel declares takes the buffer of the same name in `bindings`, as
+    /// the kind of descriptor the kernel declares (storage or texel buffer); `bindings`
+    /// may hold buffers the kernel does not declare (a variant that compiles a binding
+    /// out), and a declared binding without a buffer is an error.
+    pub fn kernel(self: &Arc<Self>, source: &str, defines: &[(&str, &str)], bindings: &[Bind]) -> Result<Kernel> {
+        let (module, interface) = self.shaders.module(&self.device, source, defines)?;
+        let chosen = choose(source, &interface, bindings)?;
+        check_bindings(&self.limits, &chosen).with_context(|| format!("kernel {source}"))?;
         let dev = &self.device;
-        let binding_info: Vec<_> = bindings
+        let binding_info: Vec<_> = chosen
             .iter()
-            .enumerate()
-            .map(|(i, b)| {
+            .map(|(r, _)| {
                 vk::DescriptorSetLayoutBinding::default()
-                    .binding(i as u32)
-                    .descriptor_type(b.descriptor_type())
+                    .binding(r.binding)
+                    .descriptor_type(r.descriptor_type)
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })
@@ -100,7 +111,8 @@ impl Gpu {
             )?;
             let mut k = Kernel {
                 gpu: self.clone(),
-                name: name.to_string(),
+                name: source.to_string(),
+                local_size: interface.local_size,
                 pipeline: vk::Pipeline::null(),
                 layout: vk::PipelineLayout::null(),
                 set_layout,
@@ -123,11 +135,11 @@ impl Gpu {
             k.pipeline = dev
                 .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
                 .map_err(|(_, e)| e)
-                .with_context(|| format!("cannot create the pipeline of kernel {name}"))?[0];
-            if !bindings.is_empty() {
+                .with_context(|| format!("cannot create the pipeline of kernel {source}"))?[0];
+            if !chosen.is_empty() {
                 let sizes: Vec<_> = [vk::DescriptorType::STORAGE_BUFFER, vk::DescriptorType::UNIFORM_TEXEL_BUFFER]
                     .into_iter()
-                    .map(|ty| (ty, bindings.iter().filter(|b| b.descriptor_type() == ty).count() as u32))
+                    .map(|ty| (ty, chosen.iter().filter(|(r, _)| r.descriptor_type == ty).count() as u32))
                     .filter(|&(_, n)| n > 0)
                     .map(|(ty, n)| vk::DescriptorPoolSize::default().ty(ty).descriptor_count(n))
                     .collect();
@@ -138,11 +150,38 @@ impl Gpu {
                 k.set = dev.allocate_descriptor_sets(
                     &vk::DescriptorSetAllocateInfo::default().descriptor_pool(k.pool).set_layouts(&set_layouts),
                 )?[0];
-                k.bind(bindings)?;
+                k.bind(&chosen)?;
             }
             Ok(k)
         }
     }
+}
+
+/// The buffer of each binding `interface` declares, by name.
+fn choose<'a>(
+    source: &str,
+    interface: &'a KernelInterface,
+    bindings: &[Bind<'a>],
+) -> Result<Vec<(&'a ReflectedBinding, Bind<'a>)>> {
+    for (i, b) in bindings.iter().enumerate() {
+        if bindings[..i].iter().any(|o| o.name == b.name) {
+            bail!("kernel {source}: two buffers given for binding {:?}", b.name);
+        }
+    }
+    interface
+        .bindings
+        .iter()
+        .map(|r| match bindings.iter().find(|b| b.name == r.name) {
+            Some(b) => Ok((r, *b)),
+            None => {
+                let given: Vec<&str> = bindings.iter().map(|b| b.name).collect();
+                bail!(
+                    "kernel {source} declares binding {:?} but no buffer of that name was given (given: {given:?})",
+                    r.name
+                )
+            }
+        })
+        .collect()
 }
 
 impl Kernel {
@@ -150,44 +189,51 @@ impl Kernel {
         &self.name
     }
 
-    /// The same kernel under another name in profiles and messages (one shader used by
-    /// two stages, see `profile::stage_of`).
-    pub fn labelled(mut self, name: &str) -> Kernel {
-        self.name = name.to_string();
-        self
+    /// The workgroup size the kernel declares (`local_size_x, y, z`).
+    pub fn local_size(&self) -> [u32; 3] {
+        self.local_size
     }
 
-    /// Points the descriptor set at `bindings` (once, at creation: the set layout fixes
-    /// each binding's kind), checked by [`check_bindings`].
-    fn bind(&mut self, bindings: &[Binding]) -> Result<()> {
-        for b in bindings {
-            if let Some((format, _)) = b.texel() {
+    /// Workgroups covering `n` invocations of a 1-D problem with this kernel's
+    /// `local_size_x`, folded into 2-D past the per-dimension limit
+    /// ([`super::groups_2d`]).
+    pub fn groups_for(&self, n: u32) -> [u32; 3] {
+        super::groups_2d(n, self.local_size[0])
+    }
+
+    /// Points the descriptor set at the chosen buffers (once, at creation: the set layout
+    /// fixes each binding's kind), checked by [`check_bindings`].
+    fn bind(&mut self, chosen: &[(&ReflectedBinding, Bind)]) -> Result<()> {
+        for (r, b) in chosen {
+            if r.descriptor_type == vk::DescriptorType::UNIFORM_TEXEL_BUFFER {
+                let (format, _) = b.texels.format_and_size();
                 let info =
-                    vk::BufferViewCreateInfo::default().buffer(b.buffer().raw).format(format).range(vk::WHOLE_SIZE);
+                    vk::BufferViewCreateInfo::default().buffer(b.buffer.raw).format(format).range(vk::WHOLE_SIZE);
                 // SAFETY: valid buffer created with UNIFORM_TEXEL_BUFFER usage; the view is
                 // destroyed with the kernel.
                 let view = unsafe { self.gpu.device.create_buffer_view(&info, None) }
-                    .with_context(|| format!("cannot create a texel view of buffer {:?}", b.buffer().name()))?;
+                    .with_context(|| format!("cannot create a texel view of buffer {:?}", b.buffer.name()))?;
                 self.views.push(view);
             } else {
                 self.views.push(vk::BufferView::null());
             }
         }
-        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = chosen
             .iter()
-            .map(|b| [vk::DescriptorBufferInfo::default().buffer(b.buffer().raw).range(vk::WHOLE_SIZE)])
+            .map(|(_, b)| [vk::DescriptorBufferInfo::default().buffer(b.buffer.raw).range(vk::WHOLE_SIZE)])
             .collect();
-        let writes: Vec<_> = bindings
+        let writes: Vec<_> = chosen
             .iter()
             .enumerate()
-            .map(|(i, b)| {
+            .map(|(i, (r, _))| {
                 let w = vk::WriteDescriptorSet::default()
                     .dst_set(self.set)
-                    .dst_binding(i as u32)
-                    .descriptor_type(b.descriptor_type());
-                match b {
-                    Binding::Storage(_) => w.buffer_info(&infos[i]),
-                    _ => w.texel_buffer_view(std::slice::from_ref(&self.views[i])),
+                    .dst_binding(r.binding)
+                    .descriptor_type(r.descriptor_type);
+                if r.descriptor_type == vk::DescriptorType::STORAGE_BUFFER {
+                    w.buffer_info(&infos[i])
+                } else {
+                    w.texel_buffer_view(std::slice::from_ref(&self.views[i]))
                 }
             })
             .collect();
@@ -200,21 +246,21 @@ impl Kernel {
 /// Refuses a binding the device cannot bind: a storage buffer over
 /// maxStorageBufferRange, a texel buffer over maxTexelBufferElements or not a whole
 /// number of texels.
-fn check_bindings(limits: &vk::PhysicalDeviceLimits, bindings: &[Binding]) -> Result<()> {
-    for b in bindings {
-        let buf = b.buffer();
-        let (max, what) = match b.texel() {
-            None => (limits.max_storage_buffer_range as u64, "bytes (maxStorageBufferRange)"),
-            Some((_, texel)) => {
-                if buf.size() % texel != 0 {
-                    bail!(
-                        "buffer {:?} ({} bytes) is read as {texel}-byte texels but is not a whole number of them",
-                        buf.name(),
-                        buf.size()
-                    );
-                }
-                (limits.max_texel_buffer_elements as u64 * texel, "bytes as texels (maxTexelBufferElements)")
+fn check_bindings(limits: &vk::PhysicalDeviceLimits, chosen: &[(&ReflectedBinding, Bind)]) -> Result<()> {
+    for (r, b) in chosen {
+        let buf = b.buffer;
+        let (max, what) = if r.descriptor_type == vk::DescriptorType::STORAGE_BUFFER {
+            (limits.max_storage_buffer_range as u64, "bytes (maxStorageBufferRange)")
+        } else {
+            let (_, texel) = b.texels.format_and_size();
+            if buf.size() % texel != 0 {
+                bail!(
+                    "buffer {:?} ({} bytes) is read as {texel}-byte texels but is not a whole number of them",
+                    buf.name(),
+                    buf.size()
+                );
             }
+            (limits.max_texel_buffer_elements as u64 * texel, "bytes as texels (maxTexelBufferElements)")
         };
         if buf.size() > max {
             bail!(

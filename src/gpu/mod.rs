@@ -5,16 +5,18 @@
 mod batch;
 mod buffer;
 mod context;
+pub mod fault_injection;
 mod kernel;
 mod profile;
+pub mod reflect;
 pub mod shader;
 mod validation;
 
 pub use batch::Batch;
 pub use buffer::Buffer;
 pub use context::{list_devices, DeviceInfo, FeatureStatus, Gpu, GpuOptions};
-pub use kernel::{Binding, Kernel, PUSH_CONSTANT_BYTES};
-pub use profile::{stage_of, KernelTime, Profile, ProfileReport, StageTime, LIGHT_VERTEX_PREFIX_KERNEL};
+pub use kernel::{Bind, Kernel, Texels, PUSH_CONSTANT_BYTES};
+pub use profile::{KernelTime, Profile, ProfileReport, StageTime};
 pub use validation::Messages;
 
 /// Workgroups needed to cover `n` invocations with groups of `local` invocations.
@@ -29,7 +31,13 @@ pub const MAX_GROUPS_PER_DIM: u32 = 65_535;
 /// into two dimensions when it needs more than [`MAX_GROUPS_PER_DIM`] groups; kernels
 /// recover the index with `invocation_index()` (glsl/common.glsl) and skip indices >= n.
 pub fn groups_2d(n: u32, local: u32) -> [u32; 3] {
-    let total = groups_for(n, local);
+    fold_groups(groups_for(n, local))
+}
+
+/// `total` workgroups as a dispatch, folded into two dimensions past
+/// [`MAX_GROUPS_PER_DIM`]; kernels recover the workgroup's index with `workgroup_index()`
+/// (glsl/common.glsl) and skip those past the end.
+pub fn fold_groups(total: u32) -> [u32; 3] {
     if total <= MAX_GROUPS_PER_DIM {
         [total, 1, 1]
     } else {

@@ -1,11 +1,14 @@
 //! Per-kernel GPU time from timestamp queries, reported by `--profile`: per kernel, per
-//! render stage and iteration, with the rays traced per second when they were counted.
+//! pass (the name a renderer gave its dispatches with `Batch::begin_pass`) and
+//! iteration, with the rays traced per second when they were counted.
 
 use serde::Serialize;
 
-/// Accumulated time of one kernel.
+/// Accumulated time of one kernel in one pass.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct KernelTime {
+    /// The pass it was dispatched in.
+    pub stage: String,
     pub kernel: String,
     pub calls: u64,
     pub total_ms: f64,
@@ -22,27 +25,6 @@ pub struct Profile {
     pub rays: Option<u64>,
 }
 
-/// The render stage of a kernel (a glsl/ file name), as src/render/features.rs names
-/// them: the light-subpath kernel, the four hash-grid passes, the camera-subpath kernels
-/// (pt.comp and el.comp are whole paths from the camera) and light tracing's accumulate.
-pub fn stage_of(kernel: &str) -> &'static str {
-    match kernel {
-        "light_subpath.comp" => "light subpaths",
-        LIGHT_VERTEX_PREFIX_KERNEL | "lv_cache_compact.comp" => "light-vertex prefix",
-        k if k.starts_with("hash_grid_") => "grid build",
-        "camera_subpath.comp" | "pt.comp" | "el.comp" => "camera subpaths",
-        "accumulate.comp" => "accumulate",
-        _ => "other",
-    }
-}
-
-/// The name under which the light-vertex cache's prefix sum (`hash_grid_scan.comp`,
-/// src/render/bidir.rs) appears in profiles.
-pub const LIGHT_VERTEX_PREFIX_KERNEL: &str = "light_vertex_prefix (hash_grid_scan.comp)";
-
-const STAGE_ORDER: [&str; 6] =
-    ["light subpaths", "light-vertex prefix", "grid build", "camera subpaths", "accumulate", "other"];
-
 /// GPU time of one stage.
 #[derive(Clone, Debug, Serialize)]
 pub struct StageTime {
@@ -55,16 +37,26 @@ pub struct StageTime {
 }
 
 impl Profile {
-    pub fn add(&mut self, kernel: &str, ns: f64) {
-        let i = match self.kernels.iter().position(|k| k.kernel == kernel) {
-            Some(i) => i,
-            None => {
-                self.kernels.push(KernelTime { kernel: kernel.to_string(), ..Default::default() });
-                self.kernels.len() - 1
-            }
-        };
+    /// Adds one dispatch of `kernel` in pass `stage` that took `ns` nanoseconds.
+    pub fn add(&mut self, stage: &str, kernel: &str, ns: f64) {
+        let i = self.entry(stage, kernel);
         self.kernels[i].calls += 1;
         self.kernels[i].total_ms += ns * 1e-6;
+    }
+
+    /// The index of (`stage`, `kernel`) in `kernels`, added if new.
+    fn entry(&mut self, stage: &str, kernel: &str) -> usize {
+        match self.kernels.iter().position(|k| k.stage == stage && k.kernel == kernel) {
+            Some(i) => i,
+            None => {
+                self.kernels.push(KernelTime {
+                    stage: stage.to_string(),
+                    kernel: kernel.to_string(),
+                    ..Default::default()
+                });
+                self.kernels.len() - 1
+            }
+        }
     }
 
     /// Counts `n` more iterations that took `seconds` of wall-clock time.
@@ -79,8 +71,9 @@ impl Profile {
             .kernels
             .iter()
             .map(|k| {
-                let e = earlier.kernels.iter().find(|e| e.kernel == k.kernel);
+                let e = earlier.kernels.iter().find(|e| e.stage == k.stage && e.kernel == k.kernel);
                 KernelTime {
+                    stage: k.stage.clone(),
                     kernel: k.kernel.clone(),
                     calls: k.calls - e.map_or(0, |e| e.calls),
                     total_ms: k.total_ms - e.map_or(0.0, |e| e.total_ms),
@@ -99,13 +92,7 @@ impl Profile {
     /// Adds `other`'s timings, iterations and rays to this profile.
     pub fn absorb(&mut self, other: &Profile) {
         for k in &other.kernels {
-            let i = match self.kernels.iter().position(|m| m.kernel == k.kernel) {
-                Some(i) => i,
-                None => {
-                    self.kernels.push(KernelTime { kernel: k.kernel.clone(), ..Default::default() });
-                    self.kernels.len() - 1
-                }
-            };
+            let i = self.entry(&k.stage, &k.kernel);
             self.kernels[i].calls += k.calls;
             self.kernels[i].total_ms += k.total_ms;
         }
@@ -121,24 +108,27 @@ impl Profile {
         self.kernels.iter().map(|k| k.total_ms).sum()
     }
 
-    /// GPU time per iteration of each stage present, in pipeline order.
+    /// GPU time per iteration of each pass, in the order the passes first ran.
     pub fn stages(&self) -> Vec<StageTime> {
         let n = self.iterations.max(1) as f64;
         let total = self.total_ms().max(1e-12);
-        STAGE_ORDER
-            .iter()
-            .filter_map(|&stage| {
-                let ks: Vec<&KernelTime> = self.kernels.iter().filter(|k| stage_of(&k.kernel) == stage).collect();
-                if ks.is_empty() {
-                    return None;
-                }
+        let mut names: Vec<&str> = Vec::new();
+        for k in &self.kernels {
+            if !names.contains(&k.stage.as_str()) {
+                names.push(&k.stage);
+            }
+        }
+        names
+            .into_iter()
+            .map(|stage| {
+                let ks: Vec<&KernelTime> = self.kernels.iter().filter(|k| k.stage == stage).collect();
                 let ms: f64 = ks.iter().map(|k| k.total_ms).sum();
-                Some(StageTime {
+                StageTime {
                     stage: stage.to_string(),
                     kernels: ks.iter().map(|k| k.kernel.clone()).collect(),
                     ms_per_iteration: ms / n,
                     share: ms / total,
-                })
+                }
             })
             .collect()
     }
@@ -154,15 +144,16 @@ impl Profile {
         self.rays.filter(|_| s > 0.0).map(|r| r as f64 / s)
     }
 
-    /// A text table: kernel, calls, total ms, mean ms, share.
+    /// A text table: pass and kernel, calls, total ms, mean ms, share.
     pub fn table(&self) -> String {
         let total = self.total_ms().max(1e-12);
-        let w = self.kernels.iter().map(|k| k.kernel.len()).max().unwrap_or(6).max(6);
+        let label = |k: &KernelTime| format!("{}: {}", k.stage, k.kernel);
+        let w = self.kernels.iter().map(|k| label(k).len()).max().unwrap_or(6).max(6);
         let mut s = format!("{:<w$} {:>7} {:>11} {:>10} {:>7}\n", "kernel", "calls", "total ms", "mean ms", "share");
         for k in &self.kernels {
             s += &format!(
                 "{:<w$} {:>7} {:>11.3} {:>10.4} {:>6.1}%\n",
-                k.kernel,
+                label(k),
                 k.calls,
                 k.total_ms,
                 k.total_ms / k.calls.max(1) as f64,
@@ -258,20 +249,21 @@ mod tests {
     #[test]
     fn stages_group_kernels_in_pipeline_order() {
         let mut p = Profile::default();
-        for (k, ms) in [
-            ("camera_subpath.comp", 3.0),
-            ("light_subpath.comp", 2.0),
-            ("hash_grid_count.comp", 0.5),
-            ("hash_grid_scan.comp", 0.25),
-            ("hash_grid_scan.comp", 0.25),
+        for (stage, k, ms) in [
+            ("light subpaths", "light_subpath.comp", 2.0),
+            ("grid build", "hash_grid_count.comp", 0.5),
+            ("grid build", "exclusive_scan.comp", 0.25),
+            ("grid build", "exclusive_scan.comp", 0.25),
+            ("camera subpaths", "camera_subpath.comp", 3.0),
         ] {
-            p.add(k, ms * 1e6);
+            p.add(stage, k, ms * 1e6);
         }
         p.add_iterations(2, 0.01);
         p.rays = Some(1000);
         let st = p.stages();
         let names: Vec<&str> = st.iter().map(|s| s.stage.as_str()).collect();
         assert_eq!(names, ["light subpaths", "grid build", "camera subpaths"]);
+        assert_eq!(st[1].kernels, ["hash_grid_count.comp", "exclusive_scan.comp"]);
         assert!((st[1].ms_per_iteration - 0.5).abs() < 1e-12);
         assert!((st[2].share - 0.5).abs() < 1e-12);
         assert!((p.rays_per_second().unwrap() - 1e5).abs() < 1e-6);

@@ -1,7 +1,9 @@
 //! GLSL -> SPIR-V through shaderc, with `#include` resolved from glsl/ and per-variant
 //! `#define`s. The sources are embedded in the binary at build time; setting
 //! `VKVCM_GLSL_DIR` reads them from that folder instead (for shader development).
-//! Compiled SPIR-V and shader modules are cached by (name, source, defines).
+//! Resources declared without a `binding = N` get one from the compiler (glslang's
+//! auto-mapping); kernels are bound by name (src/gpu/reflect.rs). Compiled SPIR-V and
+//! shader modules are cached by (name, source, defines).
 
 use std::borrow::Cow;
 use std::collections::hash_map::DefaultHasher;
@@ -12,6 +14,8 @@ use std::sync::Mutex;
 
 use anyhow::{anyhow, Result};
 use ash::vk;
+
+use super::reflect::{reflect, KernelInterface};
 
 mod embedded {
     include!(concat!(env!("OUT_DIR"), "/glsl_sources.rs"));
@@ -77,9 +81,15 @@ pub fn compile_glsl_opt(name: &str, source: &str, defines: &[(&str, &str)], opti
     opts.set_target_spirv(shaderc::SpirvVersion::V1_5);
     if optimize {
         opts.set_optimization_level(shaderc::OptimizationLevel::Performance);
+        // The optimiser strips the names that kernels are bound by unless debug info is
+        // kept; ShaderCache reflects them, then strips the debug instructions
+        // ([`strip_debug_info`]), which leaves the optimiser's instruction stream (the
+        // same with and without debug info, checked with spirv-opt --strip-debug).
+        opts.set_generate_debug_info();
     } else {
         opts.set_optimization_level(shaderc::OptimizationLevel::Zero);
     }
+    opts.set_auto_bind_uniforms(true);
     for (k, v) in defines {
         opts.add_macro_definition(k, Some(v));
     }
@@ -94,16 +104,40 @@ pub fn compile_glsl_opt(name: &str, source: &str, defines: &[(&str, &str)], opti
     }
 }
 
+/// `spirv` without its debug instructions (OpSource*, OpString, OpName, OpMemberName,
+/// OpLine, OpNoLine, OpModuleProcessed), which the driver does not need.
+pub fn strip_debug_info(spirv: &[u32]) -> Vec<u32> {
+    const DEBUG_OPS: [u32; 9] = [2, 3, 4, 5, 6, 7, 8, 317, 330];
+    let mut out = Vec::with_capacity(spirv.len());
+    out.extend_from_slice(&spirv[..spirv.len().min(5)]);
+    let mut i = 5;
+    while i < spirv.len() {
+        let count = (spirv[i] >> 16) as usize;
+        let op = spirv[i] & 0xffff;
+        if count == 0 || i + count > spirv.len() {
+            // Malformed: keep the rest as it is (the driver will say what is wrong).
+            out.extend_from_slice(&spirv[i..]);
+            break;
+        }
+        if !DEBUG_OPS.contains(&op) {
+            out.extend_from_slice(&spirv[i..i + count]);
+        }
+        i += count;
+    }
+    out
+}
+
 fn key(name: &str, source: &str, defines: &[(&str, &str)]) -> u64 {
     let mut h = DefaultHasher::new();
     (name, source, defines).hash(&mut h);
     h.finish()
 }
 
-/// Shader modules by (name, source, defines), created once per `Gpu`.
+/// Shader modules and their reflected interfaces by (name, source, defines), created once
+/// per `Gpu`.
 #[derive(Default)]
 pub(crate) struct ShaderCache {
-    modules: Mutex<HashMap<u64, vk::ShaderModule>>,
+    modules: Mutex<HashMap<u64, (vk::ShaderModule, KernelInterface)>>,
 }
 
 impl ShaderCache {
@@ -112,19 +146,21 @@ impl ShaderCache {
         device: &ash::Device,
         name: &str,
         defines: &[(&str, &str)],
-    ) -> Result<vk::ShaderModule> {
+    ) -> Result<(vk::ShaderModule, KernelInterface)> {
         let src = source(name).ok_or_else(|| anyhow!("no kernel named {name:?} in glsl/"))?;
         let k = key(name, &src, defines);
         let mut map = self.modules.lock().map_err(|_| anyhow!("shader cache poisoned"))?;
-        if let Some(m) = map.get(&k) {
-            return Ok(*m);
+        if let Some((m, i)) = map.get(&k) {
+            return Ok((*m, i.clone()));
         }
         let spirv = compile_glsl(name, &src, defines)?;
+        let interface = reflect(name, &spirv)?;
+        let spirv = strip_debug_info(&spirv);
         let info = vk::ShaderModuleCreateInfo::default().code(&spirv);
         // SAFETY: valid SPIR-V from shaderc.
         let m = unsafe { device.create_shader_module(&info, None) }?;
-        map.insert(k, m);
-        Ok(m)
+        map.insert(k, (m, interface.clone()));
+        Ok((m, interface))
     }
 
     /// Destroys every module.
@@ -133,7 +169,7 @@ impl ShaderCache {
     /// No pipeline creation may be in flight.
     pub(crate) unsafe fn destroy(&self, device: &ash::Device) {
         if let Ok(mut map) = self.modules.lock() {
-            for (_, m) in map.drain() {
+            for (_, (m, _)) in map.drain() {
                 // SAFETY: caller guarantees no use.
                 unsafe { device.destroy_shader_module(m, None) };
             }

@@ -6,13 +6,41 @@ use std::sync::Arc;
 
 use anyhow::{bail, Result};
 
-use crate::gpu::{Buffer, Gpu};
+use super::plan::BufferSize;
+use crate::gpu::{Bind, Buffer, Gpu};
 
 /// Per-pixel RGB sums.
 pub type PixelSums = Vec<[f64; 3]>;
 
 /// vec4 entries per pixel in `Film::accum`.
 pub const FILM_VEC4_PER_PIXEL: usize = 4;
+
+/// The film's sizes.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FilmPlan {
+    pub width: u32,
+    pub height: u32,
+    /// [`FILM_VEC4_PER_PIXEL`] vec4 per pixel.
+    pub sums: BufferSize,
+    /// Four u32 counters.
+    pub stats: BufferSize,
+}
+
+impl FilmPlan {
+    pub fn new(width: u32, height: u32) -> FilmPlan {
+        let px = width as u64 * height as u64;
+        FilmPlan {
+            width,
+            height,
+            sums: BufferSize::new("film", px.saturating_mul(16 * FILM_VEC4_PER_PIXEL as u64)),
+            stats: BufferSize::new("film_stats", 16),
+        }
+    }
+
+    pub fn buffers(&self) -> Vec<BufferSize> {
+        vec![self.sums, self.stats]
+    }
+}
 
 pub struct Film {
     pub width: u32,
@@ -25,14 +53,18 @@ pub struct Film {
 }
 
 impl Film {
-    pub fn new(gpu: &Arc<Gpu>, width: u32, height: u32) -> Result<Film> {
-        let n = width as usize * height as usize;
+    pub fn new(gpu: &Arc<Gpu>, plan: &FilmPlan) -> Result<Film> {
         Ok(Film {
-            width,
-            height,
-            accum: gpu.buffer_zeroed::<[f32; 4]>("film", FILM_VEC4_PER_PIXEL * n)?,
-            stats: gpu.buffer_zeroed::<u32>("film_stats", 4)?,
+            width: plan.width,
+            height: plan.height,
+            accum: plan.sums.zeroed(gpu)?,
+            stats: plan.stats.zeroed(gpu)?,
         })
+    }
+
+    /// The bindings `film` and `film_stats` (glsl/film.glsl).
+    pub fn binds(&self) -> [Bind<'_>; 2] {
+        [Bind::own(&self.accum), Bind::own_u32(&self.stats)]
     }
 
     /// Per-pixel sums of the iterations' values and of their squares (linear RGB, row 0

@@ -1,20 +1,26 @@
-//! Estimators: each is a sequence of kernel dispatches per iteration over shared buffers
-//! (../shared/DESIGN.md). One iteration = one sample per pixel.
+//! Rendering: a scene, a film and an estimator's passes, run iteration by iteration
+//! (docs/architecture.md). One iteration = one sample per pixel.
+//!
+//! * [`settings`]: what a render is asked for; [`estimators`]: the registry and one module
+//!   per estimator; [`passes`]: the passes they are made of; [`plan`]: every buffer's
+//!   size, checked before allocation; [`variants`]: what each kernel is compiled with;
+//!   [`scene_gpu`], [`film`]: the buffers every pass binds.
+//! * [`Renderer`] runs a render in batches of iterations and reads the film back.
 
-pub mod bench;
-pub mod bidir;
 pub mod converge;
+pub mod estimators;
 pub mod features;
 pub mod film;
 pub mod gpu_types;
-pub mod hash_grid;
-pub mod pt;
+pub mod passes;
+pub mod plan;
 pub mod radius;
 pub mod reads;
 pub mod regen;
-pub mod resources;
 pub mod saved;
 pub mod scene_gpu;
+pub mod settings;
+pub mod variants;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -22,96 +28,12 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 
-use crate::gpu::{Batch, Gpu, Kernel, Profile};
+use crate::gpu::{Batch, Gpu, Profile};
 use crate::scene::Scene;
+pub use estimators::{Algorithm, Estimator};
 pub use film::Film;
-pub use scene_gpu::{FrameSettings, SceneGpu};
-
-/// The estimators vkvcm implements.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Algorithm {
-    /// Eye light: |cos| at the first hit (a preview, not radiance).
-    El,
-    /// Path tracing with next-event estimation and MIS.
-    Pt,
-    /// Light tracing: light subpaths connected to the camera.
-    Lt,
-    /// Bidirectional path tracing (vertex connection), SmallVCM's MIS.
-    Bpt,
-    /// Progressive photon mapping: merging at the first non-specular camera vertex.
-    Ppm,
-    /// Bidirectional photon mapping: merging at every camera vertex, with MIS.
-    Bpm,
-    /// Vertex connection and merging: all of the above, with MIS.
-    Vcm,
-}
-
-impl Algorithm {
-    pub fn name(self) -> &'static str {
-        match self {
-            Algorithm::El => "el",
-            Algorithm::Pt => "pt",
-            Algorithm::Lt => "lt",
-            Algorithm::Bpt => "bpt",
-            Algorithm::Ppm => "ppm",
-            Algorithm::Bpm => "bpm",
-            Algorithm::Vcm => "vcm",
-        }
-    }
-}
-
-/// When a render stops.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Budget {
-    Iterations(u64),
-    /// Wall-clock seconds (at least one iteration runs).
-    Seconds(f64),
-}
-
-#[derive(Clone, Debug)]
-pub struct RenderSettings {
-    pub algorithm: Algorithm,
-    pub frame: FrameSettings,
-    pub budget: Budget,
-    /// Path tracing only: `false` disables next-event estimation (BSDF sampling only).
-    pub nee: bool,
-    /// Initial merge radius as a fraction of the scene's bounding-sphere radius.
-    pub radius_factor: f32,
-    /// Radius reduction exponent alpha of r_i = r_0 (i+1)^((alpha-1)/2).
-    pub alpha: f32,
-    /// Kernels with every scene feature compiled in, instead of only the scene's
-    /// (src/render/features.rs); the image agrees within float rounding.
-    pub generic: bool,
-    /// Count the rays traced (`Profile::rays`; a few atomics per invocation).
-    pub count_rays: bool,
-    /// bpt and vcm: where vertex connections go (SmallVCM's matching light subpath or a
-    /// light-vertex cache); must be `Path` for the other estimators.
-    pub connect: bidir::Connect,
-    /// Paths per kernel invocation (path regeneration, [`regen`]); `None` chooses by
-    /// device ([`regen::auto`]). The image does not depend on it.
-    pub paths_per_invocation: Option<u32>,
-    /// How the kernels read their read-only buffers ([`reads`]); `None` chooses by device
-    /// ([`reads::Reads::auto`]). The image does not depend on it.
-    pub reads: Option<reads::Reads>,
-}
-
-impl RenderSettings {
-    pub fn new(algorithm: Algorithm, width: u32, height: u32, budget: Budget) -> Self {
-        RenderSettings {
-            algorithm,
-            frame: FrameSettings { width, height, seed: 1234, max_path_length: 10, min_path_length: 0 },
-            budget,
-            nee: true,
-            radius_factor: radius::DEFAULT_RADIUS_FACTOR,
-            alpha: radius::DEFAULT_ALPHA,
-            generic: false,
-            count_rays: false,
-            connect: bidir::Connect::default_for(algorithm),
-            paths_per_invocation: None,
-            reads: None,
-        }
-    }
-}
+pub use scene_gpu::SceneGpu;
+pub use settings::{Budget, Connect, FrameSettings, RenderSettings, DEFAULT_CACHE_CONNECTIONS};
 
 /// Progress of a running render.
 #[derive(Clone, Debug)]
@@ -147,55 +69,6 @@ pub struct RenderOutput {
     pub interrupted: bool,
 }
 
-enum Estimator {
-    Pt(pt::PathTracer),
-    Bidir(Box<bidir::Bidir>),
-    El(Kernel, u32),
-}
-
-impl Estimator {
-    fn record(&self, batch: &mut Batch, iteration: u32) -> Result<()> {
-        match self {
-            Estimator::Pt(p) => p.record(batch, iteration),
-            Estimator::Bidir(b) => b.record(batch, iteration),
-            Estimator::El(k, pixels) => {
-                let push = gpu_types::GpuPush::simple(iteration, *pixels);
-                batch.dispatch(k, crate::gpu::groups_2d(*pixels, 64), bytemuck::bytes_of(&push))
-            }
-        }
-    }
-}
-
-/// Checks the settings, and that every buffer of the render fits the device
-/// ([`resources::check`]), before anything is allocated.
-fn check_frame(gpu: &Gpu, scene: &Scene, s: &RenderSettings) -> Result<()> {
-    if s.frame.max_path_length == 0 {
-        bail!("max path length must be at least 1");
-    }
-    // Light vertices keep their path length in 8 bits (glsl/vcm.glsl) and store at most
-    // max_path_length - 1 of them per subpath.
-    if s.frame.max_path_length > 256 && !matches!(s.algorithm, Algorithm::El | Algorithm::Pt) {
-        bail!("max path length {} is more than the light-vertex store's 256", s.frame.max_path_length);
-    }
-    if s.connect != bidir::Connect::Path && !matches!(s.algorithm, Algorithm::Bpt | Algorithm::Vcm) {
-        bail!(
-            "connections to a light-vertex cache ({}) need an estimator that connects vertices (bpt, vcm), not {}",
-            s.connect.name(),
-            s.algorithm.name()
-        );
-    }
-    if s.connect == bidir::Connect::Cache(0) {
-        bail!("the light-vertex cache needs at least 1 connection per camera vertex");
-    }
-    if s.paths_per_invocation == Some(0) {
-        bail!("paths per invocation must be at least 1");
-    }
-    if let Budget::Iterations(0) = s.budget {
-        bail!("iterations must be at least 1");
-    }
-    resources::check(gpu, scene, s)
-}
-
 /// Renders `scene`. `progress` is called after every batch of iterations; `cancel`
 /// stops the render after the current batch (the image so far is returned).
 pub fn render(
@@ -216,12 +89,10 @@ pub fn render(
 pub struct Renderer {
     settings: RenderSettings,
     // Field order is drop order: the estimator's kernels before the buffers they bind.
-    est: Estimator,
+    est: Box<dyn Estimator>,
     film: Film,
-    _scene_gpu: SceneGpu,
-    features: features::FeatureSet,
-    /// Paths per kernel invocation (path regeneration, [`regen`]).
-    paths_per_invocation: u32,
+    scene_gpu: SceneGpu,
+    plan: plan::FramePlan,
     batch: Batch,
     profile: Profile,
     /// Iterations accumulated in the film (including resumed ones).
@@ -236,56 +107,25 @@ pub struct Renderer {
 }
 
 impl Renderer {
-    /// Uploads the scene and builds the estimator's kernels; `settings.budget` is only
-    /// checked here (each [`Renderer::run`] call takes its own budget).
+    /// Checks the settings and the plan of sizes against the device, uploads the scene
+    /// and builds the estimator's passes; `settings.budget` is only checked here (each
+    /// [`Renderer::run`] call takes its own budget).
     pub fn new(gpu: &Arc<Gpu>, scene: &Scene, settings: &RenderSettings) -> Result<Renderer> {
-        check_frame(gpu, scene, settings)?;
+        let info = settings.algorithm.info();
         let frame = &settings.frame;
-        let features = features::FeatureSet::new(scene, settings.algorithm, settings.generic)
-            .with_count_rays(settings.count_rays)
-            .with_connect(settings.connect);
+        let plan = Self::plan_for(gpu, scene, settings)?;
+        let features = features::FeatureSet::new(scene, info.reads_shading_normals, settings.generic)
+            .with_count_rays(settings.count_rays);
         let reads = reads::Reads::resolve(gpu, settings.reads);
         let scene_gpu = SceneGpu::with_features(gpu, scene, frame, &features, reads)?;
-        let film = Film::new(gpu, frame.width, frame.height)?;
-        let pixels = frame.width * frame.height;
-        let k = regen::resolve(gpu, settings.algorithm, settings.paths_per_invocation, pixels);
-        let est = match settings.algorithm {
-            Algorithm::Pt => Estimator::Pt(pt::PathTracer::new(gpu, &scene_gpu, &film, settings.nee, k)?),
-            Algorithm::Lt | Algorithm::Bpt | Algorithm::Ppm | Algorithm::Bpm | Algorithm::Vcm => {
-                let mode = match settings.algorithm {
-                    Algorithm::Lt => bidir::BidirMode::LightTracing,
-                    Algorithm::Bpt => bidir::BidirMode::Bpt,
-                    Algorithm::Ppm => bidir::BidirMode::Ppm,
-                    Algorithm::Bpm => bidir::BidirMode::Bpm,
-                    _ => bidir::BidirMode::Vcm,
-                };
-                let schedule = radius::RadiusSchedule::new(
-                    settings.radius_factor,
-                    scene_gpu.params.scene_sphere[3],
-                    settings.alpha,
-                );
-                let config = bidir::BidirConfig {
-                    mode,
-                    max_path_length: frame.max_path_length,
-                    radius: schedule,
-                    connect: settings.connect,
-                    paths_per_invocation: k,
-                };
-                Estimator::Bidir(Box::new(bidir::Bidir::new(gpu, &scene_gpu, &film, config)?))
-            }
-            Algorithm::El => {
-                let defines = scene_gpu::define_refs(&scene_gpu.defines);
-                let k = gpu.kernel_with("el.comp", &defines, &scene_gpu.bindings(&[&film.accum, &film.stats]))?;
-                Estimator::El(k, pixels)
-            }
-        };
+        let film = Film::new(gpu, &plan.film)?;
+        let est = (info.build)(&estimators::Build { gpu, scene: &scene_gpu, film: &film, settings, plan: &plan })?;
         Ok(Renderer {
             settings: settings.clone(),
-            paths_per_invocation: k,
             est,
             film,
-            _scene_gpu: scene_gpu,
-            features,
+            scene_gpu,
+            plan,
             batch: gpu.batch()?,
             profile: Profile::default(),
             done: 0,
@@ -294,6 +134,18 @@ impl Renderer {
             seconds: 0.0,
             interrupted: false,
         })
+    }
+
+    /// The plan of sizes of a render of `scene` with `settings` on `gpu`, checked against
+    /// the device: what [`Renderer::new`] allocates, refused before anything is.
+    pub fn plan_for(gpu: &Gpu, scene: &Scene, settings: &RenderSettings) -> Result<plan::FramePlan> {
+        let info = settings.algorithm.info();
+        let frame = &settings.frame;
+        let pixels = frame.width.saturating_mul(frame.height);
+        let k = regen::resolve(gpu, info.regenerates_paths, settings.paths_per_invocation, pixels);
+        let plan = plan::FramePlan::new(scene, settings, info.techniques, k)?;
+        plan.check(gpu, &format!("a {}x{} {} render", frame.width, frame.height, info.name))?;
+        Ok(plan)
     }
 
     /// Iterations accumulated so far.
@@ -308,26 +160,57 @@ impl Renderer {
 
     /// Paths per kernel invocation (path regeneration, [`regen`]).
     pub fn paths_per_invocation(&self) -> u32 {
-        self.paths_per_invocation
+        self.plan.paths_per_invocation
     }
 
     /// How the kernels read their read-only buffers ([`reads`]).
     pub fn reads(&self) -> reads::Reads {
-        self._scene_gpu.reads
+        self.scene_gpu.reads()
     }
 
-    /// What the kernels were compiled with.
+    /// The scene features the kernels were compiled with.
     pub fn features(&self) -> &features::FeatureSet {
-        &self.features
+        &self.scene_gpu.variant.features
+    }
+
+    /// The plan of sizes the render allocated from.
+    pub fn plan(&self) -> &plan::FramePlan {
+        &self.plan
+    }
+
+    /// The passes of an iteration.
+    pub fn passes(&self) -> Vec<passes::PassInfo> {
+        self.est.passes()
+    }
+
+    /// What the kernels were compiled with and the passes of an iteration
+    /// (`vkvcm render --verbose`).
+    pub fn describe(&self) -> String {
+        let info = self.settings.algorithm.info();
+        let mut s = format!("estimator {}: {}\n{}\n", info.name, info.description, self.features());
+        if info.default_connect.is_some() {
+            let c = match self.settings.connect {
+                Connect::Path => "to the vertices of light subpath p = this pixel (--connect path)".to_string(),
+                Connect::Cache(n) => {
+                    format!("to {n} light vertex(es) per camera vertex drawn from all light subpaths (--connect cache)")
+                }
+            };
+            s += &format!("  vertex connections: {c}\n");
+        }
+        s += "  passes per iteration:\n";
+        for p in self.passes() {
+            s += &format!("    {}: {}\n", p.name, p.detail);
+        }
+        let defines: Vec<String> =
+            self.scene_gpu.variant.defines().list().iter().map(|(k, v)| format!("{k}={v}")).collect();
+        s + &format!("  scene defines of every kernel: {}", defines.join(" "))
     }
 
     /// `(name, bytes)` of every buffer the render allocated.
     pub fn buffers(&self) -> Vec<(String, u64)> {
-        let mut b: Vec<&crate::gpu::Buffer> = self._scene_gpu.buffers.iter().collect();
+        let mut b: Vec<&crate::gpu::Buffer> = self.scene_gpu.buffers.iter().collect();
         b.extend([&self.film.accum, &self.film.stats]);
-        if let Estimator::Bidir(bd) = &self.est {
-            b.extend(bd.buffers());
-        }
+        b.extend(self.est.buffers());
         b.iter().map(|b| (b.name().to_string(), b.size())).collect()
     }
 
@@ -463,8 +346,8 @@ impl Renderer {
             rejected_samples,
             overflow_splats,
             profile,
-            paths_per_invocation: self.paths_per_invocation,
-            reads: self._scene_gpu.reads,
+            paths_per_invocation: self.plan.paths_per_invocation,
+            reads: self.scene_gpu.reads(),
             interrupted: self.interrupted,
         })
     }

@@ -1,5 +1,5 @@
 //! The merge-radius schedule of progressive photon mapping as SmallVCM uses it
-//! (Knaus & Zwicker 2011; ../shared/SCENES.md 4.2): r_i = r_0 (i+1)^((alpha-1)/2) for the
+//! (Knaus & Zwicker 2011; docs/smallvcm.md 4.2): r_i = r_0 (i+1)^((alpha-1)/2) for the
 //! 0-based iteration i, r_0 = radius factor x scene bounding-sphere radius, clamped to
 //! at least 1e-7.
 
@@ -25,7 +25,7 @@ impl RadiusSchedule {
     }
 
     /// MIS factors (VM factor eta = pi r^2 N_L, VC factor 1/eta) for the given use of
-    /// connections and merging (../shared/SCENES.md 4.4).
+    /// connections and merging (docs/smallvcm.md 4.4.1; eq. 20 of Georgiev 2012).
     pub fn mis_factors(&self, i: u64, light_paths: u32, use_vc: bool, use_vm: bool) -> (f32, f32) {
         let r = self.radius(i) as f64;
         let eta = std::f64::consts::PI * r * r * light_paths as f64;
@@ -41,7 +41,7 @@ mod tests {
 
     #[test]
     fn matches_smallvcm_numbers() {
-        // ../shared/SCENES.md 4.2: r0 = 0.0066512 for scene radius 2.217060; 0.004988 at
+        // docs/smallvcm.md 4.2: r0 = 0.0066512 for scene radius 2.217060; 0.004988 at
         // i+1 = 10, 0.003740 at 100, 0.002805 at 1000.
         let s = RadiusSchedule::new(DEFAULT_RADIUS_FACTOR, 2.21706, DEFAULT_ALPHA);
         assert!((s.radius(0) - 0.0066512).abs() < 1e-7);

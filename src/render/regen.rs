@@ -7,12 +7,13 @@
 //! index, random sequence and outputs (tests/render_regen.rs checks equality).
 //!
 //! On a CPU device (lavapipe: 8 lanes per SIMD group) more paths per invocation measured
-//! faster up to 256 at 256x256 on 2 threads, that is 2 workgroups of 64 invocations per
-//! thread (512 was no faster; docs/performance.md, "Path regeneration"). GPUs are left at one
-//! path per invocation: they hide divergence differently and need many invocations in
-//! flight, and no GPU measurement backs another choice yet.
+//! faster, up to 2 workgroups per thread (docs/performance.md, "Path regeneration"). GPUs
+//! are left at one path per invocation: they hide divergence differently and need many
+//! invocations in flight, and no GPU measurement backs another choice yet.
 
 use ash::vk;
+
+use super::passes::WORKGROUP_SIZE;
 
 /// The most paths per invocation [`auto`] chooses.
 pub const MAX_AUTO: u32 = 256;
@@ -20,9 +21,6 @@ pub const MAX_AUTO: u32 = 256;
 /// Workgroups per CPU thread [`auto`] keeps at least, so that the device's threads share
 /// the dispatch evenly.
 const WORKGROUPS_PER_THREAD: u32 = 2;
-
-/// Invocations per workgroup of the render kernels (`local_size_x`).
-pub const WORKGROUP_SIZE: u32 = 64;
 
 /// Paths per invocation for `paths` paths per dispatch on a device of type
 /// `device_type`: 1 on GPUs; on a CPU device as many as keep
@@ -35,11 +33,11 @@ pub fn auto(device_type: vk::PhysicalDeviceType, cpu_threads: u32, paths: u32) -
     (paths / per_dispatch).clamp(1, MAX_AUTO)
 }
 
-/// Paths per invocation of `algorithm`'s kernels for `paths` paths per dispatch on `gpu`:
-/// `requested` (`--paths-per-invocation`) or else [`auto`]; 1 for `el` (one short ray per
-/// pixel, nothing to regenerate).
-pub fn resolve(gpu: &crate::gpu::Gpu, algorithm: super::Algorithm, requested: Option<u32>, paths: u32) -> u32 {
-    if algorithm == super::Algorithm::El {
+/// Paths per invocation of an estimator's kernels for `paths` paths per dispatch on
+/// `gpu`: `requested` (`--paths-per-invocation`) or else [`auto`]; 1 for an estimator
+/// whose kernels do not regenerate paths (`el`: one short ray per pixel).
+pub fn resolve(gpu: &crate::gpu::Gpu, regenerates_paths: bool, requested: Option<u32>, paths: u32) -> u32 {
+    if !regenerates_paths {
         return 1;
     }
     requested.unwrap_or_else(|| auto(gpu.info.device_type, cpu_threads(), paths))

@@ -1,6 +1,7 @@
 //! A scene uploaded to the GPU: BVH, shading data, materials, lights and per-render
-//! parameters, in the fixed bindings 0-7 every render kernel declares (glsl/scene.glsl);
-//! bindings 1-7 are read as storage or texel buffers ([`Reads`]).
+//! parameters, in the bindings every render kernel declares (glsl/scene.glsl), bound by
+//! their names; all but `scene_params` are read as storage or texel buffers as the
+//! kernels' variant says ([`Reads`]).
 
 use std::sync::Arc;
 
@@ -9,32 +10,57 @@ use glam::Vec3;
 
 use super::features::FeatureSet;
 use super::gpu_types::*;
+use super::plan::BufferSize;
 use super::reads::Reads;
+use super::settings::FrameSettings;
+use super::variants::SceneVariant;
 use crate::bvh;
-use crate::gpu::{Binding, Buffer, Gpu};
+use crate::bvh::layout::{GpuNode, GpuPrim};
+use crate::gpu::{Bind, Buffer, Gpu};
 use crate::scene::{Light, Scene};
 
-/// Settings that shape the kernels' per-render constants.
-#[derive(Clone, Debug)]
-pub struct FrameSettings {
-    pub width: u32,
-    pub height: u32,
-    pub seed: u32,
-    /// Longest path in segments (SmallVCM default 10).
-    pub max_path_length: u32,
-    pub min_path_length: u32,
+/// Upper bounds of the scene's buffers, known before the BVH is built.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ScenePlan {
+    pub buffers: [BufferSize; 8],
 }
 
-/// Buffers for bindings 0-7.
+fn size<T>(n: u64) -> u64 {
+    n.saturating_mul(std::mem::size_of::<T>() as u64)
+}
+
+impl ScenePlan {
+    pub fn new(scene: &Scene) -> ScenePlan {
+        let tris = scene.triangles.len() as u64;
+        let prims = tris + scene.spheres.len() as u64;
+        let normals = scene.triangles.iter().filter(|t| t.n.is_some()).count() as u64 * 3;
+        ScenePlan {
+            buffers: [
+                BufferSize::new("scene_params", size::<GpuParams>(1)),
+                // A BVH2 over n primitives has at most n internal nodes (the root is always one).
+                BufferSize::new("bvh_nodes", size::<GpuNode>(prims.max(1))),
+                BufferSize::new("bvh_prims", size::<GpuPrim>(prims)),
+                BufferSize::new("triangles", size::<GpuTriangle>(tris)),
+                BufferSize::new("spheres", size::<GpuSphere>(scene.spheres.len() as u64)),
+                BufferSize::new("materials", size::<GpuMaterial>(scene.materials.len() as u64)),
+                BufferSize::new("lights", size::<GpuLight>(scene.lights.len() as u64)),
+                BufferSize::new("shading_normals", size::<[f32; 4]>(normals)),
+            ],
+        }
+    }
+
+    pub fn buffers(&self) -> Vec<BufferSize> {
+        self.buffers.to_vec()
+    }
+}
+
+/// The scene's buffers and what every kernel reading them is compiled with.
 pub struct SceneGpu {
     pub params: GpuParams,
+    /// In [`ScenePlan`]'s order; each named as the binding it fills.
     pub buffers: Vec<Buffer>,
-    /// Defines every kernel that traces rays must be compiled with: the feature set's
-    /// (src/render/features.rs), which include the BVH layout's BVH_NO_SPHERES, and
-    /// `reads`' TEXEL_READS.
-    pub defines: Vec<(String, String)>,
-    /// How the kernels read bindings 1-7.
-    pub reads: Reads,
+    /// The scene's part of every render kernel's variant (features, reads).
+    pub variant: SceneVariant,
 }
 
 fn v4(v: Vec3, w: f32) -> [f32; 4] {
@@ -116,10 +142,10 @@ pub fn gpu_params(scene: &Scene, frame: &FrameSettings, background: u32) -> GpuP
 }
 
 impl SceneGpu {
-    /// The scene with kernels specialised to it (the features of a `vcm` render: all but
-    /// shading normals, which only `el` reads), read as `reads`.
+    /// The scene with kernels specialised to it, without shading normals (which only
+    /// `el` reads), read as `reads`.
     pub fn new(gpu: &Arc<Gpu>, scene: &Scene, frame: &FrameSettings, reads: Reads) -> Result<SceneGpu> {
-        Self::with_features(gpu, scene, frame, &FeatureSet::new(scene, super::Algorithm::Vcm, false), reads)
+        Self::with_features(gpu, scene, frame, &FeatureSet::new(scene, false, false), reads)
     }
 
     /// The scene for kernels compiled with `features`: shading normals are uploaded only
@@ -139,8 +165,6 @@ impl SceneGpu {
         }
         let tree = bvh::build(&scene.triangles, &scene.spheres);
         let gb = tree.into_gpu();
-        let mut defines = features.defines();
-        defines.push(reads.define());
         // The feature set's BVH_NO_SPHERES is the BVH layout's (sphere code compiled in for a
         // sphere-free layout is fine: that is the generic variant).
         debug_assert_eq!(gb.glsl_defines().is_empty(), !scene.spheres.is_empty());
@@ -191,7 +215,7 @@ impl SceneGpu {
             })
             .collect();
         let buffers = vec![
-            gpu.buffer_from_slice("params", &[params])?,
+            gpu.buffer_from_slice("scene_params", &[params])?,
             gpu.buffer_from_slice("bvh_nodes", &gb.nodes)?,
             gpu.buffer_from_slice("bvh_prims", &gb.prims)?,
             gpu.buffer_from_slice("triangles", &triangles)?,
@@ -200,19 +224,17 @@ impl SceneGpu {
             gpu.buffer_from_slice("lights", &lights)?,
             gpu.buffer_from_slice("shading_normals", &normals)?,
         ];
-        Ok(SceneGpu { params, buffers, defines, reads })
+        Ok(SceneGpu { params, buffers, variant: SceneVariant { features: features.clone(), reads } })
     }
 
-    /// Bindings 0-7 (1-7 as `reads` says) followed by `extra` as storage buffers
-    /// (bindings 8, 9, ...).
-    pub fn bindings<'a>(&'a self, extra: &[&'a Buffer]) -> Vec<Binding<'a>> {
-        let scene =
-            self.buffers.iter().enumerate().map(|(i, b)| if i == 0 { Binding::Storage(b) } else { self.reads.bind(b) });
-        scene.chain(extra.iter().map(|b| Binding::Storage(b))).collect()
+    /// The scene's bindings, each buffer at the binding of its name (all are arrays of
+    /// 16-byte elements, read as `uvec4` texels where the kernel declares texel buffers).
+    pub fn binds(&self) -> Vec<Bind<'_>> {
+        self.buffers.iter().map(Bind::own).collect()
     }
-}
 
-/// Borrowed `(name, value)` pairs for `Gpu::kernel`.
-pub fn define_refs(d: &[(String, String)]) -> Vec<(&str, &str)> {
-    d.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect()
+    /// How the kernels read the scene.
+    pub fn reads(&self) -> Reads {
+        self.variant.reads
+    }
 }

@@ -389,7 +389,7 @@ pub fn reference_scene_json(name: &str) -> Option<Value> {
             "extras": {
                 "smallvcm_scene": id,
                 "description": info.description,
-                "source": "SmallVCM LoadCornellBox (../shared/SCENES.md section 2); z-up (x,y,z) stored as y-up (x,z,-y)",
+                "source": "SmallVCM LoadCornellBox (docs/smallvcm.md section 2); z-up (x,y,z) stored as y-up (x,z,-y)",
             },
         },
         "extensionsUsed": used,

@@ -44,10 +44,10 @@ pub fn render_stats(out: &vkvcm::render::RenderOutput, mask: Option<&[bool]>) ->
 /// connections), bpt there with both connection strategies; lt, bpt and vcm on gbs_s
 /// (directional light); pt and vcm on gbs_b (camera paths that escape to the
 /// background). `(scene name, estimator, where bpt and vcm connect)`.
-pub fn invariance_cases() -> Vec<(&'static str, vkvcm::render::Algorithm, vkvcm::render::bidir::Connect)> {
-    use vkvcm::render::bidir::Connect;
+pub fn invariance_cases() -> Vec<(&'static str, vkvcm::render::Algorithm, vkvcm::render::Connect)> {
     use vkvcm::render::Algorithm::*;
-    let d = Connect::default_for;
+    use vkvcm::render::Connect;
+    let d = |a: vkvcm::render::Algorithm| a.default_connect();
     vec![
         ("glm_c", Pt, d(Pt)),
         ("glm_c", Lt, d(Lt)),

@@ -7,12 +7,11 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use serde::Serialize;
 
-use super::bidir::Connect;
-use super::{render, Algorithm, Budget, RenderSettings};
 use crate::gpu::{Gpu, KernelTime};
+use crate::render::{render, Algorithm, Budget, Connect, RenderSettings};
 use crate::scene::Scene;
 
 #[derive(Clone, Debug, Serialize)]
@@ -78,7 +77,7 @@ pub struct Overrides {
     /// Paths per kernel invocation (src/render/regen.rs).
     pub paths_per_invocation: Option<u32>,
     /// How the kernels read their read-only buffers (src/render/reads.rs).
-    pub reads: Option<super::reads::Reads>,
+    pub reads: Option<crate::render::reads::Reads>,
 }
 
 /// Renders `scene` with `variant` for 1 warm-up iteration, then `iterations` timed ones,
@@ -168,23 +167,21 @@ impl Variant {
             Some((a, c)) => (a, Some(c)),
             None => (s, None),
         };
-        let algorithm = <Algorithm as clap::ValueEnum>::from_str(a, true)
-            .map_err(|_| anyhow::anyhow!("{s:?}: unknown estimator {a:?}"))?;
-        let connect = match c {
-            None => Connect::default_for(algorithm),
+        let algorithm = Algorithm::from_name(&a.to_ascii_lowercase())
+            .ok_or_else(|| anyhow::anyhow!("{s:?}: unknown estimator {a:?}"))?;
+        let requested = match c {
+            None => None,
             Some(c) => {
-                if !matches!(algorithm, Algorithm::Bpt | Algorithm::Vcm) {
-                    bail!("{s:?}: only bpt and vcm take a connection strategy");
-                }
-                Connect::parse(c).ok_or_else(|| anyhow::anyhow!("{s:?}: {c:?} is not path or cache:N (N >= 1)"))?
+                Some(Connect::parse(c).ok_or_else(|| anyhow::anyhow!("{s:?}: {c:?} is not path or cache:N (N >= 1)"))?)
             }
         };
+        let connect = algorithm.info().connect(requested).map_err(|e| anyhow::anyhow!("{s:?}: {e}"))?;
         Ok(Variant { algorithm, connect })
     }
 
     /// `algo` for its default strategy, else `algo:path` / `algo:cache:N`.
     pub fn name(&self) -> String {
-        if self.connect == Connect::default_for(self.algorithm) {
+        if self.connect == self.algorithm.default_connect() {
             self.algorithm.name().to_string()
         } else {
             format!("{}:{}", self.algorithm.name(), self.connect.name())
@@ -233,10 +230,10 @@ pub struct Reference {
     pub noise_rms: f64,
 }
 
-/// `iterations` in all, in two independent halves ([`super::converge::render_reference`]).
+/// `iterations` in all, in two independent halves ([`crate::render::converge::render_reference`]).
 pub fn reference(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, size: u32, iterations: u64) -> Result<Reference> {
     let s = RenderSettings::new(algo, size, size, Budget::Iterations(iterations));
-    let r = super::converge::render_reference(gpu, scene, &s, None, &mut |_, _| {})?;
+    let r = crate::render::converge::render_reference(gpu, scene, &s, None, &mut |_, _| {})?;
     Ok(Reference { image: r.image, algorithm: algo, iterations: r.iterations, noise_rms: r.stderr_rms })
 }
 
@@ -254,11 +251,11 @@ pub fn equal_time(
     let (w, h) = (reference.image.width, reference.image.height);
     let mut s = variant.settings(w, h, Budget::Seconds(seconds));
     s.frame.seed = seed;
-    let target = super::converge::Target {
+    let target = crate::render::converge::Target {
         image: &reference.image,
-        error: super::converge::ReferenceError { rmse: Some(reference.noise_rms), rel_mse: None },
+        error: crate::render::converge::ReferenceError { rmse: Some(reference.noise_rms), rel_mse: None },
     };
-    let rows = super::converge::converge_one(gpu, scene, &s, &target, &[seconds], None, &mut |_| {})?;
+    let rows = crate::render::converge::converge_one(gpu, scene, &s, &target, &[seconds], None, &mut |_| {})?;
     let row = rows.last().ok_or_else(|| anyhow::anyhow!("equal-time render of {} measured nothing", variant.name()))?;
     Ok(EqualTimeRow {
         scene: scene.name.clone(),
@@ -445,16 +442,16 @@ pub fn suite_row(
     rounds: u32,
     per_round: u64,
 ) -> Result<SuiteRow> {
-    let make = |generic: bool| -> Result<super::Renderer> {
+    let make = |generic: bool| -> Result<crate::render::Renderer> {
         let mut s = RenderSettings::new(algo, size, size, Budget::Iterations(per_round));
         s.generic = generic;
         s.count_rays = true;
-        let mut r = super::Renderer::new(gpu, scene, &s)?;
+        let mut r = crate::render::Renderer::new(gpu, scene, &s)?;
         r.run(Budget::Iterations(1), None, &mut |_| {})?;
         Ok(r)
     };
     // Index 0: specialised, 1: generic; built in `first_generic` order.
-    let build = |first_generic: bool| -> Result<[super::Renderer; 2]> {
+    let build = |first_generic: bool| -> Result<[crate::render::Renderer; 2]> {
         Ok(if first_generic {
             let g = make(true)?;
             [make(false)?, g]
@@ -605,7 +602,7 @@ mod tests {
             assert_eq!(Variant::parse(&v.name()).unwrap(), v, "{s}");
         }
         assert_eq!(Variant::parse("bpt:cache:3").unwrap().connect, Connect::Cache(3));
-        assert_eq!(Variant::parse("bpt").unwrap().connect, Connect::default_for(Algorithm::Bpt));
+        assert_eq!(Variant::parse("bpt").unwrap().connect, Algorithm::Bpt.default_connect());
         for bad in ["xyz", "pt:cache:1", "bpt:cache:0", "bpt:cache", "bpt:cache:x", "bpt:other"] {
             assert!(Variant::parse(bad).is_err(), "{bad} accepted");
         }

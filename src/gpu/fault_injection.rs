@@ -1,0 +1,33 @@
+//! Fault injection for tests — not a feature. With the environment variable
+//! `VKVCM_TEST_FAIL_AFTER_BATCHES=N`, the (N+1)-th and every later `Batch::submit_wait`
+//! of the process, and every one-shot transfer after that, fail with
+//! `VK_ERROR_DEVICE_LOST` as a lost device would, so that tests/cli_render.rs can check
+//! what a render leaves behind when the device is lost (docs/robustness.md). Unset, it
+//! costs one cached environment look-up per submit.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::OnceLock;
+
+use ash::vk;
+
+/// The environment variable that turns the simulated device loss on.
+pub const FAIL_AFTER_BATCHES_VAR: &str = "VKVCM_TEST_FAIL_AFTER_BATCHES";
+
+/// `Err(ERROR_DEVICE_LOST)` once the process has submitted the number of batches the
+/// variable says; `counts_as_batch` counts this call as one (batches do, one-shot
+/// transfers do not).
+pub(crate) fn simulated_device_loss(counts_as_batch: bool) -> Result<(), vk::Result> {
+    static LIMIT: OnceLock<Option<u64>> = OnceLock::new();
+    static SUBMITS: AtomicU64 = AtomicU64::new(0);
+    let Some(limit) =
+        *LIMIT.get_or_init(|| std::env::var(FAIL_AFTER_BATCHES_VAR).ok().and_then(|v| v.trim().parse().ok()))
+    else {
+        return Ok(());
+    };
+    let n = if counts_as_batch { SUBMITS.fetch_add(1, Ordering::SeqCst) } else { SUBMITS.load(Ordering::SeqCst) };
+    if n >= limit {
+        Err(vk::Result::ERROR_DEVICE_LOST)
+    } else {
+        Ok(())
+    }
+}

@@ -1,0 +1,145 @@
+//! The pass sequence of the light-subpath estimators (lt, bpt, ppm, bpm, vcm), with the
+//! passes each [`Techniques`] turns on. Per iteration:
+//!
+//! 1. light subpaths (src/render/passes/light_subpaths.rs): one per pixel (N_L = W x H,
+//!    SmallVCM's choice), stored into the light-vertex store and/or connected to the
+//!    camera;
+//! 2. grid build (passes/hash_grid.rs), when merging: the hash grid over the stored
+//!    vertices for this iteration's radius;
+//! 3. light-vertex prefix (passes/light_vertex_cache.rs), with `--connect cache`: the
+//!    index of all stored vertices that camera vertices draw from;
+//! 4. camera subpaths (passes/camera_subpaths.rs), one per pixel, with the connections and
+//!    merges the techniques ask for; it adds each pixel's value and splats to the film;
+//!    or, for lt (no camera pass), accumulate (passes/accumulate.rs): splats to the film.
+//!
+//! The MIS factors of an iteration (docs/smallvcm.md, eta = pi r^2 N_L) follow from the
+//! techniques: connections weigh against merges only when both are on.
+
+use anyhow::Result;
+
+use super::{Build, Estimator, Techniques};
+use crate::gpu::{Batch, Buffer};
+use crate::render::gpu_types::GpuPush;
+use crate::render::passes::accumulate::Accumulate;
+use crate::render::passes::camera_subpaths::CameraSubpaths;
+use crate::render::passes::hash_grid::HashGrid;
+use crate::render::passes::light_subpaths::{LightSubpaths, LightVertexStore};
+use crate::render::passes::light_vertex_cache::LightVertexCache;
+use crate::render::passes::PassInfo;
+use crate::render::radius::RadiusSchedule;
+
+/// The pass that takes the splats (and, with a camera pass, the camera subpaths' values)
+/// into the film.
+enum FilmPass {
+    Camera(CameraSubpaths),
+    Accumulate(Accumulate),
+}
+
+/// A light-subpath estimator built for one render.
+pub struct LightSubpathEstimator {
+    techniques: Techniques,
+    radius: RadiusSchedule,
+    grid_origin: [f32; 3],
+    pixels: u32,
+    light_paths: u32,
+    paths_per_invocation: u32,
+    // Field order is drop order: each pass's kernels before the buffers they bind.
+    film_pass: FilmPass,
+    light: LightSubpaths,
+    cache: Option<LightVertexCache>,
+    grid: Option<HashGrid>,
+    store: LightVertexStore,
+}
+
+impl LightSubpathEstimator {
+    /// The passes of `techniques` for the render `b`; the buffers are the plan's.
+    pub fn new(b: &Build, techniques: Techniques) -> Result<LightSubpathEstimator> {
+        let lv = b.plan.light_vertices.as_ref().expect("a light-subpath estimator's plan has a light-vertex store");
+        let store = LightVertexStore::new(b.gpu, lv)?;
+        let cache = match &b.plan.cache {
+            Some(c) => Some(LightVertexCache::new(b.gpu, &store, c)?),
+            None => None,
+        };
+        let grid = match &b.plan.grid {
+            Some(g) => Some(HashGrid::with_plan(b.gpu, &store.vertices_a, &store.counts, g)?),
+            None => None,
+        };
+        let light = LightSubpaths::new(b, &store, cache.as_ref().map(|c| &c.prefix), techniques)?;
+        let film_pass = if techniques.light_trace_only {
+            FilmPass::Accumulate(Accumulate::new(b, &store)?)
+        } else {
+            FilmPass::Camera(CameraSubpaths::bidirectional(b, &store, grid.as_ref(), cache.as_ref(), techniques)?)
+        };
+        let s = b.scene.params.scene_sphere;
+        Ok(LightSubpathEstimator {
+            techniques,
+            radius: RadiusSchedule::new(b.settings.radius_factor, s[3], b.settings.alpha),
+            grid_origin: [s[0] - s[3], s[1] - s[3], s[2] - s[3]],
+            pixels: b.plan.pixels,
+            light_paths: b.plan.light_paths,
+            paths_per_invocation: b.plan.paths_per_invocation,
+            film_pass,
+            light,
+            cache,
+            grid,
+            store,
+        })
+    }
+}
+
+impl Estimator for LightSubpathEstimator {
+    fn record(&self, batch: &mut Batch, iteration: u32) -> Result<()> {
+        let i = iteration as u64;
+        let t = self.techniques;
+        let (mis_vm, mis_vc) = self.radius.mis_factors(i, self.light_paths, t.vertex_connection, t.vertex_merging);
+        let radius = self.radius.radius(i);
+        let mut push = GpuPush {
+            iteration,
+            count: self.light_paths,
+            mis_vm,
+            mis_vc,
+            radius,
+            light_paths: self.light_paths,
+            grid_buckets: self.grid.as_ref().map_or(0, |g| g.num_buckets()),
+            paths_per_invocation: self.paths_per_invocation,
+        };
+        self.light.record(batch, &push)?;
+        if let Some(g) = &self.grid {
+            g.record_build(batch, radius, self.grid_origin)?;
+        }
+        if let Some(c) = &self.cache {
+            c.record(batch)?;
+        }
+        push.count = self.pixels;
+        match &self.film_pass {
+            FilmPass::Camera(c) => c.record(batch, &push),
+            FilmPass::Accumulate(a) => a.record(batch, &push),
+        }
+    }
+
+    fn passes(&self) -> Vec<PassInfo> {
+        let mut v = vec![self.light.info()];
+        if let Some(g) = &self.grid {
+            v.push(g.info());
+        }
+        if let Some(c) = &self.cache {
+            v.push(c.info());
+        }
+        v.push(match &self.film_pass {
+            FilmPass::Camera(c) => c.info(),
+            FilmPass::Accumulate(a) => a.info(),
+        });
+        v
+    }
+
+    fn buffers(&self) -> Vec<&Buffer> {
+        let mut b = self.store.buffers();
+        if let Some(g) = &self.grid {
+            b.extend(g.buffers());
+        }
+        if let Some(c) = &self.cache {
+            b.extend(c.buffers());
+        }
+        b
+    }
+}

@@ -1,0 +1,54 @@
+//! Eye light (`el`): |cos| between the shading normal and the view ray at the first hit,
+//! a preview and not a radiance estimate (SmallVCM's EyeLight). One pass: the camera
+//! kernel glsl/el.comp, one ray per pixel.
+
+use anyhow::Result;
+
+use super::{Algorithm, Build, Estimator, EstimatorInfo, Techniques};
+use crate::gpu::{Batch, Buffer};
+use crate::render::gpu_types::GpuPush;
+use crate::render::passes::camera_subpaths::CameraSubpaths;
+use crate::render::passes::PassInfo;
+
+pub const INFO: EstimatorInfo = EstimatorInfo {
+    algorithm: Algorithm::El,
+    name: "el",
+    description: "Eye light: |cos| at the first hit (a preview, not radiance).",
+    techniques: Techniques {
+        light_subpaths: false,
+        store_vertices: false,
+        connect_to_camera: false,
+        vertex_connection: false,
+        vertex_merging: false,
+        merge_first_vertex_only: false,
+        light_trace_only: false,
+    },
+    radiance: false,
+    consistent_only: false,
+    default_connect: None,
+    reads_shading_normals: true,
+    regenerates_paths: false,
+    build,
+};
+
+struct EyeLight {
+    camera: CameraSubpaths,
+}
+
+fn build(b: &Build) -> Result<Box<dyn Estimator>> {
+    Ok(Box::new(EyeLight { camera: CameraSubpaths::eye_light(b)? }))
+}
+
+impl Estimator for EyeLight {
+    fn record(&self, batch: &mut Batch, iteration: u32) -> Result<()> {
+        self.camera.record(batch, &GpuPush::simple(iteration, self.camera.pixels()))
+    }
+
+    fn passes(&self) -> Vec<PassInfo> {
+        vec![self.camera.info()]
+    }
+
+    fn buffers(&self) -> Vec<&Buffer> {
+        Vec::new()
+    }
+}

@@ -1,0 +1,62 @@
+//! Path tracing (`pt`): BSDF sampling with next-event estimation, combined by the
+//! balance heuristic (`--nee false`: BSDF sampling only, a test reference). One pass: the
+//! camera kernel glsl/pt.comp, `paths_per_invocation` pixel samples per invocation (path
+//! regeneration, src/render/regen.rs).
+
+use anyhow::Result;
+
+use super::{Algorithm, Build, Estimator, EstimatorInfo, Techniques};
+use crate::gpu::{Batch, Buffer};
+use crate::render::gpu_types::GpuPush;
+use crate::render::passes::camera_subpaths::CameraSubpaths;
+use crate::render::passes::PassInfo;
+use crate::render::variants::PtKernel;
+
+pub const INFO: EstimatorInfo = EstimatorInfo {
+    algorithm: Algorithm::Pt,
+    name: "pt",
+    description: "Path tracing with next-event estimation and MIS.",
+    techniques: Techniques {
+        light_subpaths: false,
+        store_vertices: false,
+        connect_to_camera: false,
+        vertex_connection: false,
+        vertex_merging: false,
+        merge_first_vertex_only: false,
+        light_trace_only: false,
+    },
+    radiance: true,
+    consistent_only: false,
+    default_connect: None,
+    reads_shading_normals: false,
+    regenerates_paths: true,
+    build,
+};
+
+struct PathTracer {
+    camera: CameraSubpaths,
+    paths_per_invocation: u32,
+}
+
+fn build(b: &Build) -> Result<Box<dyn Estimator>> {
+    let camera = CameraSubpaths::path_tracer(b, PtKernel { nee: b.settings.nee })?;
+    Ok(Box::new(PathTracer { camera, paths_per_invocation: b.plan.paths_per_invocation }))
+}
+
+impl Estimator for PathTracer {
+    fn record(&self, batch: &mut Batch, iteration: u32) -> Result<()> {
+        let push = GpuPush {
+            paths_per_invocation: self.paths_per_invocation,
+            ..GpuPush::simple(iteration, self.camera.pixels())
+        };
+        self.camera.record(batch, &push)
+    }
+
+    fn passes(&self) -> Vec<PassInfo> {
+        vec![self.camera.info()]
+    }
+
+    fn buffers(&self) -> Vec<&Buffer> {
+        Vec::new()
+    }
+}

@@ -1,0 +1,42 @@
+//! Vertex connection and merging (`vcm`, Georgiev et al. 2012): bpt's connections and bpm's
+//! merging, all weighted by SmallVCM's recursive MIS (docs/smallvcm.md). Connections go to
+//! light subpath p = this pixel by default (SmallVCM's layout) or, with `--connect cache`,
+//! to a light-vertex cache.
+//!
+//! Passes per iteration (src/render/estimators/bidirectional.rs): light subpaths (store
+//! vertices, connect to the camera), with `--connect cache` the light-vertex prefix, grid
+//! build, camera subpaths (NEE + connections + merging, MIS; splats -> film).
+
+use anyhow::Result;
+
+use super::bidirectional::LightSubpathEstimator;
+use super::{Algorithm, Build, Estimator, EstimatorInfo, Techniques};
+use crate::render::settings::Connect;
+
+pub const INFO: EstimatorInfo = EstimatorInfo {
+    algorithm: Algorithm::Vcm,
+    name: "vcm",
+    description: "Vertex connection and merging: bpt's connections and bpm's merging, with MIS.",
+    techniques: TECHNIQUES,
+    radiance: true,
+    consistent_only: true,
+    default_connect: Some(Connect::Path),
+    reads_shading_normals: false,
+    regenerates_paths: true,
+    build,
+};
+
+/// Vertex connection and vertex merging, with MIS.
+pub const TECHNIQUES: Techniques = Techniques {
+    light_subpaths: true,
+    store_vertices: true,
+    connect_to_camera: true,
+    vertex_connection: true,
+    vertex_merging: true,
+    merge_first_vertex_only: false,
+    light_trace_only: false,
+};
+
+fn build(b: &Build) -> Result<Box<dyn Estimator>> {
+    Ok(Box::new(LightSubpathEstimator::new(b, TECHNIQUES)?))
+}

@@ -1,0 +1,38 @@
+//! The accumulate pass of estimators without a camera pass (light tracing): adds each
+//! pixel's splat sum of the iteration to the film and zeroes it (glsl/accumulate.comp).
+
+use anyhow::Result;
+
+use super::light_subpaths::LightVertexStore;
+use super::{PassInfo, WORKGROUP_SIZE};
+use crate::gpu::{Batch, Bind, Kernel};
+use crate::render::estimators::Build;
+use crate::render::gpu_types::GpuPush;
+
+/// The name profiles report.
+pub const NAME: &str = "accumulate";
+
+pub struct Accumulate {
+    kernel: Kernel,
+    pixels: u32,
+}
+
+impl Accumulate {
+    pub fn new(b: &Build, store: &LightVertexStore) -> Result<Accumulate> {
+        let mut binds: Vec<Bind> = b.film.binds().to_vec();
+        binds.push(Bind::own(&store.splat));
+        let size = WORKGROUP_SIZE.to_string();
+        let kernel = b.gpu.kernel("accumulate.comp", &[("WORKGROUP_SIZE", size.as_str())], &binds)?;
+        Ok(Accumulate { kernel, pixels: b.plan.pixels })
+    }
+
+    /// One pixel per invocation.
+    pub fn record(&self, batch: &mut Batch, push: &GpuPush) -> Result<()> {
+        batch.begin_pass(NAME);
+        batch.dispatch(&self.kernel, self.kernel.groups_for(self.pixels), bytemuck::bytes_of(push))
+    }
+
+    pub fn info(&self) -> PassInfo {
+        PassInfo { name: NAME, detail: "accumulate.comp: splats -> film".into() }
+    }
+}

@@ -1,0 +1,123 @@
+//! The camera-subpaths pass: one camera subpath per pixel and iteration, which adds the
+//! pixel's value to the film. Three kernels, one per kind of estimator:
+//! glsl/el.comp (the eye-light preview, one ray per pixel), glsl/pt.comp (path tracing)
+//! and glsl/camera_subpath.comp (bpt, ppm, bpm, vcm: connections to the light vertices of
+//! this iteration and merges with them, as the techniques ask, then the pixel's splats).
+//! pt and camera_subpath trace `paths_per_invocation` paths per invocation (path
+//! regeneration, src/render/regen.rs).
+
+use anyhow::Result;
+
+use super::hash_grid::HashGrid;
+use super::light_subpaths::LightVertexStore;
+use super::light_vertex_cache::LightVertexCache;
+use super::PassInfo;
+use crate::gpu::{Batch, Bind, Kernel};
+use crate::render::estimators::{Build, Techniques};
+use crate::render::gpu_types::GpuPush;
+use crate::render::regen;
+use crate::render::settings::Connect;
+use crate::render::variants::{CameraKernel, Defines, PtKernel};
+
+/// The name profiles report.
+pub const NAME: &str = "camera subpaths";
+
+/// The pass.
+pub struct CameraSubpaths {
+    kernel: Kernel,
+    pixels: u32,
+    /// Paths per invocation (1 for el).
+    paths_per_invocation: u32,
+    detail: String,
+}
+
+impl CameraSubpaths {
+    /// el.comp: |cos| at the first hit, one pixel per invocation.
+    pub fn eye_light(b: &Build) -> Result<CameraSubpaths> {
+        let mut binds = b.scene.binds();
+        binds.extend(b.film.binds());
+        let kernel = b.gpu.kernel("el.comp", &b.scene.variant.defines().pairs(), &binds)?;
+        Ok(CameraSubpaths {
+            kernel,
+            pixels: b.plan.pixels,
+            paths_per_invocation: 1,
+            detail: "el.comp: first hit, |cos| with the shading normal; film".into(),
+        })
+    }
+
+    /// pt.comp in `variant`.
+    pub fn path_tracer(b: &Build, variant: PtKernel) -> Result<CameraSubpaths> {
+        let mut binds = b.scene.binds();
+        binds.extend(b.film.binds());
+        let defines = b.scene.variant.defines().with(&variant.defines());
+        let kernel = b.gpu.kernel("pt.comp", &defines.pairs(), &binds)?;
+        let what = if variant.nee { "BSDF sampling + next-event estimation, MIS" } else { "BSDF sampling only" };
+        Ok(CameraSubpaths {
+            kernel,
+            pixels: b.plan.pixels,
+            paths_per_invocation: b.plan.paths_per_invocation,
+            detail: format!("pt.comp: {what}; film"),
+        })
+    }
+
+    /// camera_subpath.comp for `techniques`, reading the light-vertex `store`, the hash
+    /// `grid` (merging) and the `cache` (`--connect cache`).
+    pub fn bidirectional(
+        b: &Build,
+        store: &LightVertexStore,
+        grid: Option<&HashGrid>,
+        cache: Option<&LightVertexCache>,
+        techniques: Techniques,
+    ) -> Result<CameraSubpaths> {
+        let variant = CameraKernel::new(techniques, b.settings.connect, b.scene.variant.reads);
+        let defines: Defines = b.scene.variant.defines().with(&variant.defines());
+        let mut binds = b.scene.binds();
+        binds.extend(b.film.binds());
+        binds.extend(store.binds());
+        if let Some(g) = grid {
+            binds.extend([Bind::u32("grid_start", &g.cell_start), Bind::vec4("grid_points", &g.cell_points)]);
+        }
+        if let Some(c) = cache {
+            binds.extend([Bind::own_u32(&c.prefix), Bind::own_u32(&c.dense)]);
+        }
+        let kernel = b.gpu.kernel("camera_subpath.comp", &defines.pairs(), &binds)?;
+        Ok(CameraSubpaths {
+            kernel,
+            pixels: b.plan.pixels,
+            paths_per_invocation: b.plan.paths_per_invocation,
+            detail: format!("camera_subpath.comp: {}", describe(variant)),
+        })
+    }
+
+    /// Pixels (camera subpaths per iteration).
+    pub fn pixels(&self) -> u32 {
+        self.pixels
+    }
+
+    pub fn record(&self, batch: &mut Batch, push: &GpuPush) -> Result<()> {
+        batch.begin_pass(NAME);
+        let invocations = regen::invocations(self.pixels, self.paths_per_invocation);
+        batch.dispatch(&self.kernel, self.kernel.groups_for(invocations), bytemuck::bytes_of(push))
+    }
+
+    pub fn info(&self) -> PassInfo {
+        PassInfo { name: NAME, detail: self.detail.clone() }
+    }
+}
+
+fn describe(v: CameraKernel) -> String {
+    let mut parts = Vec::new();
+    if v.vertex_connection {
+        parts.push(match v.connect {
+            Connect::Path => "NEE + connections to light subpath p = this pixel".to_string(),
+            Connect::Cache(n) => format!("NEE + {n} connection(s) per vertex to the light-vertex cache"),
+        });
+    }
+    if v.merge_first_vertex_only {
+        parts.push("merging at the first non-specular vertex".into());
+    } else if v.vertex_merging {
+        parts.push("merging at every vertex".into());
+    }
+    let mis = if v.merge_first_vertex_only { "" } else { ", MIS" };
+    format!("{}{mis}; splats -> film", parts.join(" + "))
+}

@@ -1,0 +1,274 @@
+//! The grid-build pass: the hash grid over an iteration's light vertices (docs/design.md,
+//! docs/hash-grid.md), built on the GPU every iteration with no host round trip, as
+//! SmallVCM's counting sort (docs/smallvcm.md, the hash grid) in four steps:
+//!
+//! 1. count (`hash_grid_count.comp`): one invocation per light path, over its stored
+//!    vertices; each does `rank = atomicAdd(bucket_start[b], 1)` on its bucket b and keeps
+//!    (b, rank);
+//! 2. exclusive prefix sum of `grid_start[0..=num_buckets]` in place
+//!    ([`super::exclusive_scan`]), so `grid_start[num_buckets]` is the vertex total;
+//! 3. scatter (`hash_grid_scatter.comp`): one invocation per light path; each stored
+//!    vertex writes (position bits, slot) to `grid_points[grid_start[b] + rank]`, no
+//!    atomics; a query's radius test reads one contiguous `uvec4` per candidate instead
+//!    of an index and then the scattered store;
+//! 4. sort (`hash_grid_sort.comp`): one invocation per bucket sorts its entries ascending
+//!    by slot, so the result does not depend on the order the atomics happened in: builds
+//!    are bit-identical.
+//!
+//! Queries are in `glsl/hash_grid.glsl`.
+
+use std::sync::Arc;
+
+use anyhow::{bail, Result};
+use bytemuck::{Pod, Zeroable};
+
+use super::exclusive_scan::{ExclusiveScan, ScanPlan};
+use super::light_subpaths::LIGHT_VERTEX_HALF_BYTES;
+use super::{PassInfo, WORKGROUP_SIZE};
+use crate::gpu::{Batch, Bind, Buffer, Gpu, Kernel};
+use crate::render::plan::{check_sizes, BufferSize};
+
+/// The name profiles report.
+pub const NAME: &str = "grid build";
+
+/// Hash-grid buckets per light subpath. SmallVCM has one; four cut the candidates that a
+/// merge query rejects (other cells hashed into the same buckets); 8 and 16 measured no
+/// faster (docs/performance.md, "Performance work").
+const GRID_BUCKETS_PER_LIGHT_PATH: u64 = 4;
+
+/// Most hash-grid buckets: `grid_start` (one u32 per bucket + 1) then stays below
+/// 2^27 bytes, the smallest maxStorageBufferRange Vulkan allows.
+const MAX_GRID_BUCKETS: u64 = 1 << 24;
+
+/// The bucket count of the renderer's hash grid: GRID_BUCKETS_PER_LIGHT_PATH per light
+/// subpath, rounded up to a power of two (hash_grid.glsl then masks instead of dividing),
+/// at most MAX_GRID_BUCKETS.
+pub fn grid_buckets(light_paths: u64) -> u32 {
+    (light_paths.max(1) * GRID_BUCKETS_PER_LIGHT_PATH).next_power_of_two().min(MAX_GRID_BUCKETS) as u32
+}
+
+/// The sizes of a hash grid over `light_paths` x `slots` light-vertex slots.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct GridPlan {
+    pub light_paths: u32,
+    pub slots: u32,
+    pub buckets: u32,
+    /// `buckets + 1` u32: the exclusive prefix sum of the bucket sizes.
+    pub start: BufferSize,
+    /// One uvec4 per slot (the most vertices there can be), by bucket.
+    pub points: BufferSize,
+    /// Per slot: (bucket, arrival rank in the bucket) from the count step.
+    pub keys: BufferSize,
+    pub scan: ScanPlan,
+}
+
+impl GridPlan {
+    /// The sizes (what [`HashGrid::with_plan`] accepts it checks there).
+    pub fn new(light_paths: u32, slots: u32, buckets: u32) -> GridPlan {
+        let total_slots = light_paths as u64 * slots as u64;
+        GridPlan {
+            light_paths,
+            slots,
+            buckets,
+            start: BufferSize::new("grid_start", (buckets as u64 + 1) * 4),
+            points: BufferSize::new("grid_points", total_slots * 16),
+            keys: BufferSize::new("grid_keys", total_slots * 8),
+            scan: ScanPlan::new(buckets.saturating_add(1), "grid_start_scan_scratch"),
+        }
+    }
+
+    pub fn buffers(&self) -> Vec<BufferSize> {
+        vec![self.start, self.points, self.keys, self.scan.scratch]
+    }
+}
+
+/// Push constants of the build steps (`HASH_GRID_BUILD_PUSH` in glsl/hash_grid.glsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+struct BuildPush {
+    origin: [f32; 3],
+    radius: f32,
+    light_paths: u32,
+    slots: u32,
+    num_buckets: u32,
+    _pad: u32,
+}
+
+/// The GPU hash grid over the light-vertex store. After [`HashGrid::record_build`] has
+/// run, bucket `b` holds the valid light vertices
+/// `cell_points[cell_start[b] .. cell_start[b + 1]]`, ascending by slot, and
+/// `cell_start[num_buckets]` is the number of valid vertices.
+pub struct HashGrid {
+    /// `num_buckets + 1` `u32` (binding `grid_start`).
+    pub cell_start: Buffer,
+    /// (`floatBitsToUint` of a vertex's position, its slot) by bucket (binding
+    /// `grid_points`): what the camera kernel reads (docs/hash-grid.md).
+    pub cell_points: Buffer,
+    keys: Buffer,
+    count: Kernel,
+    scatter: Kernel,
+    sort: Kernel,
+    scan: ExclusiveScan,
+    light_paths: u32,
+    slots: u32,
+    num_buckets: u32,
+}
+
+impl HashGrid {
+    /// A grid over the light-vertex store `lv_a` (`vec4[]`, two per slot, position in
+    /// the first) / `lv_count` (`uint` per light path) of `light_paths` paths with `slots`
+    /// slots each, hashing into `num_buckets` buckets (SmallVCM: one per light path; the
+    /// renderer: [`grid_buckets`]).
+    pub fn new(
+        gpu: &Arc<Gpu>,
+        lv_a: &Buffer,
+        lv_count: &Buffer,
+        light_paths: u32,
+        slots: u32,
+        num_buckets: u32,
+    ) -> Result<HashGrid> {
+        Self::with_plan(gpu, lv_a, lv_count, &GridPlan::new(light_paths, slots, num_buckets))
+    }
+
+    /// The grid that `plan` describes.
+    pub fn with_plan(gpu: &Arc<Gpu>, lv_a: &Buffer, lv_count: &Buffer, plan: &GridPlan) -> Result<HashGrid> {
+        let (light_paths, slots, buckets) = (plan.light_paths, plan.slots, plan.buckets);
+        if light_paths == 0 || slots == 0 || buckets == 0 {
+            bail!(
+                "hash grid: light paths ({light_paths}), slots per path ({slots}) and buckets ({buckets}) must be at least 1"
+            );
+        }
+        let total_slots = light_paths as u64 * slots as u64;
+        if total_slots > u32::MAX as u64 || buckets == u32::MAX {
+            bail!("hash grid: {light_paths} light paths x {slots} slots or {buckets} buckets exceed 32-bit indices");
+        }
+        if lv_a.size() < total_slots * LIGHT_VERTEX_HALF_BYTES {
+            bail!(
+                "hash grid: buffer {:?} has {} bytes, {light_paths} x {slots} light vertices need {}",
+                lv_a.name(),
+                lv_a.size(),
+                total_slots * LIGHT_VERTEX_HALF_BYTES
+            );
+        }
+        if lv_count.size() < 4 * light_paths as u64 {
+            bail!(
+                "hash grid: buffer {:?} has {} bytes, {light_paths} path counts need more",
+                lv_count.name(),
+                lv_count.size()
+            );
+        }
+        check_sizes(
+            &plan.buffers(),
+            gpu.limits.max_storage_buffer_range as u64,
+            gpu.device_local_heap_bytes(),
+            "the hash grid",
+        )?;
+        let cell_start = plan.start.zeroed(gpu)?;
+        let keys = plan.keys.zeroed(gpu)?;
+        let cell_points = plan.points.zeroed(gpu)?;
+        let binds = [
+            Bind::vec4("light_vertices_a", lv_a),
+            Bind::u32("light_vertex_counts", lv_count),
+            Bind::u32("grid_start", &cell_start),
+            Bind::vec4("grid_keys", &keys),
+            Bind::vec4("grid_points", &cell_points),
+        ];
+        let size = WORKGROUP_SIZE.to_string();
+        let defines = [("WORKGROUP_SIZE", size.as_str())];
+        let count = gpu.kernel("hash_grid_count.comp", &defines, &binds)?;
+        let scatter = gpu.kernel("hash_grid_scatter.comp", &defines, &binds)?;
+        let sort = gpu.kernel("hash_grid_sort.comp", &defines, &binds)?;
+        let scan = ExclusiveScan::with_plan(gpu, &cell_start, &plan.scan)?;
+        Ok(HashGrid {
+            cell_start,
+            cell_points,
+            keys,
+            count,
+            scatter,
+            sort,
+            scan,
+            light_paths,
+            slots,
+            num_buckets: plan.buckets,
+        })
+    }
+
+    /// Records the whole build for merge radius `radius` (cells of side 2 `radius`) and
+    /// grid origin `origin` into `batch` (no submit), as the pass [`NAME`]. It reads the
+    /// light-vertex store as the batch's earlier dispatches left it.
+    pub fn record_build(&self, batch: &mut Batch, radius: f32, origin: [f32; 3]) -> Result<()> {
+        if !(radius.is_finite() && radius > 0.0) {
+            bail!("hash grid: merge radius {radius} must be positive and finite");
+        }
+        if !origin.iter().all(|c| c.is_finite()) {
+            bail!("hash grid: origin {origin:?} must be finite");
+        }
+        let push = BuildPush {
+            origin,
+            radius,
+            light_paths: self.light_paths,
+            slots: self.slots,
+            num_buckets: self.num_buckets,
+            _pad: 0,
+        };
+        let push = bytemuck::bytes_of(&push);
+        batch.begin_pass(NAME);
+        batch.fill(&self.cell_start, 0)?;
+        batch.dispatch(&self.count, self.count.groups_for(self.light_paths), push)?;
+        self.scan.record(batch)?;
+        batch.dispatch(&self.scatter, self.scatter.groups_for(self.light_paths), push)?;
+        batch.dispatch(&self.sort, self.sort.groups_for(self.num_buckets), push)
+    }
+
+    pub fn num_buckets(&self) -> u32 {
+        self.num_buckets
+    }
+
+    /// Every buffer the grid owns (for `vkvcm render --verbose`).
+    pub fn buffers(&self) -> Vec<&Buffer> {
+        let mut b = vec![&self.cell_start, &self.cell_points, &self.keys];
+        b.extend(self.scan.buffers());
+        b
+    }
+
+    pub fn light_paths(&self) -> u32 {
+        self.light_paths
+    }
+
+    pub fn slots(&self) -> u32 {
+        self.slots
+    }
+
+    pub fn info(&self) -> PassInfo {
+        PassInfo {
+            name: NAME,
+            detail: format!(
+                "hash grid over the light vertices in {} buckets (count, scan, scatter, sort)",
+                self.num_buckets
+            ),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_buckets_are_powers_of_two_per_light_path_within_the_binding() {
+        assert_eq!(grid_buckets(65_536), 262_144);
+        assert_eq!(grid_buckets(100), 512);
+        assert_eq!(grid_buckets(1), 4);
+        assert_eq!(grid_buckets(0), 4);
+        // 4K: 4 x 8,294,400 would round up to 2^25; capped at 2^24 (64 MiB of grid_start).
+        assert_eq!(grid_buckets(3840 * 2160), 1 << 24);
+        assert_eq!(grid_buckets(u32::MAX as u64), 1 << 24);
+    }
+
+    #[test]
+    fn push_layout() {
+        assert_eq!(std::mem::size_of::<BuildPush>(), 32);
+        assert_eq!(std::mem::offset_of!(BuildPush, radius), 12);
+        assert_eq!(std::mem::offset_of!(BuildPush, num_buckets), 24);
+    }
+}

@@ -1,0 +1,109 @@
+//! The light-vertex-prefix pass of the light-vertex cache (Davidovic et al. 2014,
+//! "Progressive Light Transport Simulation on the GPU: Survey and Improvements"): with
+//! `--connect cache`, camera vertices connect to vertices drawn uniformly from all light
+//! subpaths' stored vertices instead of those of light subpath p = their pixel. After the
+//! light pass has copied the per-path vertex counts into `light_vertex_prefix`, this pass
+//! scans them in place into each path's first index among all stored vertices (entry N_L:
+//! their total), then writes every stored vertex's slot to `light_vertex_dense` in path
+//! order (glsl/lv_cache_compact.comp), so a draw is one load.
+
+use std::sync::Arc;
+
+use anyhow::Result;
+use bytemuck::{Pod, Zeroable};
+
+use super::exclusive_scan::{ExclusiveScan, ScanPlan};
+use super::light_subpaths::{LightVertexPlan, LightVertexStore};
+use super::{PassInfo, WORKGROUP_SIZE};
+use crate::gpu::{Batch, Bind, Buffer, Gpu, Kernel};
+use crate::render::plan::BufferSize;
+
+/// The name profiles report.
+pub const NAME: &str = "light-vertex prefix";
+
+/// The cache's sizes.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LightVertexCachePlan {
+    /// N_L + 1 u32.
+    pub prefix: BufferSize,
+    /// One u32 per store slot.
+    pub dense: BufferSize,
+    pub scan: ScanPlan,
+}
+
+impl LightVertexCachePlan {
+    pub fn new(store: &LightVertexPlan) -> LightVertexCachePlan {
+        let n = store.light_paths as u64 + 1;
+        LightVertexCachePlan {
+            prefix: BufferSize::new("light_vertex_prefix", n * 4),
+            dense: BufferSize::new("light_vertex_dense", store.capacity * 4),
+            scan: ScanPlan::new(store.light_paths + 1, "light_vertex_prefix_scan_scratch"),
+        }
+    }
+
+    pub fn buffers(&self) -> Vec<BufferSize> {
+        vec![self.prefix, self.dense, self.scan.scratch]
+    }
+}
+
+/// Push constants of glsl/lv_cache_compact.comp (its `CompactPush`).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct CompactPush {
+    light_paths: u32,
+    slots: u32,
+}
+
+/// The cache's buffers and the pass that fills them.
+pub struct LightVertexCache {
+    /// Binding `light_vertex_prefix`.
+    pub prefix: Buffer,
+    /// Binding `light_vertex_dense`.
+    pub dense: Buffer,
+    scan: ExclusiveScan,
+    compact: Kernel,
+    light_paths: u32,
+    slots: u32,
+}
+
+impl LightVertexCache {
+    pub fn new(gpu: &Arc<Gpu>, store: &LightVertexStore, plan: &LightVertexCachePlan) -> Result<LightVertexCache> {
+        let prefix = plan.prefix.zeroed(gpu)?;
+        let dense = plan.dense.zeroed(gpu)?;
+        let scan = ExclusiveScan::with_plan(gpu, &prefix, &plan.scan)?;
+        let size = WORKGROUP_SIZE.to_string();
+        let compact = gpu.kernel(
+            "lv_cache_compact.comp",
+            &[("WORKGROUP_SIZE", size.as_str())],
+            &[Bind::own_u32(&store.counts), Bind::own_u32(&prefix), Bind::own_u32(&dense)],
+        )?;
+        Ok(LightVertexCache {
+            prefix,
+            dense,
+            scan,
+            compact,
+            light_paths: store.light_paths,
+            slots: store.slots_per_path,
+        })
+    }
+
+    pub fn record(&self, batch: &mut Batch) -> Result<()> {
+        batch.begin_pass(NAME);
+        self.scan.record(batch)?;
+        let p = CompactPush { light_paths: self.light_paths, slots: self.slots };
+        batch.dispatch(&self.compact, self.compact.groups_for(self.light_paths), bytemuck::bytes_of(&p))
+    }
+
+    pub fn buffers(&self) -> Vec<&Buffer> {
+        let mut b = vec![&self.prefix, &self.dense];
+        b.extend(self.scan.buffers());
+        b
+    }
+
+    pub fn info(&self) -> PassInfo {
+        PassInfo {
+            name: NAME,
+            detail: "exclusive_scan.comp: prefix sum of the per-path vertex counts; lv_cache_compact.comp: the stored vertices' slots in one list (light-vertex cache)".into(),
+        }
+    }
+}

@@ -1,0 +1,35 @@
+//! The passes an iteration is made of, shared by the estimators (src/render/estimators/).
+//! Each pass owns its kernels, records its dispatches under its `NAME` (the name
+//! `--profile` reports, `Batch::begin_pass`), and allocates its buffers from the frame's
+//! plan of sizes (src/render/plan.rs), whose part it defines next to its code.
+//!
+//! | pass | module | kernels |
+//! |---|---|---|
+//! | light subpaths | [`light_subpaths`] | light_subpath.comp |
+//! | grid build | [`hash_grid`] | hash_grid_count.comp, exclusive_scan.comp, hash_grid_scatter.comp, hash_grid_sort.comp |
+//! | light-vertex prefix | [`light_vertex_cache`] | exclusive_scan.comp, lv_cache_compact.comp |
+//! | camera subpaths | [`camera_subpaths`] | camera_subpath.comp, pt.comp or el.comp |
+//! | accumulate | [`accumulate`] | accumulate.comp |
+//!
+//! [`exclusive_scan`] is a building block of two of them.
+
+pub mod accumulate;
+pub mod camera_subpaths;
+pub mod exclusive_scan;
+pub mod hash_grid;
+pub mod light_subpaths;
+pub mod light_vertex_cache;
+
+/// Invocations per workgroup of every render kernel (`WORKGROUP_SIZE` in their GLSL,
+/// set by [`crate::render::variants`]); dispatches read it back from each kernel's
+/// SPIR-V (`Kernel::groups_for`).
+pub const WORKGROUP_SIZE: u32 = 64;
+
+/// A pass as `vkvcm render --verbose` describes it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PassInfo {
+    /// The name profiles report.
+    pub name: &'static str,
+    /// What it does in this render.
+    pub detail: String,
+}

@@ -1,0 +1,151 @@
+//! Kernel variants: what each render kernel is compiled with, as typed values, turned
+//! into `#define`s in one place. The kernels refuse to compile without the defines of
+//! their variant (`#error`), so no GLSL default picks an estimator.
+//!
+//! Every render kernel gets the scene's part ([`SceneVariant`]: the feature set of
+//! src/render/features.rs, how it reads its buffers, the workgroup size); the light,
+//! camera and path-tracing kernels add their own ([`LightKernel`], [`CameraKernel`],
+//! [`PtKernel`]).
+
+use super::estimators::Techniques;
+use super::features::FeatureSet;
+use super::passes::WORKGROUP_SIZE;
+use super::reads::Reads;
+use super::settings::Connect;
+
+/// A kernel's `#define`s.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Defines(Vec<(String, String)>);
+
+impl Defines {
+    pub fn new() -> Defines {
+        Defines::default()
+    }
+
+    /// `name` as 1 or 0.
+    pub fn flag(mut self, name: &str, on: bool) -> Defines {
+        self.0.push((name.to_string(), if on { "1" } else { "0" }.to_string()));
+        self
+    }
+
+    /// `name` as `value`.
+    pub fn value(mut self, name: &str, value: impl ToString) -> Defines {
+        self.0.push((name.to_string(), value.to_string()));
+        self
+    }
+
+    /// These defines followed by `other`'s.
+    pub fn with(mut self, other: &Defines) -> Defines {
+        self.0.extend(other.0.iter().cloned());
+        self
+    }
+
+    /// As `Gpu::kernel` takes them.
+    pub fn pairs(&self) -> Vec<(&str, &str)> {
+        self.0.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect()
+    }
+
+    /// `(name, value)` in the order they were added.
+    pub fn list(&self) -> &[(String, String)] {
+        &self.0
+    }
+}
+
+/// What every render kernel is compiled with.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SceneVariant {
+    pub features: FeatureSet,
+    /// How the kernels read the scene (TEXEL_READS).
+    pub reads: Reads,
+}
+
+impl SceneVariant {
+    pub fn defines(&self) -> Defines {
+        self.features.defines().flag("TEXEL_READS", self.reads == Reads::Texel).value("WORKGROUP_SIZE", WORKGROUP_SIZE)
+    }
+}
+
+/// glsl/light_subpath.comp.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LightKernel {
+    /// STORE_VERTICES: non-delta vertices go to the light-vertex store.
+    pub store_vertices: bool,
+    /// CONNECT_CAMERA: vertices connect to the camera (splats).
+    pub connect_camera: bool,
+    /// LIGHT_TRACE_ONLY: weight 1, emitters seen directly are splatted too (lt).
+    pub light_trace_only: bool,
+    /// LV_CACHE: the per-path vertex counts are copied for the cache's prefix sum.
+    pub fills_cache: bool,
+}
+
+impl LightKernel {
+    pub fn new(t: Techniques, connect: Connect) -> LightKernel {
+        LightKernel {
+            store_vertices: t.store_vertices,
+            connect_camera: t.connect_to_camera,
+            light_trace_only: t.light_trace_only,
+            fills_cache: t.store_vertices && connect != Connect::Path,
+        }
+    }
+
+    pub fn defines(&self) -> Defines {
+        Defines::new()
+            .flag("STORE_VERTICES", self.store_vertices)
+            .flag("LIGHT_TRACE_ONLY", self.light_trace_only)
+            .flag("CONNECT_CAMERA", self.connect_camera)
+            .flag("LV_TEXEL", false)
+            .flag("LV_CACHE", self.fills_cache)
+    }
+}
+
+/// glsl/camera_subpath.comp.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CameraKernel {
+    /// USE_VC: next-event estimation and vertex connections, with MIS.
+    pub vertex_connection: bool,
+    /// USE_VM: merging with the light vertices in the radius.
+    pub vertex_merging: bool,
+    /// PPM: merging at the first non-specular vertex only, weight 1.
+    pub merge_first_vertex_only: bool,
+    /// Where the vertex connections go (LV_CACHE, LV_CACHE_CONNECTIONS).
+    pub connect: Connect,
+    /// LV_TEXEL: the light vertices, grid and cache index are read as texel buffers.
+    pub texel_reads: bool,
+}
+
+impl CameraKernel {
+    pub fn new(t: Techniques, connect: Connect, reads: Reads) -> CameraKernel {
+        CameraKernel {
+            vertex_connection: t.vertex_connection,
+            vertex_merging: t.vertex_merging,
+            merge_first_vertex_only: t.merge_first_vertex_only,
+            connect,
+            texel_reads: reads == Reads::Texel,
+        }
+    }
+
+    pub fn defines(&self) -> Defines {
+        let d = Defines::new()
+            .flag("USE_VC", self.vertex_connection)
+            .flag("USE_VM", self.vertex_merging)
+            .flag("PPM", self.merge_first_vertex_only)
+            .flag("LV_TEXEL", self.texel_reads);
+        match self.connect {
+            Connect::Path => d.flag("LV_CACHE", false),
+            Connect::Cache(n) => d.flag("LV_CACHE", true).value("LV_CACHE_CONNECTIONS", n),
+        }
+    }
+}
+
+/// glsl/pt.comp.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PtKernel {
+    /// NEE: next-event estimation with MIS (0: BSDF sampling only).
+    pub nee: bool,
+}
+
+impl PtKernel {
+    pub fn defines(&self) -> Defines {
+        Defines::new().flag("NEE", self.nee)
+    }
+}
