@@ -11,7 +11,8 @@
 #   cargo build --release --manifest-path /tmp/vkvcm-old/Cargo.toml --target-dir target/old
 #   scripts/bit-identical.sh target/old/release/vkvcm target/release/vkvcm
 # Runs on lavapipe unless VK_DRIVER_FILES says otherwise. SIZE, ITERATIONS and SEED
-# override the frame (default 24x24, 2 iterations, seed 7: a few minutes in all).
+# override the frame (default 24x24, 2 iterations, seed 7: a few minutes in all), SCENES
+# the scene list (default: the four reference scenes and scenes/hard/*.gltf).
 set -euo pipefail
 old=${1:?usage: scripts/bit-identical.sh OLD_VKVCM NEW_VKVCM [OUT_DIR]}
 new=${2:?usage: scripts/bit-identical.sh OLD_VKVCM NEW_VKVCM [OUT_DIR]}
@@ -26,8 +27,11 @@ if [ -z "${VK_DRIVER_FILES:-}" ]; then
 fi
 mkdir -p "$out"
 
-scenes="gbs_s glm_c gbs_p gbs_b"
-for f in "$root"/scenes/hard/*.gltf; do scenes="$scenes $f"; done
+scenes=${SCENES:-}
+if [ -z "$scenes" ]; then
+  scenes="gbs_s glm_c gbs_p gbs_b"
+  for f in "$root"/scenes/hard/*.gltf; do scenes="$scenes $f"; done
+fi
 # Each variant: a name and the render flags.
 variants=(
   "el|--algo el"

@@ -66,6 +66,44 @@ impl<'a> Bind<'a> {
     }
 }
 
+/// A kernel's `#define`s.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Defines(Vec<(String, String)>);
+
+impl Defines {
+    pub fn new() -> Defines {
+        Defines::default()
+    }
+
+    /// `name` as 1 or 0.
+    pub fn flag(mut self, name: &str, on: bool) -> Defines {
+        self.0.push((name.to_string(), if on { "1" } else { "0" }.to_string()));
+        self
+    }
+
+    /// `name` as `value`.
+    pub fn value(mut self, name: &str, value: impl ToString) -> Defines {
+        self.0.push((name.to_string(), value.to_string()));
+        self
+    }
+
+    /// These defines followed by `other`'s.
+    pub fn with(mut self, other: &Defines) -> Defines {
+        self.0.extend(other.0.iter().cloned());
+        self
+    }
+
+    /// As [`Gpu::kernel`] takes them.
+    pub fn pairs(&self) -> Vec<(&str, &str)> {
+        self.0.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect()
+    }
+
+    /// `(name, value)` in the order they were added.
+    pub fn list(&self) -> &[(String, String)] {
+        &self.0
+    }
+}
+
 /// A compute pipeline with its buffers bound.
 pub struct Kernel {
     gpu: Arc<Gpu>,

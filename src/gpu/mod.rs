@@ -15,7 +15,7 @@ mod validation;
 pub use batch::Batch;
 pub use buffer::Buffer;
 pub use context::{list_devices, DeviceInfo, FeatureStatus, Gpu, GpuOptions};
-pub use kernel::{Bind, Kernel, Texels, PUSH_CONSTANT_BYTES};
+pub use kernel::{Bind, Defines, Kernel, Texels, PUSH_CONSTANT_BYTES};
 pub use profile::{KernelTime, Profile, ProfileReport, StageTime};
 pub use validation::Messages;
 

@@ -15,7 +15,7 @@ use std::fmt;
 use glam::Vec3;
 use serde::Serialize;
 
-use super::variants::Defines;
+use crate::gpu::Defines;
 use crate::scene::{Light, Scene};
 
 /// What the kernels of one render are compiled with.

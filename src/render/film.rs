@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use anyhow::{bail, Result};
 
-use super::plan::BufferSize;
+use super::sizes::BufferSize;
 use crate::gpu::{Bind, Buffer, Gpu};
 
 /// Per-pixel RGB sums.

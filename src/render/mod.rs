@@ -12,6 +12,7 @@ pub mod estimators;
 pub mod features;
 pub mod film;
 pub mod gpu_types;
+pub mod output;
 pub mod passes;
 pub mod plan;
 pub mod radius;
@@ -20,6 +21,8 @@ pub mod regen;
 pub mod saved;
 pub mod scene_gpu;
 pub mod settings;
+pub mod sizes;
+pub mod techniques;
 pub mod variants;
 
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -30,44 +33,11 @@ use anyhow::{bail, Context, Result};
 
 use crate::gpu::{Batch, Gpu, Profile};
 use crate::scene::Scene;
-pub use estimators::{Algorithm, Estimator};
+pub use estimators::Estimator;
 pub use film::Film;
+pub use output::{Progress, RenderOutput};
 pub use scene_gpu::SceneGpu;
-pub use settings::{Budget, Connect, FrameSettings, RenderSettings, DEFAULT_CACHE_CONNECTIONS};
-
-/// Progress of a running render.
-#[derive(Clone, Debug)]
-pub struct Progress {
-    pub iterations: u64,
-    pub seconds: f64,
-    /// Fraction done in [0, 1].
-    pub fraction: f64,
-}
-
-/// What a render produced.
-pub struct RenderOutput {
-    pub width: u32,
-    pub height: u32,
-    /// Mean linear RGB per pixel, row 0 at the top.
-    pub pixels: Vec<[f32; 3]>,
-    /// Per-pixel sums of the iterations' values and of their squares: the mean is
-    /// `sum / iterations`, the variance of one iteration's value follows from both.
-    pub sum: Vec<[f64; 3]>,
-    pub sum_sq: Vec<[f64; 3]>,
-    pub iterations: u64,
-    pub seconds: f64,
-    /// Samples that were NaN, infinite or negative (rejected, never added).
-    pub rejected_samples: u64,
-    /// Light-tracing splats rejected because they could overflow the fixed-point sum.
-    pub overflow_splats: u64,
-    pub profile: Profile,
-    /// Paths per kernel invocation the render ran with ([`regen`]).
-    pub paths_per_invocation: u32,
-    /// How its kernels read their read-only buffers ([`reads`]).
-    pub reads: reads::Reads,
-    /// True when stopped early by the cancel flag.
-    pub interrupted: bool,
-}
+pub use settings::{Algorithm, Budget, Connect, FrameSettings, RenderSettings, DEFAULT_CACHE_CONNECTIONS};
 
 /// Renders `scene`. `progress` is called after every batch of iterations; `cancel`
 /// stops the render after the current batch (the image so far is returned).
@@ -141,6 +111,7 @@ impl Renderer {
     pub fn plan_for(gpu: &Gpu, scene: &Scene, settings: &RenderSettings) -> Result<plan::FramePlan> {
         let info = settings.algorithm.info();
         let frame = &settings.frame;
+        settings.check()?;
         let pixels = frame.width.saturating_mul(frame.height);
         let k = regen::resolve(gpu, info.regenerates_paths, settings.paths_per_invocation, pixels);
         let plan = plan::FramePlan::new(scene, settings, info.techniques, k)?;

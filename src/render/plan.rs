@@ -7,37 +7,18 @@
 //! (src/render/scene_gpu.rs), [`FilmPlan`] (film.rs), [`LightVertexPlan`],
 //! [`LightVertexCachePlan`], [`GridPlan`] (src/render/passes/).
 
-use std::sync::Arc;
-
 use anyhow::{bail, Result};
 
-use super::estimators::Techniques;
 use super::film::FilmPlan;
 use super::passes::hash_grid::{grid_buckets, GridPlan};
 use super::passes::light_subpaths::LightVertexPlan;
 use super::passes::light_vertex_cache::LightVertexCachePlan;
 use super::scene_gpu::ScenePlan;
 use super::settings::{Connect, RenderSettings};
-use crate::gpu::{Buffer, Gpu};
+use super::sizes::{check_sizes, BufferSize};
+use super::techniques::Techniques;
+use crate::gpu::Gpu;
 use crate::scene::Scene;
-
-/// One buffer of the plan.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct BufferSize {
-    pub name: &'static str,
-    pub bytes: u64,
-}
-
-impl BufferSize {
-    pub const fn new(name: &'static str, bytes: u64) -> BufferSize {
-        BufferSize { name, bytes }
-    }
-
-    /// The buffer, zero-filled.
-    pub fn zeroed(&self, gpu: &Arc<Gpu>) -> Result<Buffer> {
-        gpu.buffer_zeroed_bytes(self.name, self.bytes)
-    }
-}
 
 /// What a render allocates.
 #[derive(Clone, Debug)]
@@ -117,59 +98,5 @@ impl FramePlan {
     /// Fails when the plan does not fit `gpu`; `what` describes the render in the message.
     pub fn check(&self, gpu: &Gpu, what: &str) -> Result<()> {
         check_sizes(&self.buffers(), gpu.limits.max_storage_buffer_range as u64, gpu.device_local_heap_bytes(), what)
-    }
-}
-
-/// `bytes` in MiB for messages.
-pub fn mib(bytes: u64) -> String {
-    let m = bytes as f64 / (1u64 << 20) as f64;
-    if m < 10.0 {
-        format!("{m:.2} MiB")
-    } else {
-        format!("{m:.0} MiB")
-    }
-}
-
-/// Checks `sizes` against a per-buffer binding limit `max_binding` and a memory heap of
-/// `heap` bytes; `what` describes the render in the message.
-pub fn check_sizes(sizes: &[BufferSize], max_binding: u64, heap: u64, what: &str) -> Result<()> {
-    if let Some(b) = sizes.iter().rev().filter(|b| b.bytes > max_binding).max_by_key(|b| b.bytes) {
-        bail!(
-            "{what} needs {} for buffer {}, but the device binds at most {} per buffer (maxStorageBufferRange); \
-             lower the resolution{}",
-            mib(b.bytes),
-            b.name,
-            mib(max_binding),
-            if b.name.contains("vert") || b.name.starts_with("grid") { " or --max-path-length" } else { "" }
-        );
-    }
-    let total = sizes.iter().fold(0u64, |a, b| a.saturating_add(b.bytes));
-    if total > heap {
-        let mut big: Vec<&BufferSize> = sizes.iter().collect();
-        big.sort_by_key(|b| std::cmp::Reverse(b.bytes));
-        let list: Vec<String> = big.iter().take(3).map(|b| format!("{} {}", b.name, mib(b.bytes))).collect();
-        bail!(
-            "{what} needs {} of device memory ({}, ...), but the device's largest memory heap has {}",
-            mib(total),
-            list.join(", "),
-            mib(heap)
-        );
-    }
-    Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn binding_and_heap_limits() {
-        let v = [BufferSize::new("film", 100), BufferSize::new("splat", 50)];
-        assert!(check_sizes(&v, 100, 150, "x").is_ok());
-        let e = check_sizes(&v, 99, 1000, "x").unwrap_err().to_string();
-        assert!(e.contains("buffer film") && e.contains("maxStorageBufferRange"), "{e}");
-        let e = check_sizes(&v, 100, 149, "x").unwrap_err().to_string();
-        assert!(e.contains("heap"), "{e}");
-        assert!(!e.contains('\n'));
     }
 }

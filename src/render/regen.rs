@@ -13,7 +13,7 @@
 
 use ash::vk;
 
-use super::passes::WORKGROUP_SIZE;
+use super::variants::WORKGROUP_SIZE;
 
 /// The most paths per invocation [`auto`] chooses.
 pub const MAX_AUTO: u32 = 256;

@@ -13,7 +13,8 @@ use std::path::Path;
 
 use anyhow::{anyhow, bail, Result};
 
-use super::{Algorithm, RenderOutput, RenderSettings};
+use super::output::RenderOutput;
+use super::settings::{Algorithm, RenderSettings};
 use crate::image::{self, ExrCompression, Image};
 use crate::scene::Scene;
 

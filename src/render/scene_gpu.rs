@@ -10,9 +10,9 @@ use glam::Vec3;
 
 use super::features::FeatureSet;
 use super::gpu_types::*;
-use super::plan::BufferSize;
 use super::reads::Reads;
 use super::settings::FrameSettings;
+use super::sizes::BufferSize;
 use super::variants::SceneVariant;
 use crate::bvh;
 use crate::bvh::layout::{GpuNode, GpuPrim};

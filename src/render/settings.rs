@@ -1,12 +1,25 @@
 //! What a render is asked for: the estimator, the frame, the budget and the estimator's
-//! options. Checked once, by [`RenderSettings::check`] and the estimator's own
-//! [`super::estimators::EstimatorInfo::check`], before anything is allocated.
+//! options. The types only: an estimator's defaults and checks are in the registry that
+//! [`Algorithm`] keys (src/render/estimators/mod.rs: `RenderSettings::new`,
+//! `RenderSettings::check`, `Algorithm::info`).
 
-use anyhow::{bail, Result};
-
-use super::estimators::Algorithm;
-use super::radius;
 use super::reads::Reads;
+
+/// The estimators vkvcm implements (the keys of the registry).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Algorithm {
+    El,
+    Pt,
+    Lt,
+    Bpt,
+    Ppm,
+    Bpm,
+    Vcm,
+}
+
+/// Every estimator, in the order the command line lists them.
+pub const ALGORITHMS: [Algorithm; 7] =
+    [Algorithm::El, Algorithm::Pt, Algorithm::Lt, Algorithm::Bpt, Algorithm::Ppm, Algorithm::Bpm, Algorithm::Vcm];
 
 /// When a render stops.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -86,44 +99,4 @@ pub struct RenderSettings {
     /// How the kernels read their read-only buffers (src/render/reads.rs); `None` chooses
     /// by device. The image does not depend on it.
     pub reads: Option<Reads>,
-}
-
-impl RenderSettings {
-    /// `algorithm`'s defaults at `width` x `height`.
-    pub fn new(algorithm: Algorithm, width: u32, height: u32, budget: Budget) -> Self {
-        RenderSettings {
-            algorithm,
-            frame: FrameSettings { width, height, seed: 1234, max_path_length: 10, min_path_length: 0 },
-            budget,
-            nee: true,
-            radius_factor: radius::DEFAULT_RADIUS_FACTOR,
-            alpha: radius::DEFAULT_ALPHA,
-            generic: false,
-            count_rays: false,
-            connect: algorithm.default_connect(),
-            paths_per_invocation: None,
-            reads: None,
-        }
-    }
-
-    /// Checks the settings every estimator shares, then the estimator's own.
-    pub fn check(&self) -> Result<()> {
-        let (w, h) = (self.frame.width, self.frame.height);
-        if w == 0 || h == 0 {
-            bail!("image size {w}x{h}: width and height must be at least 1");
-        }
-        if w as u64 * h as u64 > u32::MAX as u64 {
-            bail!("a {w}x{h} image has {} pixels, more than the 2^32 - 1 the kernels can index", w as u64 * h as u64);
-        }
-        if self.frame.max_path_length == 0 {
-            bail!("max path length must be at least 1");
-        }
-        if self.paths_per_invocation == Some(0) {
-            bail!("paths per invocation must be at least 1");
-        }
-        if let Budget::Iterations(0) = self.budget {
-            bail!("iterations must be at least 1");
-        }
-        self.algorithm.info().check(self)
-    }
 }

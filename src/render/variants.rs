@@ -7,49 +7,15 @@
 //! camera and path-tracing kernels add their own ([`LightKernel`], [`CameraKernel`],
 //! [`PtKernel`]).
 
-use super::estimators::Techniques;
 use super::features::FeatureSet;
-use super::passes::WORKGROUP_SIZE;
 use super::reads::Reads;
 use super::settings::Connect;
+use super::techniques::Techniques;
+use crate::gpu::Defines;
 
-/// A kernel's `#define`s.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct Defines(Vec<(String, String)>);
-
-impl Defines {
-    pub fn new() -> Defines {
-        Defines::default()
-    }
-
-    /// `name` as 1 or 0.
-    pub fn flag(mut self, name: &str, on: bool) -> Defines {
-        self.0.push((name.to_string(), if on { "1" } else { "0" }.to_string()));
-        self
-    }
-
-    /// `name` as `value`.
-    pub fn value(mut self, name: &str, value: impl ToString) -> Defines {
-        self.0.push((name.to_string(), value.to_string()));
-        self
-    }
-
-    /// These defines followed by `other`'s.
-    pub fn with(mut self, other: &Defines) -> Defines {
-        self.0.extend(other.0.iter().cloned());
-        self
-    }
-
-    /// As `Gpu::kernel` takes them.
-    pub fn pairs(&self) -> Vec<(&str, &str)> {
-        self.0.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect()
-    }
-
-    /// `(name, value)` in the order they were added.
-    pub fn list(&self) -> &[(String, String)] {
-        &self.0
-    }
-}
+/// Invocations per workgroup of every render kernel (their GLSL's `WORKGROUP_SIZE`);
+/// dispatches read it back from each kernel's SPIR-V (`Kernel::groups_for`).
+pub const WORKGROUP_SIZE: u32 = 64;
 
 /// What every render kernel is compiled with.
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -27,6 +27,7 @@ use crate::render::passes::light_subpaths::{LightSubpaths, LightVertexStore};
 use crate::render::passes::light_vertex_cache::LightVertexCache;
 use crate::render::passes::PassInfo;
 use crate::render::radius::RadiusSchedule;
+use crate::render::variants::{CameraKernel, LightKernel};
 
 /// The pass that takes the splats (and, with a camera pass, the camera subpaths' values)
 /// into the film.
@@ -64,11 +65,21 @@ impl LightSubpathEstimator {
             Some(g) => Some(HashGrid::with_plan(b.gpu, &store.vertices_a, &store.counts, g)?),
             None => None,
         };
-        let light = LightSubpaths::new(b, &store, cache.as_ref().map(|c| &c.prefix), techniques)?;
+        let pass = b.passes();
+        let connect = b.settings.connect;
+        let light_kernel = LightKernel::new(techniques, connect);
+        let light = LightSubpaths::new(&pass, &store, cache.as_ref().map(|c| &c.prefix), light_kernel)?;
         let film_pass = if techniques.light_trace_only {
-            FilmPass::Accumulate(Accumulate::new(b, &store)?)
+            FilmPass::Accumulate(Accumulate::new(&pass, &store)?)
         } else {
-            FilmPass::Camera(CameraSubpaths::bidirectional(b, &store, grid.as_ref(), cache.as_ref(), techniques)?)
+            let camera_kernel = CameraKernel::new(techniques, connect, b.scene.reads());
+            FilmPass::Camera(CameraSubpaths::bidirectional(
+                &pass,
+                &store,
+                grid.as_ref(),
+                cache.as_ref(),
+                camera_kernel,
+            )?)
         };
         let s = b.scene.params.scene_sphere;
         Ok(LightSubpathEstimator {

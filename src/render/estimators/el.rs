@@ -36,7 +36,7 @@ struct EyeLight {
 }
 
 fn build(b: &Build) -> Result<Box<dyn Estimator>> {
-    Ok(Box::new(EyeLight { camera: CameraSubpaths::eye_light(b)? }))
+    Ok(Box::new(EyeLight { camera: CameraSubpaths::eye_light(&b.passes())? }))
 }
 
 impl Estimator for EyeLight {

@@ -21,27 +21,14 @@ use std::sync::Arc;
 use anyhow::{bail, Result};
 
 use super::film::Film;
-use super::passes::PassInfo;
+use super::passes::{PassContext, PassInfo};
 use super::plan::FramePlan;
+use super::radius;
 use super::scene_gpu::SceneGpu;
-use super::settings::{Connect, RenderSettings};
+pub use super::settings::{Algorithm, ALGORITHMS};
+use super::settings::{Budget, Connect, FrameSettings, RenderSettings};
+pub use super::techniques::Techniques;
 use crate::gpu::{Batch, Buffer, Gpu};
-
-/// The estimators vkvcm implements (the keys of the registry).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Algorithm {
-    El,
-    Pt,
-    Lt,
-    Bpt,
-    Ppm,
-    Bpm,
-    Vcm,
-}
-
-/// Every estimator, in the order the command line lists them.
-pub const ALGORITHMS: [Algorithm; 7] =
-    [Algorithm::El, Algorithm::Pt, Algorithm::Lt, Algorithm::Bpt, Algorithm::Ppm, Algorithm::Bpm, Algorithm::Vcm];
 
 impl Algorithm {
     /// The estimator's entry in the registry.
@@ -82,27 +69,6 @@ impl clap::ValueEnum for Algorithm {
     fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
         Some(clap::builder::PossibleValue::new(self.name()).help(self.info().description))
     }
-}
-
-/// The light-transport techniques an estimator uses; they decide its passes and kernel
-/// variants (src/render/variants.rs) and its MIS factors.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Techniques {
-    /// Light subpaths are traced each iteration (lt, bpt, ppm, bpm, vcm).
-    pub light_subpaths: bool,
-    /// Their non-delta vertices are stored for the camera pass (bpt, ppm, bpm, vcm).
-    pub store_vertices: bool,
-    /// Light vertices connect to the camera, splatting onto any pixel (lt, bpt, vcm).
-    pub connect_to_camera: bool,
-    /// Camera vertices connect to lights (next-event estimation) and to light vertices,
-    /// with MIS (bpt, vcm; SmallVCM's "vertex connection").
-    pub vertex_connection: bool,
-    /// Camera vertices merge with light vertices within the radius (ppm, bpm, vcm).
-    pub vertex_merging: bool,
-    /// Merging only at the first non-specular camera vertex, weight 1 (ppm).
-    pub merge_first_vertex_only: bool,
-    /// Light tracing without MIS, which also splats directly seen emitters (lt).
-    pub light_trace_only: bool,
 }
 
 /// What the registry knows of an estimator.
@@ -173,6 +139,61 @@ pub struct Build<'a> {
     pub film: &'a Film,
     pub settings: &'a RenderSettings,
     pub plan: &'a FramePlan,
+}
+
+impl Build<'_> {
+    /// What its passes are built from.
+    pub fn passes(&self) -> PassContext<'_> {
+        PassContext {
+            gpu: self.gpu,
+            scene: self.scene,
+            film: self.film,
+            pixels: self.plan.pixels,
+            light_paths: self.plan.light_paths,
+            paths_per_invocation: self.plan.paths_per_invocation,
+        }
+    }
+}
+
+impl RenderSettings {
+    /// `algorithm`'s defaults at `width` x `height`.
+    pub fn new(algorithm: Algorithm, width: u32, height: u32, budget: Budget) -> Self {
+        RenderSettings {
+            algorithm,
+            frame: FrameSettings { width, height, seed: 1234, max_path_length: 10, min_path_length: 0 },
+            budget,
+            nee: true,
+            radius_factor: radius::DEFAULT_RADIUS_FACTOR,
+            alpha: radius::DEFAULT_ALPHA,
+            generic: false,
+            count_rays: false,
+            connect: algorithm.default_connect(),
+            paths_per_invocation: None,
+            reads: None,
+        }
+    }
+
+    /// Checks the settings every estimator shares, then the estimator's own
+    /// ([`EstimatorInfo::check`]).
+    pub fn check(&self) -> Result<()> {
+        let (w, h) = (self.frame.width, self.frame.height);
+        if w == 0 || h == 0 {
+            bail!("image size {w}x{h}: width and height must be at least 1");
+        }
+        if w as u64 * h as u64 > u32::MAX as u64 {
+            bail!("a {w}x{h} image has {} pixels, more than the 2^32 - 1 the kernels can index", w as u64 * h as u64);
+        }
+        if self.frame.max_path_length == 0 {
+            bail!("max path length must be at least 1");
+        }
+        if self.paths_per_invocation == Some(0) {
+            bail!("paths per invocation must be at least 1");
+        }
+        if let Budget::Iterations(0) = self.budget {
+            bail!("iterations must be at least 1");
+        }
+        self.algorithm.info().check(self)
+    }
 }
 
 /// An estimator built for one render: its passes, recorded once per iteration.

@@ -39,7 +39,7 @@ struct PathTracer {
 }
 
 fn build(b: &Build) -> Result<Box<dyn Estimator>> {
-    let camera = CameraSubpaths::path_tracer(b, PtKernel { nee: b.settings.nee })?;
+    let camera = CameraSubpaths::path_tracer(&b.passes(), PtKernel { nee: b.settings.nee })?;
     Ok(Box::new(PathTracer { camera, paths_per_invocation: b.plan.paths_per_invocation }))
 }
 

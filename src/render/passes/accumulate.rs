@@ -4,10 +4,10 @@
 use anyhow::Result;
 
 use super::light_subpaths::LightVertexStore;
-use super::{PassInfo, WORKGROUP_SIZE};
+use super::{PassContext, PassInfo};
 use crate::gpu::{Batch, Bind, Kernel};
-use crate::render::estimators::Build;
 use crate::render::gpu_types::GpuPush;
+use crate::render::variants::WORKGROUP_SIZE;
 
 /// The name profiles report.
 pub const NAME: &str = "accumulate";
@@ -18,12 +18,12 @@ pub struct Accumulate {
 }
 
 impl Accumulate {
-    pub fn new(b: &Build, store: &LightVertexStore) -> Result<Accumulate> {
+    pub fn new(b: &PassContext, store: &LightVertexStore) -> Result<Accumulate> {
         let mut binds: Vec<Bind> = b.film.binds().to_vec();
         binds.push(Bind::own(&store.splat));
         let size = WORKGROUP_SIZE.to_string();
         let kernel = b.gpu.kernel("accumulate.comp", &[("WORKGROUP_SIZE", size.as_str())], &binds)?;
-        Ok(Accumulate { kernel, pixels: b.plan.pixels })
+        Ok(Accumulate { kernel, pixels: b.pixels })
     }
 
     /// One pixel per invocation.

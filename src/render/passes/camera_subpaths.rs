@@ -11,13 +11,12 @@ use anyhow::Result;
 use super::hash_grid::HashGrid;
 use super::light_subpaths::LightVertexStore;
 use super::light_vertex_cache::LightVertexCache;
-use super::PassInfo;
-use crate::gpu::{Batch, Bind, Kernel};
-use crate::render::estimators::{Build, Techniques};
+use super::{PassContext, PassInfo};
+use crate::gpu::{Batch, Bind, Defines, Kernel};
 use crate::render::gpu_types::GpuPush;
 use crate::render::regen;
 use crate::render::settings::Connect;
-use crate::render::variants::{CameraKernel, Defines, PtKernel};
+use crate::render::variants::{CameraKernel, PtKernel};
 
 /// The name profiles report.
 pub const NAME: &str = "camera subpaths";
@@ -33,20 +32,20 @@ pub struct CameraSubpaths {
 
 impl CameraSubpaths {
     /// el.comp: |cos| at the first hit, one pixel per invocation.
-    pub fn eye_light(b: &Build) -> Result<CameraSubpaths> {
+    pub fn eye_light(b: &PassContext) -> Result<CameraSubpaths> {
         let mut binds = b.scene.binds();
         binds.extend(b.film.binds());
         let kernel = b.gpu.kernel("el.comp", &b.scene.variant.defines().pairs(), &binds)?;
         Ok(CameraSubpaths {
             kernel,
-            pixels: b.plan.pixels,
+            pixels: b.pixels,
             paths_per_invocation: 1,
             detail: "el.comp: first hit, |cos| with the shading normal; film".into(),
         })
     }
 
     /// pt.comp in `variant`.
-    pub fn path_tracer(b: &Build, variant: PtKernel) -> Result<CameraSubpaths> {
+    pub fn path_tracer(b: &PassContext, variant: PtKernel) -> Result<CameraSubpaths> {
         let mut binds = b.scene.binds();
         binds.extend(b.film.binds());
         let defines = b.scene.variant.defines().with(&variant.defines());
@@ -54,22 +53,21 @@ impl CameraSubpaths {
         let what = if variant.nee { "BSDF sampling + next-event estimation, MIS" } else { "BSDF sampling only" };
         Ok(CameraSubpaths {
             kernel,
-            pixels: b.plan.pixels,
-            paths_per_invocation: b.plan.paths_per_invocation,
+            pixels: b.pixels,
+            paths_per_invocation: b.paths_per_invocation,
             detail: format!("pt.comp: {what}; film"),
         })
     }
 
-    /// camera_subpath.comp for `techniques`, reading the light-vertex `store`, the hash
+    /// camera_subpath.comp in `variant`, reading the light-vertex `store`, the hash
     /// `grid` (merging) and the `cache` (`--connect cache`).
     pub fn bidirectional(
-        b: &Build,
+        b: &PassContext,
         store: &LightVertexStore,
         grid: Option<&HashGrid>,
         cache: Option<&LightVertexCache>,
-        techniques: Techniques,
+        variant: CameraKernel,
     ) -> Result<CameraSubpaths> {
-        let variant = CameraKernel::new(techniques, b.settings.connect, b.scene.variant.reads);
         let defines: Defines = b.scene.variant.defines().with(&variant.defines());
         let mut binds = b.scene.binds();
         binds.extend(b.film.binds());
@@ -83,8 +81,8 @@ impl CameraSubpaths {
         let kernel = b.gpu.kernel("camera_subpath.comp", &defines.pairs(), &binds)?;
         Ok(CameraSubpaths {
             kernel,
-            pixels: b.plan.pixels,
-            paths_per_invocation: b.plan.paths_per_invocation,
+            pixels: b.pixels,
+            paths_per_invocation: b.paths_per_invocation,
             detail: format!("camera_subpath.comp: {}", describe(variant)),
         })
     }

@@ -11,9 +11,9 @@ use std::sync::Arc;
 use anyhow::{bail, Result};
 use bytemuck::{Pod, Zeroable};
 
-use super::WORKGROUP_SIZE;
 use crate::gpu::{fold_groups, Batch, Bind, Buffer, Gpu, Kernel};
-use crate::render::plan::BufferSize;
+use crate::render::sizes::BufferSize;
+use crate::render::variants::WORKGROUP_SIZE;
 
 /// Elements each invocation of exclusive_scan.comp scans (`PER_THREAD`).
 const ELEMENTS_PER_INVOCATION: u32 = 4;

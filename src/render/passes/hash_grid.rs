@@ -24,9 +24,10 @@ use bytemuck::{Pod, Zeroable};
 
 use super::exclusive_scan::{ExclusiveScan, ScanPlan};
 use super::light_subpaths::LIGHT_VERTEX_HALF_BYTES;
-use super::{PassInfo, WORKGROUP_SIZE};
+use super::PassInfo;
 use crate::gpu::{Batch, Bind, Buffer, Gpu, Kernel};
-use crate::render::plan::{check_sizes, BufferSize};
+use crate::render::sizes::{check_sizes, BufferSize};
+use crate::render::variants::WORKGROUP_SIZE;
 
 /// The name profiles report.
 pub const NAME: &str = "grid build";

@@ -9,12 +9,12 @@
 
 use anyhow::Result;
 
+use super::PassContext;
 use super::PassInfo;
 use crate::gpu::{Batch, Bind, Buffer, Gpu, Kernel};
-use crate::render::estimators::{Build, Techniques};
 use crate::render::gpu_types::GpuPush;
-use crate::render::plan::BufferSize;
 use crate::render::regen;
+use crate::render::sizes::BufferSize;
 use crate::render::variants::LightKernel;
 
 /// The name profiles report.
@@ -103,28 +103,22 @@ pub struct LightSubpaths {
 }
 
 impl LightSubpaths {
-    /// The light kernel of `techniques` for the render `b`, writing `store` and, with the
+    /// The light kernel in `variant` for the render `b`, writing `store` and, with the
     /// light-vertex cache, a copy of the per-path counts into `cache_prefix` (the cache's
     /// `light_vertex_prefix`, scanned in place after this pass).
     pub fn new(
-        b: &Build,
+        b: &PassContext,
         store: &LightVertexStore,
         cache_prefix: Option<&Buffer>,
-        techniques: Techniques,
+        variant: LightKernel,
     ) -> Result<LightSubpaths> {
-        let variant = LightKernel::new(techniques, b.settings.connect);
         let defines = b.scene.variant.defines().with(&variant.defines());
         let mut binds = b.scene.binds();
         binds.extend(b.film.binds());
         binds.extend(store.binds());
         binds.extend(cache_prefix.map(Bind::own_u32));
         let kernel = b.gpu.kernel("light_subpath.comp", &defines.pairs(), &binds)?;
-        Ok(LightSubpaths {
-            kernel,
-            variant,
-            light_paths: b.plan.light_paths,
-            paths_per_invocation: b.plan.paths_per_invocation,
-        })
+        Ok(LightSubpaths { kernel, variant, light_paths: b.light_paths, paths_per_invocation: b.paths_per_invocation })
     }
 
     pub fn record(&self, batch: &mut Batch, push: &GpuPush) -> Result<()> {

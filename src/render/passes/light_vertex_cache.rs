@@ -14,9 +14,10 @@ use bytemuck::{Pod, Zeroable};
 
 use super::exclusive_scan::{ExclusiveScan, ScanPlan};
 use super::light_subpaths::{LightVertexPlan, LightVertexStore};
-use super::{PassInfo, WORKGROUP_SIZE};
+use super::PassInfo;
 use crate::gpu::{Batch, Bind, Buffer, Gpu, Kernel};
-use crate::render::plan::BufferSize;
+use crate::render::sizes::BufferSize;
+use crate::render::variants::WORKGROUP_SIZE;
 
 /// The name profiles report.
 pub const NAME: &str = "light-vertex prefix";

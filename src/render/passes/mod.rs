@@ -20,10 +20,24 @@ pub mod hash_grid;
 pub mod light_subpaths;
 pub mod light_vertex_cache;
 
-/// Invocations per workgroup of every render kernel (`WORKGROUP_SIZE` in their GLSL,
-/// set by [`crate::render::variants`]); dispatches read it back from each kernel's
-/// SPIR-V (`Kernel::groups_for`).
-pub const WORKGROUP_SIZE: u32 = 64;
+use std::sync::Arc;
+
+use super::film::Film;
+use super::scene_gpu::SceneGpu;
+use crate::gpu::Gpu;
+
+/// What the passes of a render are built from: the device, the scene and film they
+/// bind, and the counts of the frame's plan (src/render/plan.rs).
+pub struct PassContext<'a> {
+    pub gpu: &'a Arc<Gpu>,
+    pub scene: &'a SceneGpu,
+    pub film: &'a Film,
+    pub pixels: u32,
+    /// Light subpaths per iteration (N_L).
+    pub light_paths: u32,
+    /// Paths per invocation of the kernels that regenerate paths (src/render/regen.rs).
+    pub paths_per_invocation: u32,
+}
 
 /// A pass as `vkvcm render --verbose` describes it.
 #[derive(Clone, Debug, PartialEq, Eq)]
