@@ -8,10 +8,10 @@
 // `#include "bvh.glsl"`:
 //
 // 1. (fast) `#define BVH_DECLARES_BUFFERS` and let this file declare them, as arrays of
-//    u64vec2 (64-bit loads: on lavapipe a 64-bit gather moves twice the data of a 32-bit
-//    one per instruction; the device must have shaderInt64, which vkvcm requires);
-//    with `#define BVH_TEXEL 1` as uniform texel buffers of uvec4 texels (utextureBuffer)
-//    instead (src/render/reads.rs).
+//    u64vec2 with `#define BVH_INT64 1` (64-bit loads: on lavapipe a 64-bit gather moves
+//    twice the data of a 32-bit one per instruction; needs shaderInt64), as uvec4 arrays
+//    without (devices without shaderInt64: the same bits); with `#define BVH_TEXEL 1` as
+//    uniform texel buffers of uvec4 texels (utextureBuffer) instead (src/render/reads.rs).
 //
 // 2. (compatible) declare them itself as vec4 arrays with these names:
 //
@@ -53,6 +53,9 @@
 #ifndef BVH_TEXEL
 #define BVH_TEXEL 0
 #endif
+#ifndef BVH_INT64
+#define BVH_INT64 1
+#endif
 #if defined(BVH_DECLARES_BUFFERS) && BVH_TEXEL
 #extension GL_EXT_samplerless_texture_functions : require
 // Uniform texel buffers of uvec4 texels (scene.glsl's TEXEL_READS).
@@ -63,6 +66,19 @@ uvec4 bvh_node_elem(uint i) {
 }
 uvec4 bvh_prim_elem(uint i) {
     return texelFetch(bvh_prims, int(i));
+}
+#elif defined(BVH_DECLARES_BUFFERS) && !BVH_INT64
+layout(std430) readonly buffer bvh_nodes {
+    uvec4 bvh_node_data[];
+};
+layout(std430) readonly buffer bvh_prims {
+    uvec4 bvh_prim_data[];
+};
+uvec4 bvh_node_elem(uint i) {
+    return bvh_node_data[i];
+}
+uvec4 bvh_prim_elem(uint i) {
+    return bvh_prim_data[i];
 }
 #elif defined(BVH_DECLARES_BUFFERS)
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require

@@ -101,6 +101,40 @@ vec3 offset_ray(vec3 p, vec3 n, vec3 dir, float scene_radius) {
     return p + (dot(n, dir) >= 0.0 ? eps : -eps) * n;
 }
 
+// The float nearest to the 64-bit integer hi 2^32 + lo (ties to even), as a 64-bit
+// integer-to-float conversion rounds, without 64-bit integers: the top 24 significant
+// bits, rounded by the bits below them (film.glsl's 32-bit splats;
+// tests/render_atomics.rs checks it against the 64-bit conversion).
+float u64_words_to_float(uint lo, uint hi) {
+    if (hi == 0u) return float(lo);
+    int shift = findMSB(hi) + 9;  // bits below the 24 kept: (32 + msb + 1) - 24
+    uint mant, rest, half_unit;
+    bool rest_above_half, rest_is_half;
+    if (shift < 32) {
+        mant = (hi << (32 - shift)) | (lo >> shift);
+        rest = lo & ((1u << shift) - 1u);
+        half_unit = 1u << (shift - 1);
+        rest_above_half = rest > half_unit;
+        rest_is_half = rest == half_unit;
+    } else {
+        // shift in 32..40: the rest is (hi's low shift - 32 bits, lo).
+        int s = shift - 32;
+        mant = hi >> s;
+        uint rest_hi = s == 0 ? 0u : hi & ((1u << s) - 1u);
+        uint half_hi = s == 0 ? 0u : 1u << (s - 1);
+        if (s == 0) {
+            // The rest is lo alone; half is 2^31.
+            rest_above_half = lo > 0x80000000u;
+            rest_is_half = lo == 0x80000000u;
+        } else {
+            rest_above_half = rest_hi > half_hi || (rest_hi == half_hi && lo > 0u);
+            rest_is_half = rest_hi == half_hi && lo == 0u;
+        }
+    }
+    if (rest_above_half || (rest_is_half && (mant & 1u) == 1u)) mant += 1u;
+    return ldexp(float(mant), shift);
+}
+
 // Balance-heuristic weight (Veach 1997, sec. 9.2) of a technique with pdf a against one
 // with pdf b. The VCM family weighs its techniques through the recursive quantities of
 // vcm.glsl instead (docs/smallvcm.md); path tracing uses this directly.
@@ -126,9 +160,8 @@ uint workgroup_index() {
 // per invocation has regen_stride(paths, k) = ceil(paths / k) invocations, and invocation
 // i traces paths i, i + stride, i + 2 stride, ... (below `paths`), starting the next one
 // in the same loop iteration in which the current one ends. A SIMD group then runs until
-// its lanes' total work is done instead of once per path until its longest path is: on
-// lavapipe (8 lanes per group) 1.15-1.37x samples per CPU-second at 256x256
-// (docs/performance.md, "Third round").
+// its lanes' total work is done instead of once per path until its longest path is
+// (measured on lavapipe: docs/performance.md, "Third round").
 // Each path keeps its own index, random sequence and outputs, so the image does not
 // depend on k (tests/render_regen.rs). src/render/regen.rs chooses k.
 uint regen_stride(uint paths, uint k) {

@@ -39,18 +39,34 @@ void film_add(uint pixel, vec3 v) {
 }
 
 // ---- Splats (light tracing's camera connections land on any pixel from any invocation):
-// per pixel three uint64 fixed-point sums with SPLAT_SCALE = 2^24 units per 1.0, added by
+// per pixel three 64-bit fixed-point sums with SPLAT_SCALE = 2^24 units per 1.0, added by
 // integer atomics, so the sum is exact and independent of order (deterministic). Each
-// splat is rounded to the nearest unit (error <= 3e-8). A splat above SPLAT_MAX would
-// risk overflowing the 64-bit sum within one iteration (2^64 / 2^24 / 2^27 = 4096 such
-// splats): it is rejected and counted in stats[1]. The camera kernel (or accumulate.comp)
-// takes the sums into the film once per iteration and zeroes them.
+// splat is rounded to the nearest unit (error <= 3e-8). A splat above SPLAT_MAX = 2^27 is
+// rejected and counted in stats[1], so a sum of one iteration overflows only past
+// 2^64 / 2^24 / 2^27 = 2^13 such splats in one pixel. The camera kernel (or
+// accumulate.comp) takes the sums into the film once per iteration and zeroes them.
+//
+// SPLAT_ATOMICS_64 (src/render/atomics.rs, always set by the Rust side): 1 adds uint64
+// values with 64-bit atomics; 0 keeps the same 64-bit sums as (low, high) pairs of 32-bit
+// words (the same bytes, little-endian) and needs no 64-bit integer in the shader: an
+// add to the low word returns its old value, which says whether it wrapped, and the high
+// part plus that carry goes to the high word. Every add contributes exactly its value
+// modulo 2^64 whatever the order, so both give the same sums, and both round them to the
+// nearest float when taken: the same image.
 #ifdef HAS_SPLAT
+#ifndef SPLAT_ATOMICS_64
+#error "SPLAT_ATOMICS_64 must be defined (src/render/variants.rs)"
+#endif
+#define SPLAT_SCALE 16777216.0
+#define SPLAT_MAX 134217728.0
+
+#if SPLAT_ATOMICS_64
 #extension GL_EXT_shader_atomic_int64 : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 layout(std430) buffer splat { uint64_t splat_sums[]; };
-#define SPLAT_SCALE 16777216.0
-#define SPLAT_MAX 134217728.0
+#else
+layout(std430) buffer splat { uint splat_words[]; };
+#endif
 
 void splat_add(uint pixel, vec3 v) {
     if (!finite3(v) || any(lessThan(v, vec3(0.0)))) {
@@ -62,8 +78,21 @@ void splat_add(uint pixel, vec3 v) {
         return;
     }
     for (int c = 0; c < 3; ++c) {
+        uint i = 3u * pixel + uint(c);
+#if SPLAT_ATOMICS_64
         uint64_t q = uint64_t(v[c] * SPLAT_SCALE + 0.5);
-        if (q != 0ul) atomicAdd(splat_sums[3u * pixel + uint(c)], q);
+        if (q != 0ul) atomicAdd(splat_sums[i], q);
+#else
+        // f < 2^52 is a whole float from here on: its high and low 32 bits are exact.
+        float f = floor(v[c] * SPLAT_SCALE + 0.5);
+        uint hi = uint(floor(f * (1.0 / 4294967296.0)));
+        uint lo = uint(f - float(hi) * 4294967296.0);
+        if (lo != 0u) {
+            uint old = atomicAdd(splat_words[2u * i], lo);
+            if (old + lo < old) hi += 1u;  // the low word wrapped
+        }
+        if (hi != 0u) atomicAdd(splat_words[2u * i + 1u], hi);
+#endif
     }
 }
 
@@ -71,8 +100,15 @@ void splat_add(uint pixel, vec3 v) {
 vec3 splat_take(uint pixel) {
     vec3 v;
     for (int c = 0; c < 3; ++c) {
-        v[c] = float(splat_sums[3u * pixel + uint(c)]) * (1.0 / SPLAT_SCALE);
-        splat_sums[3u * pixel + uint(c)] = 0ul;
+        uint i = 3u * pixel + uint(c);
+#if SPLAT_ATOMICS_64
+        v[c] = float(splat_sums[i]) * (1.0 / SPLAT_SCALE);
+        splat_sums[i] = 0ul;
+#else
+        v[c] = u64_words_to_float(splat_words[2u * i], splat_words[2u * i + 1u]) * (1.0 / SPLAT_SCALE);
+        splat_words[2u * i] = 0u;
+        splat_words[2u * i + 1u] = 0u;
+#endif
     }
     return v;
 }

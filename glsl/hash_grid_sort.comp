@@ -5,13 +5,13 @@
 // a bucket holds about (light vertices / buckets) entries, a few. Up to 4 entries: a
 // 5-comparator sorting network; up to 16: Batcher's odd-even merge sorting network
 // (63 compare-exchanges); both in registers, without divergence between invocations
-// that take the same one (on lavapipe the 16-network was ~35% faster than insertion sort
-// at SmallVCM's table size, and most buckets need only the 4-network); up to SMALL:
+// that take the same one (faster than insertion sort on lavapipe, and most buckets need
+// only the 4-network: docs/hash-grid.md); up to SMALL:
 // insertion sort; above: heapsort, so a pathological bucket (a radius so large that
 // thousands of vertices share a cell) costs O(n log n) in its invocation, not O(n^2).
 // The merge query reads one contiguous uvec4 per candidate from grid_points (its radius
-// test loads no index and nothing from the light-vertex store: on lavapipe bpm +6-10%,
-// vcm +7-9% samples per CPU-second, docs/performance.md, "Performance work"). The
+// test loads no index and nothing from the light-vertex store: faster on lavapipe,
+// docs/performance.md, "Performance work"). The
 // position is stored as bits (uvec4), so no float operation can touch it (the slot in a
 // float would be a denormal). Slots are unique, so comparing them orders entries fully.
 #extension GL_GOOGLE_include_directive : require

@@ -62,8 +62,21 @@ fn devices() -> Result<()> {
         println!("{}: {} ({}), driver {}, Vulkan {}", d.index, d.name, d.type_name(), d.driver, d.api_version);
         for f in &d.features {
             let mark = if f.present { "yes" } else { "NO " };
-            let req = if f.required { "required" } else { "optional" };
-            println!("    {mark} {} ({req})", f.name);
+            let value = if f.value.is_empty() { String::new() } else { format!(" = {}", f.value) };
+            let how = match (f.required, f.present) {
+                (false, true) if !f.value.is_empty() => format!("limit: {}", f.without),
+                (true, true) => format!("required: {}", f.without),
+                (true, false) => format!("REQUIRED, missing: {}; vkvcm cannot run on this device", f.without),
+                (false, true) => format!("optional; without it: {}", f.without),
+                (false, false) => format!("optional, missing: {}", f.without),
+            };
+            println!("    {mark} {}{value} ({how})", f.name);
+        }
+        let missing = d.missing_required();
+        if missing.is_empty() {
+            println!("    usable by vkvcm");
+        } else {
+            println!("    NOT usable by vkvcm: it lacks {}", missing.join(", "));
         }
     }
     Ok(())

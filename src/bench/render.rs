@@ -78,6 +78,8 @@ pub struct Overrides {
     pub paths_per_invocation: Option<u32>,
     /// How the kernels read their read-only buffers (src/render/reads.rs).
     pub reads: Option<crate::render::reads::Reads>,
+    /// How splats are summed (src/render/atomics.rs).
+    pub atomics: Option<crate::render::atomics::SplatAtomics>,
 }
 
 /// Renders `scene` with `variant` for 1 warm-up iteration, then `iterations` timed ones,
@@ -93,6 +95,7 @@ pub fn bench_one(
     let mut warm = variant.settings(width, height, Budget::Iterations(1));
     warm.paths_per_invocation = overrides.paths_per_invocation;
     warm.reads = overrides.reads;
+    warm.atomics = overrides.atomics;
     render(gpu, scene, &warm, None, &mut |_| {})?;
     let s = RenderSettings { budget: Budget::Iterations(iterations), ..warm };
     let cpu0 = process_cpu_seconds();

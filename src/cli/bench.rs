@@ -123,6 +123,9 @@ pub struct BenchRenderArgs {
     /// for the device).
     #[arg(long, value_enum)]
     pub reads: Option<render::reads::Reads>,
+    /// How splats are summed (`render --atomics`; default: chosen for the device).
+    #[arg(long, value_enum)]
+    pub atomics: Option<render::atomics::SplatAtomics>,
     /// Also write the results as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -232,7 +235,11 @@ fn bench_render(a: BenchRenderArgs) -> Result<()> {
     }
     let gpu = open_bench_gpu(a.device.clone())?;
     let scenes = a.scenes.iter().map(|n| Ok((n, scene::load_named(n)?))).collect::<Result<Vec<_>>>()?;
-    let overrides = vkvcm::bench::render::Overrides { paths_per_invocation: a.paths_per_invocation, reads: a.reads };
+    let overrides = vkvcm::bench::render::Overrides {
+        paths_per_invocation: a.paths_per_invocation,
+        reads: a.reads,
+        atomics: a.atomics,
+    };
     let mut runs = Vec::new();
     for round in 1..=a.rounds {
         let mut rows = Vec::new();

@@ -96,6 +96,11 @@ pub struct RenderArgs {
     /// is faster; storage on a GPU; docs/performance.md).
     #[arg(long, value_enum)]
     pub reads: Option<render::reads::Reads>,
+    /// How light-tracing splats are summed: 64-bit atomics, or 32-bit atomic pairs with
+    /// carry for devices without 64-bit atomics (the image does not depend on it).
+    /// Default: 64 where the device has 64-bit buffer atomics (docs/devices.md).
+    #[arg(long, value_enum)]
+    pub atomics: Option<render::atomics::SplatAtomics>,
     /// Print the feature set the kernels are compiled with and the buffers allocated.
     #[arg(long)]
     pub verbose: bool,
@@ -210,6 +215,7 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     settings.generic = a.generic;
     settings.paths_per_invocation = a.paths_per_invocation;
     settings.reads = a.reads;
+    settings.atomics = a.atomics;
     settings.connect = connect_setting(a.algo, a.connect, a.cache_connections)?;
     settings.count_rays = a.profile || a.profile_json.is_some();
     if let Some(p) = &a.profile_json {
@@ -263,6 +269,8 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
         eprintln!("paths per invocation: {} ({how})", r.paths_per_invocation());
         let how = if a.reads.is_some() { "--reads" } else { "chosen for the device" };
         eprintln!("read-only buffers read as: {} buffers ({how})", r.reads().name());
+        let how = if a.atomics.is_some() { "--atomics" } else { "chosen for the device" };
+        eprintln!("splats summed with {}-bit atomics ({how})", r.atomics().name());
         eprint!("{}", render::features::buffer_table(&r.buffers()));
     }
     if let Some(s) = &saved {

@@ -34,13 +34,36 @@ impl GpuOptions {
     }
 }
 
-/// A feature vkvcm checks for, and whether the device has it.
+/// A feature or limit vkvcm checks for, whether the device has it, and what vkvcm does
+/// without it.
 #[derive(Clone, Debug)]
 pub struct FeatureStatus {
     pub name: &'static str,
     pub required: bool,
     pub present: bool,
+    /// What is used instead when it is absent (optional features), or why it is needed.
+    pub without: &'static str,
+    /// The device's value, for limits (empty for plain features).
+    pub value: String,
 }
+
+impl FeatureStatus {
+    fn feature(name: &'static str, required: bool, present: bool, without: &'static str) -> FeatureStatus {
+        FeatureStatus { name, required, present, without, value: String::new() }
+    }
+}
+
+/// Storage buffers the render kernel with the most of them binds (the camera kernel of
+/// vcm with the light-vertex cache and storage reads: 8 scene, 2 film, 1 splat, 3
+/// light-vertex store, 2 grid, 2 cache). `Gpu::kernel` checks every kernel's own count.
+pub const MOST_STORAGE_BUFFERS_PER_KERNEL: u32 = 18;
+/// Texel buffers the render kernel with the most of them binds (the same kernel with
+/// texel reads: 7 scene, 3 store, 2 grid, 2 cache).
+pub const MOST_TEXEL_BUFFERS_PER_KERNEL: u32 = 14;
+/// Shared memory of the largest workgroup (exclusive_scan.comp: 2 x 64 uint).
+pub const SHARED_MEMORY_BYTES: u32 = 512;
+/// Invocations per workgroup of the render kernels (src/render/variants.rs).
+pub const WORKGROUP_INVOCATIONS: u32 = 64;
 
 /// What `vkvcm devices` prints for one physical device.
 #[derive(Clone, Debug)]
@@ -129,8 +152,14 @@ fn create_instance(entry: &ash::Entry, validation: bool) -> Result<ash::Instance
     unsafe { entry.create_instance(&info, None) }.context("vkCreateInstance failed")
 }
 
-/// Features vkvcm needs. 64-bit integer buffer atomics carry the deterministic
-/// fixed-point splatting of light tracing; timestamps only the profiler.
+/// Names of the entries of [`feature_status`] that code looks up.
+pub const SHADER_INT64: &str = "shaderInt64";
+pub const SHADER_INT64_ATOMICS: &str = "shaderBufferInt64Atomics";
+pub const TEXEL_BUFFER_FORMATS: &str = "uniform texel buffers of R32G32B32A32_UINT and R32_UINT";
+pub const TIMESTAMPS: &str = "timestampComputeAndGraphics";
+
+/// Every feature and limit the kernels use (docs/devices.md): required ones, and
+/// optional ones with the fallback vkvcm uses without them.
 fn feature_status(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Vec<FeatureStatus> {
     let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
     let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f12);
@@ -139,19 +168,107 @@ fn feature_status(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Vec<Featu
     let base = f2.features;
     // SAFETY: valid handle.
     let props = unsafe { instance.get_physical_device_properties(pd) };
+    // SAFETY: valid handle.
+    let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+    let texel_ok = [vk::Format::R32G32B32A32_UINT, vk::Format::R32_UINT].iter().all(|&f| {
+        // SAFETY: valid handle.
+        let fp = unsafe { instance.get_physical_device_format_properties(pd, f) };
+        fp.buffer_features.contains(vk::FormatFeatureFlags::UNIFORM_TEXEL_BUFFER)
+    });
+    let without_int64 = super::fault_injection::simulated_missing_int64();
+    let l = &props.limits;
+    let limit = |name: &'static str, value: u64, needed: u64, why: &'static str| FeatureStatus {
+        name,
+        required: true,
+        present: value >= needed,
+        without: why,
+        value: format!("{value} (needs {needed})"),
+    };
+    let report = |name: &'static str, value: String, why: &'static str| FeatureStatus {
+        name,
+        required: false,
+        present: true,
+        without: why,
+        value,
+    };
     vec![
-        FeatureStatus { name: "Vulkan 1.2", required: true, present: props.api_version >= API_VERSION },
-        FeatureStatus { name: "shaderInt64", required: true, present: base.shader_int64 == vk::TRUE },
-        FeatureStatus {
-            name: "shaderBufferInt64Atomics",
-            required: true,
-            present: f12.shader_buffer_int64_atomics == vk::TRUE,
-        },
-        FeatureStatus {
-            name: "timestampComputeAndGraphics (profiler)",
-            required: false,
-            present: props.limits.timestamp_compute_and_graphics == vk::TRUE,
-        },
+        FeatureStatus::feature("Vulkan 1.2", true, props.api_version >= API_VERSION, "the API vkvcm is written to"),
+        FeatureStatus::feature(
+            "a compute queue",
+            true,
+            families.iter().any(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE)),
+            "every kernel is a compute shader",
+        ),
+        FeatureStatus::feature(
+            SHADER_INT64,
+            false,
+            base.shader_int64 == vk::TRUE && !without_int64,
+            "the BVH is read with 32-bit loads",
+        ),
+        FeatureStatus::feature(
+            SHADER_INT64_ATOMICS,
+            false,
+            f12.shader_buffer_int64_atomics == vk::TRUE && base.shader_int64 == vk::TRUE && !without_int64,
+            "splats are summed in two 32-bit words per channel (--atomics 32; the same image)",
+        ),
+        FeatureStatus::feature(
+            TEXEL_BUFFER_FORMATS,
+            false,
+            texel_ok,
+            "read-only buffers are read as storage buffers (--reads storage)",
+        ),
+        FeatureStatus::feature(
+            TIMESTAMPS,
+            false,
+            l.timestamp_compute_and_graphics == vk::TRUE,
+            "--profile reports no GPU times",
+        ),
+        limit(
+            "maxComputeWorkGroupInvocations",
+            l.max_compute_work_group_invocations as u64,
+            WORKGROUP_INVOCATIONS as u64,
+            "workgroups of 64 invocations",
+        ),
+        limit(
+            "maxComputeWorkGroupSize[0]",
+            l.max_compute_work_group_size[0] as u64,
+            WORKGROUP_INVOCATIONS as u64,
+            "workgroups of 64 invocations",
+        ),
+        limit(
+            "maxComputeSharedMemorySize",
+            l.max_compute_shared_memory_size as u64,
+            SHARED_MEMORY_BYTES as u64,
+            "the prefix sum's workgroup scan",
+        ),
+        limit(
+            "maxPerStageDescriptorStorageBuffers",
+            l.max_per_stage_descriptor_storage_buffers as u64,
+            MOST_STORAGE_BUFFERS_PER_KERNEL as u64,
+            "the camera kernel's buffers with storage reads",
+        ),
+        limit(
+            "maxPerStageDescriptorSampledImages",
+            l.max_per_stage_descriptor_sampled_images as u64,
+            MOST_TEXEL_BUFFERS_PER_KERNEL as u64,
+            "the camera kernel's texel buffers with texel reads",
+        ),
+        limit("maxPushConstantsSize", l.max_push_constants_size as u64, 128, "the kernels' push constants"),
+        report(
+            "maxStorageBufferRange",
+            format!("{} MiB", l.max_storage_buffer_range as u64 >> 20),
+            "the largest buffer a render may bind (checked per render)",
+        ),
+        report(
+            "maxTexelBufferElements",
+            format!("{} M texels", l.max_texel_buffer_elements as u64 >> 20),
+            "the largest texel buffer (checked per render)",
+        ),
+        report(
+            "maxComputeWorkGroupCount[0]",
+            l.max_compute_work_group_count[0].to_string(),
+            "larger dispatches are folded into 2-D",
+        ),
     ]
 }
 
@@ -271,11 +388,15 @@ impl Gpu {
                 .ok_or_else(|| anyhow!("device {:?} has no compute queue", infos[idx].name))?
                 as u32;
             let timestamps = families[queue_family as usize].timestamp_valid_bits > 0
-                && infos[idx].features.iter().any(|f| f.name.starts_with("timestamp") && f.present);
+                && infos[idx].features.iter().any(|f| f.name == TIMESTAMPS && f.present);
             let prio = [1.0f32];
             let qinfo = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&prio)];
-            let base = vk::PhysicalDeviceFeatures::default().shader_int64(true);
-            let mut f12 = vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(true);
+            // Only what the device has is enabled; kernels that would need more are not
+            // built (src/render/variants.rs chooses the 32-bit fallbacks).
+            let has = |name: &str| infos[idx].features.iter().any(|f| f.name == name && f.present);
+            let base = vk::PhysicalDeviceFeatures::default().shader_int64(has(SHADER_INT64));
+            let mut f12 =
+                vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(has(SHADER_INT64_ATOMICS));
             let dinfo =
                 vk::DeviceCreateInfo::default().queue_create_infos(&qinfo).enabled_features(&base).push_next(&mut f12);
             // SAFETY: features were checked present by `choose`.
@@ -334,6 +455,12 @@ impl Gpu {
             }),
             Err(e) => Err((e, validation)),
         }
+    }
+
+    /// Whether the device has the feature or limit `name` of [`feature_status`] (and vkvcm
+    /// enabled it).
+    pub fn has(&self, name: &str) -> bool {
+        self.info.features.iter().any(|f| f.name == name && f.present)
     }
 
     /// Validation messages received so far (empty when validation is off).

@@ -285,6 +285,23 @@ impl Kernel {
 /// maxStorageBufferRange, a texel buffer over maxTexelBufferElements or not a whole
 /// number of texels.
 fn check_bindings(limits: &vk::PhysicalDeviceLimits, chosen: &[(&ReflectedBinding, Bind)]) -> Result<()> {
+    let count = |ty: vk::DescriptorType| chosen.iter().filter(|(r, _)| r.descriptor_type == ty).count() as u32;
+    let storage = count(vk::DescriptorType::STORAGE_BUFFER);
+    if storage > limits.max_per_stage_descriptor_storage_buffers {
+        bail!(
+            "it binds {storage} storage buffers but this device allows {} per shader stage \
+             (maxPerStageDescriptorStorageBuffers); --reads texel binds fewer",
+            limits.max_per_stage_descriptor_storage_buffers
+        );
+    }
+    let texel = count(vk::DescriptorType::UNIFORM_TEXEL_BUFFER);
+    if texel > limits.max_per_stage_descriptor_sampled_images {
+        bail!(
+            "it binds {texel} texel buffers but this device allows {} per shader stage \
+             (maxPerStageDescriptorSampledImages); use --reads storage",
+            limits.max_per_stage_descriptor_sampled_images
+        );
+    }
     for (r, b) in chosen {
         let buf = b.buffer;
         let (max, what) = if r.descriptor_type == vk::DescriptorType::STORAGE_BUFFER {

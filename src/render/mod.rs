@@ -7,6 +7,7 @@
 //!   [`scene_gpu`], [`film`]: the buffers every pass binds.
 //! * [`Renderer`] runs a render in batches of iterations and reads the film back.
 
+pub mod atomics;
 pub mod converge;
 pub mod estimators;
 pub mod features;
@@ -87,7 +88,8 @@ impl Renderer {
         let features = features::FeatureSet::new(scene, info.reads_shading_normals, settings.generic)
             .with_count_rays(settings.count_rays);
         let reads = reads::Reads::resolve(gpu, settings.reads);
-        let scene_gpu = SceneGpu::with_features(gpu, scene, frame, &features, reads)?;
+        let atomics = atomics::SplatAtomics::resolve(gpu, settings.atomics)?;
+        let scene_gpu = SceneGpu::with_features(gpu, scene, frame, &features, reads, atomics)?;
         let film = Film::new(gpu, &plan.film)?;
         let est = (info.build)(&estimators::Build { gpu, scene: &scene_gpu, film: &film, settings, plan: &plan })?;
         Ok(Renderer {
@@ -137,6 +139,11 @@ impl Renderer {
     /// How the kernels read their read-only buffers ([`reads`]).
     pub fn reads(&self) -> reads::Reads {
         self.scene_gpu.reads()
+    }
+
+    /// How splats are summed (src/render/atomics.rs).
+    pub fn atomics(&self) -> atomics::SplatAtomics {
+        self.scene_gpu.variant.atomics
     }
 
     /// The scene features the kernels were compiled with.
@@ -319,6 +326,7 @@ impl Renderer {
             profile,
             paths_per_invocation: self.plan.paths_per_invocation,
             reads: self.scene_gpu.reads(),
+            atomics: self.scene_gpu.variant.atomics,
             interrupted: self.interrupted,
         })
     }

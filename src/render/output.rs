@@ -1,6 +1,7 @@
 //! What a render reports while it runs ([`Progress`]) and what it produced
 //! ([`RenderOutput`]).
 
+use super::atomics::SplatAtomics;
 use super::reads;
 use crate::gpu::Profile;
 
@@ -34,6 +35,8 @@ pub struct RenderOutput {
     pub paths_per_invocation: u32,
     /// How its kernels read their read-only buffers ([`reads`]).
     pub reads: reads::Reads,
+    /// How its splats were summed (src/render/atomics.rs).
+    pub atomics: SplatAtomics,
     /// True when stopped early by the cancel flag.
     pub interrupted: bool,
 }

@@ -46,9 +46,12 @@ impl Reads {
         }
     }
 
-    /// `requested` (`--reads`), or else [`Reads::auto`] for `gpu`.
+    /// `requested` (`--reads`), or else [`Reads::auto`] for `gpu`; storage buffers on a
+    /// device that cannot read the texel formats (docs/devices.md), where `--reads texel`
+    /// is refused when the kernels are built.
     pub fn resolve(gpu: &crate::gpu::Gpu, requested: Option<Reads>) -> Reads {
-        requested.unwrap_or_else(|| Reads::auto(gpu.info.device_type))
+        let texel_ok = gpu.has(crate::gpu::TEXEL_BUFFER_FORMATS);
+        requested.unwrap_or(if texel_ok { Reads::auto(gpu.info.device_type) } else { Reads::Storage })
     }
 }
 

@@ -7,7 +7,7 @@
 //! index, random sequence and outputs (tests/render_regen.rs checks equality).
 //!
 //! On a CPU device (lavapipe: 8 lanes per SIMD group) more paths per invocation measured
-//! faster, up to 2 workgroups per thread (docs/performance.md, "Path regeneration"). GPUs
+//! faster, up to 2 workgroups per thread (docs/performance.md, "Third round"). GPUs
 //! are left at one path per invocation: they hide divergence differently and need many
 //! invocations in flight, and no GPU measurement backs another choice yet.
 

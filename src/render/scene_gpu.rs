@@ -8,6 +8,7 @@ use std::sync::Arc;
 use anyhow::{bail, Result};
 use glam::Vec3;
 
+use super::atomics::SplatAtomics;
 use super::features::FeatureSet;
 use super::gpu_types::*;
 use super::reads::Reads;
@@ -16,7 +17,7 @@ use super::sizes::BufferSize;
 use super::variants::SceneVariant;
 use crate::bvh;
 use crate::bvh::layout::{GpuNode, GpuPrim};
-use crate::gpu::{Bind, Buffer, Gpu};
+use crate::gpu::{Bind, Buffer, Gpu, SHADER_INT64};
 use crate::scene::{Light, Scene};
 
 /// Upper bounds of the scene's buffers, known before the BVH is built.
@@ -145,17 +146,21 @@ impl SceneGpu {
     /// The scene with kernels specialised to it, without shading normals (which only
     /// `el` reads), read as `reads`.
     pub fn new(gpu: &Arc<Gpu>, scene: &Scene, frame: &FrameSettings, reads: Reads) -> Result<SceneGpu> {
-        Self::with_features(gpu, scene, frame, &FeatureSet::new(scene, false, false), reads)
+        let atomics = SplatAtomics::resolve(gpu, None)?;
+        Self::with_features(gpu, scene, frame, &FeatureSet::new(scene, false, false), reads, atomics)
     }
 
-    /// The scene for kernels compiled with `features`: shading normals are uploaded only
-    /// when the kernels read them (a 16-byte placeholder is bound otherwise).
+    /// The scene for kernels compiled with `features`, reading it as `reads` and summing
+    /// splats with `atomics`: shading normals are uploaded only when the kernels read them
+    /// (a 16-byte placeholder is bound otherwise); the BVH is read with 64-bit loads when
+    /// the device has `shaderInt64`.
     pub fn with_features(
         gpu: &Arc<Gpu>,
         scene: &Scene,
         frame: &FrameSettings,
         features: &FeatureSet,
         reads: Reads,
+        atomics: SplatAtomics,
     ) -> Result<SceneGpu> {
         if scene.lights.is_empty() {
             bail!("scene {:?} has no light source (no emissive material, punctual light or background)", scene.name);
@@ -224,7 +229,8 @@ impl SceneGpu {
             gpu.buffer_from_slice("lights", &lights)?,
             gpu.buffer_from_slice("shading_normals", &normals)?,
         ];
-        Ok(SceneGpu { params, buffers, variant: SceneVariant { features: features.clone(), reads } })
+        let variant = SceneVariant { features: features.clone(), reads, int64_loads: gpu.has(SHADER_INT64), atomics };
+        Ok(SceneGpu { params, buffers, variant })
     }
 
     /// The scene's bindings, each buffer at the binding of its name (all are arrays of

@@ -3,6 +3,7 @@
 //! [`Algorithm`] keys (src/render/estimators/mod.rs: `RenderSettings::new`,
 //! `RenderSettings::check`, `Algorithm::info`).
 
+use super::atomics::SplatAtomics;
 use super::reads::Reads;
 
 /// The estimators vkvcm implements (the keys of the registry).
@@ -99,4 +100,7 @@ pub struct RenderSettings {
     /// How the kernels read their read-only buffers (src/render/reads.rs); `None` chooses
     /// by device. The image does not depend on it.
     pub reads: Option<Reads>,
+    /// How splats are summed (src/render/atomics.rs); `None` chooses by device. The image
+    /// does not depend on it.
+    pub atomics: Option<SplatAtomics>,
 }

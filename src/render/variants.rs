@@ -7,6 +7,7 @@
 //! camera and path-tracing kernels add their own ([`LightKernel`], [`CameraKernel`],
 //! [`PtKernel`]).
 
+use super::atomics::SplatAtomics;
 use super::features::FeatureSet;
 use super::reads::Reads;
 use super::settings::Connect;
@@ -23,12 +24,26 @@ pub struct SceneVariant {
     pub features: FeatureSet,
     /// How the kernels read the scene (TEXEL_READS).
     pub reads: Reads,
+    /// BVH_INT64: the BVH is read with 64-bit loads (the device has `shaderInt64`).
+    pub int64_loads: bool,
+    /// How splats are summed (SPLAT_ATOMICS_64).
+    pub atomics: SplatAtomics,
 }
 
 impl SceneVariant {
     pub fn defines(&self) -> Defines {
-        self.features.defines().flag("TEXEL_READS", self.reads == Reads::Texel).value("WORKGROUP_SIZE", WORKGROUP_SIZE)
+        self.features
+            .defines()
+            .flag("TEXEL_READS", self.reads == Reads::Texel)
+            .flag("BVH_INT64", self.int64_loads)
+            .with(&splat_defines(self.atomics))
+            .value("WORKGROUP_SIZE", WORKGROUP_SIZE)
     }
+}
+
+/// SPLAT_ATOMICS_64 (glsl/film.glsl) for kernels that splat or take splats.
+pub fn splat_defines(atomics: SplatAtomics) -> Defines {
+    Defines::new().flag("SPLAT_ATOMICS_64", atomics == SplatAtomics::Bits64)
 }
 
 /// glsl/light_subpath.comp.

@@ -103,9 +103,12 @@ impl EstimatorInfo {
     pub fn connect(&self, requested: Option<Connect>) -> Result<Connect> {
         let connect = match (requested, self.default_connect) {
             (None, default) => default.unwrap_or(Connect::Path),
-            (Some(c), None) => bail!(
-                "a connection strategy ({}) is for the estimators that connect vertices (bpt, vcm), not {}",
-                c.name(),
+            (Some(Connect::Cache(n)), None) => bail!(
+                "connections to a light-vertex cache (cache:{n}) need an estimator that connects vertices (bpt, vcm), not {}",
+                self.name
+            ),
+            (Some(Connect::Path), None) => bail!(
+                "a connection strategy (path) is for the estimators that connect vertices (bpt, vcm), not {}",
                 self.name
             ),
             (Some(c), Some(_)) => c,
@@ -170,6 +173,7 @@ impl RenderSettings {
             connect: algorithm.default_connect(),
             paths_per_invocation: None,
             reads: None,
+            atomics: None,
         }
     }
 

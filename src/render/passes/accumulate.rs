@@ -7,7 +7,7 @@ use super::light_subpaths::LightVertexStore;
 use super::{PassContext, PassInfo};
 use crate::gpu::{Batch, Bind, Kernel};
 use crate::render::gpu_types::GpuPush;
-use crate::render::variants::WORKGROUP_SIZE;
+use crate::render::variants::{splat_defines, WORKGROUP_SIZE};
 
 /// The name profiles report.
 pub const NAME: &str = "accumulate";
@@ -21,8 +21,8 @@ impl Accumulate {
     pub fn new(b: &PassContext, store: &LightVertexStore) -> Result<Accumulate> {
         let mut binds: Vec<Bind> = b.film.binds().to_vec();
         binds.push(Bind::own(&store.splat));
-        let size = WORKGROUP_SIZE.to_string();
-        let kernel = b.gpu.kernel("accumulate.comp", &[("WORKGROUP_SIZE", size.as_str())], &binds)?;
+        let defines = splat_defines(b.scene.variant.atomics).value("WORKGROUP_SIZE", WORKGROUP_SIZE);
+        let kernel = b.gpu.kernel("accumulate.comp", &defines.pairs(), &binds)?;
         Ok(Accumulate { kernel, pixels: b.pixels })
     }
 
