@@ -160,7 +160,7 @@ impl Bench {
     fn new(gpu: &Arc<Gpu>, scene: &Scene, seed: u32) -> Bench {
         let frame =
             FrameSettings { width: RES, height: RES, seed, max_path_length: MAX_PATH_LENGTH, min_path_length: 0 };
-        let sg = SceneGpu::new(gpu, scene, &frame, Reads::resolve(gpu, None)).unwrap();
+        let sg = SceneGpu::new(gpu, scene, &frame, Reads::resolve(gpu, None).unwrap()).unwrap();
         // The film, splats and light-vertex store are declared by light_vertex_store.glsl
         // but not used by the debug kernel.
         let names = ["film", "film_stats", "splat", "light_vertices_a", "light_vertices_b", "light_vertex_counts"];

@@ -93,7 +93,7 @@ fn word_pairs_round_like_the_64_bit_conversion() {
     for bits in 24..64u32 {
         let top = 1u64 << bits;
         let ulp = 1u64 << (bits - 23);
-        for m in [top, top + ulp, top + 2 * ulp, (top << 1) - ulp] {
+        for m in [top, top + ulp, top + 2 * ulp, (top << 1).wrapping_sub(ulp)] {
             let m = m & !(ulp - 1);
             for d in [0, ulp / 2, ulp / 2 - 1, ulp / 2 + 1, ulp - 1] {
                 values.push(m.wrapping_add(d));

@@ -265,11 +265,26 @@ fn feature_status(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Vec<Featu
             "the largest texel buffer (checked per render)",
         ),
         report(
+            "largest device-local memory heap",
+            format!("{} MiB", largest_heap_bytes(instance, pd) >> 20),
+            "all of a render's buffers (checked per render)",
+        ),
+        report(
             "maxComputeWorkGroupCount[0]",
             l.max_compute_work_group_count[0].to_string(),
             "larger dispatches are folded into 2-D",
         ),
     ]
+}
+
+/// Size in bytes of the largest device-local memory heap of `pd` (the largest heap if
+/// none is marked device-local).
+fn largest_heap_bytes(instance: &ash::Instance, pd: vk::PhysicalDevice) -> u64 {
+    // SAFETY: valid handles.
+    let mem = unsafe { instance.get_physical_device_memory_properties(pd) };
+    let heaps = &mem.memory_heaps[..mem.memory_heap_count as usize];
+    let local = heaps.iter().filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL)).map(|h| h.size).max();
+    local.or_else(|| heaps.iter().map(|h| h.size).max()).unwrap_or(0)
 }
 
 fn describe(instance: &ash::Instance, index: usize, pd: vk::PhysicalDevice) -> DeviceInfo {
@@ -475,11 +490,7 @@ impl Gpu {
     /// Size in bytes of the largest device-local memory heap (the largest heap if none is
     /// marked device-local): where every vkvcm buffer lives. On lavapipe it is system RAM.
     pub fn device_local_heap_bytes(&self) -> u64 {
-        // SAFETY: valid handles.
-        let mem = unsafe { self.instance.get_physical_device_memory_properties(self.physical) };
-        let heaps = &mem.memory_heaps[..mem.memory_heap_count as usize];
-        let local = heaps.iter().filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL)).map(|h| h.size).max();
-        local.or_else(|| heaps.iter().map(|h| h.size).max()).unwrap_or(0)
+        largest_heap_bytes(&self.instance, self.physical)
     }
 
     /// Waits until the device is idle.

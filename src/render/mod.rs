@@ -87,7 +87,7 @@ impl Renderer {
         let plan = Self::plan_for(gpu, scene, settings)?;
         let features = features::FeatureSet::new(scene, info.reads_shading_normals, settings.generic)
             .with_count_rays(settings.count_rays);
-        let reads = reads::Reads::resolve(gpu, settings.reads);
+        let reads = reads::Reads::resolve(gpu, settings.reads)?;
         let atomics = atomics::SplatAtomics::resolve(gpu, settings.atomics)?;
         let scene_gpu = SceneGpu::with_features(gpu, scene, frame, &features, reads, atomics)?;
         let film = Film::new(gpu, &plan.film)?;

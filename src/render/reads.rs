@@ -48,10 +48,19 @@ impl Reads {
 
     /// `requested` (`--reads`), or else [`Reads::auto`] for `gpu`; storage buffers on a
     /// device that cannot read the texel formats (docs/devices.md), where `--reads texel`
-    /// is refused when the kernels are built.
-    pub fn resolve(gpu: &crate::gpu::Gpu, requested: Option<Reads>) -> Reads {
+    /// is refused.
+    pub fn resolve(gpu: &crate::gpu::Gpu, requested: Option<Reads>) -> anyhow::Result<Reads> {
         let texel_ok = gpu.has(crate::gpu::TEXEL_BUFFER_FORMATS);
-        requested.unwrap_or(if texel_ok { Reads::auto(gpu.info.device_type) } else { Reads::Storage })
+        match requested {
+            Some(Reads::Texel) if !texel_ok => anyhow::bail!(
+                "--reads texel: device {:?} cannot read {}; use --reads storage",
+                gpu.info.name,
+                crate::gpu::TEXEL_BUFFER_FORMATS
+            ),
+            Some(r) => Ok(r),
+            None if texel_ok => Ok(Reads::auto(gpu.info.device_type)),
+            None => Ok(Reads::Storage),
+        }
     }
 }
 
