@@ -187,7 +187,11 @@ vec3 merge_eval(SubpathState st, Bsdf b, LightVertex v, out float w) {
     float pf, pr;
     vec3 f = bsdf_eval(b, v.wo, pf, pr);
     pf *= b.cont_prob;
-    pr *= b.cont_prob;
+    // The reverse pdf is that of the light subpath continuing from the merged vertex
+    // (which lies at the light vertex), so its continuation probability is the light
+    // vertex's BSDF's, as in SmallVCM's RangeQuery (the two differ where a merge spans two
+    // materials).
+    pr *= bsdf_init(v.material, v.n, v.wo, true).cont_prob;
     float w_light = v.dvcm * push.mis_vc + v.dvm * pf;
     float w_camera = st.dvcm * push.mis_vc + st.dvm * pr;
     w = 1.0 / (w_light + 1.0 + w_camera);

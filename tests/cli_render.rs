@@ -217,3 +217,30 @@ fn device_loss_writes_last_snapshot() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains(&format!("the last completed {} iterations", s.iterations)), "{err}");
 }
+
+/// A glTF file with neither a camera nor a light (the corpus triangle with a grey
+/// material and without its camera node) renders a non-black image: a default camera
+/// frames it and a white sky lights it, each announced once. `--look-from` / `--look-at`
+/// then move that camera (a view from behind the triangle still sees it: two-sided).
+#[test]
+fn a_file_without_camera_or_lights_renders_with_the_defaults() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/malformed/no_camera.gltf");
+    let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(src).unwrap()).unwrap();
+    doc["materials"][0] = serde_json::json!({"name": "grey"});
+    let file = dir.path().join("bare.gltf");
+    std::fs::write(&file, serde_json::to_vec(&doc).unwrap()).unwrap();
+    for (name, view) in [("default", vec![]), ("behind", vec!["--look-from", "0.2,0.1,-4", "--look-at", "0,0,0"])] {
+        let exr = dir.path().join(format!("{name}.exr"));
+        let mut c = tiny(dir.path());
+        c.args([file.to_str().unwrap(), "-i", "2", "-o", exr.to_str().unwrap()]).args(&view);
+        let o = c.output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success() && error_lines(&o).is_empty(), "{name}: {err}");
+        assert_eq!(err.matches("default camera").count(), 1, "{name}: {err}");
+        assert_eq!(err.matches("white sky").count(), 1, "{name}: {err}");
+        let (img, _) = vkvcm::image::read_exr(&exr).unwrap();
+        let mean: f32 = img.data.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / img.data.len() as f32;
+        assert!(mean > 0.01, "{name}: the image is black (mean {mean})");
+    }
+}

@@ -421,18 +421,61 @@ fn unsupported_features_warn_once_per_kind() {
     assert_eq!(s.triangles.len(), 1, "the LINES primitive is skipped");
 }
 
+/// A file without a perspective camera gets a default camera that frames its geometry
+/// (scene::Camera::framing), with one warning; without geometry either, it is an error.
 #[test]
-fn missing_camera_is_an_error() {
+fn missing_camera_gets_one_that_frames_the_scene() {
+    let in_view = |s: &vkvcm::scene::Scene| {
+        let c = &s.camera;
+        let (centre, r) = s.bounding_sphere();
+        // The bounding sphere lies inside the vertical field of view.
+        let d = centre - c.position;
+        let half_angle = (r / d.length()).asin() + d.normalize().dot(c.forward).clamp(-1.0, 1.0).acos();
+        assert!(half_angle < 0.5 * c.yfov, "{c:?} does not frame the scene ({half_angle} rad)");
+        assert!((c.forward.length() - 1.0).abs() < 1e-5 && c.forward.dot(c.up).abs() < 1e-5);
+        assert!(
+            s.report.warnings.iter().filter(|w| w.contains("default camera")).count() == 1,
+            "{:?}",
+            s.report.warnings
+        );
+    };
     let mut d = Doc::triangle();
     d.json["scenes"][0]["nodes"] = json!([0]);
-    let e = err_of(d.load());
-    assert!(e.contains("no perspective camera") && e.contains("scene.gltf"), "{e}");
-
+    in_view(&d.load().unwrap());
     // An orthographic camera does not count.
     let mut d = Doc::triangle();
     d.json["cameras"][0] =
         json!({"type": "orthographic", "orthographic": {"xmag": 1.0, "ymag": 1.0, "znear": 0.1, "zfar": 10.0}});
-    assert!(err_of(d.load()).contains("no perspective camera"));
+    in_view(&d.load().unwrap());
+    // Nothing to frame.
+    let mut d = Doc::triangle();
+    d.json["scenes"][0]["nodes"] = json!([]);
+    let e = err_of(d.load());
+    assert!(e.contains("no perspective camera") && e.contains("no geometry") && e.contains("scene.gltf"), "{e}");
+}
+
+/// A file without lights is lit by a uniform white sky, with one warning.
+#[test]
+fn missing_lights_get_a_white_sky() {
+    // The triangle has the default material, which does not emit.
+    let s = Doc::triangle().load().unwrap();
+    assert_eq!(s.lights, [vkvcm::scene::Light::Background { radiance: glam::Vec3::ONE }]);
+    assert_eq!(s.report.warnings.iter().filter(|w| w.contains("white sky")).count(), 1, "{:?}", s.report.warnings);
+}
+
+/// --look-from / --look-at / --fov (Scene::set_view) take the file's world coordinates.
+#[test]
+fn the_view_can_be_set_in_world_coordinates() {
+    let d = Doc::triangle();
+    let mut s = d.load().unwrap();
+    let origin = glam::DVec3::from_array(s.report.origin).as_vec3();
+    s.set_view(Some(glam::Vec3::new(0.0, 0.0, 5.0)), Some(glam::Vec3::ZERO), Some(0.5)).unwrap();
+    assert!((s.camera.position - (glam::Vec3::new(0.0, 0.0, 5.0) - origin)).length() < 1e-5, "{:?}", s.camera);
+    assert!((s.camera.forward - glam::Vec3::NEG_Z).length() < 1e-5, "{:?}", s.camera);
+    assert_eq!(s.camera.yfov, 0.5);
+    assert!(s.set_view(None, None, Some(4.0)).is_err(), "a field of view past 180 degrees");
+    let p = s.camera.position + origin;
+    assert!(s.set_view(Some(p), Some(p), None).is_err(), "position = target");
 }
 
 #[test]

@@ -54,9 +54,20 @@ pub struct RenderArgs {
     /// With --connect cache: light vertices connected to per camera vertex.
     #[arg(long, default_value_t = vkvcm::render::DEFAULT_CACHE_CONNECTIONS)]
     pub cache_connections: u32,
-    /// Camera to use, by node or camera name (default: the first one).
+    /// Camera to use, by node or camera name (default: the first one; a file without a
+    /// camera gets one that frames the scene).
     #[arg(long)]
     pub camera: Option<String>,
+    /// Put the camera at X,Y,Z (the file's world coordinates); it then looks at the
+    /// centre of the scene unless --look-at says otherwise.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3)]
+    pub look_from: Option<glam::Vec3>,
+    /// Point the camera at X,Y,Z (the file's world coordinates).
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3)]
+    pub look_at: Option<glam::Vec3>,
+    /// Vertical field of view in degrees.
+    #[arg(long, value_name = "DEGREES")]
+    pub fov: Option<f32>,
     /// Output EXR (linear float32, with the second moment and settings to resume it).
     /// Default: <scene>_<algo>.exr.
     #[arg(long, short = 'o')]
@@ -107,6 +118,19 @@ pub struct RenderArgs {
     /// Vulkan device: index or name substring (see `vkvcm devices`).
     #[arg(long)]
     pub device: Option<String>,
+}
+
+/// `X,Y,Z` as a vector of three finite numbers.
+pub fn parse_vec3(s: &str) -> std::result::Result<glam::Vec3, String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|c| c.trim().parse::<f32>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|e| format!("{s:?}: {e}"))?;
+    match v[..] {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(glam::Vec3::new(x, y, z)),
+        _ => Err(format!("{s:?}: expected three finite numbers X,Y,Z")),
+    }
 }
 
 /// `--connect`.
@@ -190,7 +214,8 @@ fn check_args(a: &RenderArgs) -> Result<()> {
 pub fn render_cmd(a: RenderArgs) -> Result<()> {
     check_args(&a)?;
     let scene_name = a.scene.clone().unwrap_or_else(|| "default".into());
-    let scene = scene::load_named_with(&scene_name, &LoadOptions { camera: a.camera.clone() })?;
+    let mut scene = scene::load_named_with(&scene_name, &LoadOptions { camera: a.camera.clone() })?;
+    scene.set_view(a.look_from, a.look_at, a.fov.map(f32::to_radians)).context("--look-from / --look-at / --fov")?;
     for w in &scene.report.warnings {
         eprintln!("warning: {w}");
     }

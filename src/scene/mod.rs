@@ -281,4 +281,75 @@ impl Scene {
         let (lo, hi) = self.bounds();
         ((lo + hi) * 0.5, (hi - lo).length_squared().sqrt() * 0.5)
     }
+
+    /// Points the camera as the command line asks (`--look-from`, `--look-at`, `--fov`),
+    /// in the file's world coordinates (the importer re-centred the scene on
+    /// `report.origin`, which is subtracted here). A position without a target looks at
+    /// the centre of the scene's bounds; a target without a position keeps the camera
+    /// where it is. The up direction stays the camera's, made orthogonal to the new
+    /// view (world +Y if the view is along it).
+    pub fn set_view(
+        &mut self,
+        look_from: Option<Vec3>,
+        look_at: Option<Vec3>,
+        yfov: Option<f32>,
+    ) -> anyhow::Result<()> {
+        let origin = glam::DVec3::from_array(self.report.origin);
+        let local = |p: Vec3| (p.as_dvec3() - origin).as_vec3();
+        if let Some(f) = yfov {
+            if !(f > 0.0 && f < std::f32::consts::PI) {
+                anyhow::bail!("field of view {} degrees is not in (0, 180)", f.to_degrees());
+            }
+            self.camera.yfov = f;
+        }
+        if look_from.is_none() && look_at.is_none() {
+            return Ok(());
+        }
+        let position = look_from.map(local).unwrap_or(self.camera.position);
+        let target = look_at.map(local).unwrap_or_else(|| {
+            if look_from.is_some() {
+                self.bounding_sphere().0
+            } else {
+                self.camera.position + self.camera.forward
+            }
+        });
+        let camera = Camera::looking_at(position, target, self.camera.up, self.camera.yfov)
+            .ok_or_else(|| anyhow::anyhow!("the camera's position and target are the same point"))?;
+        self.camera = camera;
+        Ok(())
+    }
+}
+
+/// Where the camera of a file without one looks from: the direction from the centre of the
+/// scene to the camera (+Z is glTF's front; raised 20 degrees and turned 30 degrees to the
+/// right around +Y), and its vertical field of view.
+pub const DEFAULT_VIEW_DIRECTION_DEGREES: (f32, f32) = (30.0, 20.0);
+pub const DEFAULT_YFOV_DEGREES: f32 = 40.0;
+
+impl Camera {
+    /// A camera at `position` looking at `target`, with `up` made orthogonal to the view
+    /// (world +Y when `up` is along it); `None` when position and target coincide.
+    pub fn looking_at(position: Vec3, target: Vec3, up: Vec3, yfov: f32) -> Option<Camera> {
+        let forward = (target - position).try_normalize()?;
+        let ortho = |u: Vec3| (u - forward * forward.dot(u)).try_normalize();
+        let up = ortho(up).or_else(|| ortho(Vec3::Y)).or_else(|| ortho(Vec3::Z))?;
+        Some(Camera { position, forward, up, yfov })
+    }
+
+    /// The default camera of a scene without one: looking at the centre of the bounding
+    /// sphere (centre `c`, radius `r`) from [`DEFAULT_VIEW_DIRECTION_DEGREES`], far enough
+    /// that the sphere fits the vertical field of view [`DEFAULT_YFOV_DEGREES`] with a
+    /// margin of 10%; `None` for an empty scene.
+    pub fn framing(c: Vec3, r: f32) -> Option<Camera> {
+        if !(r > 0.0 && r.is_finite()) {
+            return None;
+        }
+        let (azimuth, elevation) =
+            (DEFAULT_VIEW_DIRECTION_DEGREES.0.to_radians(), DEFAULT_VIEW_DIRECTION_DEGREES.1.to_radians());
+        let towards_camera =
+            Vec3::new(azimuth.sin() * elevation.cos(), elevation.sin(), azimuth.cos() * elevation.cos());
+        let yfov = DEFAULT_YFOV_DEGREES.to_radians();
+        let distance = 1.1 * r / (0.5 * yfov).sin();
+        Camera::looking_at(c + towards_camera * distance, c, Vec3::Y, yfov)
+    }
 }

@@ -36,9 +36,10 @@ impl Importer<'_> {
     }
 
     /// The rendered camera: the candidate whose node or camera name is `options.camera`,
-    /// else the first one. Its up vector is made orthogonal to its forward vector; a
+    /// else the first one, else (no camera in the file) a default camera framing the
+    /// geometry ([`Camera::framing`], with a warning). Its up vector is made orthogonal to its forward vector; a
     /// degenerate transform or a yfov outside (0, pi) is an error.
-    pub(super) fn choose_camera(&self, options: &LoadOptions) -> Result<Camera> {
+    pub(super) fn choose_camera(&mut self, options: &LoadOptions) -> Result<Camera> {
         let chosen = match &options.camera {
             Some(want) => self
                 .cameras
@@ -59,7 +60,22 @@ impl Importer<'_> {
                         if names.is_empty() { "none".to_string() } else { names.join(", ") }
                     )
                 })?,
-            None => self.cameras.first().ok_or_else(|| anyhow!("no perspective camera in the default scene"))?,
+            None => {
+                match self.cameras.first() {
+                    Some(c) => c,
+                    None => {
+                        let (c, r) = self.scene.bounding_sphere();
+                        let camera = Camera::framing(c, r).ok_or_else(|| {
+                        anyhow!("no perspective camera in the default scene, and no geometry for a default camera to frame")
+                    })?;
+                        self.warnings.warn(
+                        "no perspective camera: a default camera frames the scene (from the front, +Z, turned 30 degrees right and 20 degrees up, 40-degree field of view; --look-from, --look-at, --fov change it)",
+                        "",
+                    );
+                        return Ok(camera);
+                    }
+                }
+            }
         };
         let w = chosen.world;
         let position = w.transform_point3(Vec3::ZERO);

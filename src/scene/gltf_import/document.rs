@@ -10,10 +10,22 @@ use gltf::json;
 /// The validated JSON of `bytes` (`.gltf` or `.glb`) and the GLB binary chunk, if any.
 pub(super) fn parse_document(bytes: &[u8], warnings: &mut Warnings) -> Result<(json::Root, Option<Vec<u8>>)> {
     let (mut root, blob) = read_container(bytes)?;
+    check_version(&root)?;
     check_extensions(&mut root, warnings)?;
     check_attribute_indices(&root)?;
     validate(&root, warnings)?;
     Ok((root, blob))
+}
+
+/// Refuses a file that is not glTF 2.x: glTF 1.0 is another format (materials as
+/// techniques and shaders, other accessors), which parses as JSON but means something
+/// else.
+fn check_version(root: &json::Root) -> Result<()> {
+    let v = root.asset.version.trim();
+    if v.split('.').next() != Some("2") {
+        bail!("glTF version {v:?} (asset.version): vkvcm reads glTF 2.0 files only; convert the file to glTF 2.0");
+    }
+    Ok(())
 }
 
 /// Refuses mesh attributes that refer to a missing accessor. gltf-json's primitive check

@@ -82,7 +82,9 @@ impl Importer<'_> {
             self.scene.lights.push(Light::Background { radiance });
         }
         if self.scene.lights.is_empty() {
-            self.warnings.warn("the scene has no light source", "");
+            // A file without lights is lit as glTF viewers light it by default.
+            self.warnings.warn("no light source: a uniform white sky (background radiance 1) lights the scene", "");
+            self.scene.lights.push(Light::Background { radiance: Vec3::ONE });
         }
         Ok(())
     }
