@@ -22,3 +22,16 @@ pub struct Techniques {
     /// Light tracing without MIS, which also splats directly seen emitters (lt).
     pub light_trace_only: bool,
 }
+
+impl Techniques {
+    /// No light subpaths: the camera-only estimators (pt, el).
+    pub const NONE: Techniques = Techniques {
+        light_subpaths: false,
+        store_vertices: false,
+        connect_to_camera: false,
+        vertex_connection: false,
+        vertex_merging: false,
+        merge_first_vertex_only: false,
+        light_trace_only: false,
+    };
+}

@@ -36,6 +36,12 @@ enum FilmPass {
     Accumulate(Accumulate),
 }
 
+/// Builds the light-subpath estimator of `b`'s settings, with its registry techniques
+/// (the `build` of lt, bpt, ppm, bpm and vcm).
+pub fn build(b: &Build) -> Result<Box<dyn Estimator>> {
+    Ok(Box::new(LightSubpathEstimator::new(b, b.settings.algorithm.info().techniques)?))
+}
+
 /// A light-subpath estimator built for one render.
 pub struct LightSubpathEstimator {
     techniques: Techniques,

@@ -4,23 +4,15 @@
 //! Passes per iteration (src/render/estimators/bidirectional.rs): light subpaths (store
 //! vertices), grid build, camera subpaths (merging at every vertex, MIS; film).
 
-use anyhow::Result;
+use super::{Algorithm, EstimatorInfo, Techniques};
 
-use super::bidirectional::LightSubpathEstimator;
-use super::{Algorithm, Build, Estimator, EstimatorInfo, Techniques};
-
-pub const INFO: EstimatorInfo = EstimatorInfo {
-    algorithm: Algorithm::Bpm,
-    name: "bpm",
-    description: "Bidirectional photon mapping: merging at every camera vertex, with MIS.",
-    techniques: TECHNIQUES,
-    radiance: true,
-    consistent_only: true,
-    default_connect: None,
-    reads_shading_normals: false,
-    regenerates_paths: true,
-    build,
-};
+pub const INFO: EstimatorInfo = EstimatorInfo::light_subpath(
+    Algorithm::Bpm,
+    "bpm",
+    "Bidirectional photon mapping: merging at every camera vertex, with MIS.",
+    TECHNIQUES,
+    None,
+);
 
 /// Vertex merging at every non-specular camera vertex, with MIS.
 pub const TECHNIQUES: Techniques = Techniques {
@@ -32,7 +24,3 @@ pub const TECHNIQUES: Techniques = Techniques {
     merge_first_vertex_only: false,
     light_trace_only: false,
 };
-
-fn build(b: &Build) -> Result<Box<dyn Estimator>> {
-    Ok(Box::new(LightSubpathEstimator::new(b, TECHNIQUES)?))
-}

@@ -9,24 +9,16 @@
 //! vertices, connect to the camera), with `--connect cache` the light-vertex prefix, camera
 //! subpaths (NEE + vertex connections; splats -> film).
 
-use anyhow::Result;
-
-use super::bidirectional::LightSubpathEstimator;
-use super::{Algorithm, Build, Estimator, EstimatorInfo, Techniques};
+use super::{Algorithm, EstimatorInfo, Techniques};
 use crate::render::settings::{Connect, DEFAULT_CACHE_CONNECTIONS};
 
-pub const INFO: EstimatorInfo = EstimatorInfo {
-    algorithm: Algorithm::Bpt,
-    name: "bpt",
-    description: "Bidirectional path tracing (vertex connection), SmallVCM's MIS.",
-    techniques: TECHNIQUES,
-    radiance: true,
-    consistent_only: false,
-    default_connect: Some(Connect::Cache(DEFAULT_CACHE_CONNECTIONS)),
-    reads_shading_normals: false,
-    regenerates_paths: true,
-    build,
-};
+pub const INFO: EstimatorInfo = EstimatorInfo::light_subpath(
+    Algorithm::Bpt,
+    "bpt",
+    "Bidirectional path tracing (vertex connection), SmallVCM's MIS.",
+    TECHNIQUES,
+    Some(Connect::Cache(DEFAULT_CACHE_CONNECTIONS)),
+);
 
 /// Vertex connection: light-vertex connections, NEE and camera connections, with MIS.
 pub const TECHNIQUES: Techniques = Techniques {
@@ -38,7 +30,3 @@ pub const TECHNIQUES: Techniques = Techniques {
     merge_first_vertex_only: false,
     light_trace_only: false,
 };
-
-fn build(b: &Build) -> Result<Box<dyn Estimator>> {
-    Ok(Box::new(LightSubpathEstimator::new(b, TECHNIQUES)?))
-}

@@ -4,23 +4,15 @@
 //! Passes per iteration (src/render/estimators/bidirectional.rs): light subpaths (connect
 //! to the camera, no vertex store), accumulate (splats -> film).
 
-use anyhow::Result;
+use super::{Algorithm, EstimatorInfo, Techniques};
 
-use super::bidirectional::LightSubpathEstimator;
-use super::{Algorithm, Build, Estimator, EstimatorInfo, Techniques};
-
-pub const INFO: EstimatorInfo = EstimatorInfo {
-    algorithm: Algorithm::Lt,
-    name: "lt",
-    description: "Light tracing: light subpaths connected to the camera.",
-    techniques: TECHNIQUES,
-    radiance: true,
-    consistent_only: false,
-    default_connect: None,
-    reads_shading_normals: false,
-    regenerates_paths: true,
-    build,
-};
+pub const INFO: EstimatorInfo = EstimatorInfo::light_subpath(
+    Algorithm::Lt,
+    "lt",
+    "Light tracing: light subpaths connected to the camera.",
+    TECHNIQUES,
+    None,
+);
 
 /// Light subpaths connected to the camera, nothing stored, no MIS.
 pub const TECHNIQUES: Techniques = Techniques {
@@ -32,7 +24,3 @@ pub const TECHNIQUES: Techniques = Techniques {
     merge_first_vertex_only: false,
     light_trace_only: true,
 };
-
-fn build(b: &Build) -> Result<Box<dyn Estimator>> {
-    Ok(Box::new(LightSubpathEstimator::new(b, TECHNIQUES)?))
-}

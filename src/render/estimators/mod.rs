@@ -97,6 +97,30 @@ pub struct EstimatorInfo {
 }
 
 impl EstimatorInfo {
+    /// A light-subpath estimator (lt, bpt, ppm, bpm, vcm): its value is radiance, it is
+    /// consistent only when it merges, its kernels regenerate paths and shade with
+    /// geometric normals, and its passes are [`bidirectional`]'s for `techniques`.
+    pub const fn light_subpath(
+        algorithm: Algorithm,
+        name: &'static str,
+        description: &'static str,
+        techniques: Techniques,
+        default_connect: Option<Connect>,
+    ) -> EstimatorInfo {
+        EstimatorInfo {
+            algorithm,
+            name,
+            description,
+            techniques,
+            radiance: true,
+            consistent_only: techniques.vertex_merging,
+            default_connect,
+            reads_shading_normals: false,
+            regenerates_paths: true,
+            build: bidirectional::build,
+        }
+    }
+
     /// Where this estimator's vertex connections go when `requested` (`None`: its
     /// default); any request is refused for an estimator without vertex connections, and
     /// a cache of 0 connections for every estimator.

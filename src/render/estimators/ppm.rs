@@ -5,23 +5,15 @@
 //! Passes per iteration (src/render/estimators/bidirectional.rs): light subpaths (store
 //! vertices), grid build, camera subpaths (merging at the first non-specular vertex; film).
 
-use anyhow::Result;
+use super::{Algorithm, EstimatorInfo, Techniques};
 
-use super::bidirectional::LightSubpathEstimator;
-use super::{Algorithm, Build, Estimator, EstimatorInfo, Techniques};
-
-pub const INFO: EstimatorInfo = EstimatorInfo {
-    algorithm: Algorithm::Ppm,
-    name: "ppm",
-    description: "Progressive photon mapping: merging at the first non-specular camera vertex.",
-    techniques: TECHNIQUES,
-    radiance: true,
-    consistent_only: true,
-    default_connect: None,
-    reads_shading_normals: false,
-    regenerates_paths: true,
-    build,
-};
+pub const INFO: EstimatorInfo = EstimatorInfo::light_subpath(
+    Algorithm::Ppm,
+    "ppm",
+    "Progressive photon mapping: merging at the first non-specular camera vertex.",
+    TECHNIQUES,
+    None,
+);
 
 /// Merging at the first non-specular camera vertex only, no MIS.
 pub const TECHNIQUES: Techniques = Techniques {
@@ -33,7 +25,3 @@ pub const TECHNIQUES: Techniques = Techniques {
     merge_first_vertex_only: true,
     light_trace_only: false,
 };
-
-fn build(b: &Build) -> Result<Box<dyn Estimator>> {
-    Ok(Box::new(LightSubpathEstimator::new(b, TECHNIQUES)?))
-}

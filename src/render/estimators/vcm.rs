@@ -7,24 +7,16 @@
 //! vertices, connect to the camera), with `--connect cache` the light-vertex prefix, grid
 //! build, camera subpaths (NEE + connections + merging, MIS; splats -> film).
 
-use anyhow::Result;
-
-use super::bidirectional::LightSubpathEstimator;
-use super::{Algorithm, Build, Estimator, EstimatorInfo, Techniques};
+use super::{Algorithm, EstimatorInfo, Techniques};
 use crate::render::settings::Connect;
 
-pub const INFO: EstimatorInfo = EstimatorInfo {
-    algorithm: Algorithm::Vcm,
-    name: "vcm",
-    description: "Vertex connection and merging: bpt's connections and bpm's merging, with MIS.",
-    techniques: TECHNIQUES,
-    radiance: true,
-    consistent_only: true,
-    default_connect: Some(Connect::Path),
-    reads_shading_normals: false,
-    regenerates_paths: true,
-    build,
-};
+pub const INFO: EstimatorInfo = EstimatorInfo::light_subpath(
+    Algorithm::Vcm,
+    "vcm",
+    "Vertex connection and merging: bpt's connections and bpm's merging, with MIS.",
+    TECHNIQUES,
+    Some(Connect::Path),
+);
 
 /// Vertex connection and vertex merging, with MIS.
 pub const TECHNIQUES: Techniques = Techniques {
@@ -36,7 +28,3 @@ pub const TECHNIQUES: Techniques = Techniques {
     merge_first_vertex_only: false,
     light_trace_only: false,
 };
-
-fn build(b: &Build) -> Result<Box<dyn Estimator>> {
-    Ok(Box::new(LightSubpathEstimator::new(b, TECHNIQUES)?))
-}
