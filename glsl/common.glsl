@@ -117,19 +117,15 @@ float u64_words_to_float(uint lo, uint hi) {
         rest_above_half = rest > half_unit;
         rest_is_half = rest == half_unit;
     } else {
-        // shift in 32..40: the rest is (hi's low shift - 32 bits, lo).
+        // shift in 32..40: the rest is (hi's low s = shift - 32 bits, lo) and half a unit
+        // 2^(shift - 1), as (high, low) words.
         int s = shift - 32;
         mant = hi >> s;
-        uint rest_hi = s == 0 ? 0u : hi & ((1u << s) - 1u);
+        uint rest_hi = hi & ((1u << s) - 1u);
         uint half_hi = s == 0 ? 0u : 1u << (s - 1);
-        if (s == 0) {
-            // The rest is lo alone; half is 2^31.
-            rest_above_half = lo > 0x80000000u;
-            rest_is_half = lo == 0x80000000u;
-        } else {
-            rest_above_half = rest_hi > half_hi || (rest_hi == half_hi && lo > 0u);
-            rest_is_half = rest_hi == half_hi && lo == 0u;
-        }
+        uint half_lo = s == 0 ? 0x80000000u : 0u;
+        rest_above_half = rest_hi > half_hi || (rest_hi == half_hi && lo > half_lo);
+        rest_is_half = rest_hi == half_hi && lo == half_lo;
     }
     if (rest_above_half || (rest_is_half && (mant & 1u) == 1u)) mant += 1u;
     return ldexp(float(mant), shift);

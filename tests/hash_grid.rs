@@ -1,4 +1,4 @@
-//! The GPU hash grid (stage 2, src/render/passes/hash_grid.rs, glsl/hash_grid*.{glsl,comp}) on
+//! The GPU hash grid (the grid-build pass, src/render/passes/hash_grid.rs, glsl/hash_grid*.{glsl,comp}) on
 //! lavapipe (or VKVCM_TEST_DEVICE), validation on: the built structure against a CPU
 //! counting sort, radius queries through hash_grid.glsl against CPU brute force, the
 //! multi-level scan against a CPU scan, and (ignored by default) the build's speed.

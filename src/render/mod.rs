@@ -151,11 +151,6 @@ impl Renderer {
         &self.scene_gpu.variant.features
     }
 
-    /// The plan of sizes the render allocated from.
-    pub fn plan(&self) -> &plan::FramePlan {
-        &self.plan
-    }
-
     /// The passes of an iteration.
     pub fn passes(&self) -> Vec<passes::PassInfo> {
         self.est.passes()

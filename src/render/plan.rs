@@ -40,16 +40,15 @@ pub struct FramePlan {
 }
 
 impl FramePlan {
-    /// The plan of a render of `scene` with `s` by an estimator with `techniques`,
-    /// tracing `paths_per_invocation` paths per invocation. The settings are checked
-    /// ([`RenderSettings::check`]).
+    /// The plan of a render of `scene` with `s` (already checked: `RenderSettings::check`,
+    /// as `Renderer::plan_for` does) by an estimator with `techniques`, tracing
+    /// `paths_per_invocation` paths per invocation.
     pub fn new(
         scene: &Scene,
         s: &RenderSettings,
         techniques: Techniques,
         paths_per_invocation: u32,
     ) -> Result<FramePlan> {
-        s.check()?;
         let prims = scene.triangles.len() + scene.spheres.len();
         if prims > crate::bvh::layout::MAX_PRIMS {
             bail!(
@@ -85,7 +84,7 @@ impl FramePlan {
         })
     }
 
-    /// Every buffer, in allocation order.
+    /// Every buffer.
     pub fn buffers(&self) -> Vec<BufferSize> {
         let mut v = self.scene.buffers();
         v.extend(self.film.buffers());

@@ -18,7 +18,12 @@ use crate::gpu::Defines;
 /// dispatches read it back from each kernel's SPIR-V (`Kernel::groups_for`).
 pub const WORKGROUP_SIZE: u32 = 64;
 
-/// What every render kernel is compiled with.
+/// `WORKGROUP_SIZE`, which every render kernel is compiled with.
+pub fn workgroup_defines() -> Defines {
+    Defines::new().value("WORKGROUP_SIZE", WORKGROUP_SIZE)
+}
+
+/// What every render kernel that reads the scene is compiled with.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SceneVariant {
     pub features: FeatureSet,
@@ -37,7 +42,7 @@ impl SceneVariant {
             .flag("TEXEL_READS", self.reads == Reads::Texel)
             .flag("BVH_INT64", self.int64_loads)
             .with(&splat_defines(self.atomics))
-            .value("WORKGROUP_SIZE", WORKGROUP_SIZE)
+            .with(&workgroup_defines())
     }
 }
 

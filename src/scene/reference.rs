@@ -78,7 +78,7 @@ const LB: [P; 8] = [
     [-0.25, -0.25, 1.28002],
 ];
 
-/// Material indices of SCENES.md 2.4.
+/// Material indices of docs/smallvcm.md 2.4.
 const M_LIGHT0: u32 = 0;
 const M_LIGHT1: u32 = 1;
 const M_FLOOR: u32 = 2;

@@ -13,7 +13,7 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::gpu::{fold_groups, Batch, Bind, Buffer, Gpu, Kernel};
 use crate::render::sizes::BufferSize;
-use crate::render::variants::WORKGROUP_SIZE;
+use crate::render::variants::{workgroup_defines, WORKGROUP_SIZE};
 
 /// Elements each invocation of exclusive_scan.comp scans (`PER_THREAD`).
 const ELEMENTS_PER_INVOCATION: u32 = 4;
@@ -92,16 +92,11 @@ impl ExclusiveScan {
         }
         let scratch = plan.scratch.zeroed(gpu)?;
         let kernel = |add: bool, target: &Buffer| {
-            let defines = [
-                ("ADD", if add { "1" } else { "0" }),
-                ("WORKGROUP_SIZE", &*WORKGROUP_SIZE.to_string()),
-                ("PER_THREAD", &*format!("{ELEMENTS_PER_INVOCATION}u")),
-            ]
-            .map(|(k, v)| (k, v.to_string()));
-            let defines: Vec<(&str, &str)> = defines.iter().map(|(k, v)| (*k, v.as_str())).collect();
+            let defines =
+                workgroup_defines().flag("ADD", add).value("PER_THREAD", format!("{ELEMENTS_PER_INVOCATION}u"));
             gpu.kernel(
                 "exclusive_scan.comp",
-                &defines,
+                &defines.pairs(),
                 &[Bind::u32("scan_data", target), Bind::u32("scan_block_sums", &scratch)],
             )
         };

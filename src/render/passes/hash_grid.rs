@@ -27,7 +27,7 @@ use super::light_subpaths::LIGHT_VERTEX_HALF_BYTES;
 use super::PassInfo;
 use crate::gpu::{Batch, Bind, Buffer, Gpu, Kernel};
 use crate::render::sizes::{check_sizes, BufferSize};
-use crate::render::variants::WORKGROUP_SIZE;
+use crate::render::variants::workgroup_defines;
 
 /// The name profiles report.
 pub const NAME: &str = "grid build";
@@ -174,11 +174,10 @@ impl HashGrid {
             Bind::vec4("grid_keys", &keys),
             Bind::vec4("grid_points", &cell_points),
         ];
-        let size = WORKGROUP_SIZE.to_string();
-        let defines = [("WORKGROUP_SIZE", size.as_str())];
-        let count = gpu.kernel("hash_grid_count.comp", &defines, &binds)?;
-        let scatter = gpu.kernel("hash_grid_scatter.comp", &defines, &binds)?;
-        let sort = gpu.kernel("hash_grid_sort.comp", &defines, &binds)?;
+        let defines = workgroup_defines();
+        let count = gpu.kernel("hash_grid_count.comp", &defines.pairs(), &binds)?;
+        let scatter = gpu.kernel("hash_grid_scatter.comp", &defines.pairs(), &binds)?;
+        let sort = gpu.kernel("hash_grid_sort.comp", &defines.pairs(), &binds)?;
         let scan = ExclusiveScan::with_plan(gpu, &cell_start, &plan.scan)?;
         Ok(HashGrid {
             cell_start,

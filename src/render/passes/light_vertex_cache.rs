@@ -17,7 +17,7 @@ use super::light_subpaths::{LightVertexPlan, LightVertexStore};
 use super::PassInfo;
 use crate::gpu::{Batch, Bind, Buffer, Gpu, Kernel};
 use crate::render::sizes::BufferSize;
-use crate::render::variants::WORKGROUP_SIZE;
+use crate::render::variants::workgroup_defines;
 
 /// The name profiles report.
 pub const NAME: &str = "light-vertex prefix";
@@ -72,10 +72,9 @@ impl LightVertexCache {
         let prefix = plan.prefix.zeroed(gpu)?;
         let dense = plan.dense.zeroed(gpu)?;
         let scan = ExclusiveScan::with_plan(gpu, &prefix, &plan.scan)?;
-        let size = WORKGROUP_SIZE.to_string();
         let compact = gpu.kernel(
             "lv_cache_compact.comp",
-            &[("WORKGROUP_SIZE", size.as_str())],
+            &workgroup_defines().pairs(),
             &[Bind::own_u32(&store.counts), Bind::own_u32(&prefix), Bind::own_u32(&dense)],
         )?;
         Ok(LightVertexCache {
