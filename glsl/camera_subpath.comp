@@ -185,7 +185,7 @@ void main() {
             uint bg = background_light();
             if (bg != NO_LIGHT && st.len >= min_len) {
                 float dpdf, epdf;
-                vec3 le = background_radiance(bg, dpdf, epdf);
+                vec3 le = background_radiance(bg, st.d, dpdf, epdf);
                 L += st.thr * le * mis_weight_hit(st, dpdf, epdf, pick, USE_VC != 0);
             }
             continue;

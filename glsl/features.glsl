@@ -41,6 +41,10 @@
 #ifndef HAS_BACKGROUND
 #define HAS_BACKGROUND 1
 #endif
+// The background is an image (glsl/environment.glsl); else only constant backgrounds.
+#ifndef HAS_ENVIRONMENT_MAP
+#define HAS_ENVIRONMENT_MAP 1
+#endif
 // Geometry (glsl/scene.glsl; the BVH's own switch is BVH_NO_SPHERES).
 #ifndef HAS_SPHERES
 #define HAS_SPHERES 1

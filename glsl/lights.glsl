@@ -12,6 +12,9 @@
 #define LIGHTS_GLSL
 
 #include "features.glsl"
+#if HAS_ENVIRONMENT_MAP
+#include "environment.glsl"
+#endif
 
 #define EPS_COSINE_LIGHT 1e-6
 
@@ -108,10 +111,19 @@ LightSample light_illuminate(uint index, vec3 x, vec2 u) {
 #endif
 #if HAS_BACKGROUND
     if (kind == LIGHT_BACKGROUND) {
-        s.wi = sample_uniform_sphere(u);
         s.dist = 1e30;
-        s.pdf_w = INV_4PI;
-        s.emission_pdf_w = INV_4PI / (PI * r_scene * r_scene);
+#if HAS_ENVIRONMENT_MAP
+        if (env_has_map(l)) {
+            bool ok;
+            s.radiance *= env_sample(l, u, s.wi, s.pdf_w, ok);
+            if (!ok) return s;
+        } else
+#endif
+        {
+            s.wi = sample_uniform_sphere(u);
+            s.pdf_w = INV_4PI;
+        }
+        s.emission_pdf_w = s.pdf_w / (PI * r_scene * r_scene);
     }
 #endif
     s.ok = max3(s.radiance) > 0.0;
@@ -133,12 +145,21 @@ vec3 area_light_radiance(uint index, vec3 dir, out float direct_pdf_a, out float
     return l.radiance.rgb;
 }
 
-// The background seen along `dir`, with its direct (solid angle) and emission pdfs.
-vec3 background_radiance(uint index, out float direct_pdf_w, out float emission_pdf_w) {
+// The background seen along `dir` (a ray direction that left the scene), with its direct
+// (solid angle) and emission pdfs.
+vec3 background_radiance(uint index, vec3 dir, out float direct_pdf_w, out float emission_pdf_w) {
     float r = params.scene_sphere.w;
+    GpuLight l = light_at(index);
+#if HAS_ENVIRONMENT_MAP
+    if (env_has_map(l)) {
+        vec3 le = l.radiance.rgb * env_eval(l, dir, direct_pdf_w);
+        emission_pdf_w = direct_pdf_w / (PI * r * r);
+        return le;
+    }
+#endif
     direct_pdf_w = INV_4PI;
     emission_pdf_w = INV_4PI / (PI * r * r);
-    return light_at(index).radiance.rgb;
+    return l.radiance.rgb;
 }
 
 // ---- Emission: a ray leaving a light (light subpaths). Pdfs exclude the pick
@@ -218,9 +239,24 @@ LightEmission light_emit(uint index, vec2 u_pos, vec2 u_dir) {
 #endif
 #if HAS_BACKGROUND
         if (kind == LIGHT_BACKGROUND) {
-            e.dir = sample_uniform_sphere(u_dir);
-            e.emission_pdf_w = INV_4PI / (PI * r * r);
-            e.direct_pdf = INV_4PI;
+#if HAS_ENVIRONMENT_MAP
+            if (env_has_map(l)) {
+                // Photons travel away from the sampled direction towards the map.
+                vec3 to_map;
+                bool ok;
+                e.energy *= env_sample(l, u_dir, to_map, e.direct_pdf, ok);
+                e.dir = -to_map;
+                if (!ok) {
+                    e.energy = vec3(0.0);
+                    e.direct_pdf = 1.0;
+                }
+            } else
+#endif
+            {
+                e.dir = sample_uniform_sphere(u_dir);
+                e.direct_pdf = INV_4PI;
+            }
+            e.emission_pdf_w = e.direct_pdf / (PI * r * r);
         }
 #endif
         vec2 disc = sample_concentric_disc(u_pos);

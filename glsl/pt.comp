@@ -54,7 +54,7 @@ void main() {
             uint bg = background_light();
             if (bg != NO_LIGHT && len >= min_len) {
                 float dpdf, epdf;
-                vec3 Le = background_radiance(bg, dpdf, epdf);
+                vec3 Le = background_radiance(bg, d, dpdf, epdf);
                 float wgt = (NEE == 0 || last_specular) ? 1.0 : balance(last_pdf, pick * dpdf);
                 L += thr * Le * wgt;
             }

@@ -277,6 +277,7 @@ fn mis_weights_sum_to_one() {
         .iter()
         .map(|n| vkvcm::scene::load_named(n).unwrap())
         .chain(std::iter::once(ggx_scene()))
+        .chain(std::iter::once(environment_scene(smooth_sky(16, 9), 40.0)))
         .collect();
     // The last mode is the negative control: the check can fail.
     let bad = Mode { name: "vcm, mis_vc x2", vc_scale: 2.0, ..VCM_WIDE };

@@ -495,11 +495,11 @@ fn camera_selected_by_name() {
     let first = load(&path).unwrap();
     assert_eq!(first.camera.position, Vec3::new(0.0, 0.0, 5.0));
     for name in ["second", "wide"] {
-        let s = load_with(&path, &LoadOptions { camera: Some(name.into()) }).unwrap();
+        let s = load_with(&path, &LoadOptions { camera: Some(name.into()), ..Default::default() }).unwrap();
         assert_eq!(s.camera.position, Vec3::new(0.0, 7.0, 0.0));
         assert_eq!(s.camera.yfov, 1.2);
     }
-    let e = err_of(load_with(&path, &LoadOptions { camera: Some("nope".into()) }));
+    let e = err_of(load_with(&path, &LoadOptions { camera: Some("nope".into()), ..Default::default() }));
     assert!(e.contains("nope") && e.contains("cam") && e.contains("second"), "{e}");
 }
 

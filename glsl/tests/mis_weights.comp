@@ -52,7 +52,8 @@ vec3 dir_to(uint i, uint j) {
 
 // Next-event estimation's light sample for the fixed y_0 as seen from x = y_1: the
 // production light_illuminate, with its area branch repeated for a given point instead of
-// a sampled one (the pdfs of the other lights do not depend on the sample).
+// a sampled one and the background's pdfs taken along the fixed direction (the pdfs of
+// the other lights do not depend on the sample).
 LightSample light_sample_fixed(uint li, vec3 x) {
     LightSample s = light_illuminate(li, x, vec2(0.5));
     uint kind = light_kind(light_at(li));
@@ -68,7 +69,13 @@ LightSample light_sample_fixed(uint li, vec3 x) {
         s.light_point = vp[0];
         s.ok = s.cos_light > EPS_COSINE_LIGHT && max3(s.radiance) > 0.0;
     } else if (kind == LIGHT_BACKGROUND) {
+        // The background's pdfs depend on the direction when it is a map.
         s.wi = -dir0;
+        float dp, ep;
+        s.radiance = background_radiance(li, s.wi, dp, ep);
+        s.pdf_w = dp;
+        s.emission_pdf_w = ep;
+        s.ok = dp > 0.0 && max3(s.radiance) > 0.0;
     }
     return s;
 }
@@ -193,13 +200,19 @@ void main() {
     }
     uint kind = light_kind(light_at(li));
     // The start of a light subpath leaving y_0 towards y_1: light_emit's pdfs, whose
-    // only dependence on the sample is an area light's cosine.
+    // only dependences on the sample are an area light's cosine and an environment map's
+    // direction.
     LightEmission e = light_emit(li, vec2(0.5), vec2(0.5));
     vec3 d01 = dir_to(0u, 1u);
     if (kind == LIGHT_AREA) {
         e.cos_light = dot(vn[0], d01);
         if (e.cos_light <= EPS_COSINE_LIGHT) return;
         e.emission_pdf_w = e.direct_pdf * e.cos_light * INV_PI;
+    } else if (kind == LIGHT_BACKGROUND) {
+        float dp, ep;
+        if (max3(background_radiance(li, -d01, dp, ep)) <= 0.0 || dp <= 0.0) return;
+        e.direct_pdf = dp;
+        e.emission_pdf_w = ep;
     }
 
     // ---- 2. The MIS quantities of the light subpath at y_1..y_{k-1} and of the camera
@@ -240,7 +253,7 @@ void main() {
     // s = 0: the camera subpath hits the emitter (area lights and the background).
     if (kind == LIGHT_AREA || kind == LIGHT_BACKGROUND) {
         float dp, ep;
-        vec3 le = kind == LIGHT_AREA ? area_light_radiance(li, dir_to(1u, 0u), dp, ep) : background_radiance(li, dp, ep);
+        vec3 le = kind == LIGHT_AREA ? area_light_radiance(li, dir_to(1u, 0u), dp, ep) : background_radiance(li, dir_to(1u, 0u), dp, ep);
         // Without connections only purely specular camera paths count an emitter hit.
         if (max3(le) > 0.0 && (use_vc || C[0].specular || k == 1u)) {
             w = mis_weight_hit(C[0], dp, ep, pick, use_vc);

@@ -477,6 +477,7 @@ pub fn suite_row(
             ("spot", f.spot_lights),
             ("directional", f.directional_lights),
             ("background", f.background),
+            ("environment map", f.environment_map),
             ("spheres", f.spheres),
             ("shading normals", f.shading_normals),
         ];

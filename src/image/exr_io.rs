@@ -97,15 +97,20 @@ pub fn read_exr(path: &Path) -> Result<(Image, Vec<(String, String)>)> {
 
 /// [`read_exr`] that also returns the layer's other channels (as float32, sorted by name).
 pub fn read_exr_channels(path: &Path) -> Result<(Image, Vec<ExtraChannel>, Metadata)> {
+    let bytes = std::fs::read(path).map_err(|e| anyhow!("cannot read EXR {}: {e}", path.display()))?;
+    decode_exr_channels(&bytes, &path.display().to_string())
+}
+
+/// [`read_exr_channels`] of an EXR file's bytes; `shown` names it in errors.
+pub fn decode_exr_channels(bytes: &[u8], shown: &str) -> Result<(Image, Vec<ExtraChannel>, Metadata)> {
     use ::exr::prelude::{ReadChannels, ReadLayers};
-    let shown = path.display();
     let image = ::exr::image::read::read()
         .no_deep_data()
         .largest_resolution_level()
         .all_channels()
         .all_layers()
         .all_attributes()
-        .from_file(path)
+        .from_buffered(std::io::Cursor::new(bytes))
         .map_err(|e| anyhow!("cannot read EXR {shown}: {e}"))?;
 
     let mut meta: Vec<(String, String)> = Vec::new();

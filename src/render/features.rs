@@ -37,6 +37,8 @@ pub struct FeatureSet {
     pub spot_lights: bool,
     pub directional_lights: bool,
     pub background: bool,
+    /// The background is an environment map (glsl/environment.glsl).
+    pub environment_map: bool,
     pub spheres: bool,
     /// Shading normals are uploaded and read (only `el` reads them: the estimators shade
     /// with geometric normals).
@@ -80,7 +82,8 @@ impl FeatureSet {
             point_lights: g || any_light(&|l| matches!(l, Light::Point { .. })),
             spot_lights: g || any_light(&|l| matches!(l, Light::Spot { .. })),
             directional_lights: g || any_light(&|l| matches!(l, Light::Directional { .. })),
-            background: g || any_light(&|l| matches!(l, Light::Background { .. })),
+            background: g || any_light(&Light::is_environment),
+            environment_map: g || any_light(&|l| matches!(l, Light::Environment(_))),
             spheres: g || !scene.spheres.is_empty(),
             shading_normals: g || (scene_has_shading_normals && reads_shading_normals),
             scene_has_shading_normals,
@@ -108,6 +111,7 @@ impl FeatureSet {
             ("HAS_SPOT_LIGHTS", self.spot_lights),
             ("HAS_DIRECTIONAL_LIGHTS", self.directional_lights),
             ("HAS_BACKGROUND", self.background),
+            ("HAS_ENVIRONMENT_MAP", self.environment_map),
             ("HAS_SPHERES", self.spheres),
             ("HAS_SHADING_NORMALS", self.shading_normals),
             ("COUNT_RAYS", self.count_rays),
@@ -149,6 +153,7 @@ impl fmt::Display for FeatureSet {
             ("spot", self.spot_lights),
             ("directional", self.directional_lights),
             ("background", self.background),
+            ("environment map", self.environment_map),
         ];
         writeln!(f, "  lights: {}", list(&lights))?;
         writeln!(f, "  geometry: {}", list(&[("triangles", true), ("spheres", self.spheres)]))?;

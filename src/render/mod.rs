@@ -9,6 +9,7 @@
 
 pub mod atomics;
 pub mod converge;
+pub mod environment;
 pub mod estimators;
 pub mod features;
 pub mod film;

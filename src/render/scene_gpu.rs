@@ -9,6 +9,7 @@ use anyhow::{bail, Result};
 use glam::Vec3;
 
 use super::atomics::SplatAtomics;
+use super::environment::EnvironmentTables;
 use super::features::FeatureSet;
 use super::gpu_types::*;
 use super::reads::Reads;
@@ -18,12 +19,12 @@ use super::variants::SceneVariant;
 use crate::bvh;
 use crate::bvh::layout::{GpuNode, GpuPrim};
 use crate::gpu::{Bind, Buffer, Gpu, SHADER_INT64};
-use crate::scene::{Light, Scene};
+use crate::scene::{EnvironmentMap, Light, Scene};
 
 /// Upper bounds of the scene's buffers, known before the BVH is built.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ScenePlan {
-    pub buffers: [BufferSize; 8],
+    pub buffers: [BufferSize; 10],
 }
 
 fn size<T>(n: u64) -> u64 {
@@ -35,6 +36,7 @@ impl ScenePlan {
         let tris = scene.triangles.len() as u64;
         let prims = tris + scene.spheres.len() as u64;
         let normals = scene.triangles.iter().filter(|t| t.n.is_some()).count() as u64 * 3;
+        let (env_w, env_h) = environment_map(scene).map_or((0, 0), |m| (m.width as u64, m.height as u64));
         ScenePlan {
             buffers: [
                 BufferSize::new("scene_params", size::<GpuParams>(1)),
@@ -46,6 +48,8 @@ impl ScenePlan {
                 BufferSize::new("materials", size::<GpuMaterial>(scene.materials.len() as u64)),
                 BufferSize::new("lights", size::<GpuLight>(scene.lights.len() as u64)),
                 BufferSize::new("shading_normals", size::<[f32; 4]>(normals)),
+                BufferSize::new("env_texels", size::<[f32; 4]>(env_w * env_h)),
+                BufferSize::new("env_distribution", size::<f32>(env_h + env_h.saturating_sub(1) * (env_w + 1))),
             ],
         }
     }
@@ -72,7 +76,16 @@ fn bits(u: u32) -> f32 {
     f32::from_bits(u)
 }
 
-/// The lights in GPU form, and the index of the background light if any.
+/// The scene's environment map, if its background is one.
+fn environment_map(scene: &Scene) -> Option<&EnvironmentMap> {
+    scene.lights.iter().find_map(|l| match l {
+        Light::Environment(e) => Some(e.map.as_ref()),
+        _ => None,
+    })
+}
+
+/// The lights in GPU form, and the index of the background light (constant or
+/// environment map) if any.
 pub fn gpu_lights(scene: &Scene) -> Result<(Vec<GpuLight>, u32)> {
     let mut out = Vec::with_capacity(scene.lights.len());
     let mut background = NO_LIGHT;
@@ -109,12 +122,23 @@ pub fn gpu_lights(scene: &Scene) -> Result<(Vec<GpuLight>, u32)> {
                 radiance: v4(irradiance, bits(LIGHT_DIRECTIONAL)),
                 ..Default::default()
             },
+            Light::Background { .. } | Light::Environment(_) if background != NO_LIGHT => {
+                bail!("the scene has more than one background light (VKVCM_background, VKVCM_environment or --env)")
+            }
             Light::Background { radiance } => {
-                if background != NO_LIGHT {
-                    bail!("the scene has more than one background light");
-                }
                 background = i as u32;
                 GpuLight { radiance: v4(radiance, bits(LIGHT_BACKGROUND)), ..Default::default() }
+            }
+            // glsl/environment.glsl: a = (W, H) bits, b = (cos, sin) of the rotation.
+            Light::Environment(ref e) => {
+                background = i as u32;
+                let (sin, cos) = e.rotation_deg.to_radians().sin_cos();
+                GpuLight {
+                    a: [bits(e.map.width), bits(e.map.height), 0.0, 0.0],
+                    b: [cos, sin, 0.0, 0.0],
+                    radiance: v4(e.scale, bits(LIGHT_BACKGROUND)),
+                    ..Default::default()
+                }
             }
         };
         out.push(g);
@@ -219,6 +243,10 @@ impl SceneGpu {
                 glossy: v4(m.glossy, (m.roughness * m.roughness).max(MIN_GGX_ALPHA)),
             })
             .collect();
+        let env = match environment_map(scene) {
+            Some(m) if features.environment_map => EnvironmentTables::new(m),
+            _ => EnvironmentTables { texels: Vec::new(), distribution: Vec::new() },
+        };
         let buffers = vec![
             gpu.buffer_from_slice("scene_params", &[params])?,
             gpu.buffer_from_slice("bvh_nodes", &gb.nodes)?,
@@ -228,6 +256,8 @@ impl SceneGpu {
             gpu.buffer_from_slice("materials", &materials)?,
             gpu.buffer_from_slice("lights", &lights)?,
             gpu.buffer_from_slice("shading_normals", &normals)?,
+            gpu.buffer_from_slice("env_texels", &env.texels)?,
+            gpu.buffer_from_slice("env_distribution", &env.distribution)?,
         ];
         let variant = SceneVariant { features: features.clone(), reads, int64_loads: gpu.has(SHADER_INT64), atomics };
         Ok(SceneGpu { params, buffers, variant })

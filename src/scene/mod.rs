@@ -5,6 +5,8 @@
 
 use glam::Vec3;
 
+pub use environment::{EnvironmentLight, EnvironmentMap};
+
 /// A triangle in world space.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Triangle {
@@ -85,6 +87,16 @@ pub enum Light {
     Directional { direction: Vec3, irradiance: Vec3 },
     /// Constant environment radiance from every direction (extension `VKVCM_background`).
     Background { radiance: Vec3 },
+    /// An image-based environment at infinity (extension `VKVCM_environment`, or
+    /// `vkvcm render --env`). At most one background or environment per scene.
+    Environment(EnvironmentLight),
+}
+
+impl Light {
+    /// The light surrounds the scene at infinity (background or environment map).
+    pub fn is_environment(&self) -> bool {
+        matches!(self, Light::Background { .. } | Light::Environment(_))
+    }
 }
 
 /// Pinhole camera.
@@ -147,6 +159,7 @@ impl Scene {
     }
 }
 
+pub mod environment;
 pub mod gltf_import;
 pub mod reference;
 pub mod validate;
@@ -247,7 +260,7 @@ impl Scene {
         for l in &mut self.lights {
             match l {
                 Light::Point { position, .. } | Light::Spot { position, .. } => *position += by,
-                Light::Area { .. } | Light::Directional { .. } | Light::Background { .. } => {}
+                Light::Area { .. } | Light::Directional { .. } | Light::Background { .. } | Light::Environment(_) => {}
             }
         }
         self.camera.position += by;

@@ -8,7 +8,7 @@ use anyhow::{bail, Result};
 use glam::Vec3;
 
 /// Refuses a scene that every estimator would render black or cannot render: no light
-/// source with non-zero power (emissive triangles, punctual lights, `VKVCM_background`;
+/// source with non-zero power (emissive triangles, punctual lights, `VKVCM_background`, `VKVCM_environment`;
 /// emissive spheres do not count, they are not lights), or no geometry (no triangle and
 /// no sphere; the renderer needs a BVH). [`super::load_named_with`] applies it;
 /// [`super::load_with`] does not, so tools and tests can still inspect such files.
@@ -18,6 +18,7 @@ pub fn check_renderable(scene: &Scene) -> Result<()> {
         Light::Point { intensity, .. } | Light::Spot { intensity, .. } => intensity.max_element() > 0.0,
         Light::Directional { irradiance, .. } => irradiance.max_element() > 0.0,
         Light::Background { radiance } => radiance.max_element() > 0.0,
+        Light::Environment(e) => e.scale.max_element() > 0.0 && e.map.texels.iter().any(|t| t.iter().any(|&c| c > 0.0)),
     };
     if scene.triangles.is_empty() && scene.spheres.is_empty() {
         let skipped = scene.report.degenerate_triangles;
@@ -26,7 +27,7 @@ pub fn check_renderable(scene: &Scene) -> Result<()> {
     }
     if !scene.lights.iter().any(powered) {
         let why = if scene.lights.is_empty() {
-            "no emissive material, KHR_lights_punctual light or VKVCM_background"
+            "no emissive material, KHR_lights_punctual light, VKVCM_background or VKVCM_environment"
         } else {
             "every light has zero power"
         };

@@ -83,3 +83,53 @@ pub fn glossy_floor_scene(left: Material, right: Material) -> Scene {
     let cam = camera(v(0.0, -2.5, 1.0), v(0.0, 2.5, -0.8), Vec3::Z, 60.0);
     scene("glossy_floor", tris, materials, lights, cam)
 }
+
+/// The environment-map test scene (tests/render_environment.rs; the same layout as
+/// scripts/env_reference.py writes for the Mitsuba comparison): a grey diffuse ground
+/// square y = 0, |x|, |z| <= 2, a diffuse sphere and a mirror sphere of radius 0.5 on it,
+/// lit only by `map` turned by `rotation_deg`; the camera sees the spheres, the ground
+/// and the sky.
+pub fn environment_scene(map: vkvcm::scene::EnvironmentMap, rotation_deg: f32) -> Scene {
+    use vkvcm::scene::{EnvironmentLight, Sphere};
+    let c = |x: f32, z: f32| Vec3::new(x, 0.0, z);
+    let triangles = vec![
+        Triangle { p: [c(-2.0, -2.0), c(-2.0, 2.0), c(2.0, 2.0)], n: None, material: 0 },
+        Triangle { p: [c(-2.0, -2.0), c(2.0, 2.0), c(2.0, -2.0)], n: None, material: 0 },
+    ];
+    let materials = vec![
+        Material { name: "ground".into(), diffuse: Vec3::splat(0.5), ..Default::default() },
+        Material { name: "diffuse".into(), diffuse: Vec3::new(0.8, 0.5, 0.3), ..Default::default() },
+        Material { name: "mirror".into(), mirror: Vec3::splat(0.9), ..Default::default() },
+    ];
+    let light = Light::Environment(EnvironmentLight { map: std::sync::Arc::new(map), scale: Vec3::ONE, rotation_deg });
+    let cam = Camera::looking_at(Vec3::new(0.0, 1.2, 3.5), Vec3::new(0.0, 0.4, 0.0), Vec3::Y, 40f32.to_radians())
+        .expect("camera");
+    let mut s = scene("environment", triangles, materials, vec![light], cam);
+    s.spheres = vec![
+        Sphere { center: Vec3::new(-0.6, 0.5, 0.0), radius: 0.5, material: 1 },
+        Sphere { center: Vec3::new(0.6, 0.5, 0.0), radius: 0.5, material: 2 },
+    ];
+    s
+}
+
+/// A strongly non-uniform lat-long map: a pale sky, a broad warm glow 40 degrees
+/// above the horizon towards +X (radiance up to ~6), a dark ground (no constant region:
+/// a pixel seeing one would have zero variance, which the z-tests cannot compare).
+pub fn smooth_sky(width: u32, height: u32) -> vkvcm::scene::EnvironmentMap {
+    let glow = Vec3::new(0.75, 0.6, 0.0).normalize();
+    let mut texels = Vec::new();
+    for j in 0..height {
+        let theta = std::f32::consts::PI * j as f32 / (height - 1) as f32;
+        for i in 0..width {
+            let phi = 2.0 * std::f32::consts::PI * (i as f32 + 0.5) / width as f32;
+            let d = Vec3::new(phi.sin() * theta.sin(), theta.cos(), -phi.cos() * theta.sin());
+            let g = d.dot(glow).max(0.0).powi(8) * 6.0;
+            let base = if d.y >= 0.0 { Vec3::new(0.4, 0.5, 0.7) } else { Vec3::splat(0.05 - 0.04 * d.y) };
+            // A texel checkerboard (x1.6 / x0.4) makes the radiance vary within every
+            // sampling cell, so sampling that misplaces directions inside a cell shows.
+            let checker = if (i + j) % 2 == 0 { 1.6 } else { 0.4 };
+            texels.push((checker * (base + Vec3::new(g, 0.8 * g, 0.5 * g))).to_array());
+        }
+    }
+    vkvcm::scene::EnvironmentMap::new("smooth_sky", width, height, texels).expect("map")
+}

@@ -11,6 +11,7 @@ use serde_json::Value;
 pub const EXT_SPHERES: &str = "VKVCM_spheres";
 pub const EXT_MATERIALS_PHONG: &str = "VKVCM_materials_phong";
 pub const EXT_BACKGROUND: &str = "VKVCM_background";
+pub const EXT_ENVIRONMENT: &str = "VKVCM_environment";
 
 /// All extensions the importer interprets; any other one in `extensionsUsed` or
 /// `extensionsRequired` is reported as a warning.
@@ -22,6 +23,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     EXT_SPHERES,
     EXT_MATERIALS_PHONG,
     EXT_BACKGROUND,
+    EXT_ENVIRONMENT,
 ];
 
 /// Applies the extension policy to `root`. glTF 2.0 (section 3.12): a loader that does not

@@ -1,10 +1,12 @@
 //! Light sources: one area light per emitting triangle, `KHR_lights_punctual` lights and
-//! vkvcm's `VKVCM_background`.
+//! vkvcm's `VKVCM_background` and `VKVCM_environment`.
 
-use super::extensions::{ext_vec3, non_negative, EXT_BACKGROUND};
-use super::Importer;
-use crate::scene::Light;
-use anyhow::{bail, Result};
+use std::sync::Arc;
+
+use super::extensions::{ext_f32, ext_vec3, non_negative, EXT_BACKGROUND, EXT_ENVIRONMENT};
+use super::{sources, Importer, LoadOptions};
+use crate::scene::{EnvironmentLight, EnvironmentMap, Light};
+use anyhow::{anyhow, bail, Context, Result};
 use glam::{Mat4, Vec3};
 
 impl Importer<'_> {
@@ -57,9 +59,10 @@ impl Importer<'_> {
     }
 
     /// The scene's light list, in this order: area lights (in triangle order), punctual
-    /// lights (in node order), the background. Emissive spheres are not light sources (a
-    /// warning); a scene without any light gets a warning.
-    pub(super) fn collect_lights(&mut self) -> Result<()> {
+    /// lights (in node order), the background (`options.environment`, else the file's).
+    /// Emissive spheres are not light sources (a warning); a scene without any light gets
+    /// a uniform white sky and a warning.
+    pub(super) fn collect_lights(&mut self, options: &LoadOptions) -> Result<()> {
         for (i, t) in self.scene.triangles.iter().enumerate() {
             let e = self.scene.materials[t.material as usize].emission;
             if e.max_element() > 0.0 {
@@ -76,10 +79,24 @@ impl Importer<'_> {
             }
         }
         self.scene.lights.append(&mut self.punctual);
-        if let Some(bg) = self.doc.extensions().and_then(|e| e.get(EXT_BACKGROUND)) {
-            let ctx = format!("extensions.{EXT_BACKGROUND}");
-            let radiance = non_negative(ext_vec3(bg, "radiance", Vec3::ZERO, &ctx)?, &ctx)?;
-            self.scene.lights.push(Light::Background { radiance });
+        if let Some(env) = &options.environment {
+            self.scene.lights.push(Light::Environment(env.clone()));
+        } else {
+            let ext = self.doc.extensions();
+            let background = ext.and_then(|e| e.get(EXT_BACKGROUND));
+            let environment = ext.and_then(|e| e.get(EXT_ENVIRONMENT));
+            if background.is_some() && environment.is_some() {
+                bail!("the file has both {EXT_BACKGROUND} and {EXT_ENVIRONMENT}; a scene has one background");
+            }
+            if let Some(bg) = background {
+                let ctx = format!("extensions.{EXT_BACKGROUND}");
+                let radiance = non_negative(ext_vec3(bg, "radiance", Vec3::ZERO, &ctx)?, &ctx)?;
+                self.scene.lights.push(Light::Background { radiance });
+            }
+            if let Some(env) = environment {
+                let light = self.environment_light(env)?;
+                self.scene.lights.push(Light::Environment(light));
+            }
         }
         if self.scene.lights.is_empty() {
             // A file without lights is lit as glTF viewers light it by default.
@@ -87,5 +104,25 @@ impl Importer<'_> {
             self.scene.lights.push(Light::Background { radiance: Vec3::ONE });
         }
         Ok(())
+    }
+
+    /// `VKVCM_environment`: `{"uri": "sky.hdr", "strength": 1, "rotation": 0}`; the URI
+    /// (a relative path inside the scene's folder or a data URI) names a Radiance HDR or
+    /// OpenEXR lat-long map, `strength` scales it, `rotation` turns it about +Y in degrees.
+    fn environment_light(&self, env: &serde_json::Value) -> Result<EnvironmentLight> {
+        let ctx = format!("extensions.{EXT_ENVIRONMENT}");
+        let uri = env
+            .get("uri")
+            .and_then(|u| u.as_str())
+            .ok_or_else(|| anyhow!("{ctx}.uri must be a string (the environment map's file or data URI)"))?;
+        let shown: String = if uri.starts_with("data:") { "data URI".into() } else { uri.into() };
+        let bytes = sources::load_uri(uri, self.base_dir).with_context(|| format!("{ctx}.uri"))?;
+        let map = EnvironmentMap::decode(&bytes, &shown).with_context(|| format!("{ctx}.uri"))?;
+        let strength = ext_f32(env, "strength", 1.0, &ctx)?;
+        if strength < 0.0 {
+            bail!("{ctx}.strength must not be negative, is {strength}");
+        }
+        let rotation_deg = ext_f32(env, "rotation", 0.0, &ctx)?;
+        Ok(EnvironmentLight { map: Arc::new(map), scale: Vec3::splat(strength), rotation_deg })
     }
 }

@@ -39,7 +39,7 @@ mod warnings;
 pub use extensions::{EXT_BACKGROUND, EXT_MATERIALS_PHONG, EXT_SPHERES, SUPPORTED_EXTENSIONS};
 pub use sources::{decode_data_uri, encode_data_uri};
 
-use super::{Camera, Light, LoadReport, Scene};
+use super::{Camera, EnvironmentLight, Light, LoadReport, Scene};
 use anyhow::{anyhow, bail, Result};
 use cameras::CameraCandidate;
 use glam::{DMat4, DQuat, DVec3, Mat4, Vec3};
@@ -47,11 +47,15 @@ use std::path::Path;
 use warnings::Warnings;
 
 /// Options of [`load_gltf`].
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct LoadOptions {
     /// Select the camera whose node name or camera name equals this; `None`: the first
     /// perspective camera in node order.
     pub camera: Option<String>,
+    /// Light the scene with this environment instead of the file's background
+    /// (`VKVCM_background` / `VKVCM_environment`, which are then not read) or the default
+    /// white sky (`vkvcm render --env`).
+    pub environment: Option<EnvironmentLight>,
 }
 
 /// Loads a `.gltf` or `.glb` file. Errors name the file and the offending object.
@@ -90,6 +94,7 @@ fn import_bytes(bytes: &[u8], base_dir: &Path, name: String, options: &LoadOptio
     let buffers = sources::load_buffers(&doc, blob, base_dir)?;
     let mut importer = Importer {
         doc: &doc,
+        base_dir,
         buffers,
         warnings,
         scene: Scene {
@@ -123,6 +128,8 @@ fn import_bytes(bytes: &[u8], base_dir: &Path, name: String, options: &LoadOptio
 /// the submodules by concern; [`Importer::run`] is the order in which they are applied.
 struct Importer<'d> {
     doc: &'d gltf::Document,
+    /// The folder relative URIs are resolved in (environment maps).
+    base_dir: &'d Path,
     /// The document's buffers, indexed like `doc.buffers()`, each at least `byteLength` long.
     buffers: Vec<Vec<u8>>,
     warnings: Warnings,
@@ -164,7 +171,7 @@ impl<'d> Importer<'d> {
         }
 
         self.scene.camera = self.choose_camera(options)?;
-        self.collect_lights()
+        self.collect_lights(options)
     }
 
     /// The default scene, or else the first scene (with a warning when there are several).

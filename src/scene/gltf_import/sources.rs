@@ -82,7 +82,7 @@ pub fn decode_data_uri(uri: &str) -> Result<Vec<u8>> {
 /// The bytes a buffer URI names: a base64 `data:` URI, or a relative file path
 /// (%-escapes decoded) that must stay inside `base_dir`, symbolic links included. Other
 /// schemes and absolute paths are refused.
-fn load_uri(uri: &str, base_dir: &Path) -> Result<Vec<u8>> {
+pub(super) fn load_uri(uri: &str, base_dir: &Path) -> Result<Vec<u8>> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let (meta, payload) = rest.split_once(',').ok_or_else(|| anyhow!("malformed data URI (no ',')"))?;
         if !meta.ends_with(";base64") {
