@@ -244,3 +244,41 @@ fn a_file_without_camera_or_lights_renders_with_the_defaults() {
         assert!(mean > 0.01, "{name}: the image is black (mean {mean})");
     }
 }
+
+/// `--env` lights a file without lights with the map instead of the white sky (no sky
+/// warning), `--env-strength` scales the image, and a missing or unreadable map is one
+/// error line naming --env.
+#[test]
+fn env_option_lights_the_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let src = root.join("tests/malformed/no_camera.gltf");
+    let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(src).unwrap()).unwrap();
+    doc["materials"][0] = serde_json::json!({"name": "grey"});
+    let file = dir.path().join("bare.gltf");
+    std::fs::write(&file, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let sky = root.join("tests/env/sky.hdr");
+    let mut means = Vec::new();
+    for strength in ["1", "2"] {
+        let exr = dir.path().join(format!("s{strength}.exr"));
+        let mut c = tiny(dir.path());
+        c.args([file.to_str().unwrap(), "-i", "4", "--seed", "3", "-o", exr.to_str().unwrap()]);
+        c.args(["--env", sky.to_str().unwrap(), "--env-strength", strength, "--env-rotate", "-45"]);
+        let o = c.output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success() && error_lines(&o).is_empty(), "{err}");
+        assert!(!err.contains("white sky"), "{err}");
+        let (img, _) = vkvcm::image::read_exr(&exr).unwrap();
+        means.push(img.data.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / img.data.len() as f64);
+    }
+    assert!(means[0] > 0.01, "black image under the map");
+    assert!((means[1] / means[0] - 2.0).abs() < 1e-3, "strength 2 gives {} x the image", means[1] / means[0]);
+    let run = |env: &str| {
+        let mut c = tiny(dir.path());
+        c.args([file.to_str().unwrap(), "-i", "1", "--env", env]);
+        c.output().unwrap()
+    };
+    one_error(&run("missing.hdr"), &["--env", "missing.hdr"]);
+    std::fs::write(dir.path().join("text.hdr"), "hello").unwrap();
+    one_error(&run("text.hdr"), &["--env", "neither a Radiance HDR"]);
+}

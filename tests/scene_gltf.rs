@@ -463,6 +463,33 @@ fn missing_lights_get_a_white_sky() {
     assert_eq!(s.report.warnings.iter().filter(|w| w.contains("white sky")).count(), 1, "{:?}", s.report.warnings);
 }
 
+/// VKVCM_environment: the map's file relative to the scene's folder, its strength and
+/// rotation; LoadOptions::environment replaces it (and the white sky).
+#[test]
+fn environment_extension_and_override() {
+    use vkvcm::scene::{EnvironmentLight, EnvironmentMap, Light};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let s = load_with(&root.join("tests/env/env_scene.gltf"), &LoadOptions::default()).unwrap();
+    let envs: Vec<&EnvironmentLight> =
+        s.lights.iter().filter_map(|l| if let Light::Environment(e) = l { Some(e) } else { None }).collect();
+    assert_eq!(envs.len(), 1, "{:?}", s.lights);
+    assert_eq!((envs[0].map.width, envs[0].map.height), (128, 64));
+    assert_eq!((envs[0].scale, envs[0].rotation_deg), (glam::Vec3::ONE, 30.0));
+    assert!(s.report.warnings.is_empty(), "{:?}", s.report.warnings);
+    let other = EnvironmentLight {
+        map: std::sync::Arc::new(EnvironmentMap::constant(4, 3, [2.0; 3])),
+        scale: glam::Vec3::splat(0.5),
+        rotation_deg: 0.0,
+    };
+    let options = LoadOptions { environment: Some(other.clone()), ..Default::default() };
+    let s = load_with(&root.join("tests/env/env_scene.gltf"), &options).unwrap();
+    assert_eq!(s.lights, [Light::Environment(other.clone())]);
+    let dir = tempfile::tempdir().unwrap();
+    let s = load_with(&Doc::triangle().write(dir.path()), &options).unwrap();
+    assert_eq!(s.lights, [Light::Environment(other)]);
+    assert!(!s.report.warnings.iter().any(|w| w.contains("white sky")), "{:?}", s.report.warnings);
+}
+
 /// --look-from / --look-at / --fov (Scene::set_view) take the file's world coordinates.
 #[test]
 fn the_view_can_be_set_in_world_coordinates() {

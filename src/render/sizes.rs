@@ -35,17 +35,28 @@ pub fn mib(bytes: u64) -> String {
     }
 }
 
+/// What to change when buffer `name` is larger than one binding.
+fn remedy(name: &str) -> &'static str {
+    match name {
+        n if n.starts_with("env_") => "use a smaller environment map (20 bytes per texel)",
+        "bvh_nodes" | "bvh_prims" | "triangles" | "spheres" | "materials" | "lights" | "shading_normals" => {
+            "the scene is too large for this device (fewer triangles, or a device with a larger maxStorageBufferRange)"
+        }
+        n if n.contains("vert") || n.starts_with("grid") => "lower the resolution or --max-path-length",
+        _ => "lower the resolution",
+    }
+}
+
 /// Checks `sizes` against a per-buffer binding limit `max_binding` and a memory heap of
 /// `heap` bytes; `what` describes the render in the message.
 pub fn check_sizes(sizes: &[BufferSize], max_binding: u64, heap: u64, what: &str) -> Result<()> {
     if let Some(b) = sizes.iter().rev().filter(|b| b.bytes > max_binding).max_by_key(|b| b.bytes) {
         bail!(
-            "{what} needs {} for buffer {}, but the device binds at most {} per buffer (maxStorageBufferRange); \
-             lower the resolution{}",
+            "{what} needs {} for buffer {}, but the device binds at most {} per buffer (maxStorageBufferRange); {}",
             mib(b.bytes),
             b.name,
             mib(max_binding),
-            if b.name.contains("vert") || b.name.starts_with("grid") { " or --max-path-length" } else { "" }
+            remedy(b.name)
         );
     }
     let total = sizes.iter().fold(0u64, |a, b| a.saturating_add(b.bytes));
@@ -73,6 +84,13 @@ mod tests {
         assert!(check_sizes(&v, 100, 150, "x").is_ok());
         let e = check_sizes(&v, 99, 1000, "x").unwrap_err().to_string();
         assert!(e.contains("buffer film") && e.contains("maxStorageBufferRange"), "{e}");
+        assert!(e.contains("lower the resolution"), "{e}");
+        let env = [BufferSize::new("env_texels", 100)];
+        let e = check_sizes(&env, 99, 1000, "x").unwrap_err().to_string();
+        assert!(e.contains("smaller environment map") && !e.contains("resolution"), "{e}");
+        let bvh = [BufferSize::new("bvh_prims", 100)];
+        let e = check_sizes(&bvh, 99, 1000, "x").unwrap_err().to_string();
+        assert!(e.contains("scene is too large") && !e.contains("resolution"), "{e}");
         let e = check_sizes(&v, 100, 149, "x").unwrap_err().to_string();
         assert!(e.contains("heap"), "{e}");
         assert!(!e.contains('\n'));

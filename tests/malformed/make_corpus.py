@@ -170,6 +170,11 @@ case("sphere_negative_radius.gltf", doc(lambda d: d["nodes"][0].update(extension
 case("sphere_bad_material.gltf", doc(lambda d: d["nodes"][0].update(extensions={"VKVCM_spheres": {"spheres": [{"center": [0, 0, 0], "radius": 1, "material": 99}]}})), "out of range")
 case("phong_not_object.gltf", doc(set_(["materials", 0, "extensions"], {"VKVCM_materials_phong": 3})), "must be an object")
 case("background_string.gltf", doc(set_(["extensions"], {"VKVCM_background": {"radiance": [1, "x", 1]}})), "VKVCM_background.radiance[1]")
+case("environment_without_uri.gltf", doc(set_(["extensions"], {"VKVCM_environment": {"strength": 1}})), "VKVCM_environment.uri must be a string")
+case("environment_file_missing.gltf", doc(set_(["extensions"], {"VKVCM_environment": {"uri": "no_such_sky.hdr"}})), "cannot read buffer file")
+case("environment_not_an_image.gltf", doc(set_(["extensions"], {"VKVCM_environment": {"uri": data_uri(b"not an image at all")}})), "neither a Radiance HDR")
+case("environment_negative_strength.gltf", doc(set_(["extensions"], {"VKVCM_environment": {"uri": data_uri(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 3 +X 2\n" + bytes([128, 128, 128, 129]) * 6), "strength": -1}})), "strength must not be negative")
+case("environment_and_background.gltf", doc(set_(["extensions"], {"VKVCM_background": {"radiance": [1, 1, 1]}, "VKVCM_environment": {"uri": "sky.hdr"}})), "a scene has one background")
 
 if __name__ == "__main__":
     for f in os.listdir(HERE):

@@ -1,0 +1,183 @@
+#!/usr/bin/env python3
+"""The environment-map comparison with Mitsuba 3 (tests/render_environment.rs,
+`environment_map_matches_mitsuba`): one scene description, written as a glTF for vkvcm
+and rendered by Mitsuba 3 as the independent reference.
+
+The scene: a grey diffuse ground square (y = 0, |x|, |z| <= 2), a diffuse sphere and a
+mirror sphere of radius 0.5 on it, lit only by tests/env/sky.hdr turned 30 degrees about +Y
+(scripts/make_env_map.py). Conventions matched (docs/environment.md, docs/toolchain.md):
+vkvcm's opaque surfaces reflect on both sides (Mitsuba: `twosided`), its mirror without an
+IOR is a plain reflectance (Mitsuba: `conductor` with material `none` scaled by
+`specular_reflectance`), camera `fov_axis` y with a box pixel filter, `max_depth` = vkvcm's
+--max-path-length (both count segments), the envmap's lat-long mapping and `to_world`
+rotation are the same functions in both.
+
+    python3 scripts/env_reference.py gltf        # writes tests/env/env_scene.gltf (stdlib only)
+    VENV/bin/python scripts/env_reference.py mitsuba [--seeds 16 --spp 256]
+        # renders tests/env/mitsuba_mean.exr and tests/env/mitsuba_var.exr: the mean and the
+        # unbiased per-pixel variance over SEEDS independent renders of SPP samples each,
+        # and tests/env/mitsuba.json (what made them). Needs `pip install mitsuba numpy`.
+"""
+import argparse
+import base64
+import json
+import math
+import os
+import struct
+import sys
+import time
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+OUT = os.path.join(ROOT, "tests", "env")
+
+SCENE = {
+    "width": 48,
+    "height": 48,
+    "max_path_length": 8,
+    "camera": {"from": [0.0, 1.2, 3.5], "to": [0.0, 0.4, 0.0], "up": [0.0, 1.0, 0.0], "yfov_deg": 40.0},
+    "environment": {"file": "sky.hdr", "strength": 1.0, "rotation_deg": 30.0},
+    "ground": {"half_size": 2.0, "diffuse": [0.5, 0.5, 0.5]},
+    "spheres": [
+        {"center": [-0.6, 0.5, 0.0], "radius": 0.5, "diffuse": [0.8, 0.5, 0.3]},
+        {"center": [0.6, 0.5, 0.0], "radius": 0.5, "mirror": [0.9, 0.9, 0.9]},
+    ],
+}
+
+
+def look_at_quaternion(eye, target, up):
+    """The glTF node rotation (x, y, z, w) whose -Z looks from eye to target, +Y near up."""
+    f = [t - e for t, e in zip(target, eye)]
+    n = math.sqrt(sum(c * c for c in f))
+    f = [c / n for c in f]
+    z = [-c for c in f]  # the camera looks along -Z
+    x = [up[1] * z[2] - up[2] * z[1], up[2] * z[0] - up[0] * z[2], up[0] * z[1] - up[1] * z[0]]
+    n = math.sqrt(sum(c * c for c in x))
+    x = [c / n for c in x]
+    y = [z[1] * x[2] - z[2] * x[1], z[2] * x[0] - z[0] * x[2], z[0] * x[1] - z[1] * x[0]]
+    m = [[x[0], y[0], z[0]], [x[1], y[1], z[1]], [x[2], y[2], z[2]]]  # columns x, y, z
+    tr = m[0][0] + m[1][1] + m[2][2]
+    if tr > 0:
+        s = math.sqrt(tr + 1.0) * 2
+        return [(m[2][1] - m[1][2]) / s, (m[0][2] - m[2][0]) / s, (m[1][0] - m[0][1]) / s, 0.25 * s]
+    if m[0][0] > m[1][1] and m[0][0] > m[2][2]:
+        s = math.sqrt(1.0 + m[0][0] - m[1][1] - m[2][2]) * 2
+        return [0.25 * s, (m[0][1] + m[1][0]) / s, (m[0][2] + m[2][0]) / s, (m[2][1] - m[1][2]) / s]
+    if m[1][1] > m[2][2]:
+        s = math.sqrt(1.0 + m[1][1] - m[0][0] - m[2][2]) * 2
+        return [(m[0][1] + m[1][0]) / s, 0.25 * s, (m[1][2] + m[2][1]) / s, (m[0][2] - m[2][0]) / s]
+    s = math.sqrt(1.0 + m[2][2] - m[0][0] - m[1][1]) * 2
+    return [(m[0][2] + m[2][0]) / s, (m[1][2] + m[2][1]) / s, 0.25 * s, (m[1][0] - m[0][1]) / s]
+
+
+def write_gltf(path):
+    s = SCENE
+    h = s["ground"]["half_size"]
+    quad = [(-h, 0, -h), (-h, 0, h), (h, 0, h), (-h, 0, -h), (h, 0, h), (h, 0, -h)]
+    blob = b"".join(struct.pack("<3f", *p) for p in quad)
+    phong = lambda d=(0, 0, 0), m=(0, 0, 0): {"VKVCM_materials_phong": {"diffuse": list(d), "mirror": list(m), "ior": -1}}
+    materials = [{"name": "ground", "extensions": phong(d=s["ground"]["diffuse"])}]
+    spheres = []
+    for i, sp in enumerate(s["spheres"]):
+        materials.append({"name": f"sphere{i}", "extensions": phong(d=sp.get("diffuse", (0, 0, 0)), m=sp.get("mirror", (0, 0, 0)))})
+        spheres.append({"center": sp["center"], "radius": sp["radius"], "material": i + 1})
+    cam = s["camera"]
+    env = s["environment"]
+    doc = {
+        "asset": {"version": "2.0", "generator": "vkvcm scripts/env_reference.py"},
+        "extensionsUsed": ["VKVCM_spheres", "VKVCM_materials_phong", "VKVCM_environment"],
+        "extensions": {"VKVCM_environment": {"uri": env["file"], "strength": env["strength"], "rotation": env["rotation_deg"]}},
+        "scene": 0,
+        "scenes": [{"name": "env_scene", "nodes": [0, 1, 2]}],
+        "nodes": [
+            {"name": "ground", "mesh": 0},
+            {"name": "spheres", "extensions": {"VKVCM_spheres": {"spheres": spheres}}},
+            {"name": "camera", "camera": 0, "translation": cam["from"], "rotation": look_at_quaternion(cam["from"], cam["to"], cam["up"])},
+        ],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": math.radians(cam["yfov_deg"]), "znear": 0.01, "aspectRatio": 1.0}}],
+        "meshes": [{"name": "ground", "primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}],
+        "materials": materials,
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 6, "type": "VEC3", "min": [-h, 0, -h], "max": [h, 0, h]}],
+        "bufferViews": [{"buffer": 0, "byteLength": len(blob)}],
+        "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}],
+    }
+    with open(path, "w") as f:
+        json.dump(doc, f, indent=1)
+        f.write("\n")
+    print(f"wrote {path}")
+
+
+def mitsuba_scene(mi, seed, spp):
+    s = SCENE
+    T = mi.ScalarTransform4f
+    cam = s["camera"]
+    env = s["environment"]
+    h = s["ground"]["half_size"]
+    d = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": s["max_path_length"], "hide_emitters": False},
+        "sensor": {
+            "type": "perspective",
+            "fov": cam["yfov_deg"],
+            "fov_axis": "y",
+            "to_world": T().look_at(origin=cam["from"], target=cam["to"], up=cam["up"]),
+            "sampler": {"type": "independent", "sample_count": spp, "seed": seed},
+            "film": {"type": "hdrfilm", "width": s["width"], "height": s["height"], "rfilter": {"type": "box"}, "pixel_format": "rgb"},
+        },
+        "env": {"type": "envmap", "filename": os.path.join(OUT, env["file"]), "scale": env["strength"], "to_world": T().rotate([0, 1, 0], env["rotation_deg"])},
+        # Mitsuba's rectangle is [-1, 1]^2 in z = 0; turned onto y = 0.
+        "ground": {
+            "type": "rectangle",
+            "to_world": T().rotate([1, 0, 0], -90).scale([h, h, 1]),
+            "bsdf": {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": s["ground"]["diffuse"]}}},
+        },
+    }
+    for i, sp in enumerate(s["spheres"]):
+        if "mirror" in sp:
+            bsdf = {"type": "conductor", "material": "none", "specular_reflectance": {"type": "rgb", "value": sp["mirror"]}}
+        else:
+            bsdf = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": sp["diffuse"]}}}
+        d[f"sphere{i}"] = {"type": "sphere", "center": sp["center"], "radius": sp["radius"], "bsdf": bsdf}
+    return d
+
+
+def render_mitsuba(seeds, spp, variant):
+    try:
+        import mitsuba as mi
+        import numpy as np
+    except ImportError:
+        sys.exit("mitsuba and numpy are needed: python3 -m venv VENV && VENV/bin/pip install mitsuba numpy")
+    mi.set_variant(variant)
+    images = []
+    t0 = time.time()
+    for seed in range(seeds):
+        scene = mi.load_dict(mitsuba_scene(mi, seed, spp))
+        images.append(np.array(mi.render(scene, seed=seed, spp=spp), dtype=np.float64))
+        print(f"seed {seed}: {time.time() - t0:.0f} s", flush=True)
+    stack = np.stack(images)
+    mean = stack.mean(axis=0).astype(np.float32)
+    var = stack.var(axis=0, ddof=1).astype(np.float32)
+    mi.Bitmap(mean).write(os.path.join(OUT, "mitsuba_mean.exr"))
+    mi.Bitmap(var).write(os.path.join(OUT, "mitsuba_var.exr"))
+    meta = {"renderer": f"Mitsuba {mi.__version__} {variant}, integrator path", "seeds": seeds, "spp_per_seed": spp,
+            "scene": SCENE, "command": " ".join(sys.argv)}
+    with open(os.path.join(OUT, "mitsuba.json"), "w") as f:
+        json.dump(meta, f, indent=1)
+        f.write("\n")
+    print(f"wrote tests/env/mitsuba_mean.exr, mitsuba_var.exr ({seeds} seeds x {spp} spp, {time.time() - t0:.0f} s)")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("what", choices=["gltf", "mitsuba"])
+    ap.add_argument("--seeds", type=int, default=16)
+    ap.add_argument("--spp", type=int, default=256)
+    ap.add_argument("--variant", default="scalar_rgb")
+    a = ap.parse_args()
+    if a.what == "gltf":
+        write_gltf(os.path.join(OUT, "env_scene.gltf"))
+    else:
+        render_mitsuba(a.seeds, a.spp, a.variant)
+
+
+if __name__ == "__main__":
+    main()
