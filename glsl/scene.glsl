@@ -1,7 +1,8 @@
 // Scene buffers shared by every render kernel (the bindings scene_params, bvh_nodes,
 // bvh_prims, triangles, spheres, materials, lights and shading_normals, bound by name:
-// src/render/scene_gpu.rs), the camera, and the conversion of a BVH hit into a shading
-// point.
+// src/render/scene_gpu.rs; with HAS_ENVIRONMENT_MAP also env_texels and env_distribution,
+// declared by glsl/environment.glsl), the camera, and the conversion of a BVH hit into a
+// shading point.
 // Scene features the scene lacks compile out (glsl/features.glsl): spheres, shading
 // normals, area lights (then no surface is an emitter) and the background.
 #ifndef SCENE_GLSL
