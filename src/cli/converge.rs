@@ -47,6 +47,8 @@ pub struct ReferenceArgs {
     /// Vulkan device: index or name substring (see `vkvcm devices`).
     #[arg(long)]
     pub device: Option<String>,
+    #[command(flatten)]
+    pub env: super::EnvArgs,
 }
 
 #[derive(Args)]
@@ -86,6 +88,9 @@ pub struct ConvergeArgs {
     /// Vulkan device: index or name substring (see `vkvcm devices`).
     #[arg(long)]
     pub device: Option<String>,
+    /// The environment map of the reference, if it had one.
+    #[command(flatten)]
+    pub env: super::EnvArgs,
 }
 
 /// Names of the materials and lights that make SDS paths (light -> specular -> diffuse
@@ -123,7 +128,8 @@ fn check_validation(gpu: std::sync::Arc<Gpu>) -> Result<()> {
 }
 
 pub fn reference_cmd(a: ReferenceArgs) -> Result<()> {
-    let scene = scene::load_named(&a.scene)?;
+    a.env.check()?;
+    let scene = scene::load_named_with(&a.scene, &a.env.load_options(None)?)?;
     let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}_reference.exr", scene.name)));
     check_writable(&output)?;
     if let Some(p) = &a.png {
@@ -237,7 +243,8 @@ pub fn converge_cmd(a: ConvergeArgs) -> Result<()> {
     for p in [&a.csv, &a.plot].into_iter().flatten() {
         check_writable(p)?;
     }
-    let scene = scene::load_named(&a.scene)?;
+    a.env.check()?;
+    let scene = scene::load_named_with(&a.scene, &a.env.load_options(None)?)?;
     if let Some(s) = meta_value(&meta, "vkvcm:scene").filter(|s| *s != scene.name) {
         eprintln!("warning: the reference {} was rendered from scene {s}, not {}", a.reference.display(), scene.name);
     }

@@ -6,7 +6,49 @@ pub mod diff;
 pub mod progress;
 pub mod render;
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
+
+/// The environment-map options of the commands that render a scene (docs/environment.md).
+#[derive(clap::Args, Clone, Debug)]
+pub struct EnvArgs {
+    /// Light the scene with an equirectangular environment map (Radiance .hdr or OpenEXR;
+    /// row 0 is the sky, the image centre looks along +Z: docs/environment.md) instead of
+    /// the file's background or the default white sky. Importance-sampled.
+    #[arg(long, value_name = "FILE")]
+    pub env: Option<std::path::PathBuf>,
+    /// With --env: radiance scale of the map.
+    #[arg(long, value_name = "S", default_value_t = 1.0, requires = "env")]
+    pub env_strength: f32,
+    /// With --env: turn the map about the world's +Y axis by DEG degrees (right-handed).
+    #[arg(long, value_name = "DEG", default_value_t = 0.0, allow_negative_numbers = true, requires = "env")]
+    pub env_rotate: f32,
+}
+
+impl EnvArgs {
+    /// Checks the numbers (no file is read).
+    pub fn check(&self) -> Result<()> {
+        if !(self.env_strength >= 0.0 && self.env_strength.is_finite()) {
+            bail!("--env-strength {}: must be a non-negative number", self.env_strength);
+        }
+        if !self.env_rotate.is_finite() {
+            bail!("--env-rotate {}: must be a number of degrees", self.env_rotate);
+        }
+        Ok(())
+    }
+
+    /// Scene load options with the map read (`camera` as `--camera` gives it).
+    pub fn load_options(&self, camera: Option<String>) -> Result<vkvcm::scene::LoadOptions> {
+        let environment = match &self.env {
+            Some(path) => Some(vkvcm::scene::EnvironmentLight {
+                map: std::sync::Arc::new(vkvcm::scene::EnvironmentMap::load(path).context("--env")?),
+                scale: glam::Vec3::splat(self.env_strength),
+                rotation_deg: self.env_rotate,
+            }),
+            None => None,
+        };
+        Ok(vkvcm::scene::LoadOptions { camera, environment })
+    }
+}
 
 /// Writes `value` as pretty JSON, atomically.
 pub fn write_json<T: serde::Serialize>(p: &std::path::Path, value: &T) -> Result<()> {

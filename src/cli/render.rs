@@ -12,7 +12,7 @@ use super::progress::Reporter;
 use vkvcm::gpu::{Gpu, GpuOptions};
 use vkvcm::image::{self, Image};
 use vkvcm::render::{self, saved, Algorithm, Budget, Connect, Progress, RenderOutput, RenderSettings, Renderer};
-use vkvcm::scene::{self, LoadOptions};
+use vkvcm::scene;
 
 #[derive(Args)]
 pub struct RenderArgs {
@@ -68,17 +68,8 @@ pub struct RenderArgs {
     /// Vertical field of view in degrees.
     #[arg(long, value_name = "DEGREES")]
     pub fov: Option<f32>,
-    /// Light the scene with an equirectangular environment map (Radiance .hdr or OpenEXR;
-    /// row 0 is the sky, the image centre looks along +Z: docs/environment.md) instead of
-    /// the file's background or the default white sky. Importance-sampled.
-    #[arg(long, value_name = "FILE")]
-    pub env: Option<PathBuf>,
-    /// With --env: radiance scale of the map.
-    #[arg(long, value_name = "S", default_value_t = 1.0, requires = "env")]
-    pub env_strength: f32,
-    /// With --env: turn the map about the world's +Y axis by DEG degrees (right-handed).
-    #[arg(long, value_name = "DEG", default_value_t = 0.0, allow_negative_numbers = true, requires = "env")]
-    pub env_rotate: f32,
+    #[command(flatten)]
+    pub env: super::EnvArgs,
     /// Output EXR (linear float32, with the second moment and settings to resume it).
     /// Default: <scene>_<algo>.exr.
     #[arg(long, short = 'o')]
@@ -216,12 +207,7 @@ fn check_args(a: &RenderArgs) -> Result<()> {
     if !(a.alpha > 0.0 && a.alpha <= 1.0) {
         bail!("--alpha {}: must be in (0, 1]", a.alpha);
     }
-    if !(a.env_strength >= 0.0 && a.env_strength.is_finite()) {
-        bail!("--env-strength {}: must be a non-negative number", a.env_strength);
-    }
-    if !a.env_rotate.is_finite() {
-        bail!("--env-rotate {}: must be a number of degrees", a.env_rotate);
-    }
+    a.env.check()?;
     if !(a.exposure > 0.0 && a.exposure.is_finite()) {
         bail!("--exposure {}: must be a positive number", a.exposure);
     }
@@ -231,16 +217,7 @@ fn check_args(a: &RenderArgs) -> Result<()> {
 pub fn render_cmd(a: RenderArgs) -> Result<()> {
     check_args(&a)?;
     let scene_name = a.scene.clone().unwrap_or_else(|| "default".into());
-    let environment = match &a.env {
-        Some(path) => Some(scene::EnvironmentLight {
-            map: std::sync::Arc::new(scene::EnvironmentMap::load(path).context("--env")?),
-            scale: glam::Vec3::splat(a.env_strength),
-            rotation_deg: a.env_rotate,
-        }),
-        None => None,
-    };
-    let options = LoadOptions { camera: a.camera.clone(), environment };
-    let mut scene = scene::load_named_with(&scene_name, &options)?;
+    let mut scene = scene::load_named_with(&scene_name, &a.env.load_options(a.camera.clone())?)?;
     scene.set_view(a.look_from, a.look_at, a.fov.map(f32::to_radians)).context("--look-from / --look-at / --fov")?;
     for w in &scene.report.warnings {
         eprintln!("warning: {w}");
