@@ -37,6 +37,7 @@ use rayon::prelude::*;
 use super::aabb::Aabb;
 use super::intersect::{sphere_is_finite, triangle_is_finite};
 use super::layout::{decode_ref, leaf_ref, GpuBvh, GpuNode, GpuPrim, MAX_DEPTH, MAX_LEAF_PRIMS, MAX_PRIMS};
+use crate::activity::Activity;
 use crate::scene::{Sphere, Triangle};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -268,7 +269,9 @@ pub fn build_with(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOption
 /// [`build_with`] on the current rayon pool (options already checked).
 fn build_in_pool(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOptions) -> Bvh {
     let nt = triangles.len();
+    // Progress: primitives placed in subtrees (see Builder::build_node).
     let total = triangles.len() + spheres.len();
+    let activity = Activity::begin(|| format!("building the BVH ({total} primitives)"), Some(total as u64));
     // Primitive references in input order (rayon's collect keeps the order).
     let mut refs: Vec<PrimRef> = triangles
         .par_iter()
@@ -289,7 +292,7 @@ fn build_in_pool(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOptions
         )
         .reduce(|| (Bounds::EMPTY, Bounds::EMPTY), |(b0, c0), (b1, c1)| (b0.union(&b1), c0.union(&c1)));
 
-    let builder = Builder { opts };
+    let builder = Builder { opts, activity: &activity };
     let mut worker = Worker::new(refs.len());
     let root = builder.build_node(&mut refs, 0, bounds, cbounds, 1, true, &mut worker);
     debug_assert_eq!(root, 0);
@@ -578,6 +581,7 @@ impl Bins {
 
 struct Builder<'a> {
     opts: &'a BuildOptions,
+    activity: &'a Activity,
 }
 
 /// A chosen split: `refs[..nl]` left, `refs[nl..]` right, already partitioned.
@@ -640,6 +644,11 @@ impl Builder<'_> {
                 let mut sub = Worker::new(refs.len());
                 let r =
                     self.build_node(refs, offset, split.boxes[side], split.cboxes[side], level + 1, false, &mut sub);
+                // Progress: each primitive is counted once, by the one subtree task of
+                // it that builds serially.
+                if refs.len() < PARALLEL_SUBTREE_MIN_PRIMS {
+                    self.activity.advance(refs.len() as u64);
+                }
                 (r, sub.nodes)
             };
             let ((lref, lnodes), (rref, rnodes)) =
