@@ -8,6 +8,7 @@
 //! triangles) are the same kinds at four times the size. Anything else is loaded as a
 //! scene ([`crate::scene::load_named`]: a built-in name or a glTF path). No GPU is used.
 
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
@@ -43,6 +44,26 @@ pub fn build_scene(name: &str) -> Result<BuildScene> {
             }
         },
     }
+}
+
+/// Writes `scene`'s triangles to `dir/NAME.f32`, the name's characters other than ASCII
+/// letters, digits, `-` and `_` replaced by `_`: 9 little-endian `f32` per triangle (the
+/// three vertices; spheres are left out). Returns the path.
+pub fn export_triangles(scene: &BuildScene, dir: &Path) -> Result<PathBuf> {
+    let stem: String =
+        scene.name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect();
+    let path = dir.join(format!("{stem}.f32"));
+    let mut bytes = Vec::with_capacity(scene.triangles.len() * 36);
+    for t in &scene.triangles {
+        for v in t.p {
+            for x in v.to_array() {
+                bytes.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+    }
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    std::fs::write(&path, bytes).with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(path)
 }
 
 /// Build times of one scene at one thread count.

@@ -116,6 +116,11 @@ pub struct BenchBvhBuildArgs {
     /// Also write the results as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Also write each scene's triangles to DIR/SCENE.f32 (9 little-endian f32 per
+    /// triangle: the three vertices), for scripts/embree_build.py to build the same mesh
+    /// with Embree.
+    #[arg(long, value_name = "DIR")]
+    pub export_triangles: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -194,6 +199,10 @@ fn bench_bvh_build(a: BenchBvhBuildArgs) -> Result<()> {
     let mut rows = Vec::new();
     for name in &a.scenes {
         let scene = vkvcm::bench::build::build_scene(name)?;
+        if let Some(dir) = &a.export_triangles {
+            let path = vkvcm::bench::build::export_triangles(&scene, dir)?;
+            println!("{name}: triangles written to {}", path.display());
+        }
         for row in vkvcm::bench::build::bench_build(&scene, &a.threads, a.rounds)? {
             println!("{row}");
             rows.push(row);
