@@ -453,7 +453,8 @@ impl NodeList {
         };
         if self.pieces.len() == 1 {
             let mut nodes = self.pieces.pop().expect("one piece");
-            nodes.par_chunks_mut(64 * 1024).enumerate().for_each(|(c, chunk)| absolute(chunk, c * 64 * 1024));
+            const CHUNK: usize = 64 * 1024;
+            nodes.par_chunks_mut(CHUNK).enumerate().for_each(|(c, chunk)| absolute(chunk, c * CHUNK));
             return nodes;
         }
         let mut nodes = vec![GpuNode::default(); self.len];
