@@ -2,8 +2,10 @@
 //!
 //! Layout (the design behind it: docs/design.md): `gpu` is the Vulkan core, `scene` the
 //! glTF import and built-in scenes, `bvh` the acceleration structure, `render` the
-//! estimators, `image` file output and error metrics.
+//! estimators, `image` file output and error metrics; `activity` announces long work
+//! (scene loads, BVH builds) to a front end that shows progress.
 
+pub mod activity;
 pub mod bench;
 pub mod bvh;
 pub mod gpu;

@@ -36,6 +36,8 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // Scene loads and BVH builds of more than a second get a progress line.
+    vkvcm::activity::set_observer(Box::new(cli::progress::ActivityLines));
     let result = match cli.command {
         Command::Devices => devices(),
         Command::Render(args) => cli::render::render_cmd(args),

@@ -216,15 +216,92 @@ fn sah_beats_median_split() {
     assert!(sah.stats.sah_cost < median_cost * 0.95);
 }
 
-#[test]
-fn parallel_build_matches_serial() {
+/// `a` and `b` are the same BVH, bit for bit (nodes, primitives, and so the statistics).
+fn assert_same_bvh(a: &Bvh, b: &Bvh, what: &str) {
+    let first_diff = |x: usize, y: usize| x.min(y);
+    if a.nodes != b.nodes {
+        let i = (0..first_diff(a.nodes.len(), b.nodes.len())).find(|&i| a.nodes[i] != b.nodes[i]);
+        panic!("{what}: node arrays differ ({} vs {} nodes, first difference at {i:?})", a.nodes.len(), b.nodes.len());
+    }
+    if a.prims != b.prims {
+        let i = (0..first_diff(a.prims.len(), b.prims.len())).find(|&i| a.prims[i] != b.prims[i]);
+        panic!("{what}: primitive arrays differ (first difference at {i:?})");
+    }
+    assert_eq!(a.stats.sah_cost.to_bits(), b.stats.sah_cost.to_bits(), "{what}: SAH cost");
+    assert_eq!((a.stats.leaves, a.stats.max_depth), (b.stats.leaves, b.stats.max_depth), "{what}");
+}
+
+/// Meshes for the determinism tests: ordinary, degenerate and tiny, some large enough for
+/// the builder's parallel paths (subtrees as tasks from 8k primitives, parallel binning
+/// from 128k).
+fn determinism_cases() -> Vec<(&'static str, Vec<Triangle>, Vec<Sphere>)> {
+    let mut r = rng(30);
     let s = test_scene(5, 100_000, 1000);
-    let one = build_with(&s.triangles, &s.spheres, &BuildOptions { threads: 1, ..Default::default() });
-    let four = build_with(&s.triangles, &s.spheres, &BuildOptions { threads: 4, ..Default::default() });
-    check_structure(&four);
-    assert_eq!(one.prims, four.prims);
-    assert_eq!(one.nodes.len(), four.nodes.len());
-    assert!((one.stats.sah_cost - four.stats.sah_cost).abs() < 1e-9 * one.stats.sah_cost);
+    let same = Triangle { p: [Vec3::ZERO, Vec3::X, Vec3::Y], n: None, material: 0 };
+    let mut depth_guard = vec![same.clone(); 5000];
+    for i in 0..20_000 {
+        let x = 1.5f32.powi(i % 200) * 1e-20;
+        depth_guard.push(Triangle {
+            p: [Vec3::new(x, 0.0, 0.0), Vec3::new(x * 1.01, 0.0, 0.0), Vec3::new(x, x * 0.01, (i / 200) as f32)],
+            n: None,
+            material: 1,
+        });
+    }
+    let one_sphere = vec![Sphere { center: Vec3::ONE, radius: 0.5, material: 3 }];
+    vec![
+        ("soup of 100k triangles and 1k spheres", s.triangles, s.spheres),
+        ("163,840 triangles of 640 UV spheres", vkvcm::bench::traverse::sphere_grid([8, 8, 10]), Vec::new()),
+        ("60k triangles with one centroid", vec![same.clone(); 60_000], Vec::new()),
+        ("5k coincident + 20k geometric sequence (depth guard)", depth_guard, Vec::new()),
+        ("no primitive", Vec::new(), Vec::new()),
+        ("1 triangle", vec![same], Vec::new()),
+        ("1 sphere", Vec::new(), one_sphere.clone()),
+        ("3 triangles and 1 sphere", triangle_soup(&mut r, 3), one_sphere),
+        ("9 triangles", triangle_soup(&mut r, 9), Vec::new()),
+    ]
+}
+
+/// Every thread count builds the serial build's BVH, bit for bit: same splits, same node
+/// order, same primitive order.
+#[test]
+fn parallel_build_is_the_serial_build() {
+    for (what, tris, spheres) in determinism_cases() {
+        let serial = build_with(&tris, &spheres, &BuildOptions { threads: 1, ..Default::default() });
+        check_structure(&serial);
+        check_ids(&serial, &tris, &spheres, 0);
+        for threads in [2, 3, 8] {
+            let parallel = build_with(&tris, &spheres, &BuildOptions { threads, ..Default::default() });
+            assert_same_bvh(&serial, &parallel, &format!("{what}, {threads} threads"));
+        }
+        // `threads: 0` builds on the caller's rayon pool, whatever its size.
+        for pool_threads in [1, 2, 4] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(pool_threads).build().unwrap();
+            let in_pool = pool.install(|| build(&tris, &spheres));
+            assert_same_bvh(&serial, &in_pool, &format!("{what}, pool of {pool_threads}"));
+        }
+    }
+}
+
+/// The median-split baseline is deterministic across thread counts too.
+#[test]
+fn parallel_median_build_is_the_serial_build() {
+    let s = test_scene(31, 50_000, 500);
+    let opts = |threads| BuildOptions { threads, method: SplitMethod::Median, ..Default::default() };
+    let serial = build_with(&s.triangles, &s.spheres, &opts(1));
+    check_structure(&serial);
+    assert_same_bvh(&serial, &build_with(&s.triangles, &s.spheres, &opts(4)), "median split, 4 threads");
+}
+
+/// The tree is the one the serial builder made before the build was parallelised (commit
+/// ce99580, `threads: 1`): CRC-32 of the node and primitive arrays of the 1M-triangle
+/// `displaced` scene, whose mesh needs no libm function (only sqrt and floor, exact
+/// everywhere). Images rendered with the BVH are therefore unchanged as well.
+#[test]
+fn tree_unchanged_since_the_serial_builder() {
+    let scene = vkvcm::bench::traverse::scene_displaced();
+    let bvh = build(&scene.triangles, &scene.spheres);
+    assert_eq!((bvh.nodes.len(), bvh.prims.len()), (543_136, 1_002_252));
+    assert_eq!(format!("{:08x}", vkvcm::bench::build::checksum(&bvh)), "dda26bfc");
 }
 
 #[test]
@@ -290,5 +367,5 @@ fn build_one_million_triangles() {
     );
     check_structure(&bvh);
     assert_eq!(bvh.prims.len(), 1 << 20);
-    assert_eq!(serial.prims, bvh.prims);
+    assert_same_bvh(&serial, &bvh, "1M triangles, all threads");
 }

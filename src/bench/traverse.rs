@@ -275,26 +275,46 @@ pub fn scene_cornell() -> BenchScene {
 /// 4,096 UV spheres (16 segments x 9 rings = 256 triangles each, radius 0.3 to 0.6) on a
 /// jittered 16^3 grid of spacing 2: 1,048,576 triangles.
 pub fn scene_spheres() -> BenchScene {
-    let mut rng = Pcg32::new(7);
-    let mut tris = Vec::with_capacity(1 << 20);
-    for i in 0..4096u32 {
-        let g = Vec3::new((i % 16) as f32, ((i / 16) % 16) as f32, (i / 256) as f32);
-        let jitter = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5;
-        let c = (g - 7.5) * 2.0 + jitter * 0.6;
-        let r = 0.3 + 0.3 * rng.next_f32();
-        tris.extend(uv_sphere(c, r, 16, 9, i % 8));
-    }
     BenchScene {
         name: "spheres".into(),
-        triangles: tris,
+        triangles: sphere_grid([16, 16, 16]),
         spheres: Vec::new(),
         camera: BenchCamera { position: Vec3::new(24.0, 18.0, 40.0), target: Vec3::ZERO, yfov: 0.9 },
     }
 }
 
+/// UV spheres (16 segments x 9 rings = 256 triangles each, radius 0.3 to 0.6) on a
+/// jittered `n[0] x n[1] x n[2]` grid of spacing 2 centred at the origin: `256 n0 n1 n2`
+/// triangles, materials 0..8 in turn.
+pub fn sphere_grid(n: [u32; 3]) -> Vec<Triangle> {
+    let mut rng = Pcg32::new(7);
+    let count = n[0] * n[1] * n[2];
+    let centre = (Vec3::new(n[0] as f32, n[1] as f32, n[2] as f32) - 1.0) * 0.5;
+    let mut tris = Vec::with_capacity(256 * count as usize);
+    for i in 0..count {
+        let g = Vec3::new((i % n[0]) as f32, ((i / n[0]) % n[1]) as f32, (i / (n[0] * n[1])) as f32);
+        let jitter = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5;
+        let c = (g - centre) * 2.0 + jitter * 0.6;
+        let r = 0.3 + 0.3 * rng.next_f32();
+        tris.extend(uv_sphere(c, r, 16, 9, i % 8));
+    }
+    tris
+}
+
 /// A unit cube-sphere of 289^2 * 12 = 1,002,252 triangles with its radius displaced by
 /// four octaves of value noise (amplitude 0.25).
 pub fn scene_displaced() -> BenchScene {
+    BenchScene {
+        name: "displaced".into(),
+        triangles: displaced_sphere(289),
+        spheres: Vec::new(),
+        camera: BenchCamera { position: Vec3::new(0.6, 0.9, 3.0), target: Vec3::ZERO, yfov: 0.75 },
+    }
+}
+
+/// A unit [`cube_sphere`] of `12 n^2` triangles with its radius displaced by four octaves
+/// of value noise (amplitude 0.25).
+pub fn displaced_sphere(n: u32) -> Vec<Triangle> {
     let displace = |u: Vec3| {
         let mut a = 0.0;
         let mut f = 2.0;
@@ -306,12 +326,7 @@ pub fn scene_displaced() -> BenchScene {
         }
         1.0 + a
     };
-    BenchScene {
-        name: "displaced".into(),
-        triangles: cube_sphere(289, displace, 0),
-        spheres: Vec::new(),
-        camera: BenchCamera { position: Vec3::new(0.6, 0.9, 3.0), target: Vec3::ZERO, yfov: 0.75 },
-    }
+    cube_sphere(n, displace, 0)
 }
 
 /// One of [`BENCH_SCENES`].
@@ -460,7 +475,7 @@ impl std::fmt::Display for TraverseBenchReport {
 }
 
 /// User + system CPU time of this process (all threads), from /proc/self/stat (Linux).
-fn process_cpu_seconds() -> Option<f64> {
+pub(crate) fn process_cpu_seconds() -> Option<f64> {
     let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
     // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
     let rest = &stat[stat.rfind(')')? + 2..];

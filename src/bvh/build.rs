@@ -15,18 +15,29 @@
 //! * Primitives with non-finite bounds (NaN or infinite coordinates or radius, or
 //!   coordinates so close to `f32::MAX` that the centroid or the padded box overflows) are
 //!   left out and counted in [`BuildStats::skipped_non_finite`].
-//! * The two subtrees of large nodes are built on separate threads
-//!   (`std::thread::scope`) up to [`BuildOptions::threads`]; so is the final flattening.
-//! * Flattening pads every box ([`Aabb::padded`]) and quantises it outwards to 8 bits per
-//!   coordinate ([`super::layout::quantize_boxes`]).
+//! * Each node is written in the GPU layout when it is made: its boxes padded
+//!   ([`Aabb::padded`]) and quantised outwards to 8 bits per coordinate
+//!   ([`super::layout::quantize_boxes`]). Nodes are in depth-first preorder (a node, its
+//!   first subtree, its second subtree).
+//! * Parallel (rayon) without changing the tree: the two subtrees of a node with many
+//!   primitives are built as two tasks ([`rayon::join`]) into separate node lists with
+//!   child references relative to the parent, joined in preorder afterwards, so node
+//!   indices follow from the tree alone, not from which task finished first; near-root
+//!   nodes bin their primitives in parallel chunks whose bins are merged exactly (box
+//!   unions and counts); the primitive references, the root bounds and the primitive
+//!   array are made with parallel iterators that keep the input order. Every split is
+//!   the serial build's, so the node and primitive arrays are identical for any number of
+//!   threads. docs/bvh.md, "Build", has the details.
 
 use std::time::Instant;
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
+use rayon::prelude::*;
 
 use super::aabb::Aabb;
 use super::intersect::{sphere_is_finite, triangle_is_finite};
 use super::layout::{decode_ref, leaf_ref, GpuBvh, GpuNode, GpuPrim, MAX_DEPTH, MAX_LEAF_PRIMS, MAX_PRIMS};
+use crate::activity::Activity;
 use crate::scene::{Sphere, Triangle};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -48,7 +59,9 @@ pub struct BuildOptions {
     pub traversal_cost: f32,
     /// SAH cost of one primitive test.
     pub intersection_cost: f32,
-    /// Worker threads; 0 = `std::thread::available_parallelism()`.
+    /// Threads: 0 = the current rayon pool (the global one has a thread per core, or
+    /// `RAYON_NUM_THREADS`), n = a pool of n threads for this build. The tree is the same
+    /// for any number.
     pub threads: usize,
 }
 
@@ -136,10 +149,41 @@ struct PrimRef {
 }
 
 impl PrimRef {
+    /// The reference of a primitive with box `[min, max]` and unified index `id`, or `None`
+    /// where the centroid sum or the padded box (see [`Aabb::padded`]) overflows
+    /// (coordinates near `f32::MAX`).
+    fn new(min: Vec3, max: Vec3, id: usize) -> Option<PrimRef> {
+        let r = PrimRef { min, id: id as u32, max, _pad: 0 };
+        let padded = r.aabb().padded();
+        (r.c2().is_finite() && padded.min.is_finite() && padded.max.is_finite()).then_some(r)
+    }
+
+    /// `None` for a triangle with a non-finite coordinate (or an overflowing box).
+    fn of_triangle(t: &Triangle, id: usize) -> Option<PrimRef> {
+        if !triangle_is_finite(t) {
+            return None;
+        }
+        PrimRef::new(t.p[0].min(t.p[1]).min(t.p[2]), t.p[0].max(t.p[1]).max(t.p[2]), id)
+    }
+
+    /// `None` for a sphere with a non-finite centre or radius (or an overflowing box).
+    fn of_sphere(s: &Sphere, id: usize) -> Option<PrimRef> {
+        if !sphere_is_finite(s) {
+            return None;
+        }
+        let r = Vec3::splat(s.radius.abs());
+        PrimRef::new(s.center - r, s.center + r, id)
+    }
+
     /// Twice the centroid (the factor 2 is irrelevant to binning and saves a multiply).
     #[inline]
-    fn c2(&self) -> Vec3 {
-        self.min + self.max
+    fn c2(&self) -> Vec3A {
+        Vec3A::from(self.min) + Vec3A::from(self.max)
+    }
+
+    #[inline]
+    fn bounds(&self) -> Bounds {
+        Bounds { min: self.min.into(), max: self.max.into() }
     }
 
     fn aabb(&self) -> Aabb {
@@ -147,17 +191,58 @@ impl PrimRef {
     }
 }
 
+/// The builder's working box: an [`Aabb`] in SIMD registers. Growing a box only takes
+/// minima and maxima, which are exact, so a box is the same whatever order (or thread)
+/// grew it (up to the sign of a zero coordinate, which only comparisons see, and they do
+/// not); areas go through [`Aabb::half_area`].
 #[derive(Clone, Copy, Debug)]
-struct Node {
-    boxes: [Aabb; 2],
-    children: [u32; 2],
+struct Bounds {
+    min: Vec3A,
+    max: Vec3A,
+}
+
+impl Bounds {
+    const EMPTY: Bounds = Bounds { min: Vec3A::INFINITY, max: Vec3A::NEG_INFINITY };
+
+    #[inline]
+    fn grow(&mut self, o: &Bounds) {
+        self.min = self.min.min(o.min);
+        self.max = self.max.max(o.max);
+    }
+
+    #[inline]
+    fn grow_point(&mut self, p: Vec3A) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    fn union(mut self, o: &Bounds) -> Bounds {
+        self.grow(o);
+        self
+    }
+
+    fn aabb(&self) -> Aabb {
+        Aabb { min: self.min.into(), max: self.max.into() }
+    }
+
+    #[inline]
+    fn half_area(&self) -> f64 {
+        self.aabb().half_area()
+    }
 }
 
 const MAX_BINS: usize = 64;
-/// Subtrees with at least this many primitives may be built on another thread.
-const PARALLEL_MIN_PRIMS: usize = 32 * 1024;
+/// Nodes with at least this many primitives build their two subtrees as two rayon tasks
+/// (`rayon::join`). Only the speed depends on it, not the tree.
+const PARALLEL_SUBTREE_MIN_PRIMS: usize = 8 * 1024;
+/// Nodes with at least this many primitives bin them in parallel, in chunks of
+/// [`PARALLEL_BIN_CHUNK`] (the near-root nodes, where there are fewer subtrees than
+/// threads). Only the speed depends on it, not the tree.
+const PARALLEL_BIN_MIN_PRIMS: usize = 128 * 1024;
+const PARALLEL_BIN_CHUNK: usize = 32 * 1024;
 
-/// Builds a BVH over `triangles` then `spheres` with the given options.
+/// Builds a BVH over `triangles` then `spheres` with the given options, on
+/// [`BuildOptions::threads`] threads (the tree does not depend on the number).
 ///
 /// Panics if there are more than 2^28 primitives or options are out of range.
 pub fn build_with(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOptions) -> Bvh {
@@ -166,52 +251,55 @@ pub fn build_with(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOption
     assert!((1..=MAX_LEAF_PRIMS).contains(&opts.max_leaf), "max_leaf out of range");
     let total = triangles.len() + spheres.len();
     assert!(total <= MAX_PRIMS, "too many primitives for the BVH ({total})");
-    let nt = triangles.len();
-
-    let mut refs: Vec<PrimRef> = Vec::with_capacity(total);
-    let mut bounds = Aabb::EMPTY;
-    let mut cbounds = Aabb::EMPTY;
-    let mut skipped = 0usize;
-    let mut push = |min: Vec3, max: Vec3, id: usize| {
-        let r = PrimRef { min, id: id as u32, max, _pad: 0 };
-        // The centroid sum or the padded box (see Aabb::padded) can overflow for
-        // coordinates near f32::MAX: skip those too.
-        let padded = r.aabb().padded();
-        if !(r.c2().is_finite() && padded.min.is_finite() && padded.max.is_finite()) {
-            return false;
+    let mut bvh = if opts.threads == 0 {
+        build_in_pool(triangles, spheres, opts)
+    } else {
+        match rayon::ThreadPoolBuilder::new().num_threads(opts.threads).build() {
+            Ok(pool) => pool.install(|| build_in_pool(triangles, spheres, opts)),
+            Err(e) => {
+                log::warn!("BVH build: no pool of {} threads ({e}); building on the global pool", opts.threads);
+                build_in_pool(triangles, spheres, opts)
+            }
         }
-        bounds.grow(&r.aabb());
-        cbounds.grow_point(r.c2());
-        refs.push(r);
-        true
     };
-    for (i, t) in triangles.iter().enumerate() {
-        if !triangle_is_finite(t) {
-            skipped += 1;
-            continue;
-        }
-        let min = t.p[0].min(t.p[1]).min(t.p[2]);
-        let max = t.p[0].max(t.p[1]).max(t.p[2]);
-        skipped += usize::from(!push(min, max, i));
-    }
-    for (i, s) in spheres.iter().enumerate() {
-        if !sphere_is_finite(s) {
-            skipped += 1;
-            continue;
-        }
-        let r = Vec3::splat(s.radius.abs());
-        skipped += usize::from(!push(s.center - r, s.center + r, nt + i));
-    }
+    bvh.stats.build_seconds = start.elapsed().as_secs_f64();
+    bvh
+}
 
-    let threads =
-        if opts.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { opts.threads };
-    let ctx = Ctx { opts };
-    let mut nodes: Vec<Node> = Vec::with_capacity(refs.len() / 2 + 1);
-    let root = ctx.build_node(&mut refs, 0, bounds, cbounds, 1, threads, true, &mut nodes);
+/// [`build_with`] on the current rayon pool (options already checked).
+fn build_in_pool(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOptions) -> Bvh {
+    let nt = triangles.len();
+    // Progress: primitives placed in subtrees (see Builder::build_node).
+    let total = triangles.len() + spheres.len();
+    let activity = Activity::begin(|| format!("building the BVH ({total} primitives)"), Some(total as u64));
+    // Primitive references in input order (rayon's collect keeps the order).
+    let mut refs: Vec<PrimRef> = triangles
+        .par_iter()
+        .enumerate()
+        .filter_map(|(i, t)| PrimRef::of_triangle(t, i))
+        .chain(spheres.par_iter().enumerate().filter_map(|(i, s)| PrimRef::of_sphere(s, nt + i)))
+        .collect();
+    let skipped = total - refs.len();
+    let (bounds, cbounds) = refs
+        .par_iter()
+        .fold(
+            || (Bounds::EMPTY, Bounds::EMPTY),
+            |(mut b, mut c), r| {
+                b.grow(&r.bounds());
+                c.grow_point(r.c2());
+                (b, c)
+            },
+        )
+        .reduce(|| (Bounds::EMPTY, Bounds::EMPTY), |(b0, c0), (b1, c1)| (b0.union(&b1), c0.union(&c1)));
+
+    let builder = Builder { opts, activity: &activity };
+    let mut worker = Worker::new(refs.len());
+    let root = builder.build_node(&mut refs, 0, bounds, cbounds, 1, true, &mut worker);
     debug_assert_eq!(root, 0);
+    let nodes = worker.nodes.into_nodes();
 
     let prims: Vec<GpuPrim> = refs
-        .iter()
+        .par_iter()
         .map(|r| {
             let id = r.id as usize;
             if id < nt {
@@ -224,22 +312,9 @@ pub fn build_with(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOption
         })
         .collect();
     drop(refs);
-    // Pad and quantise the boxes (in parallel: it is a sizeable part of the build).
-    let mut gpu_nodes = vec![GpuNode::default(); nodes.len()];
-    let chunk = nodes.len().div_ceil(threads).max(1024);
-    std::thread::scope(|s| {
-        for (dst, src) in gpu_nodes.chunks_mut(chunk).zip(nodes.chunks(chunk)) {
-            s.spawn(move || {
-                for (d, n) in dst.iter_mut().zip(src) {
-                    *d = GpuNode::new(n.boxes.map(|b| b.padded()), n.children);
-                }
-            });
-        }
-    });
-    drop(nodes);
 
     let mut bvh = Bvh {
-        nodes: gpu_nodes,
+        nodes,
         prims,
         stats: BuildStats {
             triangles: triangles.len(),
@@ -253,7 +328,6 @@ pub fn build_with(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOption
     bvh.stats.leaves = leaves;
     bvh.stats.max_depth = max_depth;
     bvh.stats.sah_cost = sah_cost;
-    bvh.stats.build_seconds = start.elapsed().as_secs_f64();
     assert!(max_depth <= MAX_DEPTH, "BVH depth bound violated: {max_depth}");
     bvh
 }
@@ -301,38 +375,238 @@ fn median_levels(n: usize, max_leaf: usize) -> u32 {
     levels
 }
 
-struct Ctx<'a> {
+/// A node of the GPU layout over two child boxes (padded, then quantised).
+fn gpu_node(boxes: [Bounds; 2], children: [u32; 2]) -> GpuNode {
+    GpuNode::new(boxes.map(|b| b.aabb().padded()), children)
+}
+
+/// `f` applied to a child reference if it is an internal node's (leaves unchanged).
+fn map_internal(r: u32, f: impl Fn(u32) -> u32) -> u32 {
+    if decode_ref(r).is_ok() {
+        f(r)
+    } else {
+        r
+    }
+}
+
+/// The nodes of a subtree in depth-first preorder (a node, then its first child's
+/// subtree, then its second child's), which is the order the serial recursion creates
+/// them in. Held as consecutive pieces, so that subtrees built by other tasks are joined
+/// by moving their pieces, not their nodes.
+///
+/// While building, an internal child reference is relative: the child's position minus
+/// its parent's. A piece thus does not depend on where it ends up, and
+/// [`NodeList::into_nodes`] turns the references into node indices when it concatenates
+/// the pieces.
+struct NodeList {
+    pieces: Vec<Vec<GpuNode>>,
+    len: usize,
+}
+
+impl NodeList {
+    fn with_capacity(capacity: usize) -> NodeList {
+        NodeList { pieces: vec![Vec::with_capacity(capacity)], len: 0 }
+    }
+
+    fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Appends a node; returns its position.
+    fn push(&mut self, node: GpuNode) -> usize {
+        let pos = self.len;
+        self.pieces.last_mut().expect("a NodeList always has a piece").push(node);
+        self.len += 1;
+        pos
+    }
+
+    /// The node at position `pos`.
+    fn node_mut(&mut self, pos: usize) -> &mut GpuNode {
+        let mut start = self.len;
+        for piece in self.pieces.iter_mut().rev() {
+            start -= piece.len();
+            if pos >= start {
+                return &mut piece[pos - start];
+            }
+        }
+        unreachable!("node position {pos} beyond the list ({})", self.len)
+    }
+
+    /// Appends `other`'s nodes (moving its pieces).
+    fn append(&mut self, other: NodeList) {
+        if self.pieces.last().is_some_and(Vec::is_empty) {
+            self.pieces.pop();
+        }
+        self.pieces.extend(other.pieces.into_iter().filter(|p| !p.is_empty()));
+        self.pieces.push(Vec::new());
+        self.len += other.len;
+    }
+
+    /// The nodes in one array, child references made absolute (in parallel over pieces).
+    fn into_nodes(mut self) -> Vec<GpuNode> {
+        self.pieces.retain(|p| !p.is_empty());
+        let absolute = |piece: &mut [GpuNode], start: usize| {
+            for (k, node) in piece.iter_mut().enumerate() {
+                let pos = (start + k) as u32;
+                node.set_children([0, 1].map(|i| map_internal(node.child(i), |rel| pos + rel)));
+            }
+        };
+        if self.pieces.len() == 1 {
+            let mut nodes = self.pieces.pop().expect("one piece");
+            const CHUNK: usize = 64 * 1024;
+            nodes.par_chunks_mut(CHUNK).enumerate().for_each(|(c, chunk)| absolute(chunk, c * CHUNK));
+            return nodes;
+        }
+        let mut nodes = vec![GpuNode::default(); self.len];
+        let mut jobs = Vec::with_capacity(self.pieces.len());
+        let mut rest = nodes.as_mut_slice();
+        let mut start = 0;
+        for piece in &self.pieces {
+            let (dst, tail) = rest.split_at_mut(piece.len());
+            jobs.push((dst, piece, start));
+            start += piece.len();
+            rest = tail;
+        }
+        jobs.into_par_iter().for_each(|(dst, piece, start)| {
+            dst.copy_from_slice(piece);
+            absolute(dst, start);
+        });
+        nodes
+    }
+}
+
+/// What one build task owns: the nodes it has made and its bin scratch (reused from node
+/// to node, so that nodes allocate nothing).
+struct Worker {
+    nodes: NodeList,
+    bins: Box<Bins>,
+}
+
+impl Worker {
+    /// A worker for a subtree over `prims` primitives. A subtree of at least
+    /// [`PARALLEL_SUBTREE_MIN_PRIMS`] makes only its root node itself (the rest comes
+    /// from the tasks it starts); a smaller one makes about one node per two primitives.
+    fn new(prims: usize) -> Worker {
+        let capacity = if prims >= PARALLEL_SUBTREE_MIN_PRIMS { 1 } else { prims / 2 + 1 };
+        Worker { nodes: NodeList::with_capacity(capacity), bins: Bins::new() }
+    }
+}
+
+/// Where a centroid falls: `count` equal intervals of the node's centroid bounds on each
+/// axis. `scale` is 0 on an axis whose centroids (nearly) coincide: everything falls into
+/// bin 0 there, and `active` is false.
+struct BinGrid {
+    cmin: Vec3A,
+    scale: Vec3A,
+    count: usize,
+    active: [bool; 3],
+}
+
+impl BinGrid {
+    /// `None` when the centroids coincide on every axis.
+    fn new(cbounds: &Bounds, count: usize) -> Option<BinGrid> {
+        let ext = cbounds.max - cbounds.min;
+        let mut scale = [0.0f32; 3];
+        let mut active = [false; 3];
+        for a in 0..3 {
+            let s = count as f32 / ext[a];
+            if ext[a] > 0.0 && s.is_finite() {
+                scale[a] = s;
+                active[a] = true;
+            }
+        }
+        active.contains(&true).then(|| BinGrid { cmin: cbounds.min, scale: Vec3A::from(scale), count, active })
+    }
+
+    /// The bin of doubled centroid `c2` on each axis.
+    #[inline]
+    fn bin_of(&self, c2: Vec3A) -> [usize; 3] {
+        ((c2 - self.cmin) * self.scale).to_array().map(|x| self.clamp(x))
+    }
+
+    /// The bin of doubled centroid coordinate `c2` on axis `a` (as [`Self::bin_of`]).
+    #[inline]
+    fn bin_on(&self, c2: f32, a: usize) -> usize {
+        self.clamp((c2 - self.cmin[a]) * self.scale[a])
+    }
+
+    /// Grid coordinate `x` to its bin: truncated, clamped to the bins. (`as i32` saturates
+    /// and maps NaN to 0; it is a shorter instruction sequence than `as usize`, with the
+    /// same result here.)
+    #[inline]
+    fn clamp(&self, x: f32) -> usize {
+        ((x as i32).max(0) as usize).min(self.count - 1)
+    }
+}
+
+/// A node's bins on all three axes: the boxes and counts of the primitives whose
+/// centroid falls into each. Only the grid's first `count` bins per axis are used.
+struct Bins {
+    boxes: [[Bounds; MAX_BINS]; 3],
+    counts: [[u32; MAX_BINS]; 3],
+}
+
+impl Bins {
+    fn new() -> Box<Bins> {
+        Box::new(Bins { boxes: [[Bounds::EMPTY; MAX_BINS]; 3], counts: [[0; MAX_BINS]; 3] })
+    }
+
+    fn clear(&mut self, count: usize) {
+        for a in 0..3 {
+            self.boxes[a][..count].fill(Bounds::EMPTY);
+            self.counts[a][..count].fill(0);
+        }
+    }
+
+    /// Adds `refs` to the (cleared or partly filled) bins of `grid`.
+    fn add(&mut self, grid: &BinGrid, refs: &[PrimRef]) {
+        for r in refs {
+            let b = r.bounds();
+            for (a, bin) in grid.bin_of(r.c2()).into_iter().enumerate() {
+                self.counts[a][bin] += 1;
+                self.boxes[a][bin].grow(&b);
+            }
+        }
+    }
+
+    /// Adds `o`'s first `count` bins to these (exact: box unions and integer sums).
+    fn merge(&mut self, o: &Bins, count: usize) {
+        for a in 0..3 {
+            for i in 0..count {
+                self.counts[a][i] += o.counts[a][i];
+                self.boxes[a][i].grow(&o.boxes[a][i]);
+            }
+        }
+    }
+}
+
+struct Builder<'a> {
     opts: &'a BuildOptions,
+    activity: &'a Activity,
 }
 
 /// A chosen split: `refs[..nl]` left, `refs[nl..]` right, already partitioned.
 struct Split {
     nl: usize,
-    boxes: [Aabb; 2],
-    cboxes: [Aabb; 2],
+    boxes: [Bounds; 2],
+    cboxes: [Bounds; 2],
 }
 
-#[derive(Clone, Copy)]
-struct Bin {
-    bounds: Aabb,
-    count: u32,
-}
-
-impl Ctx<'_> {
+impl Builder<'_> {
     /// Builds the subtree over `refs` (which start at `offset` in the final primitive
-    /// order) and returns its child reference. A node created here is at internal level
-    /// `level`. `force_split`: make an internal node even for few primitives (the root).
+    /// order) into `w` and returns its child reference: a leaf, or the position in
+    /// `w.nodes` of its root. A node created here is at internal level `level`.
+    /// `force_split`: make an internal node even for few primitives (the root).
     #[allow(clippy::too_many_arguments)]
     fn build_node(
         &self,
         refs: &mut [PrimRef],
         offset: usize,
-        bounds: Aabb,
-        cbounds: Aabb,
+        bounds: Bounds,
+        cbounds: Bounds,
         level: u32,
-        threads: usize,
         force_split: bool,
-        nodes: &mut Vec<Node>,
+        w: &mut Worker,
     ) -> u32 {
         let n = refs.len();
         let max_leaf = self.opts.max_leaf;
@@ -345,133 +619,136 @@ impl Ctx<'_> {
                 return leaf_ref(offset as u32, n as u32);
             }
             // Root over 0 or 1 primitive: one leaf and an empty one.
-            let empty = Aabb { min: Vec3::ZERO, max: Vec3::ZERO };
+            let empty = Bounds { min: Vec3A::ZERO, max: Vec3A::ZERO };
             let b0 = if n == 1 { bounds } else { empty };
-            nodes.push(Node {
-                boxes: [b0, empty],
-                children: [leaf_ref(offset as u32, n as u32), leaf_ref((offset + n) as u32, 0)],
-            });
-            return 0;
+            let children = [leaf_ref(offset as u32, n as u32), leaf_ref((offset + n) as u32, 0)];
+            return w.nodes.push(gpu_node([b0, empty], children)) as u32;
         }
 
         let split = match self.opts.method {
-            SplitMethod::Sah => match self.sah_split(refs, &bounds, &cbounds, level, !force_split && n <= max_leaf) {
-                SahResult::Leaf => return leaf_ref(offset as u32, n as u32),
-                SahResult::Split(s) => s,
-                SahResult::Median => median_split(refs, &cbounds),
-            },
+            SplitMethod::Sah => {
+                match self.sah_split(refs, &bounds, &cbounds, level, !force_split && n <= max_leaf, &mut w.bins) {
+                    SahResult::Leaf => return leaf_ref(offset as u32, n as u32),
+                    SahResult::Split(s) => s,
+                    SahResult::Median => median_split(refs, &cbounds),
+                }
+            }
             SplitMethod::Median => median_split(refs, &cbounds),
         };
 
-        let index = nodes.len();
-        nodes.push(Node { boxes: split.boxes, children: [0, 0] });
         let nl = split.nl;
         let (left, right) = refs.split_at_mut(nl);
-        let children = if threads > 1 && n >= PARALLEL_MIN_PRIMS {
-            let tl = threads / 2;
-            let tr = threads - tl;
-            let (lref, lnodes, rref) = std::thread::scope(|s| {
-                let h = s.spawn(|| {
-                    let mut v = Vec::with_capacity(left.len() / 2 + 1);
-                    let r =
-                        self.build_node(left, offset, split.boxes[0], split.cboxes[0], level + 1, tl, false, &mut v);
-                    (r, v)
-                });
-                let rref =
-                    self.build_node(right, offset + nl, split.boxes[1], split.cboxes[1], level + 1, tr, false, nodes);
-                let (lref, lnodes) = h.join().expect("BVH build thread panicked");
-                (lref, lnodes, rref)
-            });
-            // Append the left subtree after the right one, relocating its node indices.
-            let base = nodes.len() as u32;
-            let reloc = |r: u32| if decode_ref(r).is_ok() { r + base } else { r };
-            nodes.extend(lnodes.into_iter().map(|mut nd| {
-                nd.children = nd.children.map(reloc);
-                nd
-            }));
-            [reloc(lref), rref]
+        if n >= PARALLEL_SUBTREE_MIN_PRIMS {
+            // Both subtrees as rayon tasks, each into its own node list; then this node
+            // and the two lists in preorder, as the serial branch below would lay them out.
+            let subtree = |refs: &mut [PrimRef], offset: usize, side: usize| {
+                let mut sub = Worker::new(refs.len());
+                let r =
+                    self.build_node(refs, offset, split.boxes[side], split.cboxes[side], level + 1, false, &mut sub);
+                // Progress: each primitive is counted once, by the one subtree task of
+                // it that builds serially.
+                if refs.len() < PARALLEL_SUBTREE_MIN_PRIMS {
+                    self.activity.advance(refs.len() as u64);
+                }
+                (r, sub.nodes)
+            };
+            let ((lref, lnodes), (rref, rnodes)) =
+                rayon::join(|| subtree(left, offset, 0), || subtree(right, offset + nl, 1));
+            // Relative references: the left subtree starts right after this node, the
+            // right one after the left one.
+            let left_len = lnodes.len() as u32;
+            let children = [map_internal(lref, |p| 1 + p), map_internal(rref, |p| 1 + left_len + p)];
+            let pos = w.nodes.push(gpu_node(split.boxes, children));
+            w.nodes.append(lnodes);
+            w.nodes.append(rnodes);
+            pos as u32
         } else {
-            let lref = self.build_node(left, offset, split.boxes[0], split.cboxes[0], level + 1, 1, false, nodes);
-            let rref = self.build_node(right, offset + nl, split.boxes[1], split.cboxes[1], level + 1, 1, false, nodes);
-            [lref, rref]
-        };
-        nodes[index].children = children;
-        index as u32
+            let pos = w.nodes.push(gpu_node(split.boxes, [0, 0]));
+            let lref = self.build_node(left, offset, split.boxes[0], split.cboxes[0], level + 1, false, w);
+            let rref = self.build_node(right, offset + nl, split.boxes[1], split.cboxes[1], level + 1, false, w);
+            let relative = |r: u32| map_internal(r, |p| p - pos as u32);
+            w.nodes.node_mut(pos).set_children([relative(lref), relative(rref)]);
+            pos as u32
+        }
     }
 
-    /// Binned SAH on all three axes. `leaf_allowed`: compare with the leaf cost.
+    /// Binned SAH on all three axes. `leaf_allowed`: compare with the leaf cost. `bins`:
+    /// scratch.
     fn sah_split(
         &self,
         refs: &mut [PrimRef],
-        bounds: &Aabb,
-        cbounds: &Aabb,
+        bounds: &Bounds,
+        cbounds: &Bounds,
         level: u32,
         leaf_allowed: bool,
+        bins: &mut Bins,
     ) -> SahResult {
         let n = refs.len();
         let nb = self.opts.bins;
-        let ext = cbounds.extent();
-        let mut scale = [0.0f32; 3];
-        let mut any_axis = false;
-        for a in 0..3 {
-            let s = nb as f32 / ext[a];
-            if ext[a] > 0.0 && s.is_finite() {
-                scale[a] = s;
-                any_axis = true;
-            }
-        }
-        if !any_axis {
+        let Some(grid) = BinGrid::new(cbounds, nb) else {
             // All centroids coincide: SAH cannot separate them.
             return if leaf_allowed { SahResult::Leaf } else { SahResult::Median };
-        }
-        let cmin = cbounds.min;
-        let bin_of = |c: f32, a: usize| -> usize {
-            // `as` saturates (and maps NaN to 0); clamp the top.
-            (((c - cmin[a]) * scale[a]) as usize).min(nb - 1)
         };
 
-        let empty = Bin { bounds: Aabb::EMPTY, count: 0 };
-        let mut bins = [[empty; MAX_BINS]; 3];
-        for r in refs.iter() {
-            let c = r.c2();
-            let b = r.aabb();
-            for a in 0..3 {
-                if scale[a] > 0.0 {
-                    let bin = &mut bins[a][bin_of(c[a], a)];
-                    bin.count += 1;
-                    bin.bounds.grow(&b);
-                }
-            }
-        }
+        // Near the root, per-chunk bins merged (the same bins: the merge is exact).
+        let parallel_bins;
+        let bins: &Bins = if n >= PARALLEL_BIN_MIN_PRIMS {
+            parallel_bins = refs
+                .par_chunks(PARALLEL_BIN_CHUNK)
+                .map(|chunk| {
+                    let mut b = Bins::new();
+                    b.add(&grid, chunk);
+                    b
+                })
+                .reduce_with(|mut a, b| {
+                    a.merge(&b, nb);
+                    a
+                })
+                .expect("a node has primitives");
+            &parallel_bins
+        } else {
+            bins.clear(nb);
+            bins.add(&grid, refs);
+            bins
+        };
 
         let ct = self.opts.traversal_cost as f64;
         let ci = self.opts.intersection_cost as f64;
         let parea = bounds.half_area();
-        // Costs multiplied by the parent's area (valid when that area is 0).
+        // Costs multiplied by the parent's area (valid when that area is 0). Only the
+        // planes just after an occupied bin are evaluated: a plane after an empty bin has
+        // the same two sides, hence bit for bit the same cost, as the plane before that
+        // bin (or an empty side), and the strict `<` keeps the first of equal costs.
         let mut best: Option<(f64, usize, usize)> = None;
+        let mut occupied = [0usize; MAX_BINS];
+        // right_area[j]: area of the occupied bins after occupied[j].
+        let mut right_area = [0.0f64; MAX_BINS];
         for a in 0..3 {
-            if scale[a] == 0.0 {
+            if !grid.active[a] {
                 continue;
             }
-            let bins = &bins[a][..nb];
-            let mut right_area = [0.0f64; MAX_BINS];
-            let mut acc = Aabb::EMPTY;
-            for i in (1..nb).rev() {
-                acc.grow(&bins[i].bounds);
-                right_area[i] = acc.half_area();
+            let (boxes, counts) = (&bins.boxes[a][..nb], &bins.counts[a][..nb]);
+            let mut m = 0;
+            for (i, &c) in counts.iter().enumerate() {
+                occupied[m] = i;
+                m += usize::from(c > 0);
             }
-            let mut acc = Aabb::EMPTY;
+            let planes = m.saturating_sub(1);
+            let mut acc = Bounds::EMPTY;
+            for j in (0..planes).rev() {
+                acc.grow(&boxes[occupied[j + 1]]);
+                right_area[j] = acc.half_area();
+            }
+            let mut acc = Bounds::EMPTY;
             let mut nl = 0usize;
-            for i in 1..nb {
-                acc.grow(&bins[i - 1].bounds);
-                nl += bins[i - 1].count as usize;
+            for j in 0..planes {
+                let bin = occupied[j];
+                acc.grow(&boxes[bin]);
+                nl += counts[bin] as usize;
                 let nr = n - nl;
-                if nl == 0 || nr == 0 {
-                    continue;
-                }
-                let cost = ct * parea + ci * (acc.half_area() * nl as f64 + right_area[i] * nr as f64);
+                let cost = ct * parea + ci * (acc.half_area() * nl as f64 + right_area[j] * nr as f64);
                 if best.is_none_or(|(c, _, _)| cost < c) {
-                    best = Some((cost, a, i));
+                    best = Some((cost, a, bin + 1));
                 }
             }
         }
@@ -483,33 +760,34 @@ impl Ctx<'_> {
         }
 
         // Depth guard: both children must still fit below MAX_DEPTH.
-        let nl: usize = bins[axis][..plane].iter().map(|b| b.count as usize).sum();
+        let nl: usize = bins.counts[axis][..plane].iter().map(|&c| c as usize).sum();
         let nr = n - nl;
         let max_leaf = self.opts.max_leaf;
         if level + median_levels(nl, max_leaf) > MAX_DEPTH || level + median_levels(nr, max_leaf) > MAX_DEPTH {
             return SahResult::Median;
         }
 
-        // Partition in place, collecting the children's boxes and centroid boxes.
-        let mut boxes = [Aabb::EMPTY; 2];
-        let mut cboxes = [Aabb::EMPTY; 2];
+        // Partition in place, collecting the children's boxes and centroid boxes. (Serial:
+        // the order it leaves the primitives in is part of the tree.)
+        // Four separate accumulators (not arrays indexed by side) stay in registers.
+        let (mut lbox, mut lc, mut rbox, mut rc) = (Bounds::EMPTY, Bounds::EMPTY, Bounds::EMPTY, Bounds::EMPTY);
         let mut i = 0;
         let mut j = n;
         while i < j {
             let c = refs[i].c2();
-            if bin_of(c[axis], axis) < plane {
-                boxes[0].grow(&refs[i].aabb());
-                cboxes[0].grow_point(c);
+            if grid.bin_on(c[axis], axis) < plane {
+                lbox.grow(&refs[i].bounds());
+                lc.grow_point(c);
                 i += 1;
             } else {
+                rbox.grow(&refs[i].bounds());
+                rc.grow_point(c);
                 j -= 1;
-                boxes[1].grow(&refs[i].aabb());
-                cboxes[1].grow_point(c);
                 refs.swap(i, j);
             }
         }
         debug_assert_eq!(i, nl);
-        SahResult::Split(Split { nl, boxes, cboxes })
+        SahResult::Split(Split { nl, boxes: [lbox, rbox], cboxes: [lc, rc] })
     }
 }
 
@@ -521,9 +799,9 @@ enum SahResult {
 }
 
 /// Object median on the widest centroid axis: the lower half by centroid goes left.
-fn median_split(refs: &mut [PrimRef], cbounds: &Aabb) -> Split {
+fn median_split(refs: &mut [PrimRef], cbounds: &Bounds) -> Split {
     let n = refs.len();
-    let e = cbounds.extent();
+    let e = cbounds.max - cbounds.min;
     let axis = if e.x >= e.y && e.x >= e.z {
         0
     } else if e.y >= e.z {
@@ -535,11 +813,11 @@ fn median_split(refs: &mut [PrimRef], cbounds: &Aabb) -> Split {
     if e[axis] > 0.0 {
         refs.select_nth_unstable_by(nl, |a, b| a.c2()[axis].total_cmp(&b.c2()[axis]));
     }
-    let mut boxes = [Aabb::EMPTY; 2];
-    let mut cboxes = [Aabb::EMPTY; 2];
+    let mut boxes = [Bounds::EMPTY; 2];
+    let mut cboxes = [Bounds::EMPTY; 2];
     for (k, r) in refs.iter().enumerate() {
         let s = usize::from(k >= nl);
-        boxes[s].grow(&r.aabb());
+        boxes[s].grow(&r.bounds());
         cboxes[s].grow_point(r.c2());
     }
     Split { nl, boxes, cboxes }

@@ -84,6 +84,12 @@ impl GpuNode {
     pub fn child(&self, i: usize) -> u32 {
         [self.a[3], self.b[3]][i]
     }
+
+    /// Replaces both child references (the boxes stay).
+    pub fn set_children(&mut self, children: [u32; 2]) {
+        self.a[3] = children[0];
+        self.b[3] = children[1];
+    }
 }
 
 /// Decoded value of grid coordinate `q`: `origin + q * step`. `step` is a power of two and

@@ -6,7 +6,8 @@
 //! traversal of the layout).
 //!
 //! * [`build`](fn@build) / [`build_with`]: binned SAH build over one unified primitive list
-//!   (all triangles, then all spheres), see [`build`](mod@build).
+//!   (all triangles, then all spheres), parallel (rayon) with the same tree for any number
+//!   of threads, see [`build`](mod@build).
 //! * [`Bvh::to_gpu`]: the flattened BVH2 in the GPU layout ([`GpuNode`], [`GpuPrim`]),
 //!   read by `glsl/bvh.glsl` (`trace_closest`, `trace_any`).
 //! * [`GpuBvh::closest_hit`] / [`GpuBvh::any_hit`]: the CPU mirror of the GLSL

@@ -20,6 +20,11 @@ pub enum BenchCommand {
     /// on the generated traversal scenes: cornell (~4k triangles + spheres), spheres and
     /// displaced (1M triangles each); see docs/bvh.md.
     Traverse(BenchTraverseArgs),
+    /// BVH build time per million triangles for each thread count, on generated meshes of
+    /// 1M and 4M triangles (spheres, displaced, spheres-4m, displaced-4m) or loaded scenes
+    /// (built-in names, glTF paths); checks that every thread count builds the same BVH.
+    /// CPU only; see docs/bvh.md.
+    BvhBuild(BenchBvhBuildArgs),
     /// Error at equal time: each estimator renders for --seconds of wall-clock time, and
     /// its RMSE, relative MSE and mean bias against a long reference render are reported
     /// (the reference's own remaining noise is printed with it).
@@ -97,6 +102,28 @@ pub struct BenchTraverseArgs {
 }
 
 #[derive(Args)]
+pub struct BenchBvhBuildArgs {
+    /// Generated meshes (spheres, displaced, spheres-4m, displaced-4m), built-in scene
+    /// names or glTF paths, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "spheres,displaced,spheres-4m,displaced-4m")]
+    pub scenes: Vec<String>,
+    /// Builder thread counts to time, comma-separated (0 = all cores).
+    #[arg(long, value_delimiter = ',', default_value = "1,0")]
+    pub threads: Vec<usize>,
+    /// Builds per scene and thread count; the median counts.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    pub rounds: u32,
+    /// Also write the results as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Also write each scene's triangles to DIR/SCENE.f32 (9 little-endian f32 per
+    /// triangle: the three vertices), for scripts/embree_build.py to build the same mesh
+    /// with Embree.
+    #[arg(long, value_name = "DIR")]
+    pub export_triangles: Option<PathBuf>,
+}
+
+#[derive(Args)]
 pub struct BenchRenderArgs {
     /// Scenes (built-in names or glTF paths), comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "gbs_s,glm_c,gbs_p,gbs_b")]
@@ -138,6 +165,7 @@ impl BenchCommand {
         match self {
             BenchCommand::Render(a) => bench_render(a),
             BenchCommand::Traverse(a) => bench_traverse(a),
+            BenchCommand::BvhBuild(a) => bench_bvh_build(a),
             BenchCommand::EqualTime(a) => bench_equal_time(a),
             BenchCommand::Suite(a) => bench_suite(a),
         }
@@ -159,6 +187,29 @@ fn bench_traverse(a: BenchTraverseArgs) -> Result<()> {
             .with_context(|| format!("unknown traversal scene {name:?} (cornell, spheres, displaced)"))?;
         let report = vkvcm::bench::traverse::bench_traverse(&gpu, &scene, &opts)?;
         println!("{report}");
+    }
+    Ok(())
+}
+
+fn bench_bvh_build(a: BenchBvhBuildArgs) -> Result<()> {
+    if let Some(p) = &a.json {
+        super::render::check_writable(p).context("--json")?;
+    }
+    println!("BVH build on {} cores available", std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let mut rows = Vec::new();
+    for name in &a.scenes {
+        let scene = vkvcm::bench::build::build_scene(name)?;
+        if let Some(dir) = &a.export_triangles {
+            let path = vkvcm::bench::build::export_triangles(&scene, dir)?;
+            println!("{name}: triangles written to {}", path.display());
+        }
+        for row in vkvcm::bench::build::bench_build(&scene, &a.threads, a.rounds)? {
+            println!("{row}");
+            rows.push(row);
+        }
+    }
+    if let Some(p) = &a.json {
+        write_json(p, &rows)?;
     }
     Ok(())
 }

@@ -181,6 +181,7 @@ pub fn load(path: &Path) -> anyhow::Result<Scene> {
 /// Loads a glTF 2.0 scene (`.gltf` or `.glb`); `options.camera` selects a camera by node
 /// or camera name.
 pub fn load_with(path: &Path, options: &LoadOptions) -> anyhow::Result<Scene> {
+    let _activity = crate::activity::Activity::begin(|| format!("loading {}", path.display()), None);
     gltf_import::load_gltf(path, options)
 }
 
