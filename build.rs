@@ -6,8 +6,9 @@ fn main() {
     embed_glsl();
     println!("cargo:rerun-if-env-changed=SHADERC_LIB_DIR");
     let dir = std::path::Path::new("/usr/lib/x86_64-linux-gnu");
-    if cfg!(target_os = "linux") && dir.join("libglslang.a").exists() {
+    let compiler = if cfg!(target_os = "linux") && dir.join("libglslang.a").exists() {
         println!("cargo:rustc-link-search=native={}", dir.display());
+        let mut linked = vec!["shaderc_combined"];
         for lib in [
             "glslang",
             "MachineIndependent",
@@ -21,9 +22,53 @@ fn main() {
         ] {
             if dir.join(format!("lib{lib}.a")).exists() {
                 println!("cargo:rustc-link-lib=static={lib}");
+                linked.push(lib);
             }
         }
+        debian_compiler_identity(dir, &linked)
+    } else {
+        let lib_dir = std::env::var("SHADERC_LIB_DIR").unwrap_or_default();
+        format!("shaderc as shaderc-sys finds it (SHADERC_LIB_DIR={lib_dir:?})")
+    };
+    // Part of the key of the kernel cache's SPIR-V (src/gpu/shader.rs, compiler_identity).
+    println!("cargo:rustc-env=VKVCM_SHADER_COMPILER={compiler}");
+}
+
+/// What identifies the GLSL compiler linked from Debian's static libraries: the versions
+/// of shaderc, glslang and SPIRV-Tools, and the size and modification time of every
+/// static library linked (which change when any of those packages is rebuilt or
+/// upgraded; build.rs then re-runs, so the binary carries the new identity).
+fn debian_compiler_identity(dir: &std::path::Path, linked: &[&str]) -> String {
+    let pc_version = |name: &str| {
+        let text = std::fs::read_to_string(dir.join("pkgconfig").join(format!("{name}.pc"))).unwrap_or_default();
+        text.lines().find_map(|l| l.strip_prefix("Version:")).unwrap_or("?").trim().to_string()
+    };
+    let build_info = std::fs::read_to_string("/usr/include/glslang/build_info.h").unwrap_or_default();
+    let glslang: Vec<&str> = ["MAJOR", "MINOR", "PATCH"]
+        .iter()
+        .map(|part| {
+            let prefix = format!("#define GLSLANG_VERSION_{part} ");
+            build_info.lines().find_map(|l| l.strip_prefix(prefix.as_str())).unwrap_or("?").trim()
+        })
+        .collect();
+    let mut out = format!(
+        "shaderc {}, glslang {}, SPIRV-Tools {}; static libraries:",
+        pc_version("shaderc_combined"),
+        glslang.join("."),
+        pc_version("SPIRV-Tools")
+    );
+    for lib in linked {
+        let path = dir.join(format!("lib{lib}.a"));
+        println!("cargo:rerun-if-changed={}", path.display());
+        let meta = std::fs::metadata(&path).ok();
+        let size = meta.as_ref().map_or(0, |m| m.len());
+        let modified = meta
+            .and_then(|m| m.modified().ok())
+            .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+            .map_or(0, |d| d.as_secs());
+        out.push_str(&format!(" {lib} {size} bytes @{modified}"));
     }
+    out
 }
 
 /// Embeds every file under glsl/ into the binary (`glsl_sources.rs` in OUT_DIR) so that

@@ -155,6 +155,7 @@ fn profile_json_has_the_stages_and_rays() {
             .arg("-o")
             .arg(dir.path().join(format!("{algo}.exr")))
             .env("VKVCM_VALIDATION", "1")
+            .env("VKVCM_CACHE_DIR", "") // no kernel cache
             .output()
             .unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);

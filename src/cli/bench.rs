@@ -7,7 +7,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 
 use super::write_json;
-use vkvcm::gpu::{Gpu, GpuOptions};
+use vkvcm::gpu::Gpu;
 use vkvcm::render::{self, Algorithm};
 use vkvcm::scene;
 
@@ -56,8 +56,8 @@ pub struct BenchSuiteArgs {
     pub iterations: u64,
     #[arg(long)]
     pub json: Option<PathBuf>,
-    #[arg(long)]
-    pub device: Option<String>,
+    #[command(flatten)]
+    pub gpu: super::GpuArgs,
 }
 
 #[derive(Args)]
@@ -85,8 +85,8 @@ pub struct BenchEqualTimeArgs {
     pub reference_iterations: u64,
     #[arg(long)]
     pub json: Option<PathBuf>,
-    #[arg(long)]
-    pub device: Option<String>,
+    #[command(flatten)]
+    pub gpu: super::GpuArgs,
 }
 
 #[derive(Args)]
@@ -97,8 +97,8 @@ pub struct BenchTraverseArgs {
     /// Rays per ray set.
     #[arg(long, default_value_t = 1 << 20)]
     pub rays: u32,
-    #[arg(long)]
-    pub device: Option<String>,
+    #[command(flatten)]
+    pub gpu: super::GpuArgs,
 }
 
 #[derive(Args)]
@@ -156,8 +156,8 @@ pub struct BenchRenderArgs {
     /// Also write the results as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
-    #[arg(long)]
-    pub device: Option<String>,
+    #[command(flatten)]
+    pub gpu: super::GpuArgs,
 }
 
 impl BenchCommand {
@@ -173,14 +173,14 @@ impl BenchCommand {
 }
 
 /// Opens the device for a benchmark and prints which one it is (results name it).
-fn open_bench_gpu(device: Option<String>) -> Result<Arc<Gpu>> {
-    let gpu = Gpu::new(&GpuOptions::from_env(device))?;
+fn open_bench_gpu(args: &super::GpuArgs) -> Result<Arc<Gpu>> {
+    let gpu = Gpu::new(&args.options())?;
     println!("device: {} ({}), Vulkan {}", gpu.info.name, gpu.info.driver, gpu.info.api_version);
     Ok(gpu)
 }
 
 fn bench_traverse(a: BenchTraverseArgs) -> Result<()> {
-    let gpu = open_bench_gpu(a.device.clone())?;
+    let gpu = open_bench_gpu(&a.gpu)?;
     let opts = vkvcm::bench::traverse::TraverseBenchOptions { rays: a.rays.max(1), ..Default::default() };
     for name in &a.scenes {
         let scene = vkvcm::bench::traverse::bench_scene(name)
@@ -218,7 +218,7 @@ fn bench_equal_time(a: BenchEqualTimeArgs) -> Result<()> {
     if a.size == 0 || a.seconds.is_nan() || a.seconds <= 0.0 || a.reference_iterations < 2 || a.rounds == 0 {
         bail!("--size, --seconds and --rounds must be positive and --reference-iterations at least 2");
     }
-    let gpu = open_bench_gpu(a.device.clone())?;
+    let gpu = open_bench_gpu(&a.gpu)?;
     let mut rows = Vec::new();
     for name in &a.scenes {
         let scene = scene::load_named(name)?;
@@ -253,7 +253,7 @@ fn bench_suite(a: BenchSuiteArgs) -> Result<()> {
     if let Some(p) = &a.json {
         super::render::check_writable(p).context("--json")?;
     }
-    let gpu = open_bench_gpu(a.device.clone())?;
+    let gpu = open_bench_gpu(&a.gpu)?;
     let mut rows = Vec::new();
     for name in &a.scenes {
         let scene = scene::load_named(name)?;
@@ -284,7 +284,7 @@ fn bench_render(a: BenchRenderArgs) -> Result<()> {
     if a.size == 0 || a.iterations == 0 {
         bail!("--size and --iterations must be at least 1");
     }
-    let gpu = open_bench_gpu(a.device.clone())?;
+    let gpu = open_bench_gpu(&a.gpu)?;
     let scenes = a.scenes.iter().map(|n| Ok((n, scene::load_named(n)?))).collect::<Result<Vec<_>>>()?;
     let overrides = vkvcm::bench::render::Overrides {
         paths_per_invocation: a.paths_per_invocation,

@@ -7,7 +7,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 
 use super::render::{check_writable, install_interrupt};
-use vkvcm::gpu::{Gpu, GpuOptions};
+use vkvcm::gpu::Gpu;
 use vkvcm::image::{self, plot};
 use vkvcm::render::converge::{self as conv, ReferenceError};
 use vkvcm::render::{Algorithm, Budget, RenderSettings};
@@ -44,9 +44,8 @@ pub struct ReferenceArgs {
     /// Also write a tone-mapped sRGB PNG of the reference.
     #[arg(long)]
     pub png: Option<PathBuf>,
-    /// Vulkan device: index or name substring (see `vkvcm devices`).
-    #[arg(long)]
-    pub device: Option<String>,
+    #[command(flatten)]
+    pub gpu: super::GpuArgs,
     #[command(flatten)]
     pub env: super::EnvArgs,
 }
@@ -85,9 +84,8 @@ pub struct ConvergeArgs {
     /// Longest path, in segments (default: the reference's vkvcm:max_path_length, else 10).
     #[arg(long)]
     pub max_path_length: Option<u32>,
-    /// Vulkan device: index or name substring (see `vkvcm devices`).
-    #[arg(long)]
-    pub device: Option<String>,
+    #[command(flatten)]
+    pub gpu: super::GpuArgs,
     /// The environment map of the reference, if it had one.
     #[command(flatten)]
     pub env: super::EnvArgs,
@@ -111,8 +109,8 @@ fn meta_value<'a>(meta: &'a [(String, String)], key: &str) -> Option<&'a str> {
     meta.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
 }
 
-fn open_gpu(device: Option<String>) -> Result<std::sync::Arc<Gpu>> {
-    let gpu = Gpu::new(&GpuOptions::from_env(device))?;
+fn open_gpu(args: &super::GpuArgs) -> Result<std::sync::Arc<Gpu>> {
+    let gpu = Gpu::new(&args.options())?;
     eprintln!("device: {} ({})", gpu.info.name, gpu.info.driver);
     Ok(gpu)
 }
@@ -166,7 +164,7 @@ pub fn reference_cmd(a: ReferenceArgs) -> Result<()> {
     settings.frame.seed = a.seed;
     settings.frame.max_path_length = a.max_path_length;
 
-    let gpu = open_gpu(a.device.clone())?;
+    let gpu = open_gpu(&a.gpu)?;
     let mut last = -1.0;
     let r = conv::render_reference(&gpu, &scene, &settings, None, &mut |half, p| {
         if p.seconds - last >= 5.0 || p.fraction >= 1.0 {
@@ -268,7 +266,7 @@ pub fn converge_cmd(a: ConvergeArgs) -> Result<()> {
     }
 
     let target = conv::Target { image: &reference, error: ref_err };
-    let gpu = open_gpu(a.device.clone())?;
+    let gpu = open_gpu(&a.gpu)?;
     let cancel = install_interrupt();
     let mut rows = Vec::new();
     for &algo in &a.algos {

@@ -7,9 +7,12 @@ pub mod progress;
 pub mod render;
 
 use anyhow::{bail, Context, Result};
+use clap::Args;
+
+use vkvcm::gpu::GpuOptions;
 
 /// The environment-map options of the commands that render a scene (docs/environment.md).
-#[derive(clap::Args, Clone, Debug)]
+#[derive(Args, Clone, Debug)]
 pub struct EnvArgs {
     /// Light the scene with an equirectangular environment map (Radiance .hdr or OpenEXR;
     /// row 0 is the sky, the image centre looks along +Z: docs/environment.md) instead of
@@ -47,6 +50,31 @@ impl EnvArgs {
             None => None,
         };
         Ok(vkvcm::scene::LoadOptions { camera, environment })
+    }
+}
+
+/// The options of the subcommands that open a Vulkan device.
+#[derive(Args, Clone, Debug)]
+pub struct GpuArgs {
+    /// Vulkan device: index or name substring (see `vkvcm devices`).
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Build every kernel afresh, neither reading nor writing the kernel cache (compiled
+    /// kernels kept in $VKVCM_CACHE_DIR, else $XDG_CACHE_HOME/vkvcm, else ~/.cache/vkvcm;
+    /// docs/kernel-cache.md).
+    #[arg(long)]
+    pub no_kernel_cache: bool,
+}
+
+impl GpuArgs {
+    /// The device options: these arguments over the environment's ([`GpuOptions::from_env`]).
+    pub fn options(&self) -> GpuOptions {
+        let opts = GpuOptions::from_env(self.device.clone());
+        if self.no_kernel_cache {
+            GpuOptions { kernel_cache: None, ..opts }
+        } else {
+            opts
+        }
     }
 }
 

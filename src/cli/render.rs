@@ -9,7 +9,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 
 use super::progress::Reporter;
-use vkvcm::gpu::{Gpu, GpuOptions};
+use vkvcm::gpu::Gpu;
 use vkvcm::image::{self, Image};
 use vkvcm::render::{self, saved, Algorithm, Budget, Connect, Progress, RenderOutput, RenderSettings, Renderer};
 use vkvcm::scene;
@@ -117,9 +117,8 @@ pub struct RenderArgs {
     /// Print the feature set the kernels are compiled with and the buffers allocated.
     #[arg(long)]
     pub verbose: bool,
-    /// Vulkan device: index or name substring (see `vkvcm devices`).
-    #[arg(long)]
-    pub device: Option<String>,
+    #[command(flatten)]
+    pub gpu: super::GpuArgs,
 }
 
 /// `X,Y,Z` as a vector of three finite numbers.
@@ -176,6 +175,21 @@ pub fn install_interrupt() -> Arc<AtomicBool> {
 /// film is copied after every batch.
 const SNAPSHOT_COST_FACTOR: f64 = 25.0;
 const MAX_SNAPSHOT_SECONDS: f64 = 5.0;
+
+/// What --verbose says of the kernel cache: where it is, and how the kernels were built.
+fn kernel_cache_line(gpu: &Gpu) -> String {
+    let c = gpu.shader_counts();
+    match gpu.kernel_cache_dir() {
+        Some(dir) => format!(
+            "kernel cache {}: {} kernel(s) compiled, {} read from the cache; pipeline cache: {} bytes read",
+            dir.display(),
+            c.compiled,
+            c.from_disk,
+            gpu.pipeline_cache_loaded_bytes()
+        ),
+        None => format!("kernel cache: off; {} kernel(s) compiled", c.compiled),
+    }
+}
 
 /// Checks the arguments that need no scene or device; errors name the option.
 fn check_args(a: &RenderArgs) -> Result<()> {
@@ -278,7 +292,7 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
         }
     }
 
-    let gpu = Gpu::new(&GpuOptions::from_env(a.device.clone()))?;
+    let gpu = Gpu::new(&a.gpu.options())?;
     eprintln!("device: {} ({})", gpu.info.name, gpu.info.driver);
     provenance.device = gpu.info.name.clone();
     Renderer::plan_for(&gpu, &scene, &settings).map_err(|e| {
@@ -300,6 +314,7 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
         let how = if a.atomics.is_some() { "--atomics" } else { "chosen for the device" };
         eprintln!("splats summed with {}-bit atomics ({how})", r.atomics().name());
         eprint!("{}", render::features::buffer_table(&r.buffers()));
+        eprintln!("{}", kernel_cache_line(&gpu));
     }
     if let Some(s) = &saved {
         r.resume_saved(s)?;

@@ -2,13 +2,16 @@
 
 use std::ffi::{c_char, CStr};
 use std::mem::ManuallyDrop;
+use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 use anyhow::{anyhow, bail, Context, Result};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
-use super::shader::ShaderCache;
+use super::kernel_cache::{self, CacheDir};
+use super::pipeline_cache::PipelineCache;
+use super::shader::{ShaderCache, ShaderCounts};
 use super::validation::{Messages, Validation};
 
 /// How to open the GPU.
@@ -19,18 +22,24 @@ pub struct GpuOptions {
     pub device: Option<String>,
     /// Enable VK_LAYER_KHRONOS_validation and collect its messages.
     pub validation: bool,
+    /// The folder of the kernel cache (compiled SPIR-V and the driver's pipeline cache,
+    /// docs/kernel-cache.md); `None` builds every kernel afresh and writes nothing.
+    pub kernel_cache: Option<PathBuf>,
 }
 
 impl GpuOptions {
-    /// Options from the environment: `VKVCM_VALIDATION=1` turns validation on.
+    /// Options from the environment: `VKVCM_VALIDATION=1` turns validation on; the
+    /// kernel cache is in its default folder ([`kernel_cache::default_dir`]:
+    /// `VKVCM_CACHE_DIR`, `XDG_CACHE_HOME` or `HOME`; `VKVCM_CACHE_DIR=` turns it off).
     pub fn from_env(device: Option<String>) -> Self {
         let validation = std::env::var("VKVCM_VALIDATION").is_ok_and(|v| v != "0" && !v.is_empty());
-        GpuOptions { device, validation }
+        GpuOptions { device, validation, kernel_cache: kernel_cache::default_dir() }
     }
 
-    /// Tests always run with validation; `VKVCM_TEST_DEVICE` may choose the device.
+    /// Tests always run with validation and without a kernel cache (they neither depend
+    /// on nor write the user's); `VKVCM_TEST_DEVICE` may choose the device.
     pub fn for_tests() -> Self {
-        GpuOptions { device: std::env::var("VKVCM_TEST_DEVICE").ok(), validation: true }
+        GpuOptions { device: std::env::var("VKVCM_TEST_DEVICE").ok(), validation: true, kernel_cache: None }
     }
 }
 
@@ -104,6 +113,8 @@ pub struct Gpu {
     pub(crate) queue_family: u32,
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
     pub(crate) shaders: ShaderCache,
+    pub(crate) pipelines: PipelineCache,
+    kernel_cache: Option<CacheDir>,
     pub(crate) timestamp_period_ns: f64,
     pub(crate) timestamps: bool,
     pub info: DeviceInfo,
@@ -439,6 +450,8 @@ impl Gpu {
             // SAFETY: valid handle.
             unsafe { instance.get_physical_device_properties2(physical, &mut p2) };
             let props = p2.properties;
+            let kernel_cache = opts.kernel_cache.clone().map(CacheDir::new);
+            let pipelines = PipelineCache::open(&device, &props, kernel_cache.clone());
             Ok((
                 physical,
                 device,
@@ -449,10 +462,24 @@ impl Gpu {
                 infos[idx].clone(),
                 props,
                 sub.subgroup_size,
+                pipelines,
+                kernel_cache,
             ))
         };
         match step() {
-            Ok((physical, device, queue, queue_family, allocator, timestamps, info, props, subgroup_size)) => Ok(Gpu {
+            Ok((
+                physical,
+                device,
+                queue,
+                queue_family,
+                allocator,
+                timestamps,
+                info,
+                props,
+                subgroup_size,
+                pipelines,
+                kernel_cache,
+            )) => Ok(Gpu {
                 entry,
                 instance,
                 physical,
@@ -460,7 +487,9 @@ impl Gpu {
                 queue,
                 queue_family,
                 allocator: ManuallyDrop::new(Mutex::new(allocator)),
-                shaders: ShaderCache::default(),
+                shaders: ShaderCache::new(kernel_cache.clone()),
+                pipelines,
+                kernel_cache,
                 timestamp_period_ns: props.limits.timestamp_period as f64,
                 timestamps,
                 info,
@@ -493,6 +522,29 @@ impl Gpu {
         largest_heap_bytes(&self.instance, self.physical)
     }
 
+    /// The kernel cache's folder (`None`: no kernel cache).
+    pub fn kernel_cache_dir(&self) -> Option<&Path> {
+        self.kernel_cache.as_ref().map(CacheDir::path)
+    }
+
+    /// How many kernel variants were compiled and how many read from the kernel cache.
+    pub fn shader_counts(&self) -> ShaderCounts {
+        self.shaders.counts()
+    }
+
+    /// Bytes of pipeline-cache data read from the kernel cache when the device was opened
+    /// (0: the pipeline cache started empty).
+    pub fn pipeline_cache_loaded_bytes(&self) -> usize {
+        self.pipelines.loaded_bytes()
+    }
+
+    /// Writes the pipeline cache to the kernel cache now if pipelines were created since
+    /// it was last written (it is also written when the `Gpu` is dropped): called once a
+    /// renderer's kernels exist, so a process that does not end normally keeps them.
+    pub fn save_pipeline_cache(&self) {
+        self.pipelines.save(&self.device);
+    }
+
     /// Waits until the device is idle.
     pub fn wait_idle(&self) -> Result<()> {
         // SAFETY: valid device.
@@ -507,6 +559,7 @@ impl Drop for Gpu {
         unsafe {
             let _ = self.device.device_wait_idle();
             self.shaders.destroy(&self.device);
+            self.pipelines.destroy(&self.device);
             ManuallyDrop::drop(&mut self.allocator);
             self.device.destroy_device(None);
         }

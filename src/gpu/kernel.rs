@@ -171,9 +171,10 @@ impl Gpu {
                 .name(c"main");
             let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(k.layout)];
             k.pipeline = dev
-                .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
+                .create_compute_pipelines(self.pipelines.handle(), &info, None)
                 .map_err(|(_, e)| e)
                 .with_context(|| format!("cannot create the pipeline of kernel {source}"))?[0];
+            self.pipelines.note_created();
             if !chosen.is_empty() {
                 let sizes: Vec<_> = [vk::DescriptorType::STORAGE_BUFFER, vk::DescriptorType::UNIFORM_TEXEL_BUFFER]
                     .into_iter()

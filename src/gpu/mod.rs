@@ -7,6 +7,8 @@ mod buffer;
 mod context;
 pub mod fault_injection;
 mod kernel;
+pub mod kernel_cache;
+mod pipeline_cache;
 mod profile;
 pub mod reflect;
 pub mod shader;
@@ -20,6 +22,7 @@ pub use context::{
 };
 pub use kernel::{Bind, Defines, Kernel, Texels, PUSH_CONSTANT_BYTES};
 pub use profile::{KernelTime, Profile, ProfileReport, StageTime};
+pub use shader::ShaderCounts;
 pub use validation::Messages;
 
 /// Workgroups needed to cover `n` invocations with groups of `local` invocations.

@@ -93,6 +93,9 @@ impl Renderer {
         let scene_gpu = SceneGpu::with_features(gpu, scene, frame, &features, reads, atomics)?;
         let film = Film::new(gpu, &plan.film)?;
         let est = (info.build)(&estimators::Build { gpu, scene: &scene_gpu, film: &film, settings, plan: &plan })?;
+        // Every kernel of the render exists now: keep their pipelines for later processes
+        // even if this one does not end normally.
+        gpu.save_pipeline_cache();
         Ok(Renderer {
             settings: settings.clone(),
             est,

@@ -8,10 +8,16 @@ use std::sync::Arc;
 
 use vkvcm::gpu::{Gpu, GpuOptions};
 
-/// Runs `f` with a validation-enabled GPU; fails if the layer said anything, including
-/// at device destruction (leaked objects).
+/// Runs `f` with a validation-enabled GPU without a kernel cache
+/// ([`GpuOptions::for_tests`]); fails if the layer said anything, including at device
+/// destruction (leaked objects).
 pub fn with_gpu<R>(f: impl FnOnce(&Arc<Gpu>) -> R) -> R {
-    let gpu = Gpu::new(&GpuOptions::for_tests()).expect("cannot open a Vulkan device for tests");
+    with_gpu_options(&GpuOptions::for_tests(), f)
+}
+
+/// [`with_gpu`] with `opts` (which must turn validation on).
+pub fn with_gpu_options<R>(opts: &GpuOptions, f: impl FnOnce(&Arc<Gpu>) -> R) -> R {
+    let gpu = Gpu::new(opts).expect("cannot open a Vulkan device for tests");
     assert!(gpu.validation_enabled());
     let messages = gpu.validation_messages();
     let r = f(&gpu);
