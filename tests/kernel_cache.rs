@@ -110,7 +110,10 @@ fn corrupt(bytes: &mut Vec<u8>, how: usize) -> &'static str {
             "truncated to half"
         }
         1 => {
-            bytes[n - 3] ^= 0x40;
+            // The payload's middle byte: inside an instruction of a SPIR-V file, inside the
+            // driver's header in lavapipe's pipeline cache (32 bytes, header only).
+            let middle = 72 + (n - 72) / 2;
+            bytes[middle] ^= 0x40;
             "a byte of the payload flipped"
         }
         2 => {

@@ -35,7 +35,7 @@ const STALE_TEMP_AGE: Duration = Duration::from_secs(3600);
 
 /// A cache key: the SHA-256 of labelled fields ([`KeyBuilder`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct Key([u8; KEY_BYTES]);
+pub(crate) struct Key([u8; KEY_BYTES]);
 
 impl Key {
     /// The key in lowercase hexadecimal (file names).
@@ -47,7 +47,7 @@ impl Key {
 /// Hashes the fields that determine a cached thing into a [`Key`]. Each field is its
 /// label and its value, each preceded by its length, so that no two different lists of
 /// fields hash the same bytes. Every key also covers the entry format and vkvcm's version.
-pub struct KeyBuilder(Sha256);
+pub(crate) struct KeyBuilder(Sha256);
 
 impl KeyBuilder {
     /// A key of the kind `kind` (e.g. `"spirv"`).

@@ -265,7 +265,7 @@ pub fn strip_debug_info(spirv: &[u32]) -> Vec<u32> {
 }
 
 /// The SPIR-V files of the kernel cache are kept within this many bytes in all (the least
-/// recently written are removed first); a kernel variant's file is 20-400 KiB.
+/// recently written are removed first); a kernel variant's file is 10-200 KiB.
 pub const MAX_SPIRV_CACHE_BYTES: u64 = 256 << 20;
 
 /// The kernel cache's file of the SPIR-V of `key`.
