@@ -56,7 +56,7 @@ MITSUBA_VARIANT = "llvm_ad_rgb"
 # (seed << 16) + pass, so seeds stay below 2^16.
 REF_SEED = 50000
 
-QUICK = {"cpu": 4.0, "seeds": 3, "ref_cpu": 24.0, "ref_chunks": 8}
+QUICK = {"cpu": 3.0, "seeds": 3, "ref_cpu": 16.0, "ref_chunks": 8}
 FULL = {"cpu": 20.0, "seeds": 5, "ref_cpu": 600.0, "ref_chunks": 16}
 
 
@@ -187,7 +187,7 @@ class Vkvcm:
         self.binary = Path(binary)
         self.out = Path(out)
         self.startup = {}  # (scene, estimator) -> CPU-s of a 1-iteration run
-        self.cpu_per_wall = {}  # (scene, estimator) -> CPU-s per wall second of the render loop
+        self.cpu_per_iteration = {}  # (scene, estimator) -> CPU-s per iteration beyond the first
 
     def check(self):
         if not self.binary.exists():
@@ -220,19 +220,24 @@ class Vkvcm:
         return c.cpu
 
     def render(self, scene, estimator, seed, cpu, out_base, render_wall=None):
+        """About `cpu` CPU-seconds in all (or, with render_wall, a --time probe). vkvcm's
+        --time is wall time, which a loaded machine stretches; so once a run of this cell
+        has measured the CPU one iteration costs, the budget is given as an iteration
+        count, which costs about the same CPU under any load. The first run of a cell aims
+        with --time at the machine's core count in CPU per wall second."""
         key = (scene, estimator)
-        startup = self.startup.get(key, 0.0)
-        per_wall = self.cpu_per_wall.get(key, float(os.cpu_count() or 1))
-        # vkvcm's --time is wall time of the render loop: aim its CPU at the budget left
-        # after start-up, at the CPU-per-wall rate its last run of this cell had.
-        seconds = render_wall if render_wall is not None else max(0.2, (cpu - startup) / per_wall)
+        startup = self.startup.get(key, 0.0)  # includes one iteration
+        if render_wall is not None:
+            budget = ["--time", f"{render_wall:.3f}"]
+        elif key in self.cpu_per_iteration:
+            budget = ["--iterations", str(max(1, 1 + round((cpu - startup) / self.cpu_per_iteration[key])))]
+        else:
+            budget = ["--time", f"{max(0.2, (cpu - startup) / float(os.cpu_count() or 1)):.3f}"]
         exr = out_base.with_suffix(".exr")
-        c = run_charged(self.command(scene, estimator, seed, exr, ["--time", f"{seconds:.3f}"]),
-                        out_base.with_suffix(".log"))
-        m = parse(r"(\d+) iterations in ([0-9.]+) s", c.output, "vkvcm's iteration count")
-        iterations, loop_wall = int(m.group(1)), float(m.group(2))
-        if loop_wall > 0 and c.cpu > startup:
-            self.cpu_per_wall[key] = max(0.25, (c.cpu - startup) / loop_wall)
+        c = run_charged(self.command(scene, estimator, seed, exr, budget), out_base.with_suffix(".log"))
+        iterations = int(parse(r"(\d+) iterations in ([0-9.]+) s", c.output, "vkvcm's iteration count").group(1))
+        if iterations > 1 and c.cpu > startup:
+            self.cpu_per_iteration[key] = (c.cpu - startup) / (iterations - 1)
         return iterations, c, exr
 
     def describe(self):
@@ -558,8 +563,9 @@ def make_references(cache, vkvcm_bin, out, refs, scenes, ref_cpu, chunks):
 def timed_vkvcm_long(vk, scene, estimator, seed, cpu, out_base, work):
     """One vkvcm process of about `cpu` CPU-seconds."""
     vk.warm_up(scene, estimator, work)
-    # A short run first, to learn this cell's CPU per wall second.
-    vk.render(scene, estimator, seed, 0.0, out_base.with_name(out_base.name + "_probe"), render_wall=3.0)
+    # A short run first (a tenth of the budget, 1-3 s wall), to learn the CPU an iteration costs.
+    vk.render(scene, estimator, seed, 0.0, out_base.with_name(out_base.name + "_probe"),
+              render_wall=min(3.0, max(1.0, cpu / 10)))
     n, c, img = vk.render(scene, estimator, seed, cpu, out_base)
     return {"iterations": n, "cpu": c.cpu, "image": img}
 
@@ -571,7 +577,9 @@ def agreement_line(r):
     return (f"{r['scene']}: reference {ref['program']} {ref['estimator']} ({ref['iterations']} iterations, "
             f"{ref['cpu_s']:.0f} CPU-s, noise floor relMSE {ref['noise_floor_relmse']:.2e}); "
             f"check {c['a']} vs {c['b']}: mean relative difference {c['mean_rel_diff']:+.2e}{sigmas}, "
-            f"per-pixel z std {c['z_std']:.3f} (mean {c['z_mean']:+.3f}, |z|>4: {c['z_abs_gt_4']} of {c['values']})")
+            f"relMSE between them {c['relmse_a_vs_b'] / c['relmse_expected_from_noise']:.3f} x what their noise "
+            f"explains, per-pixel z std {c['z_std']:.3f} (mean {c['z_mean']:+.3f}, |z|>4: {c['z_abs_gt_4']} of "
+            f"{c['values']})")
 
 
 # ---------------------------------------------------------------------------------------
