@@ -1,0 +1,838 @@
+#!/usr/bin/env python3
+"""vkvcm side by side with SmallVCM and Mitsuba 3, on one machine, in one sitting.
+
+    peers.py setup --smallvcm-src PATH     build SmallVCM, make the venv, fetch LLVM 19
+    peers.py scenes                        write the peer scene (glTF + Mitsuba XML)
+    peers.py reference [--quick]           reference images (once per machine/commit)
+    peers.py run [--quick]                 the alternating comparison; prints the table
+
+See scripts/peers/README.md for what is measured and how to read the table. This driver
+uses only the standard library (the system python3); numpy, OpenEXR and Mitsuba run in
+the venv that `setup` makes, as separate processes.
+"""
+
+import argparse
+import datetime
+import hashlib
+import json
+import os
+import re
+import resource
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parent.parent
+sys.path.insert(0, str(HERE))
+import scene_desc  # noqa: E402
+
+PATCH = HERE / "smallvcm-driver.patch"
+REQUIREMENTS = HERE / "requirements.txt"
+
+# SmallVCM's four scenes: vkvcm's built-in names and SmallVCM's `-s` index.
+SMALLVCM_SCENES = {"gbs_s": 0, "glm_c": 1, "gbs_p": 2, "gbs_b": 3}
+SMALLVCM_SIZE = 256
+# SmallVCM's max path length is fixed (config.hxx: mMaxPathLength = 10); vkvcm is given
+# the same with --max-path-length.
+SMALLVCM_MAX_PATH_LENGTH = 10
+# Estimators compared with SmallVCM. vkvcm's --algo names equal SmallVCM's -a acronyms
+# (its config.hxx: pt = PathTracer, bpt = VertexCM kBpt, vcm = VertexCM kVcm).
+# `bpt:path` is vkvcm's bpt with SmallVCM's connections (--connect path); plain `bpt` is
+# vkvcm's default (the light-vertex cache for bpt).
+SMALLVCM_ESTIMATORS = ("vcm", "bpt", "pt")
+# The scene vkvcm and Mitsuba both describe (scene_desc.py), and the vkvcm estimators
+# run against Mitsuba's `path` integrator on it.
+MITSUBA_SCENE = "cornell_mg"
+MITSUBA_ESTIMATORS = ("pt", "bpt", "vcm")
+MITSUBA_VARIANT = "llvm_ad_rgb"
+
+# Seeds: runs use 1..N, references REF_SEED + k. SmallVCM is given 1000 x that (its thread
+# k adds k, so no two processes share a stream); Mitsuba derives its passes' seeds as
+# (seed << 16) + pass, so seeds stay below 2^16.
+REF_SEED = 50000
+
+QUICK = {"cpu": 3.0, "seeds": 3, "ref_cpu": 16.0, "ref_chunks": 8}
+FULL = {"cpu": 20.0, "seeds": 5, "ref_cpu": 600.0, "ref_chunks": 16}
+
+
+class HarnessError(Exception):
+    """An error for the user: printed as one message, no traceback."""
+
+
+def log(msg):
+    print(msg, file=sys.stderr, flush=True)
+
+
+# ---------------------------------------------------------------------------------------
+# Places
+
+
+def default_cache():
+    return Path(os.environ.get("VKVCM_PEERS_CACHE", Path.home() / ".cache" / "vkvcm-peers"))
+
+
+class Cache:
+    """What `setup` makes: SmallVCM's build, the venv, LLVM 19, and setup.json about them."""
+
+    def __init__(self, root):
+        self.root = Path(root)
+        self.smallvcm_dir = self.root / "smallvcm"
+        self.smallvcm = self.smallvcm_dir / "smallvcm"
+        self.venv = self.root / "venv"
+        self.python = self.venv / "bin" / "python"
+        self.llvm_dir = self.root / "llvm19"
+        self.info_path = self.root / "setup.json"
+
+    def info(self):
+        if not self.info_path.exists():
+            return {}
+        return json.loads(self.info_path.read_text())
+
+    def save_info(self, info):
+        self.root.mkdir(parents=True, exist_ok=True)
+        self.info_path.write_text(json.dumps(info, indent=1) + "\n")
+
+    def require_smallvcm(self):
+        if not self.smallvcm.exists():
+            raise HarnessError(f"SmallVCM is not built in {self.smallvcm_dir}: run "
+                               f"`{sys.argv[0]} setup --smallvcm-src PATH` (PATH: SmallVCM's source)")
+        return self.smallvcm
+
+    def require_venv(self):
+        if not self.python.exists():
+            raise HarnessError(f"the venv {self.venv} is missing: run `{sys.argv[0]} setup` first")
+        return self.python
+
+    def mitsuba_env(self):
+        env = dict(os.environ)
+        llvm = self.info().get("llvm")
+        if llvm:
+            env["DRJIT_LIBLLVM_PATH"] = llvm
+        elif MITSUBA_VARIANT.startswith("llvm"):
+            raise HarnessError(f"LLVM 19 for Mitsuba's {MITSUBA_VARIANT} is not set up in {self.llvm_dir}: "
+                               f"run `{sys.argv[0]} setup`")
+        return env
+
+
+# ---------------------------------------------------------------------------------------
+# Running programs, charged their whole process's CPU time
+
+
+class Charged:
+    def __init__(self, cpu, wall, output):
+        self.cpu, self.wall, self.output = cpu, wall, output
+
+
+def run_charged(cmd, log_path, env=None, cwd=None):
+    """Runs cmd to completion (stdout and stderr to log_path) and returns its CPU time
+    (user + sys of the process and everything it waited for, from the RUSAGE_CHILDREN
+    delta: the driver runs one child at a time) and wall time."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.monotonic()
+    with open(log_path, "w") as out:
+        try:
+            p = subprocess.run([str(c) for c in cmd], stdout=out, stderr=subprocess.STDOUT, env=env, cwd=cwd)
+        except OSError as e:
+            raise HarnessError(f"cannot run {cmd[0]}: {e}")
+    wall = time.monotonic() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    text = Path(log_path).read_text(errors="replace")
+    if p.returncode != 0:
+        tail = "\n".join(text.splitlines()[-8:])
+        raise HarnessError(f"{Path(str(cmd[0])).name} exited with status {p.returncode} "
+                           f"(command: {' '.join(str(c) for c in cmd)}; log {log_path}):\n{tail}")
+    return Charged(cpu, wall, text)
+
+
+def capture(cmd, env=None, cwd=None):
+    """stdout of a short command; HarnessError if it fails."""
+    try:
+        p = subprocess.run([str(c) for c in cmd], capture_output=True, text=True, env=env, cwd=cwd)
+    except OSError as e:
+        raise HarnessError(f"cannot run {cmd[0]}: {e}")
+    if p.returncode != 0:
+        raise HarnessError(f"{' '.join(str(c) for c in cmd)} failed (status {p.returncode}):\n{p.stderr.strip()}")
+    return p.stdout
+
+
+def imgtool(cache, *args):
+    out = capture([cache.require_venv(), HERE / "imgtool.py", *args])
+    return json.loads(out)
+
+
+def parse(pattern, text, what):
+    m = re.search(pattern, text)
+    if not m:
+        raise HarnessError(f"could not find {what} in the output:\n{text[-800:]}")
+    return m
+
+
+# ---------------------------------------------------------------------------------------
+# The three programs. Each renders (scene, estimator, seed) for about `cpu` CPU-seconds of
+# its whole process and returns (iterations, Charged). Start-up costs (vkvcm's shader
+# compilation, Mitsuba's Python import and JIT) are measured by a warm-up run and taken
+# off the budget given to the render loop, so that each process's total is about `cpu`.
+
+
+class Vkvcm:
+    name = "vkvcm"
+
+    def __init__(self, binary, out):
+        self.binary = Path(binary)
+        self.out = Path(out)
+        self.startup = {}  # (scene, estimator) -> CPU-s of a 1-iteration run
+        self.cpu_per_iteration = {}  # (scene, estimator) -> CPU-s per iteration beyond the first
+
+    def check(self):
+        if not self.binary.exists():
+            raise HarnessError(f"vkvcm binary {self.binary} not found: build it (cargo build --release) or pass --vkvcm PATH")
+
+    def scene_args(self, scene):
+        if scene in SMALLVCM_SCENES:
+            path = REPO / "scenes" / f"{scene}.gltf"
+            return path, SMALLVCM_SIZE, SMALLVCM_SIZE, SMALLVCM_MAX_PATH_LENGTH
+        desc = scene_desc.SCENES[scene]
+        w, h = desc["resolution"]
+        return self.out / "scenes" / f"{scene}.gltf", w, h, desc["max_path_length"]
+
+    def command(self, scene, estimator, seed, out_exr, budget):
+        path, w, h, length = self.scene_args(scene)
+        algo, _, connect = estimator.partition(":")
+        cmd = [self.binary, "render", path, "--algo", algo, "--width", w, "--height", h, "--seed", seed,
+               "--max-path-length", length, "-o", out_exr]
+        if connect:
+            cmd += ["--connect", connect]
+        return cmd + budget
+
+    def warm_up(self, scene, estimator, workdir):
+        # Twice: the first run may compile the kernels into Mesa's shader cache; the
+        # second is the start-up every later run pays (plus its one iteration).
+        for _ in range(2):
+            c = run_charged(self.command(scene, estimator, 0, workdir / "warmup.exr", ["--iterations", "1"]),
+                            workdir / "warmup.log")
+        self.startup[(scene, estimator)] = c.cpu
+        return c.cpu
+
+    def render(self, scene, estimator, seed, cpu, out_base, render_wall=None):
+        """About `cpu` CPU-seconds in all (or, with render_wall, a --time probe). vkvcm's
+        --time is wall time, which a loaded machine stretches; so once a run of this cell
+        has measured the CPU one iteration costs, the budget is given as an iteration
+        count, which costs about the same CPU under any load. The first run of a cell aims
+        with --time at the machine's core count in CPU per wall second."""
+        key = (scene, estimator)
+        startup = self.startup.get(key, 0.0)  # includes one iteration
+        if render_wall is not None:
+            budget = ["--time", f"{render_wall:.3f}"]
+        elif key in self.cpu_per_iteration:
+            budget = ["--iterations", str(max(1, 1 + round((cpu - startup) / self.cpu_per_iteration[key])))]
+        else:
+            budget = ["--time", f"{max(0.2, (cpu - startup) / float(os.cpu_count() or 1)):.3f}"]
+        exr = out_base.with_suffix(".exr")
+        c = run_charged(self.command(scene, estimator, seed, exr, budget), out_base.with_suffix(".log"))
+        iterations = int(parse(r"(\d+) iterations in ([0-9.]+) s", c.output, "vkvcm's iteration count").group(1))
+        if iterations > 1 and c.cpu > startup:
+            self.cpu_per_iteration[key] = (c.cpu - startup) / (iterations - 1)
+        return iterations, c, exr
+
+    def describe(self):
+        version = capture([self.binary, "--version"]).strip()
+        devices = capture([self.binary, "devices"])
+        first = devices.splitlines()[0] if devices else ""
+        m = re.search(r"driver (.*?), Vulkan", first)
+        digest = hashlib.sha256(self.binary.read_bytes()).hexdigest()[:12]
+        return {"binary": str(self.binary), "version": version, "sha256": digest, "device": first,
+                "driver": m.group(1) if m else first}
+
+
+class SmallVcm:
+    name = "SmallVCM"
+
+    def __init__(self, cache):
+        self.cache = cache
+        self.startup = {}  # (scene, estimator) -> CPU-s of a 1-iteration run
+        self.overhead = {}  # (scene, estimator) -> CPU-s of a run outside its timed loop
+
+    def check(self):
+        self.cache.require_smallvcm()
+
+    def command(self, scene, estimator, seed, out_hdr, budget):
+        return [self.cache.smallvcm, "-s", SMALLVCM_SCENES[scene], "-a", estimator, "-r", SMALLVCM_SIZE,
+                "-seed", seed, "-o", out_hdr] + budget
+
+    def warm_up(self, scene, estimator, workdir):
+        c = run_charged(self.command(scene, estimator, 0, workdir / "warmup.hdr", ["-i", "1"]), workdir / "warmup.log")
+        loop = float(parse(r"CPU seconds: *([0-9.]+)", c.output, "SmallVCM's CPU seconds").group(1))
+        self.startup[(scene, estimator)] = c.cpu
+        self.overhead[(scene, estimator)] = max(0.0, c.cpu - loop)
+        return c.cpu
+
+    def render(self, scene, estimator, seed, cpu, out_base):
+        # SmallVCM's -t is CPU time (clock(), all threads) of its render loop; it stops
+        # after the iteration that crosses it (each thread finishes its own).
+        seconds = max(0.1, cpu - self.overhead.get((scene, estimator), 0.0))
+        hdr = out_base.with_suffix(".hdr")
+        c = run_charged(self.command(scene, estimator, 1000 * seed, hdr, ["-t", f"{seconds:.3f}"]),
+                        out_base.with_suffix(".log"))
+        iterations = int(parse(r"Iterations total: (\d+)", c.output, "SmallVCM's iteration count").group(1))
+        return iterations, c, out_base.with_suffix(".pfm")
+
+    def describe(self):
+        info = self.cache.info().get("smallvcm", {})
+        return {"binary": str(self.cache.smallvcm), "source": info.get("source", "?"),
+                "patch_sha256": info.get("patch_sha256", "?"), "compiler": info.get("compiler", "?")}
+
+
+class Mitsuba:
+    name = "Mitsuba"
+
+    def __init__(self, cache, out):
+        self.cache = cache
+        self.out = Path(out)
+        self.startup = {}  # scene -> CPU-s of a 1-spp run
+        self.cpu_per_spp = {}  # scene -> CPU-s per spp beyond start-up
+
+    def check(self):
+        self.cache.require_venv()
+        self.cache.mitsuba_env()
+
+    def command(self, scene, seed, spp, out_exr):
+        return [self.cache.python, HERE / "mitsuba_render.py", self.out / "scenes" / f"{scene}.xml",
+                "--spp", spp, "--seed", seed, "--out", out_exr, "--variant", MITSUBA_VARIANT]
+
+    def _run(self, scene, seed, spp, out_base):
+        exr = out_base.with_suffix(".exr")
+        c = run_charged(self.command(scene, seed, spp, exr), out_base.with_suffix(".log"), env=self.cache.mitsuba_env())
+        return c, exr
+
+    def warm_up(self, scene, estimator, workdir):
+        # 1 spp twice (the first may fill Dr.Jit's kernel cache, as vkvcm's first run
+        # fills Mesa's shader cache; the second is the start-up), then 32 spp: CPU per spp.
+        if scene not in self.startup:
+            for _ in range(2):
+                one, _ = self._run(scene, 0, 1, workdir / "warmup1")
+            many, _ = self._run(scene, 0, 32, workdir / "warmup32")
+            self.startup[scene] = one.cpu
+            self.cpu_per_spp[scene] = max(1e-4, (many.cpu - one.cpu) / 31)
+        return self.startup[scene]
+
+    def spp_for(self, scene, cpu):
+        return max(1, round((cpu - self.startup.get(scene, 0.0)) / self.cpu_per_spp.get(scene, 0.05)))
+
+    def render(self, scene, estimator, seed, cpu, out_base, spp=None):
+        spp = spp or self.spp_for(scene, cpu)
+        c, exr = self._run(scene, seed, spp, out_base)
+        startup = self.startup.get(scene, 0.0)
+        if c.cpu > startup:
+            self.cpu_per_spp[scene] = max(1e-4, (c.cpu - startup) / spp)
+        return spp, c, exr
+
+    def describe(self):
+        info = self.cache.info().get("venv", {})
+        return {"mitsuba": info.get("mitsuba", "?"), "drjit": info.get("drjit", "?"), "variant": MITSUBA_VARIANT,
+                "llvm": self.cache.info().get("llvm", "?")}
+
+
+# ---------------------------------------------------------------------------------------
+# setup
+
+
+def cmd_setup(args):
+    cache = Cache(args.cache)
+    cache.root.mkdir(parents=True, exist_ok=True)
+    info = cache.info()
+    if not args.skip_smallvcm:
+        info["smallvcm"] = setup_smallvcm(cache, args.smallvcm_src)
+        cache.save_info(info)
+    if not args.skip_mitsuba:
+        info["venv"] = setup_venv(cache)
+        cache.save_info(info)
+        info["llvm"] = setup_llvm(cache)
+        cache.save_info(info)
+        log("checking Mitsuba's %s variant on the peer scene (8 spp) ..." % MITSUBA_VARIANT)
+        with tempfile.TemporaryDirectory() as tmp:
+            tmp = Path(tmp)
+            xml = tmp / "scene.xml"
+            scene_desc.write_mitsuba_xml(scene_desc.CORNELL, xml)
+            m = Mitsuba(cache, tmp)
+            c = run_charged([cache.python, HERE / "mitsuba_render.py", xml, "--spp", 8, "--seed", 1,
+                             "--out", tmp / "t.exr", "--variant", MITSUBA_VARIANT], tmp / "t.log", env=m.cache.mitsuba_env())
+            log(f"  ok: {c.wall:.1f} s wall, {c.cpu:.1f} CPU-s")
+    log(f"setup done; cache {cache.root} (setup.json records what was built)")
+
+
+def setup_smallvcm(cache, src):
+    if not src:
+        raise HarnessError("give SmallVCM's source: --smallvcm-src PATH (a checkout of "
+                           "https://github.com/SmallVCM/SmallVCM, the folder holding Makefile and src/), "
+                           "or --skip-smallvcm")
+    src = Path(src).expanduser()
+    if not (src / "src" / "smallvcm.cxx").is_file() or not (src / "Makefile").is_file():
+        raise HarnessError(f"{src} is not SmallVCM's source: expected {src}/Makefile and {src}/src/smallvcm.cxx")
+    for tool in ("g++", "make", "patch"):
+        if not shutil.which(tool):
+            raise HarnessError(f"{tool} not found on PATH (needed to build SmallVCM)")
+    log(f"building SmallVCM from {src} into {cache.smallvcm_dir} (patched driver, about a minute) ...")
+    if cache.smallvcm_dir.exists():
+        shutil.rmtree(cache.smallvcm_dir)
+    shutil.copytree(src, cache.smallvcm_dir, ignore=shutil.ignore_patterns(".git", "*.o", "smallvcm"))
+    p = subprocess.run(["patch", "-p1", "--forward", "-i", str(PATCH)], cwd=cache.smallvcm_dir,
+                       capture_output=True, text=True)
+    if p.returncode != 0:
+        raise HarnessError(f"{PATCH.name} does not apply to {src} (is it SmallVCM commit a13690f, unpatched?):\n"
+                           f"{p.stdout}{p.stderr}")
+    p = subprocess.run(["make"], cwd=cache.smallvcm_dir, capture_output=True, text=True)
+    if p.returncode != 0 or not cache.smallvcm.exists():
+        raise HarnessError(f"building SmallVCM failed:\n{p.stdout[-2000:]}{p.stderr[-2000:]}")
+    compiler = capture(["g++", "--version"]).splitlines()[0]
+    log(f"  built {cache.smallvcm} ({compiler})")
+    return {"source": str(src.resolve()), "patch_sha256": hashlib.sha256(PATCH.read_bytes()).hexdigest()[:12],
+            "compiler": compiler, "built": now()}
+
+
+def setup_venv(cache):
+    if not cache.python.exists():
+        log(f"making the venv {cache.venv} ...")
+        p = subprocess.run([sys.executable, "-m", "venv", str(cache.venv)], capture_output=True, text=True)
+        if p.returncode != 0:
+            raise HarnessError(f"python3 -m venv failed (Debian: apt-get install python3-venv):\n{p.stderr}")
+    wanted = [l.strip() for l in REQUIREMENTS.read_text().splitlines() if l.strip() and not l.startswith("#")]
+    log(f"installing {' '.join(wanted)} into it (pip; a few minutes the first time) ...")
+    p = subprocess.run([str(cache.python), "-m", "pip", "install", "--quiet", "-r", str(REQUIREMENTS)])
+    if p.returncode != 0:
+        raise HarnessError("pip install into the venv failed (see its messages above)")
+    out = capture([cache.python, "-c", "import mitsuba, drjit, numpy, OpenEXR, json; print(json.dumps({"
+                   "'mitsuba': mitsuba.__version__, 'drjit': drjit.__version__, 'numpy': numpy.__version__, "
+                   "'openexr': OpenEXR.__version__}))"])
+    versions = json.loads(out)
+    log(f"  {versions}")
+    return versions
+
+
+def setup_llvm(cache):
+    """Mitsuba's llvm_* variants crash with Debian 12's LLVM 15; Debian's libllvm19,
+    unpacked (not installed), works (docs/toolchain.md section 6)."""
+    found = sorted(cache.llvm_dir.glob("root/usr/lib/*/libLLVM.so.19*"))
+    if found:
+        return str(found[0])
+    for tool in ("apt-get", "dpkg"):
+        if not shutil.which(tool):
+            raise HarnessError(f"{tool} not found: fetch libLLVM.so.19 yourself, unpack it under "
+                               f"{cache.llvm_dir}/root/usr/lib/<arch>/ and rerun setup")
+    log(f"fetching libllvm19 (apt-get download, unpacked into {cache.llvm_dir}; nothing installed) ...")
+    cache.llvm_dir.mkdir(parents=True, exist_ok=True)
+    p = subprocess.run(["apt-get", "download", "libllvm19"], cwd=cache.llvm_dir, capture_output=True, text=True)
+    if p.returncode != 0:
+        raise HarnessError("apt-get download libllvm19 failed (run apt-get update; on Debian 12 the package is "
+                           f"in bookworm or bookworm-backports):\n{p.stderr.strip()}")
+    debs = sorted(cache.llvm_dir.glob("libllvm19_*.deb"))
+    if not debs:
+        raise HarnessError(f"apt-get download left no libllvm19_*.deb in {cache.llvm_dir}")
+    capture(["dpkg", "-x", debs[-1], cache.llvm_dir / "root"])
+    found = sorted(cache.llvm_dir.glob("root/usr/lib/*/libLLVM.so.19*"))
+    if not found:
+        raise HarnessError(f"{debs[-1].name} holds no libLLVM.so.19*")
+    log(f"  {found[0]}")
+    return str(found[0])
+
+
+# ---------------------------------------------------------------------------------------
+# scenes
+
+
+def cmd_scenes(args):
+    write_scenes(Path(args.out))
+
+
+def write_scenes(out):
+    folder = out / "scenes"
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, desc in scene_desc.SCENES.items():
+        try:
+            scene_desc.write_gltf(desc, folder / f"{name}.gltf")
+            scene_desc.write_mitsuba_xml(desc, folder / f"{name}.xml")
+        except scene_desc.SceneError as e:
+            raise HarnessError(f"scene {name}: {e}")
+    log(f"wrote {', '.join(f'{n}.gltf/.xml' for n in scene_desc.SCENES)} in {folder}")
+
+
+# ---------------------------------------------------------------------------------------
+# reference
+
+
+def cmd_reference(args):
+    budget = QUICK if args.quick else FULL
+    ref_cpu = args.cpu or budget["ref_cpu"]
+    chunks = args.chunks or budget["ref_chunks"]
+    out = Path(args.out)
+    make_references(Cache(args.cache), Path(args.vkvcm), out, ref_dir(out, args.quick), scenes_of(args), ref_cpu, chunks)
+
+
+def ref_dir(out, quick):
+    return out / ("references-quick" if quick else "references")
+
+
+def scenes_of(args):
+    names = list(SMALLVCM_SCENES) + [MITSUBA_SCENE]
+    chosen = args.scenes.split(",") if args.scenes else names
+    for s in chosen:
+        if s not in names:
+            raise HarnessError(f"unknown scene {s!r}: the harness's scenes are {', '.join(names)}")
+    return chosen
+
+
+def make_references(cache, vkvcm_bin, out, refs, scenes, ref_cpu, chunks):
+    """For each scene, the reference the run measures against (about ref_cpu CPU-seconds),
+    and an agreement check of the two programs on it (ref_cpu / 2 each; printed and stored
+    in <scene>.json):
+
+    * SmallVCM's scenes: the reference is one long vkvcm vcm render (one process, so the
+      merging radius shrinks over all its iterations; vcm is the only estimator of the
+      three that reaches every path, e.g. caustics seen in the mirror; per-pixel noise from
+      its second moment). The check: vkvcm's bpt against SmallVCM's bpt (unbiased, so
+      SmallVCM's can be run as independent chunks, whose spread gives its per-pixel noise).
+    * The Mitsuba scene: the reference is Mitsuba's path tracer, in independent chunks;
+      the check: vkvcm's pt, one process, against it.
+    """
+    vk = Vkvcm(vkvcm_bin, out)
+    vk.check()
+    cache.require_venv()
+    write_scenes(out)
+    refs.mkdir(parents=True, exist_ok=True)
+    work = refs / "work"
+    work.mkdir(exist_ok=True)
+    summary = []
+    check_cpu = ref_cpu / 2  # each side of the agreement check
+    for scene in scenes:
+        t0 = time.monotonic()
+        log(f"reference {scene}: about {ref_cpu:.0f} CPU-s, then {check_cpu:.0f} CPU-s per program for the check ...")
+        if scene in SMALLVCM_SCENES:
+            sv = SmallVcm(cache)
+            sv.check()
+            # The reference: vkvcm vcm, one process.
+            ref_run = timed_vkvcm_long(vk, scene, "vcm", REF_SEED, ref_cpu, work / f"{scene}_ref_vkvcm_vcm", work)
+            ref = imgtool(cache, "reference", refs / f"{scene}.exr", ref_run["image"])
+            # The check: SmallVCM bpt in chunks against vkvcm bpt.
+            images, cpu, its = [], 0.0, 0
+            sv.warm_up(scene, "bpt", work)
+            for k in range(chunks):
+                n, c, img = sv.render(scene, "bpt", REF_SEED + k, check_cpu / chunks,
+                                      work / f"{scene}_check_smallvcm_bpt_{k}")
+                images.append(img)
+                cpu += c.cpu
+                its += n
+            imgtool(cache, "reference", work / f"{scene}_check_smallvcm_bpt.exr", *images)
+            mine = timed_vkvcm_long(vk, scene, "bpt", REF_SEED + 1, check_cpu, work / f"{scene}_check_vkvcm_bpt", work)
+            agree = imgtool(cache, "agree", mine["image"], work / f"{scene}_check_smallvcm_bpt.exr")
+            record = {"scene": scene, "reference": {"program": "vkvcm", "estimator": "vcm", "process": "one",
+                                                     "cpu_s": ref_run["cpu"], "iterations": ref_run["iterations"],
+                                                     "noise_floor_relmse": ref["noise_floor_relmse"]},
+                      "check": {"a": f"vkvcm bpt, one process, {mine['iterations']} iterations, {mine['cpu']:.0f} CPU-s",
+                                "b": f"SmallVCM bpt, {chunks} chunks, {its} iterations, {cpu:.0f} CPU-s", **agree}}
+        else:
+            mi = Mitsuba(cache, out)
+            mi.check()
+            mi.warm_up(scene, "path", work)
+            images, cpu, spp = [], 0.0, 0
+            for k in range(chunks):
+                n, c, img = mi.render(scene, "path", REF_SEED + k, ref_cpu / chunks, work / f"{scene}_ref_mitsuba_{k}")
+                images.append(img)
+                cpu += c.cpu
+                spp += n
+            ref = imgtool(cache, "reference", refs / f"{scene}.exr", *images)
+            mine = timed_vkvcm_long(vk, scene, "pt", REF_SEED + 1, check_cpu, work / f"{scene}_check_vkvcm_pt", work)
+            agree = imgtool(cache, "agree", mine["image"], refs / f"{scene}.exr")
+            record = {"scene": scene, "reference": {"program": "Mitsuba", "estimator": "path", "process": f"{chunks} chunks",
+                                                     "cpu_s": cpu, "iterations": spp,
+                                                     "noise_floor_relmse": ref["noise_floor_relmse"]},
+                      "check": {"a": f"vkvcm pt, one process, {mine['iterations']} iterations, {mine['cpu']:.0f} CPU-s",
+                                "b": f"Mitsuba path ({MITSUBA_VARIANT}), {chunks} chunks, {spp} spp, {cpu:.0f} CPU-s",
+                                **agree}}
+        record.update({"date": now(), "commit": git_commit(), "ref_cpu_budget": ref_cpu, "chunks": chunks})
+        (refs / f"{scene}.json").write_text(json.dumps(record, indent=1) + "\n")
+        summary.append(record)
+        log(f"  {agreement_line(record)} ({time.monotonic() - t0:.0f} s)")
+    print("\n".join(agreement_line(r) for r in summary))
+
+
+def timed_vkvcm_long(vk, scene, estimator, seed, cpu, out_base, work):
+    """One vkvcm process of about `cpu` CPU-seconds."""
+    vk.warm_up(scene, estimator, work)
+    # A short run first (a tenth of the budget, 1-3 s wall), to learn the CPU an iteration costs.
+    vk.render(scene, estimator, seed, 0.0, out_base.with_name(out_base.name + "_probe"),
+              render_wall=min(3.0, max(1.0, cpu / 10)))
+    n, c, img = vk.render(scene, estimator, seed, cpu, out_base)
+    return {"iterations": n, "cpu": c.cpu, "image": img}
+
+
+def agreement_line(r):
+    c, ref = r["check"], r["reference"]
+    sigmas = c.get("mean_diff_sigmas")
+    sigmas = "" if sigmas is None else f" ({sigmas:+.1f} standard errors)"
+    return (f"{r['scene']}: reference {ref['program']} {ref['estimator']} ({ref['iterations']} iterations, "
+            f"{ref['cpu_s']:.0f} CPU-s, noise floor relMSE {ref['noise_floor_relmse']:.2e}); "
+            f"check {c['a']} vs {c['b']}: mean relative difference {c['mean_rel_diff']:+.2e}{sigmas}, "
+            f"relMSE between them {c['relmse_a_vs_b'] / c['relmse_expected_from_noise']:.3f} x what their noise "
+            f"explains, per-pixel z std {c['z_std']:.3f} (mean {c['z_mean']:+.3f}, |z|>4: {c['z_abs_gt_4']} of "
+            f"{c['values']})")
+
+
+# ---------------------------------------------------------------------------------------
+# run
+
+
+def cmd_run(args):
+    budget = QUICK if args.quick else FULL
+    cpu = args.cpu or budget["cpu"]
+    seeds = args.seeds or budget["seeds"]
+    if seeds < 3:
+        raise HarnessError("--seeds must be at least 3 (one run's relMSE is dominated by fireflies)")
+    out = Path(args.out)
+    cache = Cache(args.cache)
+    vk = Vkvcm(args.vkvcm, out)
+    vk.check()
+    cache.require_venv()
+    scenes = scenes_of(args)
+    if any(s in SMALLVCM_SCENES for s in scenes):
+        SmallVcm(cache).check()
+    if MITSUBA_SCENE in scenes:
+        Mitsuba(cache, out).check()
+    write_scenes(out)
+
+    refs = Path(args.references) if args.references else ref_dir(out, args.quick)
+    missing = [s for s in scenes if not (refs / f"{s}.exr").exists()]
+    if missing and args.quick and not args.references:
+        log(f"no quick references for {', '.join(missing)} in {refs}: making them "
+            f"({QUICK['ref_cpu']:.0f} CPU-s per program and scene)")
+        make_references(cache, Path(args.vkvcm), out, refs, missing, QUICK["ref_cpu"], QUICK["ref_chunks"])
+    elif missing:
+        raise HarnessError(f"no reference for {', '.join(missing)} in {refs}: run `{sys.argv[0]} reference` first "
+                           "(or --references DIR)")
+
+    # Cells: pairs (vkvcm estimator, peer) in the order they run within a round.
+    cells = []
+    for scene in scenes:
+        if scene in SMALLVCM_SCENES:
+            for e in (args.estimators.split(",") if args.estimators else SMALLVCM_ESTIMATORS):
+                cells.append((scene, e, "SmallVCM", e.split(":")[0]))
+        else:
+            for e in (args.estimators.split(",") if args.estimators else MITSUBA_ESTIMATORS):
+                cells.append((scene, e, "Mitsuba", "path"))
+    stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
+    work = out / "runs" / stamp
+    work.mkdir(parents=True)
+    programs = {"vkvcm": vk, "SmallVCM": SmallVcm(cache), "Mitsuba": Mitsuba(cache, out)}
+
+    header = describe_sitting(cache, vk, programs, cpu, seeds, args.quick, refs)
+    header["load_before"] = os.getloadavg()
+    t_start = time.monotonic()
+
+    log(f"warm-up runs (not counted): {len(cells)} cells ...")
+    for scene, e, peer, pe in cells:
+        vk.warm_up(scene, e, work)
+        programs[peer].warm_up(scene, pe, work)
+
+    rows = []
+    total = len(cells) * seeds * 2
+    for i in range(1, seeds + 1):
+        for scene, e, peer, pe in cells:
+            # Alternate: vkvcm then the peer in odd rounds, the peer first in even ones.
+            order = [("vkvcm", e), (peer, pe)]
+            if i % 2 == 0:
+                order.reverse()
+            for prog, est in order:
+                base = work / f"{scene}_{est.replace(':', '-')}_{prog}_{i}"
+                iterations, c, img = programs[prog].render(scene, est, i, cpu, base)
+                rows.append({"scene": scene, "estimator": est, "program": prog, "seed": i, "iterations": iterations,
+                             "cpu_s": c.cpu, "wall_s": c.wall, "image": str(img),
+                             "startup_cpu_s": startup_of(programs[prog], scene, est)})
+                log(f"[{len(rows)}/{total}] {scene} {est} {prog} seed {i}: {iterations} iterations, "
+                    f"{c.cpu:.2f} CPU-s, {c.wall:.2f} s")
+    header["load_after"] = os.getloadavg()
+    header["elapsed_s"] = time.monotonic() - t_start
+
+    jobs = work / "relmse_jobs.json"
+    jobs.write_text(json.dumps([{"image": r["image"], "reference": str(refs / f"{r['scene']}.exr")} for r in rows]))
+    for r, e in zip(rows, imgtool(cache, "relmse", jobs)["relmse"]):
+        r["relmse"] = e
+    header["references"] = [json.loads((refs / f"{s}.json").read_text()) for s in scenes if (refs / f"{s}.json").exists()]
+    (work / "results.json").write_text(json.dumps({"sitting": header, "cells": cells, "rows": rows}, indent=1) + "\n")
+    table = render_table(header, rows, cells)
+    (work / "table.md").write_text(table)
+    print(table)
+    log(f"results: {work}/results.json, table: {work}/table.md")
+
+
+def cmd_table(args):
+    """Prints the table of a finished run again (from its results.json)."""
+    path = Path(args.results)
+    if path.is_dir():
+        path = path / "results.json"
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError) as e:
+        raise HarnessError(f"cannot read {path}: {e}")
+    print(render_table(data["sitting"], data["rows"], [tuple(c) for c in data["cells"]]), end="")
+
+
+def startup_of(program, scene, est):
+    if isinstance(program, Mitsuba):
+        return program.startup.get(scene)
+    return program.startup.get((scene, est))
+
+
+def describe_sitting(cache, vk, programs, cpu, seeds, quick, refs):
+    u = os.uname()
+    model = "?"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {
+        "date": now(), "machine": f"{u.sysname} {u.nodename} {u.release} {u.version} {u.machine}",
+        "cpu_model": model, "cores": os.cpu_count(), "commit": git_commit(), "vkvcm": vk.describe(),
+        "smallvcm": programs["SmallVCM"].describe(), "mitsuba": programs["Mitsuba"].describe(),
+        "cpu_budget_s": cpu, "seeds": seeds, "quick": quick, "references_dir": str(refs),
+        "command": " ".join([Path(sys.argv[0]).name] + sys.argv[1:]),
+    }
+
+
+def median_range(values, fmt):
+    return f"{fmt(statistics.median(values))} ({fmt(min(values))}-{fmt(max(values))})"
+
+
+def sig(x):
+    return f"{x:.3g}"
+
+
+def render_table(h, rows, cells):
+    groups = {}
+    for r in rows:
+        groups.setdefault((r["scene"], r["estimator"], r["program"]), []).append(r)
+    eff = {k: statistics.median(r["relmse"] * r["cpu_s"] for r in g) for k, g in groups.items()}
+    vk = h["vkvcm"]
+    lines = [
+        f"# vkvcm side by side: {'QUICK (smoke test, not for figures)' if h['quick'] else 'full run'}",
+        "",
+        f"- date: {h['date']}; command: `{h['command']}` ({h['elapsed_s'] / 60:.1f} min)",
+        f"- machine: {h['machine']}",
+        f"- CPU: {h['cpu_model']}, {h['cores']} cores; load average before {fmt_load(h['load_before'])}, "
+        f"after {fmt_load(h['load_after'])}",
+        f"- vkvcm: repository commit {h['commit']}; binary {vk['binary']} ({vk['version']}, sha256 {vk['sha256']}); "
+        f"device {vk['driver']}",
+        f"- SmallVCM: {h['smallvcm']['binary']} from {h['smallvcm']['source']} (driver patch sha256 "
+        f"{h['smallvcm']['patch_sha256']}; {h['smallvcm']['compiler']}), -O3 -fopenmp, all cores",
+        f"- Mitsuba {h['mitsuba']['mitsuba']} (Dr.Jit {h['mitsuba']['drjit']}), variant {h['mitsuba']['variant']}, "
+        f"integrator path",
+        f"- budget: about {h['cpu_budget_s']:g} CPU-s per process (user + sys of the whole process, start-up included), "
+        f"{h['seeds']} seeds per row, programs alternating; SmallVCM scenes {SMALLVCM_SIZE}x{SMALLVCM_SIZE}, "
+        f"{MITSUBA_SCENE} {'x'.join(map(str, scene_desc.CORNELL['resolution']))}; max path length 10",
+        "- relMSE = mean over pixels and R, G, B of (x - ref)^2 / (ref^2 + 0.01); relMSE x CPU-s: lower is better; "
+        "\"vs peer\" = the peer's median relMSE x CPU-s / this row's (above 1: vkvcm is more efficient)",
+        "",
+        "References and the agreement checks (`peers.py reference`):",
+        "",
+    ]
+    for r in h["references"]:
+        lines.append(f"- {agreement_line(r)}")
+    lines += [
+        "",
+        "| scene | estimator | program | runs | CPU-s per run (median) | start-up CPU-s | iterations per CPU-s: median (min-max) "
+        "| relMSE: median | relMSE x CPU-s: median (min-max) | vs peer |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    seen = set()
+    for scene, e, peer, pe in cells:
+        for key in ((scene, e, "vkvcm"), (scene, pe, peer)):
+            if key in seen or key not in groups:
+                continue
+            seen.add(key)
+            g = groups[key]
+            ratio = "" if key[2] != "vkvcm" else f"{eff[(scene, pe, peer)] / eff[key]:.2f}"
+            startup = g[0]["startup_cpu_s"]
+            lines.append(
+                f"| {scene} | {key[1]} | {key[2]} | {len(g)} | {statistics.median(r['cpu_s'] for r in g):.2f} | "
+                f"{'' if startup is None else f'{startup:.2f}'} | "
+                f"{median_range([r['iterations'] / r['cpu_s'] for r in g], sig)} | "
+                f"{sig(statistics.median(r['relmse'] for r in g))} | "
+                f"{median_range([r['relmse'] * r['cpu_s'] for r in g], sig)} | {ratio} |")
+    return "\n".join(lines) + "\n"
+
+
+def fmt_load(l):
+    return " ".join(f"{x:.2f}" for x in l)
+
+
+def now():
+    return datetime.datetime.now().astimezone().isoformat(timespec="seconds")
+
+
+def git_commit():
+    try:
+        c = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=REPO, capture_output=True, text=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=REPO,
+                               capture_output=True, text=True).stdout.strip()
+        return c + ("-dirty" if dirty else "") if c else "?"
+    except OSError:
+        return "?"
+
+
+# ---------------------------------------------------------------------------------------
+
+
+def main():
+    p = argparse.ArgumentParser(prog="peers.py", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--cache", default=str(default_cache()),
+                   help="where setup puts SmallVCM, the venv and LLVM 19 (default $VKVCM_PEERS_CACHE or ~/.cache/vkvcm-peers)")
+    p.add_argument("--out", default=str(REPO / "target" / "peers"), help="scenes, references and runs (default target/peers)")
+    p.add_argument("--vkvcm", default=os.environ.get("VKVCM_BIN", str(REPO / "target" / "release" / "vkvcm")),
+                   help="vkvcm binary (default $VKVCM_BIN or target/release/vkvcm)")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    s = sub.add_parser("setup", help="build SmallVCM, make the venv, fetch LLVM 19")
+    s.add_argument("--smallvcm-src", help="SmallVCM's source (the folder with Makefile and src/)")
+    s.add_argument("--skip-smallvcm", action="store_true")
+    s.add_argument("--skip-mitsuba", action="store_true", help="no venv, no LLVM")
+    s.set_defaults(func=cmd_setup)
+
+    s = sub.add_parser("scenes", help="write the peer scene (glTF and Mitsuba XML) into OUT/scenes")
+    s.set_defaults(func=cmd_scenes)
+
+    for name, what in (("reference", "reference images and the agreement checks"), ("run", "the alternating comparison")):
+        s = sub.add_parser(name, help=what)
+        s.add_argument("--quick", action="store_true", help="small budgets: a smoke test of a few minutes, not figures")
+        s.add_argument("--scenes", help=f"comma-separated (default all: {', '.join(list(SMALLVCM_SCENES) + [MITSUBA_SCENE])})")
+        s.add_argument("--cpu", type=float, help="CPU-seconds per process (run) or per program and scene (reference)")
+        if name == "reference":
+            s.add_argument("--chunks", type=int, help="independent chunks of a peer's reference")
+            s.set_defaults(func=cmd_reference)
+        else:
+            s.add_argument("--seeds", type=int, help="runs per row, at least 3")
+            s.add_argument("--estimators", help="vkvcm estimators, comma-separated (e.g. vcm,bpt,bpt:path,pt)")
+            s.add_argument("--references", help="folder of references (default OUT/references, with --quick OUT/references-quick)")
+            s.set_defaults(func=cmd_run)
+    s = sub.add_parser("table", help="print the table of a finished run again")
+    s.add_argument("results", help="a run's folder (OUT/runs/STAMP) or its results.json")
+    s.set_defaults(func=cmd_table)
+    args = p.parse_args()
+    try:
+        args.func(args)
+    except HarnessError as e:
+        print(f"peers.py: error: {e}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("peers.py: interrupted", file=sys.stderr)
+        return 130
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
