@@ -32,7 +32,8 @@ fn bench_traverse_scenes() {
     if let Ok(s) = std::env::var("VKVCM_BENCH_LOCAL_SIZE") {
         opts.local_size = s.parse().expect("VKVCM_BENCH_LOCAL_SIZE");
     }
-    let gpu = Gpu::new(&GpuOptions::from_env(std::env::var("VKVCM_TEST_DEVICE").ok())).unwrap();
+    let gpu_opts = GpuOptions::from_env(std::env::var("VKVCM_TEST_DEVICE").ok());
+    let gpu = Gpu::new(&GpuOptions { kernel_cache: None, ..gpu_opts }).unwrap(); // not the user's cache
     for name in scenes.split(',') {
         let scene = bench_scene(name).unwrap_or_else(|| panic!("unknown scene {name}"));
         let report = bench_traverse(&gpu, &scene, &opts).unwrap();

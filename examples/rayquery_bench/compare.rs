@@ -106,7 +106,8 @@ pub struct Report {
 
 /// Runs the comparison. `Ok(Err(reason))` when the device has no ray queries.
 pub fn run(opts: &Options) -> Result<std::result::Result<Report, String>> {
-    let gpu = Gpu::new(&GpuOptions { validation: opts.validation, ..GpuOptions::from_env(opts.device.clone()) })?;
+    // No kernel cache: it builds one kernel, and tests/rayquery_bench.rs runs this too.
+    let gpu = Gpu::new(&GpuOptions { device: opts.device.clone(), validation: opts.validation, kernel_cache: None })?;
     let rq = match RqDevice::new(&gpu.info.name, opts.validation)? {
         Ok(d) => d,
         Err(why) => return Ok(Err(why)),
