@@ -57,33 +57,7 @@ fn stats(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, iterations: u64, mask: 
 /// Pixels whose camera rays, at 9 positions spread over the pixel, all hit a surface
 /// without a specular component.
 fn non_specular_mask(scene: &Scene) -> Vec<bool> {
-    let bvh = vkvcm::bvh::build(&scene.triangles, &scene.spheres).into_gpu();
-    let cam = &scene.camera;
-    let forward = cam.forward.normalize();
-    let right = forward.cross(cam.up).normalize();
-    let up = right.cross(forward);
-    let plane = H as f32 / (2.0 * (0.5 * cam.yfov).tan());
-    let mut mask = vec![true; (W * H) as usize];
-    for y in 0..H {
-        for x in 0..W {
-            for (a, b) in [0.02f32, 0.5, 0.98].iter().flat_map(|a| [0.02f32, 0.5, 0.98].map(|b| (*a, b))) {
-                let (rx, ry) = (x as f32 + a, y as f32 + b);
-                let d = (forward * plane + right * (rx - 0.5 * W as f32) + up * (0.5 * H as f32 - ry)).normalize();
-                let ray = vkvcm::bvh::Ray { o: cam.position, d };
-                let ok = match bvh.closest_hit(&ray, 0.0, f32::INFINITY) {
-                    None => false,
-                    Some(h) => {
-                        let m = &scene.materials[h.material as usize];
-                        m.mirror.max_element() == 0.0 && m.ior < 0.0
-                    }
-                };
-                if !ok {
-                    mask[(y * W + x) as usize] = false;
-                }
-            }
-        }
-    }
-    mask
+    common::primary_hit_mask(scene, W, H, |m| m.mirror.max_element() == 0.0 && m.ior < 0.0)
 }
 
 #[test]

@@ -125,26 +125,8 @@ fn constant_map_renders_the_constant_background() {
     });
 }
 
-/// Pixels whose camera rays at 9 positions over the pixel all hit a surface whose
-/// material passes `keep`.
 fn hit_mask(scene: &Scene, keep: impl Fn(&Material) -> bool) -> Vec<bool> {
-    let bvh = vkvcm::bvh::build(&scene.triangles, &scene.spheres).into_gpu();
-    let cam = &scene.camera;
-    let right = cam.forward.cross(cam.up).normalize();
-    let up = right.cross(cam.forward);
-    let plane = H as f32 / (2.0 * (0.5 * cam.yfov).tan());
-    let mut mask = vec![true; (W * H) as usize];
-    for y in 0..H {
-        for x in 0..W {
-            for (a, b) in [0.02f32, 0.5, 0.98].iter().flat_map(|a| [0.02f32, 0.5, 0.98].map(|b| (*a, b))) {
-                let (rx, ry) = (x as f32 + a, y as f32 + b);
-                let d = (cam.forward * plane + right * (rx - 0.5 * W as f32) + up * (0.5 * H as f32 - ry)).normalize();
-                let hit = bvh.closest_hit(&vkvcm::bvh::Ray { o: cam.position, d }, 0.0, f32::INFINITY);
-                mask[(y * W + x) as usize] &= hit.is_some_and(|h| keep(&scene.materials[h.material as usize]));
-            }
-        }
-    }
-    mask
+    common::primary_hit_mask(scene, W, H, keep)
 }
 
 #[test]

@@ -69,3 +69,33 @@ pub fn invariance_cases() -> Vec<(&'static str, vkvcm::render::Algorithm, vkvcm:
         ("gbs_b", Vcm, d(Vcm)),
     ]
 }
+
+/// Pixels of a `width` x `height` render of `scene` whose camera rays, at 9 positions
+/// spread over the pixel, all hit a surface whose material passes `keep` (traced on the
+/// CPU with the BVH).
+pub fn primary_hit_mask(
+    scene: &vkvcm::scene::Scene,
+    width: u32,
+    height: u32,
+    keep: impl Fn(&vkvcm::scene::Material) -> bool,
+) -> Vec<bool> {
+    let bvh = vkvcm::bvh::build(&scene.triangles, &scene.spheres).into_gpu();
+    let cam = &scene.camera;
+    let forward = cam.forward.normalize();
+    let right = forward.cross(cam.up).normalize();
+    let up = right.cross(forward);
+    let plane = height as f32 / (2.0 * (0.5 * cam.yfov).tan());
+    let mut mask = vec![true; (width * height) as usize];
+    for y in 0..height {
+        for x in 0..width {
+            for (a, b) in [0.02f32, 0.5, 0.98].iter().flat_map(|a| [0.02f32, 0.5, 0.98].map(|b| (*a, b))) {
+                let (rx, ry) = (x as f32 + a, y as f32 + b);
+                let d =
+                    (forward * plane + right * (rx - 0.5 * width as f32) + up * (0.5 * height as f32 - ry)).normalize();
+                let hit = bvh.closest_hit(&vkvcm::bvh::Ray { o: cam.position, d }, 0.0, f32::INFINITY);
+                mask[(y * width + x) as usize] &= hit.is_some_and(|h| keep(&scene.materials[h.material as usize]));
+            }
+        }
+    }
+    mask
+}
