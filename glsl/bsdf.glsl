@@ -17,6 +17,19 @@
 // the reverse pdf has the same form with wi.h. f, being reciprocal, needs no adjoint
 // correction.
 //
+// Shading normals (interpolated vertex normals) follow Veach's thesis (1997), ch. 5.3:
+// every lobe is evaluated and sampled about the shading normal n, while the geometric
+// normal ng decides the side: a direction is a reflection only if it lies on wo's side
+// of the geometric surface and a refraction only if it lies on the other side, so no ray
+// leaks through the surface; wo below the shading hemisphere makes the BSDF black (as
+// Mitsuba 3 does). The cosine that multiplies f is |n.wi| for camera subpaths (radiance:
+// the incident direction is wi); for light subpaths (importance) it is
+// |n.wo| |ng.wi| / |ng.wo| (Veach eq. 5.19, the adjoint BSDF with shading normals: the
+// incident radiance comes from wo), `bsdf_cos`. Pdf conversions between solid angle and
+// area, and hence every MIS quantity, use geometric cosines (`bsdf_cos_geometric`): they
+// are the densities the estimators sample with. Without shading normals (n == ng) both
+// cosines are |ng.wi|, bit for bit.
+//
 // Components no material of the scene has are compiled out (HAS_DIFFUSE, HAS_PHONG,
 // HAS_GGX, HAS_MIRROR, HAS_DIELECTRIC: glsl/features.glsl); the branches taken and the
 // arithmetic done for the components present are the same as with all of them.
@@ -30,7 +43,8 @@
 #define EPS_COSINE 1e-6
 
 struct Bsdf {
-    vec3 n;          // normal: for opaque materials on the side of wo; for dielectrics outward
+    vec3 n;          // shading normal: for opaque materials on the side of wo; for dielectrics outward
+    vec3 ng;         // geometric normal, oriented as n
     vec3 wo;         // the fixed direction (towards the previous vertex), unit
     uint material;
     float prob_diffuse, prob_phong, prob_glossy, prob_reflect, prob_refract;
@@ -95,8 +109,9 @@ vec3 ggx_eval(vec3 n, vec3 wo, vec3 wi, float cos_o, float cos_i, vec3 f0, float
     return fr * (d * g2 / (4.0 * cos_o * cos_i));
 }
 
-// `ng`: geometric normal (for a dielectric it must point outwards).
-Bsdf bsdf_init(uint material, vec3 ng, vec3 wo, bool from_light) {
+// `ng`: geometric normal (for a dielectric it must point outwards); `ns`: shading normal
+// on the same side as ng (== ng for flat shading).
+Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light) {
     Bsdf b;
     GpuMaterial m = material_at(material);
     float ior = m.phong.w;
@@ -104,17 +119,21 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 wo, bool from_light) {
     b.wo = wo;
     b.from_light = from_light;
     float c = dot(ng, wo);
-    b.valid = abs(c) >= EPS_COSINE;
+    // wo must lie off the geometric surface and, on the same side, above the shading one.
+    b.valid = abs(c) >= EPS_COSINE && (c >= 0.0 ? dot(ns, wo) : -dot(ns, wo)) >= EPS_COSINE;
 #if HAS_DIELECTRIC
     if (ior < 0.0) {
 #endif
-        b.n = c >= 0.0 ? ng : -ng;  // opaque surfaces reflect on both sides
+        // Opaque surfaces reflect on both sides.
+        b.n = c >= 0.0 ? ns : -ns;
+        b.ng = c >= 0.0 ? ng : -ng;
         b.fresnel = 1.0;
         b.eta_ratio = 1.0;
 #if HAS_DIELECTRIC
     } else {
-        b.n = ng;
-        b.fresnel = fresnel_dielectric(c, ior);
+        b.n = ns;
+        b.ng = ng;
+        b.fresnel = fresnel_dielectric(dot(ns, wo), ior);
         b.eta_ratio = c >= 0.0 ? 1.0 / ior : ior;
     }
 #endif
@@ -165,6 +184,10 @@ vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
     float cos_o = dot(b.n, b.wo);
     float cos_i = dot(b.n, wi);
     if (b.delta || cos_o < EPS_COSINE || cos_i < EPS_COSINE) return vec3(0.0);
+#if HAS_SHADING_NORMALS
+    // A reflection: wi on wo's side of the geometric surface (no light leaks).
+    if (dot(b.ng, wi) <= 0.0 || dot(b.ng, b.wo) <= 0.0) return vec3(0.0);
+#endif
     GpuMaterial m = material_at(b.material);
     vec3 f = vec3(0.0);
 #if HAS_DIFFUSE
@@ -199,12 +222,29 @@ vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
     return f;
 }
 
+// Veach's adjoint correction |n.wo| |ng.wi| / (|ng.wo| |n.wi|) for light subpaths (eq.
+// 5.19); exactly 1 for camera subpaths and for flat shading.
+float shading_correction(Bsdf b, vec3 wi) {
+#if HAS_SHADING_NORMALS
+    if (b.from_light && b.n != b.ng)
+        return abs(dot(b.n, b.wo)) * abs(dot(b.ng, wi)) / (abs(dot(b.ng, b.wo)) * abs(dot(b.n, wi)));
+#endif
+    return 1.0;
+}
+
+// The cosine that multiplies f(wo, wi) in the path throughput (the header's rule: |n.wi|
+// for camera subpaths, |n.wo| |ng.wi| / |ng.wo| for light subpaths).
+float bsdf_cos(Bsdf b, vec3 wi) { return abs(dot(b.n, wi)) * shading_correction(b, wi); }
+
+// |ng.w|: the cosine of solid-angle <-> area conversions at this vertex (MIS).
+float bsdf_cos_geometric(Bsdf b, vec3 w) { return abs(dot(b.ng, w)); }
+
 struct BsdfSample {
     vec3 wi;
-    vec3 weight;     // f |cos wi| / pdf (the path-throughput factor, before roulette)
+    vec3 weight;     // f bsdf_cos(wi) / pdf (the path-throughput factor, before roulette)
     float pdf;       // solid-angle pdf (component probability for specular events)
     float pdf_rev;
-    float cos_wi;    // |cos| at wi
+    float cos_wi;    // |ng.wi|, for the MIS quantities
     bool specular;
     bool ok;
 };
@@ -259,9 +299,9 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
 #endif
         }
         vec3 f = bsdf_eval(b, s.wi, s.pdf, s.pdf_rev);
-        s.cos_wi = dot(b.n, s.wi);
-        if (s.pdf <= 0.0 || s.cos_wi < EPS_COSINE) return s;
-        s.weight = f * (s.cos_wi / s.pdf);
+        if (s.pdf <= 0.0 || dot(b.n, s.wi) < EPS_COSINE) return s;
+        s.cos_wi = bsdf_cos_geometric(b, s.wi);
+        s.weight = f * (bsdf_cos(b, s.wi) / s.pdf);
         s.ok = true;
         return s;
     }
@@ -270,11 +310,14 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
 #if HAS_MIRROR
     if (x < p_nonspec + b.prob_reflect) {
         s.wi = 2.0 * dot(b.n, b.wo) * b.n - b.wo;
+#if HAS_SHADING_NORMALS
+        if (dot(b.ng, s.wi) * dot(b.ng, b.wo) <= 0.0) return s;  // would leak through
+#endif
         s.pdf = b.prob_reflect;
         s.pdf_rev = b.prob_reflect;
-        s.cos_wi = abs(dot(b.n, s.wi));
-        // f |cos| / pdf with f = F mirror / |cos|.
-        s.weight = b.fresnel * m.mirror.rgb / b.prob_reflect;
+        s.cos_wi = bsdf_cos_geometric(b, s.wi);
+        // f bsdf_cos / pdf with f = F mirror / |n.wi|.
+        s.weight = b.fresnel * m.mirror.rgb * shading_correction(b, s.wi) / b.prob_reflect;
     } else
 #endif
     {
@@ -288,13 +331,17 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
         if (sin2_t >= 1.0) return s;
         float ct = sqrt(1.0 - sin2_t);
         s.wi = normalize(-eta * b.wo + (eta * ci - ct) * n);
+#if HAS_SHADING_NORMALS
+        if (dot(b.ng, s.wi) * dot(b.ng, b.wo) >= 0.0) return s;  // would not cross the surface
+#endif
         s.pdf = b.prob_refract;
         s.pdf_rev = b.prob_refract;
-        s.cos_wi = ct;
+        // ct is |n.wi| before normalize's rounding: the geometric cosine when n == ng.
+        s.cos_wi = b.n == b.ng ? ct : bsdf_cos_geometric(b, s.wi);
         // Radiance is scaled by (eta_o / eta_t)^2 crossing the boundary; the adjoint
-        // (light subpath) transport is not (Veach 1997, 5.2).
+        // (light subpath) transport is not (Veach 1997, 5.2). f = (1 - F) scale / |n.wi|.
         float scale = b.from_light ? 1.0 : eta * eta;
-        s.weight = vec3((1.0 - b.fresnel) * scale / b.prob_refract);
+        s.weight = vec3((1.0 - b.fresnel) * scale * shading_correction(b, s.wi) / b.prob_refract);
 #else
         // Without dielectrics prob_refract is 0: the generic kernel reaches this branch
         // only through rounding (x >= p_nonspec + prob_reflect) and fails (pdf 0) too.

@@ -72,7 +72,7 @@ void main() {
             }
         }
         if (len >= max_len) continue;
-        Bsdf b = bsdf_init(s.material, s.ng, -d, false);
+        Bsdf b = bsdf_init(s.material, s.ng, s.ns, -d, false);
         if (!b.valid) continue;
 #if NEE
         if (!b.delta && len + 1u >= min_len) {
@@ -83,7 +83,7 @@ void main() {
                 if (max3(f) > 0.0) {
                     if (light_sample_visible(s.p, s.ng, ls)) {
                         float wgt = ls.delta ? 1.0 : balance(pick * ls.pdf_w, pf * b.cont_prob);
-                        float cos_x = dot(b.n, ls.wi);
+                        float cos_x = bsdf_cos(b, ls.wi);
                         L += thr * f * ls.radiance * (wgt * cos_x / (pick * ls.pdf_w));
                     }
                 }

@@ -24,12 +24,20 @@ struct SubpathState {
 // (a light subpath stores at most that many vertices), so a camera subpath finds the
 // vertices of "its" light subpath p = pixel index without search, as in SmallVCM.
 //   lv_a[2i] = (position, dVCM)      lv_a[2i+1] = (throughput, dVC)
-//   lv_b[2i] = (wo, dVM)             lv_b[2i+1] = (normal, material | length << 24)
+//   lv_b[Bi] = (wo, dVM)             lv_b[Bi+1] = (normal, material | length << 24)
+//   with HAS_SHADING_NORMALS (B = 3):  lv_b[Bi+2] = (shading normal, 0); else B = 2
+// (src/render/passes/light_subpaths.rs, LightVertexPlan, sizes the store the same way).
+#if HAS_SHADING_NORMALS
+#define LV_B_STRIDE 3u
+#else
+#define LV_B_STRIDE 2u
+#endif
 struct LightVertex {
     vec3 p;
     vec3 thr;
     vec3 wo;   // direction towards the previous vertex
     vec3 n;    // geometric normal
+    vec3 ns;   // shading normal (== n for flat shading)
     uint material;
     uint len;        // segments from the light
     float dvcm, dvc, dvm;
@@ -41,19 +49,27 @@ uint lv_slots() { return max_path_length() - 1u; }
 void lv_store(uint slot, LightVertex v) {
     lv_a[2u * slot] = vec4(v.p, v.dvcm);
     lv_a[2u * slot + 1u] = vec4(v.thr, v.dvc);
-    lv_b[2u * slot] = vec4(v.wo, v.dvm);
-    lv_b[2u * slot + 1u] = vec4(v.n, uintBitsToFloat(v.material | (v.len << 24)));
+    lv_b[LV_B_STRIDE * slot] = vec4(v.wo, v.dvm);
+    lv_b[LV_B_STRIDE * slot + 1u] = vec4(v.n, uintBitsToFloat(v.material | (v.len << 24)));
+#if HAS_SHADING_NORMALS
+    lv_b[LV_B_STRIDE * slot + 2u] = vec4(v.ns, 0.0);
+#endif
 }
 #endif
 
 LightVertex lv_load(uint slot) {
     LightVertex v;
     vec4 a0 = lv_a_at(2u * slot), a1 = lv_a_at(2u * slot + 1u);
-    vec4 b0 = lv_b_at(2u * slot), b1 = lv_b_at(2u * slot + 1u);
+    vec4 b0 = lv_b_at(LV_B_STRIDE * slot), b1 = lv_b_at(LV_B_STRIDE * slot + 1u);
     v.p = a0.xyz; v.dvcm = a0.w;
     v.thr = a1.xyz; v.dvc = a1.w;
     v.wo = b0.xyz; v.dvm = b0.w;
     v.n = b1.xyz;
+#if HAS_SHADING_NORMALS
+    v.ns = lv_b_at(LV_B_STRIDE * slot + 2u).xyz;
+#else
+    v.ns = v.n;
+#endif
     uint info = floatBitsToUint(b1.w);
     v.material = info & 0xffffffu;
     v.len = info >> 24;
@@ -115,7 +131,7 @@ void mis_on_scatter(inout SubpathState st, float pdf, float pdf_rev, float cos_w
 // evaluated instead of sampled): for the debug kernel, which follows a fixed path. For a
 // delta BSDF `wi` must be its specular direction.
 void mis_on_scatter_to(inout SubpathState st, Bsdf b, vec3 wi) {
-    float cos_wi = abs(dot(b.n, wi));
+    float cos_wi = bsdf_cos_geometric(b, wi);
     if (b.delta) {
         mis_on_scatter(st, 0.0, 0.0, cos_wi, true);
         return;
@@ -138,21 +154,23 @@ float mis_weight_hit(SubpathState st, float direct_pdf, float emission_pdf, floa
 // Next-event estimation at a camera vertex with BSDF `b` towards light sample `ls` (eq.
 // 44-45, docs/smallvcm.md 4.4.9):
 // returns the MIS weight, with f the BSDF value (zero: no contribution) and cos_x the
-// cosine at the camera vertex.
+// cosine that multiplies it (bsdf_cos).
 float nee_eval(SubpathState st, Bsdf b, LightSample ls, float pick, out vec3 f, out float cos_x) {
     float pf, pr;
     f = bsdf_eval(b, ls.wi, pf, pr);
-    cos_x = dot(b.n, ls.wi);
+    cos_x = bsdf_cos(b, ls.wi);
     if (max3(f) <= 0.0) return 0.0;
     pf = ls.delta ? 0.0 : pf * b.cont_prob;
     pr *= b.cont_prob;
     float w_light = pf / (pick * ls.pdf_w);
-    float w_camera = (ls.emission_pdf_w * cos_x / (ls.pdf_w * ls.cos_light)) * (push.mis_vm + st.dvcm + st.dvc * pr);
+    float cos_g = bsdf_cos_geometric(b, ls.wi);
+    float w_camera = (ls.emission_pdf_w * cos_g / (ls.pdf_w * ls.cos_light)) * (push.mis_vm + st.dvcm + st.dvc * pr);
     return 1.0 / (w_light + 1.0 + w_camera);
 }
 
 // Vertex connection between camera vertex `p` (BSDF `b`, state `st`) and light vertex
-// `v` (eq. 40-41, docs/smallvcm.md 4.4.11): returns the MIS weight with both BSDF values and the geometry term g (fc or fl
+// `v` (eq. 40-41, docs/smallvcm.md 4.4.11): returns the MIS weight with both BSDF values
+// and g, the product of their cosines (bsdf_cos) over the squared distance (fc or fl
 // zero: no contribution). Visibility is the caller's.
 float connection_eval(SubpathState st, vec3 p, Bsdf b, LightVertex v, out vec3 fc, out vec3 fl, out float g) {
     fl = vec3(0.0);
@@ -164,15 +182,15 @@ float connection_eval(SubpathState st, vec3 p, Bsdf b, LightVertex v, out vec3 f
     float cpf, cpr;
     fc = bsdf_eval(b, dir, cpf, cpr);
     if (max3(fc) <= 0.0) return 0.0;
-    Bsdf lb = bsdf_init(v.material, v.n, v.wo, true);
+    Bsdf lb = bsdf_init(v.material, v.n, v.ns, v.wo, true);
     float lpf, lpr;
     fl = bsdf_eval(lb, -dir, lpf, lpr);
     if (max3(fl) <= 0.0) return 0.0;
     cpf *= b.cont_prob; cpr *= b.cont_prob;
     lpf *= lb.cont_prob; lpr *= lb.cont_prob;
-    float cos_c = abs(dot(b.n, dir));
-    float cos_l = abs(dot(lb.n, dir));
-    g = cos_c * cos_l / dist2;
+    g = bsdf_cos(b, dir) * bsdf_cos(lb, -dir) / dist2;
+    float cos_c = bsdf_cos_geometric(b, dir);
+    float cos_l = bsdf_cos_geometric(lb, dir);
     float camera_pdf_a = cpf * cos_l / dist2;  // camera BSDF sampling the light vertex
     float light_pdf_a = lpf * cos_c / dist2;   // light BSDF sampling the camera vertex
     float w_light = camera_pdf_a * (push.mis_vm + v.dvcm + v.dvc * lpr);
@@ -182,16 +200,21 @@ float connection_eval(SubpathState st, vec3 p, Bsdf b, LightVertex v, out vec3 f
 
 // Merging camera vertex (BSDF `b`, state `st`) with light vertex `v` (eq. 38-39,
 // docs/smallvcm.md 4.4.12): returns the camera BSDF value towards v's predecessor, and in
-// `w` the MIS weight.
+// `w` the MIS weight. The light vertices estimate the flux per unit of geometric area, so
+// with shading normals f is scaled by |n.wo| / |ng.wo| at the camera vertex: the outgoing
+// radiance integrates f L |n.wi| over directions (Veach 5.3), the density gives L |ng.wi|.
 vec3 merge_eval(SubpathState st, Bsdf b, LightVertex v, out float w) {
     float pf, pr;
     vec3 f = bsdf_eval(b, v.wo, pf, pr);
+#if HAS_SHADING_NORMALS
+    if (b.n != b.ng) f *= abs(dot(b.n, v.wo)) / abs(dot(b.ng, v.wo));
+#endif
     pf *= b.cont_prob;
     // The reverse pdf is that of the light subpath continuing from the merged vertex
     // (which lies at the light vertex), so its continuation probability is the light
     // vertex's BSDF's, as in SmallVCM's RangeQuery (the two differ where a merge spans two
     // materials).
-    pr *= bsdf_init(v.material, v.n, v.wo, true).cont_prob;
+    pr *= bsdf_init(v.material, v.n, v.ns, v.wo, true).cont_prob;
     float w_light = v.dvcm * push.mis_vc + v.dvm * pf;
     float w_camera = st.dvcm * push.mis_vc + st.dvm * pr;
     w = 1.0 / (w_light + 1.0 + w_camera);
@@ -226,12 +249,15 @@ bool camera_raster(vec3 x, out vec2 raster) {
 // A light vertex at p (BSDF `b`, state `st`) seen by the camera: returns the MIS weight
 // of this light-to-camera connection (1 when `weight_one`: pure light tracing), with the
 // BSDF value f towards the camera (zero: no contribution), the camera's pdf per unit area
-// at p and the raster position. False when p is behind the camera or off the image.
+// at p, the importance factor that multiplies f (that pdf with bsdf_cos in place of the
+// geometric cosine) and the raster position. False when p is behind the camera or off the
+// image.
 bool camera_connection_eval(SubpathState st, vec3 p, Bsdf b, bool weight_one, out float w, out vec3 f,
-                            out float camera_pdf_a, out vec2 raster) {
+                            out float camera_pdf_a, out float importance, out vec2 raster) {
     w = 0.0;
     f = vec3(0.0);
     camera_pdf_a = 0.0;
+    importance = 0.0;
     if (!camera_raster(p, raster)) return false;
     vec3 to_cam = params.cam_pos.xyz - p;
     float dist = length(to_cam);
@@ -241,11 +267,11 @@ bool camera_connection_eval(SubpathState st, vec3 p, Bsdf b, bool weight_one, ou
     if (max3(f) <= 0.0) return true;
     pr *= b.cont_prob;
     float cos_cam = dot(params.cam_forward.xyz, -to_cam);
-    float cos_x = abs(dot(b.n, to_cam));
     float plane = params.cam_pos.w;
     // Pdf of the camera generating this point, per unit area at p (pixel area 1).
     float image_to_solid = plane * plane / (cos_cam * cos_cam * cos_cam);
-    camera_pdf_a = image_to_solid * cos_x / (dist * dist);
+    camera_pdf_a = image_to_solid * bsdf_cos_geometric(b, to_cam) / (dist * dist);
+    importance = image_to_solid * bsdf_cos(b, to_cam) / (dist * dist);
     float n_l = float(push.light_paths);
     w = 1.0;
     if (!weight_one) {
@@ -259,12 +285,12 @@ bool camera_connection_eval(SubpathState st, vec3 p, Bsdf b, bool weight_one, ou
 // weighted by eq. 46-47 (docs/smallvcm.md 4.4.10). `weight_one` disables MIS (pure light
 // tracing).
 void connect_to_camera(SubpathState st, vec3 p, vec3 ng, Bsdf b, bool weight_one) {
-    float w, camera_pdf_a;
+    float w, camera_pdf_a, importance;
     vec3 f;
     vec2 raster;
-    if (!camera_connection_eval(st, p, b, weight_one, w, f, camera_pdf_a, raster)) return;
+    if (!camera_connection_eval(st, p, b, weight_one, w, f, camera_pdf_a, importance, raster)) return;
     if (max3(f) <= 0.0) return;
-    vec3 contrib = (w / float(push.light_paths)) * st.thr * f * camera_pdf_a;
+    vec3 contrib = (w / float(push.light_paths)) * st.thr * f * importance;
     if (max3(contrib) <= 0.0) return;
     if (!visible(p, ng, params.cam_pos.xyz, vec3(0.0))) return;
     uint pixel = uint(raster.y) * image_width() + uint(raster.x);

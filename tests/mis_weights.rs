@@ -1,7 +1,9 @@
 //! The MIS weights of all techniques that can sample one path sum to 1 (issue #5),
 //! checked on the GPU by the debug kernel glsl/tests/mis_weights.comp over random paths
-//! of the reference scenes (area light, background, point light, sun) and a GGX scene
-//! with an area and a point light, in bpt, bpm and vcm modes. The kernel evaluates every
+//! of the reference scenes (area light, background, point light, sun), a GGX scene
+//! with an area and a point light, the same with shading normals tilted off every
+//! triangle and a smooth-shaded sphere mesh (the MIS quantities use geometric cosines,
+//! glsl/bsdf.glsl), and an environment map, in bpt, bpm and vcm modes. The kernel evaluates every
 //! weight with the production functions of glsl/vcm.glsl (docs/estimators.md, "MIS
 //! weights sum to one: the debug kernel"). Lavapipe, validation on.
 
@@ -217,6 +219,16 @@ fn ggx_scene() -> Scene {
     s
 }
 
+/// ggx_scene with shading normals: tilted up to 30 degrees off every triangle, and a
+/// coarse smooth-shaded sphere mesh on the floor.
+fn smooth_ggx_scene() -> Scene {
+    let mut s = ggx_scene();
+    tilt_shading_normals(&mut s, 30.0, 7);
+    s.triangles.extend(smooth_sphere_mesh(Vec3::new(-0.5, 0.8, 0.4), 0.4, 5, 8, 0));
+    s.name = "ggx + point, shading normals".into();
+    s
+}
+
 fn print_summary(mode: Mode, s: &Summary) {
     let shares: Vec<String> = CLASSES
         .iter()
@@ -277,6 +289,7 @@ fn mis_weights_sum_to_one() {
         .iter()
         .map(|n| vkvcm::scene::load_named(n).unwrap())
         .chain(std::iter::once(ggx_scene()))
+        .chain(std::iter::once(smooth_ggx_scene()))
         .chain(std::iter::once(environment_scene(smooth_sky(16, 9), 40.0)))
         .collect();
     // The last mode is the negative control: the check can fail.

@@ -199,7 +199,7 @@ fn feature_derivation() {
     ] {
         let scene = load_named(name).unwrap();
         for algo in [Algorithm::El, Algorithm::Pt, Algorithm::Bpt, Algorithm::Vcm] {
-            let f = FeatureSet::new(&scene, algo.info().reads_shading_normals, false);
+            let f = FeatureSet::new(&scene, false);
             let mut want: Vec<&str> = mats.to_vec();
             if glass {
                 want.push("HAS_DIELECTRIC");
@@ -214,23 +214,22 @@ fn feature_derivation() {
             assert!(text.contains("textures: none"), "{text}");
             assert!(text.contains("compiled out: ggx"), "{text}");
             // Generic: everything on, whatever the scene.
-            let g = FeatureSet::new(&scene, algo.info().reads_shading_normals, true);
+            let g = FeatureSet::new(&scene, true);
             assert!(defines(&g).iter().all(|d| d.ends_with("=1")), "{:?}", defines(&g));
         }
     }
-    // GGX, triangles only, and shading normals that only el reads.
+    // GGX, triangles only, and shading normals where the scene has them.
     let mut scene = glossy_scene();
-    let f = FeatureSet::new(&scene, Algorithm::Vcm.info().reads_shading_normals, false);
+    let f = FeatureSet::new(&scene, false);
     assert!(f.ggx && f.diffuse && !f.phong && !f.mirror && !f.dielectric && f.area_lights && !f.spheres);
     assert!(defines(&f).contains(&"BVH_NO_SPHERES=1".to_string()));
     assert!(!f.shading_normals && !f.scene_has_shading_normals);
     let n = glam::Vec3::Z;
     scene.triangles[0].n = Some([n, n, n]);
-    assert!(!FeatureSet::new(&scene, Algorithm::Pt.info().reads_shading_normals, false).shading_normals);
-    assert!(FeatureSet::new(&scene, Algorithm::El.info().reads_shading_normals, false).shading_normals);
+    assert!(FeatureSet::new(&scene, false).shading_normals);
     // A material no primitive uses does not count.
     scene.materials.push(vkvcm::scene::Material { mirror: glam::Vec3::ONE, ior: 1.5, ..Default::default() });
-    let f = FeatureSet::new(&scene, Algorithm::Pt.info().reads_shading_normals, false);
+    let f = FeatureSet::new(&scene, false);
     assert!(!f.mirror && !f.dielectric);
     assert!(f.with_count_rays(true).defines().list().contains(&("COUNT_RAYS".to_string(), "1".to_string())));
 }

@@ -38,6 +38,7 @@ layout(std430) buffer mis_results { float result[]; };
 
 vec3 vp[MAXV];    // position (y_0 of an infinite light: unused)
 vec3 vn[MAXV];    // geometric normal (y_0: the area light's normal, else 0)
+vec3 vns[MAXV];   // shading normal (y_1..y_{k-1})
 uint vmat[MAXV];  // material
 bool vdelta[MAXV];
 bool infinite0;   // y_0 lies on an infinite light (directional, background)
@@ -119,9 +120,9 @@ void main() {
             Hit h;
             if (!trace_closest(st.o, st.d, 0.0, 1e30, h)) return;
             Surface s = surface_at(h, st.o, st.d);
-            Bsdf b = bsdf_init(s.material, s.ng, -st.d, true);
+            Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, true);
             if (!b.valid) return;
-            vp[i] = s.p; vn[i] = s.ng; vmat[i] = s.material; vdelta[i] = b.delta;
+            vp[i] = s.p; vn[i] = s.ng; vns[i] = s.ns; vmat[i] = s.material; vdelta[i] = b.delta;
             if (i + 1u < s_gen && !scatter(st, b, s.p, s.ng, rng)) return;
         }
     }
@@ -157,9 +158,9 @@ void main() {
             }
             if (!hit) return;
             Surface s = surface_at(h, st.o, st.d);
-            Bsdf b = bsdf_init(s.material, s.ng, -st.d, false);
+            Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, false);
             if (!b.valid) return;
-            vp[i] = s.p; vn[i] = s.ng; vmat[i] = s.material; vdelta[i] = b.delta;
+            vp[i] = s.p; vn[i] = s.ng; vns[i] = s.ns; vmat[i] = s.material; vdelta[i] = b.delta;
             if (j < k - s_gen && !scatter(st, b, s.p, s.ng, rng)) return;
         }
     }
@@ -176,15 +177,15 @@ void main() {
             vn[0] = ls.light_normal;
         }
         float pf, pr;
-        Bsdf b = bsdf_init(vmat[1], vn[1], dir_to(1u, 2u), false);
+        Bsdf b = bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false);
         if (max3(bsdf_eval(b, ls.wi, pf, pr)) <= 0.0) return;
         if (!light_sample_visible(vp[1], vn[1], ls)) return;
     } else if (s_gen >= 2u && s_gen < k) {
         uint a = s_gen - 1u, c = s_gen;
         if (vdelta[a] || vdelta[c]) return;
         float pf, pr;
-        Bsdf bl = bsdf_init(vmat[a], vn[a], dir_to(a, a - 1u), true);
-        Bsdf bc = bsdf_init(vmat[c], vn[c], dir_to(c, c + 1u), false);
+        Bsdf bl = bsdf_init(vmat[a], vn[a], vns[a], dir_to(a, a - 1u), true);
+        Bsdf bc = bsdf_init(vmat[c], vn[c], vns[c], dir_to(c, c + 1u), false);
         if (max3(bsdf_eval(bl, dir_to(a, c), pf, pr)) <= 0.0) return;
         if (max3(bsdf_eval(bc, dir_to(c, a), pf, pr)) <= 0.0) return;
         if (!visible(vp[a], vn[a], vp[c], vn[c])) return;
@@ -194,7 +195,7 @@ void main() {
         vec2 raster;
         if (!camera_raster(vp[a], raster)) return;
         float pf, pr;
-        Bsdf bl = bsdf_init(vmat[a], vn[a], dir_to(a, a - 1u), true);
+        Bsdf bl = bsdf_init(vmat[a], vn[a], vns[a], dir_to(a, a - 1u), true);
         if (max3(bsdf_eval(bl, dir_to(a, k), pf, pr)) <= 0.0) return;
         if (!visible(vp[a], vn[a], params.cam_pos.xyz, vec3(0.0))) return;
     }
@@ -230,7 +231,7 @@ void main() {
         mis_on_hit(st, i == 1u && infinite0 ? 0.0 : distance(vp[i - 1u], vp[i]), abs(dot(vn[i], d)),
                    i == 1u && infinite0);
         L[i] = st;
-        if (i + 1u < k) mis_on_scatter_to(st, bsdf_init(vmat[i], vn[i], -d, true), dir_to(i, i + 1u));
+        if (i + 1u < k) mis_on_scatter_to(st, bsdf_init(vmat[i], vn[i], vns[i], -d, true), dir_to(i, i + 1u));
     }
     st.specular = true;
     mis_camera_start(st, dir_to(k, k - 1u));
@@ -240,7 +241,7 @@ void main() {
         st.len = j;
         if (!(i == 0u && infinite0)) mis_on_hit(st, distance(vp[i + 1u], vp[i]), abs(dot(vn[i], d)), false);
         C[i] = st;
-        if (i > 0u) mis_on_scatter_to(st, bsdf_init(vmat[i], vn[i], -d, false), dir_to(i, i - 1u));
+        if (i > 0u) mis_on_scatter_to(st, bsdf_init(vmat[i], vn[i], vns[i], -d, false), dir_to(i, i - 1u));
     }
 
     // ---- 3. Every technique's weight.
@@ -267,7 +268,7 @@ void main() {
             LightSample ls = light_sample_fixed(li, vp[1]);
             vec3 f;
             float cos_x;
-            w = nee_eval(C[1], bsdf_init(vmat[1], vn[1], dir_to(1u, 2u), false), ls, pick, f, cos_x);
+            w = nee_eval(C[1], bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false), ls, pick, f, cos_x);
             if (!ls.ok || max3(f) <= 0.0) w = -2.0;  // cannot happen for a sampled path
             write_out(base, 9u, w);
             sum += w; n += 1u; bad += (w >= 0.0 && !isinf(w)) ? 0u : 1u;
@@ -276,11 +277,11 @@ void main() {
         for (uint s = 2u; s < k; ++s) {
             if (vdelta[s - 1u] || vdelta[s]) continue;
             LightVertex v;
-            v.p = vp[s - 1u]; v.n = vn[s - 1u]; v.wo = dir_to(s - 1u, s - 2u); v.material = vmat[s - 1u];
+            v.p = vp[s - 1u]; v.n = vn[s - 1u]; v.ns = vns[s - 1u]; v.wo = dir_to(s - 1u, s - 2u); v.material = vmat[s - 1u];
             v.len = s - 1u; v.dvcm = L[s - 1u].dvcm; v.dvc = L[s - 1u].dvc; v.dvm = L[s - 1u].dvm;
             vec3 fc, fl;
             float g;
-            w = connection_eval(C[s], vp[s], bsdf_init(vmat[s], vn[s], dir_to(s, s + 1u), false), v, fc, fl, g);
+            w = connection_eval(C[s], vp[s], bsdf_init(vmat[s], vn[s], vns[s], dir_to(s, s + 1u), false), v, fc, fl, g);
             if (max3(fc) <= 0.0 || max3(fl) <= 0.0) w = -2.0;
             write_out(base, 8u + s, w);
             sum += w; n += 1u; bad += (w >= 0.0 && !isinf(w)) ? 0u : 1u;
@@ -288,10 +289,10 @@ void main() {
         // t = 1: light vertex y_{k-1} connected to the camera.
         if (!vdelta[k - 1u]) {
             vec3 f;
-            float pdf_a;
+            float pdf_a, importance;
             vec2 raster;
-            Bsdf b = bsdf_init(vmat[k - 1u], vn[k - 1u], dir_to(k - 1u, k - 2u), true);
-            if (!camera_connection_eval(L[k - 1u], vp[k - 1u], b, false, w, f, pdf_a, raster) || max3(f) <= 0.0)
+            Bsdf b = bsdf_init(vmat[k - 1u], vn[k - 1u], vns[k - 1u], dir_to(k - 1u, k - 2u), true);
+            if (!camera_connection_eval(L[k - 1u], vp[k - 1u], b, false, w, f, pdf_a, importance, raster) || max3(f) <= 0.0)
                 w = -2.0;
             write_out(base, 8u + k, w);
             sum += w; n += 1u; bad += (w >= 0.0 && !isinf(w)) ? 0u : 1u;
@@ -302,9 +303,9 @@ void main() {
         for (uint i = 1u; i < k; ++i) {
             if (vdelta[i]) continue;
             LightVertex v;
-            v.p = vp[i]; v.n = vn[i]; v.wo = dir_to(i, i - 1u); v.material = vmat[i];
+            v.p = vp[i]; v.n = vn[i]; v.ns = vns[i]; v.wo = dir_to(i, i - 1u); v.material = vmat[i];
             v.len = i; v.dvcm = L[i].dvcm; v.dvc = L[i].dvc; v.dvm = L[i].dvm;
-            vec3 f = merge_eval(C[i], bsdf_init(vmat[i], vn[i], dir_to(i, i + 1u), false), v, w);
+            vec3 f = merge_eval(C[i], bsdf_init(vmat[i], vn[i], vns[i], dir_to(i, i + 1u), false), v, w);
             if (max3(f) <= 0.0) w = -2.0;
             write_out(base, 8u + MAXV + i, w);
             sum += w; n += 1u; bad += (w >= 0.0 && !isinf(w)) ? 0u : 1u;

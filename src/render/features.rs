@@ -40,8 +40,7 @@ pub struct FeatureSet {
     /// The background is an environment map (glsl/environment.glsl).
     pub environment_map: bool,
     pub spheres: bool,
-    /// Shading normals are uploaded and read (only `el` reads them: the estimators shade
-    /// with geometric normals).
+    /// Shading normals are uploaded and every estimator shades with them (glsl/bsdf.glsl).
     pub shading_normals: bool,
     /// The scene has shading normals (whether or not the kernels read them).
     pub scene_has_shading_normals: bool,
@@ -52,10 +51,9 @@ fn nonzero(v: Vec3) -> bool {
 }
 
 impl FeatureSet {
-    /// The features of `scene` for kernels that read shading normals or not
-    /// (`EstimatorInfo::reads_shading_normals`); with `generic` every feature is on (the
-    /// scene's own features are still recorded in `scene_has_shading_normals`).
-    pub fn new(scene: &Scene, reads_shading_normals: bool, generic: bool) -> FeatureSet {
+    /// The features of `scene`; with `generic` every feature is on (the scene's own
+    /// shading normals are still recorded in `scene_has_shading_normals`).
+    pub fn new(scene: &Scene, generic: bool) -> FeatureSet {
         // Only materials that a primitive uses can be evaluated.
         let mut used = vec![false; scene.materials.len()];
         let prims = scene.triangles.iter().map(|t| t.material).chain(scene.spheres.iter().map(|s| s.material));
@@ -85,7 +83,7 @@ impl FeatureSet {
             background: g || any_light(&Light::is_environment),
             environment_map: g || any_light(&|l| matches!(l, Light::Environment(_))),
             spheres: g || !scene.spheres.is_empty(),
-            shading_normals: g || (scene_has_shading_normals && reads_shading_normals),
+            shading_normals: g || scene_has_shading_normals,
             scene_has_shading_normals,
         }
     }
@@ -158,9 +156,9 @@ impl fmt::Display for FeatureSet {
         writeln!(f, "  lights: {}", list(&lights))?;
         writeln!(f, "  geometry: {}", list(&[("triangles", true), ("spheres", self.spheres)]))?;
         let normals = match (self.scene_has_shading_normals, self.shading_normals) {
-            (_, true) => "read (uploaded)",
-            (true, false) => "in the scene, not read by this estimator (geometric normals): not uploaded",
-            (false, false) => "none in the scene",
+            (true, _) => "interpolated (smooth shading)",
+            (false, true) => "compiled in, none in the scene (flat shading)",
+            (false, false) => "none in the scene (flat shading)",
         };
         writeln!(f, "  shading normals: {normals}")?;
         writeln!(f, "  textures: none (not supported by vkvcm)")?;

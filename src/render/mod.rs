@@ -86,8 +86,7 @@ impl Renderer {
         let info = settings.algorithm.info();
         let frame = &settings.frame;
         let plan = Self::plan_for(gpu, scene, settings)?;
-        let features = features::FeatureSet::new(scene, info.reads_shading_normals, settings.generic)
-            .with_count_rays(settings.count_rays);
+        let features = features::FeatureSet::new(scene, settings.generic).with_count_rays(settings.count_rays);
         let reads = reads::Reads::resolve(gpu, settings.reads)?;
         let atomics = atomics::SplatAtomics::resolve(gpu, settings.atomics)?;
         let scene_gpu = SceneGpu::with_features(gpu, scene, frame, &features, reads, atomics)?;
@@ -120,7 +119,8 @@ impl Renderer {
         settings.check()?;
         let pixels = frame.width.saturating_mul(frame.height);
         let k = regen::resolve(gpu, info.regenerates_paths, settings.paths_per_invocation, pixels);
-        let plan = plan::FramePlan::new(scene, settings, info.techniques, k)?;
+        let shading_normals = features::FeatureSet::new(scene, settings.generic).shading_normals;
+        let plan = plan::FramePlan::new(scene, settings, info.techniques, k, shading_normals)?;
         plan.check(gpu, &format!("a {}x{} {} render", frame.width, frame.height, info.name))?;
         Ok(plan)
     }

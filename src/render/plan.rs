@@ -42,12 +42,15 @@ pub struct FramePlan {
 impl FramePlan {
     /// The plan of a render of `scene` with `s` (already checked: `RenderSettings::check`,
     /// as `Renderer::plan_for` does) by an estimator with `techniques`, tracing
-    /// `paths_per_invocation` paths per invocation.
+    /// `paths_per_invocation` paths per invocation, with kernels that shade with the
+    /// scene's shading normals or not (`FeatureSet::shading_normals`: light vertices then
+    /// carry them).
     pub fn new(
         scene: &Scene,
         s: &RenderSettings,
         techniques: Techniques,
         paths_per_invocation: u32,
+        shading_normals: bool,
     ) -> Result<FramePlan> {
         let prims = scene.triangles.len() + scene.spheres.len();
         if prims > crate::bvh::layout::MAX_PRIMS {
@@ -59,9 +62,15 @@ impl FramePlan {
         }
         let pixels = s.frame.width * s.frame.height;
         let light_paths = pixels;
-        let light_vertices = techniques
-            .light_subpaths
-            .then(|| LightVertexPlan::new(pixels, light_paths, s.frame.max_path_length, techniques.store_vertices));
+        let light_vertices = techniques.light_subpaths.then(|| {
+            LightVertexPlan::new(
+                pixels,
+                light_paths,
+                s.frame.max_path_length,
+                techniques.store_vertices,
+                shading_normals,
+            )
+        });
         let cache = match (&light_vertices, s.connect) {
             (Some(lv), Connect::Cache(_)) if techniques.vertex_connection => Some(LightVertexCachePlan::new(lv)),
             _ => None,

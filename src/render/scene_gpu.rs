@@ -167,16 +167,15 @@ pub fn gpu_params(scene: &Scene, frame: &FrameSettings, background: u32) -> GpuP
 }
 
 impl SceneGpu {
-    /// The scene with kernels specialised to it, without shading normals (which only
-    /// `el` reads), read as `reads`.
+    /// The scene with kernels specialised to it, read as `reads`.
     pub fn new(gpu: &Arc<Gpu>, scene: &Scene, frame: &FrameSettings, reads: Reads) -> Result<SceneGpu> {
         let atomics = SplatAtomics::resolve(gpu, None)?;
-        Self::with_features(gpu, scene, frame, &FeatureSet::new(scene, false, false), reads, atomics)
+        Self::with_features(gpu, scene, frame, &FeatureSet::new(scene, false), reads, atomics)
     }
 
     /// The scene for kernels compiled with `features`, reading it as `reads` and summing
-    /// splats with `atomics`: shading normals are uploaded only when the kernels read them
-    /// (a 16-byte placeholder is bound otherwise); the BVH is read with 64-bit loads when
+    /// splats with `atomics`: shading normals are uploaded when the scene has them and
+    /// the kernels read them (a 16-byte placeholder is bound otherwise); the BVH is read with 64-bit loads when
     /// the device has `shaderInt64`.
     pub fn with_features(
         gpu: &Arc<Gpu>,

@@ -133,3 +133,57 @@ pub fn smooth_sky(width: u32, height: u32) -> vkvcm::scene::EnvironmentMap {
     }
     vkvcm::scene::EnvironmentMap::new("smooth_sky", width, height, texels).expect("map")
 }
+
+/// Gives every triangle of `scene` vertex normals tilted off its geometric normal by
+/// random angles of up to `max_tilt_deg` (deterministic in `seed`), on the geometric
+/// normal's side: shading normals that disagree with the geometry everywhere, as a coarse
+/// mesh's interpolated normals do.
+pub fn tilt_shading_normals(scene: &mut Scene, max_tilt_deg: f32, seed: u32) {
+    let mut rng = seed | 1;
+    let mut rnd = move || {
+        rng ^= rng << 13;
+        rng ^= rng >> 17;
+        rng ^= rng << 5;
+        rng as f32 / u32::MAX as f32
+    };
+    let tan_max = max_tilt_deg.to_radians().tan();
+    for t in &mut scene.triangles {
+        let ng = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]).normalize();
+        let (a, b) = ng.any_orthonormal_pair();
+        t.n = Some([0; 3].map(|_| {
+            let phi = 2.0 * std::f32::consts::PI * rnd();
+            let r = tan_max * rnd().sqrt();
+            (ng + r * (phi.cos() * a + phi.sin() * b)).normalize()
+        }));
+    }
+}
+
+/// A UV sphere of `rings` x `segments` quads (two triangles each, outward geometric
+/// normals) with the sphere's exact normals at its vertices: a coarse tessellation whose
+/// interpolated shading normals differ from the facets' geometric normals by up to about
+/// 180 / rings degrees.
+pub fn smooth_sphere_mesh(center: Vec3, radius: f32, rings: u32, segments: u32, material: u32) -> Vec<Triangle> {
+    use std::f32::consts::PI;
+    let dir = |i: u32, j: u32| {
+        let theta = PI * i as f32 / rings as f32;
+        let phi = 2.0 * PI * j as f32 / segments as f32;
+        Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin())
+    };
+    let mut out = Vec::new();
+    let mut push = |a: Vec3, b: Vec3, c: Vec3| {
+        let ng = (b - a).cross(c - a);
+        if ng.length() > 1e-9 {
+            // Counter-clockwise seen from outside.
+            let [a, b, c] = if ng.dot(a + b + c) > 0.0 { [a, b, c] } else { [a, c, b] };
+            out.push(Triangle { p: [a, b, c].map(|d| center + radius * d), n: Some([a, b, c]), material });
+        }
+    };
+    for i in 0..rings {
+        for j in 0..segments {
+            let (a, b, c, d) = (dir(i, j), dir(i + 1, j), dir(i + 1, j + 1), dir(i, j + 1));
+            push(a, b, c);
+            push(a, c, d);
+        }
+    }
+    out
+}

@@ -18,7 +18,6 @@ pub const INFO: EstimatorInfo = EstimatorInfo {
     radiance: false,
     consistent_only: false,
     default_connect: None,
-    reads_shading_normals: true,
     regenerates_paths: false,
     build,
 };

@@ -87,9 +87,6 @@ pub struct EstimatorInfo {
     /// The default of `--connect` for estimators with vertex connections (None: the
     /// estimator has none and accepts only `Connect::Path`, which means nothing to it).
     pub default_connect: Option<Connect>,
-    /// Its kernels read shading normals (only `el` today; the estimators shade with
-    /// geometric normals).
-    pub reads_shading_normals: bool,
     /// Its kernels trace several paths per invocation (path regeneration).
     pub regenerates_paths: bool,
     /// Builds its passes for a render.
@@ -115,7 +112,6 @@ impl EstimatorInfo {
             radiance: true,
             consistent_only: techniques.vertex_merging,
             default_connect,
-            reads_shading_normals: false,
             regenerates_paths: true,
             build: bidirectional::build,
         }

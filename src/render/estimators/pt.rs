@@ -20,7 +20,6 @@ pub const INFO: EstimatorInfo = EstimatorInfo {
     radiance: true,
     consistent_only: false,
     default_connect: None,
-    reads_shading_normals: false,
     regenerates_paths: true,
     build,
 };

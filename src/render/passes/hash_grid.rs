@@ -23,7 +23,7 @@ use anyhow::{bail, Result};
 use bytemuck::{Pod, Zeroable};
 
 use super::exclusive_scan::{ExclusiveScan, ScanPlan};
-use super::light_subpaths::LIGHT_VERTEX_HALF_BYTES;
+use super::light_subpaths::LIGHT_VERTEX_A_BYTES;
 use super::PassInfo;
 use crate::gpu::{Batch, Bind, Buffer, Gpu, Kernel};
 use crate::render::sizes::{check_sizes, BufferSize};
@@ -143,12 +143,12 @@ impl HashGrid {
         if total_slots > u32::MAX as u64 || buckets == u32::MAX {
             bail!("hash grid: {light_paths} light paths x {slots} slots or {buckets} buckets exceed 32-bit indices");
         }
-        if lv_a.size() < total_slots * LIGHT_VERTEX_HALF_BYTES {
+        if lv_a.size() < total_slots * LIGHT_VERTEX_A_BYTES {
             bail!(
                 "hash grid: buffer {:?} has {} bytes, {light_paths} x {slots} light vertices need {}",
                 lv_a.name(),
                 lv_a.size(),
-                total_slots * LIGHT_VERTEX_HALF_BYTES
+                total_slots * LIGHT_VERTEX_A_BYTES
             );
         }
         if lv_count.size() < 4 * light_paths as u64 {

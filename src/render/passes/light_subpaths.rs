@@ -20,8 +20,20 @@ use crate::render::variants::LightKernel;
 /// The name profiles report.
 pub const NAME: &str = "light subpaths";
 
-/// Bytes of one light vertex in each of `light_vertices_a` and `_b`: two vec4.
-pub const LIGHT_VERTEX_HALF_BYTES: u64 = 32;
+/// Bytes of one light vertex in `light_vertices_a` (position, throughput and two MIS
+/// quantities: two vec4).
+pub const LIGHT_VERTEX_A_BYTES: u64 = 32;
+
+/// Bytes of one light vertex in `light_vertices_b`: (wo, dVM) and (normal, material and
+/// length), and with shading normals a third vec4 holding the shading normal
+/// (glsl/vcm.glsl, LV_B_STRIDE).
+pub fn light_vertex_b_bytes(shading_normals: bool) -> u64 {
+    if shading_normals {
+        48
+    } else {
+        32
+    }
+}
 
 /// The sizes of the light-vertex store and the splat sums.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -41,7 +53,13 @@ pub struct LightVertexPlan {
 }
 
 impl LightVertexPlan {
-    pub fn new(pixels: u32, light_paths: u32, max_path_length: u32, store_vertices: bool) -> LightVertexPlan {
+    pub fn new(
+        pixels: u32,
+        light_paths: u32,
+        max_path_length: u32,
+        store_vertices: bool,
+        shading_normals: bool,
+    ) -> LightVertexPlan {
         let slots_per_path = max_path_length.saturating_sub(1).max(1);
         let capacity = if store_vertices { light_paths as u64 * slots_per_path as u64 } else { 1 };
         let count_entries = if store_vertices { light_paths as u64 } else { 1 };
@@ -50,8 +68,11 @@ impl LightVertexPlan {
             slots_per_path,
             capacity,
             splat: BufferSize::new("splat", (pixels as u64).saturating_mul(24)),
-            vertices_a: BufferSize::new("light_vertices_a", capacity.saturating_mul(LIGHT_VERTEX_HALF_BYTES)),
-            vertices_b: BufferSize::new("light_vertices_b", capacity.saturating_mul(LIGHT_VERTEX_HALF_BYTES)),
+            vertices_a: BufferSize::new("light_vertices_a", capacity.saturating_mul(LIGHT_VERTEX_A_BYTES)),
+            vertices_b: BufferSize::new(
+                "light_vertices_b",
+                capacity.saturating_mul(light_vertex_b_bytes(shading_normals)),
+            ),
             counts: BufferSize::new("light_vertex_counts", count_entries * 4),
         }
     }
