@@ -17,6 +17,14 @@ rotation are the same functions in both.
         # renders tests/env/mitsuba_mean.exr and tests/env/mitsuba_var.exr: the mean and the
         # unbiased per-pixel variance over SEEDS independent renders of SPP samples each,
         # and tests/env/mitsuba.json (what made them). Needs `pip install mitsuba numpy`.
+
+With `--smooth` (both commands) the diffuse sphere is a coarse smooth-shaded mesh instead
+(a UV sphere of 6 x 10 quads with the sphere's normals at its vertices, tests/env/
+smooth_scene.gltf, tests/env/mitsuba_smooth_{mean,var}.exr, mitsuba_smooth.json): the
+comparison for vkvcm's shading normals (docs/numerics.md). Mitsuba gets the same triangles
+as an OBJ file with vertex normals, and a one-sided `diffuse` (wo below the shading
+hemisphere is black in both; a direction that the shading normal allows but the facet does
+not is rejected by vkvcm and, in Mitsuba, enters the closed mesh, where it finds no light).
 """
 import argparse
 import base64
@@ -69,17 +77,62 @@ def look_at_quaternion(eye, target, up):
     return [(m[0][2] + m[2][0]) / s, (m[1][2] + m[2][1]) / s, 0.25 * s, (m[1][0] - m[0][1]) / s]
 
 
-def write_gltf(path):
+# The smooth variant's mesh: rings x segments quads.
+SMOOTH_RINGS, SMOOTH_SEGMENTS = 6, 10
+
+
+def smooth_sphere_triangles(center, radius):
+    """[(positions, normals)] of a UV sphere's triangles, counter-clockwise seen from outside."""
+    def d(i, j):
+        th = math.pi * i / SMOOTH_RINGS
+        ph = 2 * math.pi * j / SMOOTH_SEGMENTS
+        return (math.sin(th) * math.cos(ph), math.cos(th), math.sin(th) * math.sin(ph))
+    sub = lambda a, b: [x - y for x, y in zip(a, b)]
+    cross = lambda a, b: [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    out = []
+    for i in range(SMOOTH_RINGS):
+        for j in range(SMOOTH_SEGMENTS):
+            a, b, c, e = d(i, j), d(i + 1, j), d(i + 1, j + 1), d(i, j + 1)
+            for tri in ((a, b, c), (a, c, e)):
+                n = cross(sub(tri[1], tri[0]), sub(tri[2], tri[0]))
+                if sum(x * x for x in n) < 1e-18:
+                    continue  # a pole's degenerate triangle
+                if sum(x * y for x, y in zip(n, [tri[0][k] + tri[1][k] + tri[2][k] for k in range(3)])) < 0:
+                    tri = (tri[0], tri[2], tri[1])
+                out.append(([[center[k] + radius * v[k] for k in range(3)] for v in tri], [list(v) for v in tri]))
+    return out
+
+
+def write_gltf(path, smooth):
     s = SCENE
     h = s["ground"]["half_size"]
     quad = [(-h, 0, -h), (-h, 0, h), (h, 0, h), (-h, 0, -h), (h, 0, h), (h, 0, -h)]
     blob = b"".join(struct.pack("<3f", *p) for p in quad)
     phong = lambda d=(0, 0, 0), m=(0, 0, 0): {"VKVCM_materials_phong": {"diffuse": list(d), "mirror": list(m), "ior": -1}}
     materials = [{"name": "ground", "extensions": phong(d=s["ground"]["diffuse"])}]
+    meshes = [{"name": "ground", "primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}]
+    accessors = [{"bufferView": 0, "componentType": 5126, "count": 6, "type": "VEC3", "min": [-h, 0, -h], "max": [h, 0, h]}]
+    views = [{"buffer": 0, "byteLength": len(blob)}]
     spheres = []
     for i, sp in enumerate(s["spheres"]):
         materials.append({"name": f"sphere{i}", "extensions": phong(d=sp.get("diffuse", (0, 0, 0)), m=sp.get("mirror", (0, 0, 0)))})
-        spheres.append({"center": sp["center"], "radius": sp["radius"], "material": i + 1})
+        if smooth and "diffuse" in sp:
+            tris = smooth_sphere_triangles(sp["center"], sp["radius"])
+            pos = [p for t in tris for p in t[0]]
+            nrm = [n for t in tris for n in t[1]]
+            for values, name in ((pos, "POSITION"), (nrm, "NORMAL")):
+                chunk = b"".join(struct.pack("<3f", *v) for v in values)
+                views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(chunk)})
+                acc = {"bufferView": len(views) - 1, "componentType": 5126, "count": len(values), "type": "VEC3"}
+                if name == "POSITION":
+                    acc["min"] = [min(v[k] for v in values) for k in range(3)]
+                    acc["max"] = [max(v[k] for v in values) for k in range(3)]
+                accessors.append(acc)
+                blob += chunk
+            n = len(accessors)
+            meshes.append({"name": f"sphere{i}", "primitives": [{"attributes": {"POSITION": n - 2, "NORMAL": n - 1}, "material": i + 1}]})
+        else:
+            spheres.append({"center": sp["center"], "radius": sp["radius"], "material": i + 1})
     cam = s["camera"]
     env = s["environment"]
     doc = {
@@ -87,17 +140,17 @@ def write_gltf(path):
         "extensionsUsed": ["VKVCM_spheres", "VKVCM_materials_phong", "VKVCM_environment"],
         "extensions": {"VKVCM_environment": {"uri": env["file"], "strength": env["strength"], "rotation": env["rotation_deg"]}},
         "scene": 0,
-        "scenes": [{"name": "env_scene", "nodes": [0, 1, 2]}],
+        "scenes": [{"name": "smooth_scene" if smooth else "env_scene", "nodes": list(range(3 + len(meshes) - 1))}],
         "nodes": [
             {"name": "ground", "mesh": 0},
             {"name": "spheres", "extensions": {"VKVCM_spheres": {"spheres": spheres}}},
             {"name": "camera", "camera": 0, "translation": cam["from"], "rotation": look_at_quaternion(cam["from"], cam["to"], cam["up"])},
-        ],
+        ] + [{"name": m["name"], "mesh": k + 1} for k, m in enumerate(meshes[1:])],
         "cameras": [{"type": "perspective", "perspective": {"yfov": math.radians(cam["yfov_deg"]), "znear": 0.01, "aspectRatio": 1.0}}],
-        "meshes": [{"name": "ground", "primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}],
+        "meshes": meshes,
         "materials": materials,
-        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 6, "type": "VEC3", "min": [-h, 0, -h], "max": [h, 0, h]}],
-        "bufferViews": [{"buffer": 0, "byteLength": len(blob)}],
+        "accessors": accessors,
+        "bufferViews": views,
         "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}],
     }
     with open(path, "w") as f:
@@ -106,7 +159,19 @@ def write_gltf(path):
     print(f"wrote {path}")
 
 
-def mitsuba_scene(mi, seed, spp):
+def write_obj(path, tris):
+    with open(path, "w") as f:
+        for pos, nrm in tris:
+            for p in pos:
+                f.write("v %.9g %.9g %.9g\n" % tuple(p))
+            for n in nrm:
+                f.write("vn %.9g %.9g %.9g\n" % tuple(n))
+        for k in range(len(tris)):
+            a = 3 * k + 1
+            f.write(f"f {a}//{a} {a + 1}//{a + 1} {a + 2}//{a + 2}\n")
+
+
+def mitsuba_scene(mi, seed, spp, smooth, tmp):
     s = SCENE
     T = mi.ScalarTransform4f
     cam = s["camera"]
@@ -134,36 +199,46 @@ def mitsuba_scene(mi, seed, spp):
     for i, sp in enumerate(s["spheres"]):
         if "mirror" in sp:
             bsdf = {"type": "conductor", "material": "none", "specular_reflectance": {"type": "rgb", "value": sp["mirror"]}}
+        elif smooth:
+            obj = os.path.join(tmp, f"sphere{i}.obj")
+            write_obj(obj, smooth_sphere_triangles(sp["center"], sp["radius"]))
+            diffuse = {"type": "diffuse", "reflectance": {"type": "rgb", "value": sp["diffuse"]}}
+            d[f"sphere{i}"] = {"type": "obj", "filename": obj, "face_normals": False, "bsdf": diffuse}
+            continue
         else:
             bsdf = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": sp["diffuse"]}}}
         d[f"sphere{i}"] = {"type": "sphere", "center": sp["center"], "radius": sp["radius"], "bsdf": bsdf}
     return d
 
 
-def render_mitsuba(seeds, spp, variant):
+def render_mitsuba(seeds, spp, variant, smooth):
     try:
         import mitsuba as mi
         import numpy as np
     except ImportError:
         sys.exit("mitsuba and numpy are needed: python3 -m venv VENV && VENV/bin/pip install mitsuba numpy")
     mi.set_variant(variant)
+    import tempfile
+    tmp = tempfile.mkdtemp()
+    stem = "mitsuba_smooth" if smooth else "mitsuba"
     images = []
     t0 = time.time()
     for seed in range(seeds):
-        scene = mi.load_dict(mitsuba_scene(mi, seed, spp))
+        scene = mi.load_dict(mitsuba_scene(mi, seed, spp, smooth, tmp))
         images.append(np.array(mi.render(scene, seed=seed, spp=spp), dtype=np.float64))
         print(f"seed {seed}: {time.time() - t0:.0f} s", flush=True)
     stack = np.stack(images)
     mean = stack.mean(axis=0).astype(np.float32)
     var = stack.var(axis=0, ddof=1).astype(np.float32)
-    mi.Bitmap(mean).write(os.path.join(OUT, "mitsuba_mean.exr"))
-    mi.Bitmap(var).write(os.path.join(OUT, "mitsuba_var.exr"))
+    mi.Bitmap(mean).write(os.path.join(OUT, f"{stem}_mean.exr"))
+    mi.Bitmap(var).write(os.path.join(OUT, f"{stem}_var.exr"))
     meta = {"renderer": f"Mitsuba {mi.__version__} {variant}, integrator path", "seeds": seeds, "spp_per_seed": spp,
-            "scene": SCENE, "command": " ".join(sys.argv)}
-    with open(os.path.join(OUT, "mitsuba.json"), "w") as f:
+            "scene": SCENE, "smooth_sphere": [SMOOTH_RINGS, SMOOTH_SEGMENTS] if smooth else None,
+            "command": " ".join(sys.argv)}
+    with open(os.path.join(OUT, f"{stem}.json"), "w") as f:
         json.dump(meta, f, indent=1)
         f.write("\n")
-    print(f"wrote tests/env/mitsuba_mean.exr, mitsuba_var.exr ({seeds} seeds x {spp} spp, {time.time() - t0:.0f} s)")
+    print(f"wrote tests/env/{stem}_mean.exr, {stem}_var.exr ({seeds} seeds x {spp} spp, {time.time() - t0:.0f} s)")
 
 
 def main():
@@ -172,11 +247,12 @@ def main():
     ap.add_argument("--seeds", type=int, default=16)
     ap.add_argument("--spp", type=int, default=256)
     ap.add_argument("--variant", default="scalar_rgb")
+    ap.add_argument("--smooth", action="store_true", help="the diffuse sphere as a smooth-shaded mesh")
     a = ap.parse_args()
     if a.what == "gltf":
-        write_gltf(os.path.join(OUT, "env_scene.gltf"))
+        write_gltf(os.path.join(OUT, "smooth_scene.gltf" if a.smooth else "env_scene.gltf"), a.smooth)
     else:
-        render_mitsuba(a.seeds, a.spp, a.variant)
+        render_mitsuba(a.seeds, a.spp, a.variant, a.smooth)
 
 
 if __name__ == "__main__":

@@ -307,13 +307,28 @@ fn gpu_sampling_follows_the_pdf() {
 /// tests/env/env_scene.gltf for vkvcm and rendered by Mitsuba's `path` integrator as
 /// tests/env/mitsuba_{mean,var}.exr, 16 independent renders of 256 spp): the glTF with its
 /// VKVCM_environment (tests/env/sky.hdr turned 30 degrees) renders the same image, per
-/// pixel (Welch test with the reference's 16 renders as its samples).
+/// pixel (Welch test with the reference's 16 renders as its samples), in pt and vcm.
 #[test]
 fn environment_map_matches_mitsuba() {
+    matches_mitsuba("env_scene.gltf", "mitsuba");
+}
+
+/// The same scene with the diffuse sphere as a coarse smooth-shaded mesh (6 x 10 quads
+/// with the sphere's normals at the vertices: `env_reference.py --smooth`, tests/env/
+/// smooth_scene.gltf and mitsuba_smooth_{mean,var}.exr): vkvcm's shading normals
+/// (docs/numerics.md) against Mitsuba's, per pixel, in pt and in vcm (whose light
+/// subpaths use the adjoint correction).
+#[test]
+fn smooth_shaded_mesh_matches_mitsuba() {
+    matches_mitsuba("smooth_scene.gltf", "mitsuba_smooth");
+}
+
+/// Renders tests/env/`gltf` and compares it with the reference `reference_stem`_{mean,var}.exr.
+fn matches_mitsuba(gltf: &str, reference_stem: &str) {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/env");
-    let scene = vkvcm::scene::load_with(&dir.join("env_scene.gltf"), &Default::default()).unwrap();
-    let (mean, _) = vkvcm::image::read_exr(&dir.join("mitsuba_mean.exr")).unwrap();
-    let (var, _) = vkvcm::image::read_exr(&dir.join("mitsuba_var.exr")).unwrap();
+    let scene = vkvcm::scene::load_with(&dir.join(gltf), &Default::default()).unwrap();
+    let (mean, _) = vkvcm::image::read_exr(&dir.join(format!("{reference_stem}_mean.exr"))).unwrap();
+    let (var, _) = vkvcm::image::read_exr(&dir.join(format!("{reference_stem}_var.exr"))).unwrap();
     let k = 16usize;
     let sum: Vec<[f64; 3]> = mean.data.iter().map(|m| m.map(|x| x as f64 * k as f64)).collect();
     let sum_sq: Vec<[f64; 3]> = mean
@@ -329,10 +344,10 @@ fn environment_map_matches_mitsuba() {
             s.frame.max_path_length = 8;
             s.frame.seed = 5;
             let st = render_stats(&render_with(gpu, &scene, &s), None);
-            welch_test(&st, &reference, ALPHA).unwrap().assert_passed(&format!("env_mitsuba_{}", algo.name()));
+            welch_test(&st, &reference, ALPHA).unwrap().assert_passed(&format!("{reference_stem}_{}", algo.name()));
             let m = |p: &PixelStats| p.mean.iter().map(|c| c[1]).sum::<f64>() / p.mean.len() as f64;
             let (a, b) = (m(&st), m(&reference));
-            eprintln!("{} x {iterations}: image mean (green) {a:.5}, Mitsuba's {b:.5}", algo.name());
+            eprintln!("{gltf}: {} x {iterations}: image mean (green) {a:.5}, Mitsuba's {b:.5}", algo.name());
             assert!((a - b).abs() < 0.005 * b, "{}: image mean {a}, Mitsuba's {b}", algo.name());
         }
     });
