@@ -109,6 +109,27 @@ vec3 ggx_eval(vec3 n, vec3 wo, vec3 wi, float cos_o, float cos_i, vec3 f0, float
     return fr * (d * g2 / (4.0 * cos_o * cos_i));
 }
 
+// Schlick's Fresnel reflectance for F0 = `f0` at cos(theta) = `c`.
+float schlick(float f0, float c) {
+    float s = 1.0 - c;
+    float s2 = s * s;
+    return f0 + (1.0 - f0) * (s2 * s2 * s);
+}
+
+// The weight of a diffuse lobe under a dielectric interface of Schlick F0 `f0` (glTF's
+// metallic/roughness dielectric): (1 - F(cos_o)) (1 - F(cos_i)) / (1 - E_avg), with
+// E_avg = 2 int_0^1 F(mu) mu dmu = f0 + (1 - f0) / 21 the cosine-weighted average of F.
+// The coupled matte-specular weighting of Kelemen and Szirmay-Kalos, "A Microfacet Based
+// Coupled Specular-Matte BRDF Model with Importance Sampling" (Eurographics 2001), with
+// Schlick's F standing in for the specular lobe's albedo: symmetric in wo and wi (so
+// reciprocal, no adjoint), and for a white base the diffuse albedo at wo is exactly
+// 1 - F(cos_o), so diffuse + specular never exceed 1. glTF's reference `fresnel_mix`
+// weights the diffuse lobe by 1 - F(wo.h) instead, which reflects up to 1.7 times what a
+// white smooth surface receives at grazing angles (docs/scene-format.md).
+float diffuse_fresnel_weight(float f0, float cos_o, float cos_i) {
+    return (1.0 - schlick(f0, cos_o)) * (1.0 - schlick(f0, cos_i)) / (1.0 - (f0 + (1.0 - f0) / 21.0));
+}
+
 // `ng`: geometric normal (for a dielectric it must point outwards); `ns`: shading normal
 // on the same side as ng (== ng for flat shading).
 Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light) {
@@ -192,7 +213,12 @@ vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
     vec3 f = vec3(0.0);
 #if HAS_DIFFUSE
     if (b.prob_diffuse > 0.0) {
-        f += m.diffuse.rgb * INV_PI;
+        float f0 = m.mirror.w;
+        if (f0 > 0.0) {
+            f += m.diffuse.rgb * (INV_PI * diffuse_fresnel_weight(f0, cos_o, cos_i));
+        } else {
+            f += m.diffuse.rgb * INV_PI;
+        }
         pdf_fwd += b.prob_diffuse * cos_i * INV_PI;
         pdf_rev += b.prob_diffuse * cos_o * INV_PI;
     }

@@ -18,7 +18,7 @@ use glam::Vec3;
 use vkvcm::gpu::Gpu;
 use vkvcm::image::stats::{welch_test, PixelStats};
 use vkvcm::render::{self, Algorithm, Budget, RenderSettings};
-use vkvcm::scene::{Material, Scene};
+use vkvcm::scene::{Light, Material, Scene, Sphere};
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 24;
@@ -40,8 +40,9 @@ fn stats(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, nee: bool, iterations: 
 }
 
 /// Left half: pure GGX metal, roughness 0.3 (alpha 0.09), coloured F0. Right half:
-/// roughness 0.7 (alpha 0.49) GGX with F0 0.04 over a diffuse base (the importer's
-/// dielectric mapping), so component selection is exercised too.
+/// roughness 0.7 (alpha 0.49) GGX with F0 0.04 over a diffuse base behind a dielectric
+/// interface (the importer's dielectric mapping), so component selection and the diffuse
+/// lobe's Fresnel weight are exercised too.
 fn ggx_floor() -> Scene {
     let metal =
         Material { name: "ggx_metal".into(), glossy: Vec3::new(0.9, 0.7, 0.5), roughness: 0.3, ..Default::default() };
@@ -50,6 +51,7 @@ fn ggx_floor() -> Scene {
         diffuse: Vec3::new(0.2, 0.5, 0.3),
         glossy: Vec3::splat(0.04),
         roughness: 0.7,
+        diffuse_fresnel_f0: 0.04,
         ..Default::default()
     };
     glossy_floor_scene(metal, plastic)
@@ -183,4 +185,93 @@ fn ggx_furnace_conserves_energy() {
             );
         }
     });
+}
+
+/// The glTF metallic/roughness material (`Material::metallic_roughness`, white base) on a
+/// sphere under a uniform white environment, with paths of at most 2 segments: a pixel on
+/// the sphere (convex, so no interreflection) sees the material's directional albedo at
+/// its view direction, the environment's pixels see 1. For every roughness and metallic
+/// value no pixel may exceed 1 (one-sided per-pixel test: mean <= 1 + z se with the
+/// Šidák-corrected z), and a smooth white dielectric (roughness 0, metallic 0) reflects
+/// exactly what it receives: its GGX lobe reflects F(cos_o) and the diffuse lobe under
+/// the interface 1 - F(cos_o) (glsl/bsdf.glsl, diffuse_fresnel_weight), so every pixel is
+/// 1 (two-sided per-pixel test). BPT must agree with PT per pixel (the layered lobe's
+/// pdfs in both directions). Sabotage: with glTF's `fresnel_mix` weighting (1 - F(wo.h))
+/// a roughness-0.3 dielectric pixel reflects 1.126 +- 0.026, without any weighting (a
+/// plain sum of the lobes) a smooth one 1.102 +- 0.021: both fail the bound.
+#[test]
+fn gltf_material_never_reflects_more_than_it_receives() {
+    let (w, h) = (24u32, 24u32);
+    with_gpu(|gpu| {
+        for (metallic, roughness) in [(0.0f32, 0.0f32), (0.0, 0.3), (0.0, 1.0), (0.5, 0.5), (1.0, 0.3), (1.0, 1.0)] {
+            let mut mat = Material::metallic_roughness(Vec3::ONE, metallic, roughness);
+            mat.name = format!("white m {metallic} r {roughness}");
+            let cam = camera(Vec3::new(0.0, 0.0, 3.2), Vec3::new(0.0, 0.0, -1.0), Vec3::Y, 45.0);
+            let mut sc = scene("gltf furnace", vec![], vec![mat], vec![Light::Background { radiance: Vec3::ONE }], cam);
+            sc.spheres = vec![Sphere { center: Vec3::ZERO, radius: 1.0, material: 0 }];
+            let render = |algo: Algorithm, iterations: u64| {
+                let mut s = RenderSettings::new(algo, w, h, Budget::Iterations(iterations));
+                s.frame.max_path_length = 2;
+                s.frame.seed = 41 + algo as u32;
+                render_one(gpu, &sc, &s)
+            };
+            let run = |algo: Algorithm, iterations: u64| render_stats(&render(algo, iterations), None);
+            let pt_out = render(Algorithm::Pt, 512);
+            let pt = render_stats(&pt_out, None);
+            let label = format!("metallic {metallic}, roughness {roughness}");
+            let z = vkvcm::image::stats::inverse_normal_cdf(1.0 - vkvcm::image::stats::sidak(ALPHA, 3 * pt.mean.len()));
+            let mut worst = 0.0f64;
+            for (m, v) in pt.mean.iter().zip(&pt.variance) {
+                for c in 0..3 {
+                    let se = (v[c] / pt.count as f64).sqrt();
+                    worst = worst.max(m[c]);
+                    assert!(m[c] <= 1.0 + z * se + 1e-6, "{label}: a pixel reflects {} +- {se} > 1", m[c]);
+                }
+            }
+            eprintln!("{label}: brightest pixel {worst:.4}, image mean {:.4}", image_mean(&pt));
+            if metallic == 0.0 && roughness == 0.0 {
+                // Pixels that see the sphere at grazing angles (cos < 0.2) are left out:
+                // there the GGX lobe's alpha floor of 1e-3 makes its shadowing lose energy.
+                let mask = not_grazing_mask(&sc.camera, w, h, 0.2);
+                let kept = mask.iter().filter(|&&m| m).count();
+                assert!(kept > (w * h / 2) as usize, "mask keeps {kept} pixels");
+                let mut expected = vkvcm::image::Image::filled(w, h, [1.0; 3]);
+                for (e, &m) in expected.data.iter_mut().zip(&mask) {
+                    if !m {
+                        *e = [0.0; 3];
+                    }
+                }
+                let masked = render_stats(&pt_out, Some(&mask));
+                let t = vkvcm::image::stats::one_sample_test(&masked, &expected, ALPHA).unwrap();
+                assert!(t.passed(), "{label}: a smooth white dielectric must reflect everything: {t}");
+            }
+            let t = welch_test(&run(Algorithm::Bpt, 256), &pt, ALPHA).unwrap();
+            assert!(t.passed(), "{label}: BPT vs PT: {t}");
+        }
+    });
+}
+
+/// Pixels of a `w` x `h` frame of `cam` whose four corners either all miss the unit sphere
+/// at the origin or all hit it at |cos(view ray, normal)| >= `min_cos`.
+fn not_grazing_mask(cam: &vkvcm::scene::Camera, w: u32, h: u32, min_cos: f32) -> Vec<bool> {
+    let plane = 0.5 * h as f32 / (0.5 * cam.yfov).tan();
+    let right = cam.forward.cross(cam.up).normalize();
+    let up = right.cross(cam.forward);
+    // None: the ray misses; Some(cos) at the hit.
+    let corner = |x: f32, y: f32| -> Option<f32> {
+        let d = (cam.forward * plane + right * (x - 0.5 * w as f32) + up * (0.5 * h as f32 - y)).normalize();
+        let b = cam.position.dot(d);
+        let disc = b * b - (cam.position.length_squared() - 1.0);
+        (disc >= 0.0).then(|| {
+            let p = cam.position + d * (-b - disc.sqrt());
+            -d.dot(p.normalize())
+        })
+    };
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32, (i / w) as f32);
+            let c = [corner(x, y), corner(x + 1.0, y), corner(x, y + 1.0), corner(x + 1.0, y + 1.0)];
+            c.iter().all(|c| c.is_none()) || c.iter().all(|c| c.is_some_and(|v| v >= min_cos))
+        })
+        .collect()
 }

@@ -22,7 +22,8 @@ pub struct GpuMaterial {
     pub diffuse: [f32; 4],
     /// rgb: Phong reflectance; w: index of refraction (< 0: not a dielectric).
     pub phong: [f32; 4],
-    /// rgb: specular (mirror) reflectance; w: unused.
+    /// rgb: specular (mirror) reflectance; w: the diffuse lobe's Fresnel F0
+    /// (`Material::diffuse_fresnel_f0`).
     pub mirror: [f32; 4],
     /// rgb: emitted radiance; w: unused.
     pub emission: [f32; 4],

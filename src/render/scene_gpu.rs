@@ -237,7 +237,7 @@ impl SceneGpu {
             .map(|m| GpuMaterial {
                 diffuse: v4(m.diffuse, m.phong_exponent),
                 phong: v4(m.phong, m.ior),
-                mirror: v4(m.mirror, 0.0),
+                mirror: v4(m.mirror, m.diffuse_fresnel_f0),
                 emission: v4(m.emission, 0.0),
                 glossy: v4(m.glossy, (m.roughness * m.roughness).max(MIN_GGX_ALPHA)),
             })

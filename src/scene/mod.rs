@@ -46,6 +46,10 @@ pub struct Material {
     pub glossy: Vec3,
     /// Perceptual roughness of the GGX lobe; its alpha is roughness^2 (at least 1e-3).
     pub roughness: f32,
+    /// Schlick F0 of a dielectric interface over the diffuse lobe (glTF metallic/roughness:
+    /// 0.04), which then reflects only what the interface transmits: it is weighted by
+    /// (1 - F(cos_o)) (1 - F(cos_i)) / (1 - E_avg), glsl/bsdf.glsl. 0: plain Lambert.
+    pub diffuse_fresnel_f0: f32,
 }
 
 impl Default for Material {
@@ -60,7 +64,30 @@ impl Default for Material {
             emission: Vec3::ZERO,
             glossy: Vec3::ZERO,
             roughness: 1.0,
+            diffuse_fresnel_f0: 0.0,
         }
+    }
+}
+
+/// Specular reflectance of dielectrics at normal incidence in glTF's metallic/roughness
+/// model (its fixed F0).
+pub const GLTF_DIELECTRIC_F0: f32 = 0.04;
+
+impl Material {
+    /// glTF 2.0's metallic/roughness material (Appendix B) in vkvcm's model: a GGX lobe
+    /// whose Schlick F0 is mix(0.04, base, metallic) (the dielectric's and the metal's
+    /// Fresnel terms are the same Schlick form, so their mix is one lobe), over a diffuse
+    /// lobe (1 - metallic) base behind a dielectric interface of F0 0.04. A metal with
+    /// roughness 0 is a perfect mirror of colour `base`. docs/scene-format.md says what
+    /// differs from the specification's `fresnel_mix` and why.
+    pub fn metallic_roughness(base: Vec3, metallic: f32, roughness: f32) -> Material {
+        if metallic >= 1.0 && roughness <= 0.0 {
+            return Material { mirror: base, ..Material::default() };
+        }
+        let diffuse = base * (1.0 - metallic);
+        let glossy = Vec3::splat(GLTF_DIELECTRIC_F0).lerp(base, metallic);
+        let diffuse_fresnel_f0 = if diffuse == Vec3::ZERO { 0.0 } else { GLTF_DIELECTRIC_F0 };
+        Material { diffuse, glossy, roughness, diffuse_fresnel_f0, ..Material::default() }
     }
 }
 

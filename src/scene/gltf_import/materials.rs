@@ -8,10 +8,6 @@ use crate::scene::Material;
 use anyhow::{bail, Result};
 use glam::Vec3;
 
-/// Specular reflectance of dielectrics at normal incidence used by the
-/// metallic/roughness mapping (glTF's fixed F0).
-const DIELECTRIC_F0: f32 = 0.04;
-
 impl Importer<'_> {
     /// Index of glTF's default material (for primitives and spheres without one), added
     /// to the scene's materials on first use.
@@ -20,7 +16,7 @@ impl Importer<'_> {
             return i;
         }
         // glTF's default material: baseColor 1, metallic 1, roughness 1.
-        let mut m = metallic_roughness(Vec3::ONE, 1.0, 1.0);
+        let mut m = Material::metallic_roughness(Vec3::ONE, 1.0, 1.0);
         m.name = "gltf-default".into();
         let i = self.scene.materials.len() as u32;
         self.scene.materials.push(m);
@@ -89,6 +85,7 @@ impl Importer<'_> {
                 emission: Vec3::ZERO,
                 glossy: Vec3::ZERO,
                 roughness: 1.0,
+                diffuse_fresnel_f0: 0.0,
             }
         } else if let Some(t) = m.transmission().filter(|t| t.transmission_factor() > 0.0) {
             if t.transmission_factor() < 1.0 || roughness > 0.0 || base != Vec3::ONE {
@@ -101,7 +98,7 @@ impl Importer<'_> {
             }
             Material { mirror: Vec3::ONE, ior, ..Material::default() }
         } else {
-            metallic_roughness(base, metallic, roughness)
+            Material::metallic_roughness(base, metallic, roughness)
         };
         let strength = m.emissive_strength().unwrap_or(1.0);
         let ef = m.emissive_factor();
@@ -114,16 +111,6 @@ impl Importer<'_> {
     }
 }
 
-/// The metallic/roughness -> diffuse + GGX (+ mirror) mapping of docs/scene-format.md.
-fn metallic_roughness(base: Vec3, metallic: f32, roughness: f32) -> Material {
-    if metallic >= 1.0 && roughness <= 0.0 {
-        return Material { mirror: base, ..Material::default() };
-    }
-    let diffuse = base * (1.0 - metallic);
-    let glossy = Vec3::splat(DIELECTRIC_F0).lerp(base, metallic);
-    Material { diffuse, glossy, roughness, ..Material::default() }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -131,20 +118,21 @@ mod tests {
     #[test]
     fn metallic_roughness_mapping() {
         let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-6;
-        let m = metallic_roughness(Vec3::splat(0.5), 0.0, 1.0);
+        let m = Material::metallic_roughness(Vec3::splat(0.5), 0.0, 1.0);
         assert!(close(m.diffuse, Vec3::splat(0.5)));
         assert!(close(m.glossy, Vec3::splat(0.04)));
+        assert_eq!(m.diffuse_fresnel_f0, 0.04);
         assert_eq!(m.roughness, 1.0);
         assert_eq!(m.phong, Vec3::ZERO);
-        let m = metallic_roughness(Vec3::new(1.0, 0.5, 0.25), 1.0, 0.0);
+        let m = Material::metallic_roughness(Vec3::new(1.0, 0.5, 0.25), 1.0, 0.0);
         assert_eq!(m.mirror, Vec3::new(1.0, 0.5, 0.25));
         assert_eq!(m.diffuse, Vec3::ZERO);
         assert_eq!(m.glossy, Vec3::ZERO);
-        let m = metallic_roughness(Vec3::new(1.0, 0.5, 0.25), 1.0, 0.5);
+        let m = Material::metallic_roughness(Vec3::new(1.0, 0.5, 0.25), 1.0, 0.5);
         assert!(close(m.glossy, Vec3::new(1.0, 0.5, 0.25)));
         assert_eq!(m.diffuse, Vec3::ZERO);
         assert_eq!(m.roughness, 0.5);
-        let m = metallic_roughness(Vec3::ONE, 0.5, 0.0);
+        let m = Material::metallic_roughness(Vec3::ONE, 0.5, 0.0);
         assert!(close(m.diffuse, Vec3::splat(0.5)));
         assert!(close(m.glossy, Vec3::splat(0.52)));
         assert_eq!(m.mirror, Vec3::ZERO);
