@@ -177,7 +177,7 @@ fn non_finite_prims_are_skipped() {
 fn coincident_prims_and_depth_bound() {
     // Many identical triangles (no SAH split possible) and a geometric sequence of
     // positions (SAH would peel one prim per level): depth must stay within MAX_DEPTH.
-    let t = Triangle { p: [Vec3::ZERO, Vec3::X, Vec3::Y], n: None, material: 0 };
+    let t = Triangle { p: [Vec3::ZERO, Vec3::X, Vec3::Y], n: None, material: 0, attributes: None };
     let mut tris = vec![t; 5000];
     for i in 0..20_000 {
         let x = 1.5f32.powi(i % 200) * 1e-20;
@@ -186,6 +186,7 @@ fn coincident_prims_and_depth_bound() {
             p: [Vec3::new(x, 0.0, 0.0), Vec3::new(x + s, 0.0, 0.0), Vec3::new(x, s, (i / 200) as f32)],
             n: None,
             material: 1,
+            attributes: None,
         });
     }
     let bvh = build(&tris, &[]);
@@ -237,7 +238,7 @@ fn assert_same_bvh(a: &Bvh, b: &Bvh, what: &str) {
 fn determinism_cases() -> Vec<(&'static str, Vec<Triangle>, Vec<Sphere>)> {
     let mut r = rng(30);
     let s = test_scene(5, 100_000, 1000);
-    let same = Triangle { p: [Vec3::ZERO, Vec3::X, Vec3::Y], n: None, material: 0 };
+    let same = Triangle { p: [Vec3::ZERO, Vec3::X, Vec3::Y], n: None, material: 0, attributes: None };
     let mut depth_guard = vec![same.clone(); 5000];
     for i in 0..20_000 {
         let x = 1.5f32.powi(i % 200) * 1e-20;
@@ -245,6 +246,7 @@ fn determinism_cases() -> Vec<(&'static str, Vec<Triangle>, Vec<Sphere>)> {
             p: [Vec3::new(x, 0.0, 0.0), Vec3::new(x * 1.01, 0.0, 0.0), Vec3::new(x, x * 0.01, (i / 200) as f32)],
             n: None,
             material: 1,
+            attributes: None,
         });
     }
     let one_sphere = vec![Sphere { center: Vec3::ONE, radius: 0.5, material: 3 }];

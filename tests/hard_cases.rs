@@ -96,13 +96,18 @@ fn sliver_box(h: f32) -> Scene {
             for k in 0..SPLITS {
                 let p = a.lerp(b, k as f32 / SPLITS as f32);
                 let q = a.lerp(b, (k + 1) as f32 / SPLITS as f32);
-                tris.push(Triangle { p: [c, p, q], n: None, material: 0 });
+                tris.push(Triangle { p: [c, p, q], n: None, material: 0, attributes: None });
             }
         }
     }
     let floor: Vec<Triangle> = inward_box(h, 0).into_iter().skip(8).take(2).collect();
     tris.extend(floor);
-    tris.push(Triangle { p: [Vec3::splat(0.1 * h), Vec3::splat(0.2 * h), Vec3::splat(0.3 * h)], n: None, material: 0 });
+    tris.push(Triangle {
+        p: [Vec3::splat(0.1 * h), Vec3::splat(0.2 * h), Vec3::splat(0.3 * h)],
+        n: None,
+        material: 0,
+        attributes: None,
+    });
     let lights = vec![
         Light::Background { radiance: Vec3::ONE },
         Light::Point { position: Vec3::new(0.3, 2.5, 0.2) * h, intensity: Vec3::splat(10.0 * h * h) },
@@ -127,8 +132,8 @@ fn tiny_bright_emitter_is_finite_and_unbiased() {
     let (y, s) = (0.999f32, side / 2.0);
     // Facing down (-y): counter-clockwise seen from below.
     let v = Vec3::new;
-    tris.push(Triangle { p: [v(-s, y, -s), v(s, y, -s), v(s, y, s)], n: None, material: 1 });
-    tris.push(Triangle { p: [v(-s, y, -s), v(s, y, s), v(-s, y, s)], n: None, material: 1 });
+    tris.push(Triangle { p: [v(-s, y, -s), v(s, y, -s), v(s, y, s)], n: None, material: 1, attributes: None });
+    tris.push(Triangle { p: [v(-s, y, -s), v(s, y, s), v(-s, y, s)], n: None, material: 1, attributes: None });
     for t in &tris[12..] {
         assert!((t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]).y < 0.0, "emitter must face down");
     }

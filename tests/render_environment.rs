@@ -66,6 +66,7 @@ fn furnace_scene(albedo: f32, light: Light) -> Scene {
         lights: vec![light],
         camera: Camera::looking_at(Vec3::new(0.3, 0.5, 3.0), Vec3::ZERO, Vec3::Y, 45f32.to_radians()).unwrap(),
         report: LoadReport::default(),
+        images: vec![],
     }
 }
 

@@ -62,7 +62,7 @@ impl Pcg32 {
 
 /// An indexed mesh turned into triangles (shared vertices are bit-identical).
 fn triangles_from(verts: &[Vec3], faces: &[[u32; 3]], material: u32) -> Vec<Triangle> {
-    faces.iter().map(|f| Triangle { p: f.map(|i| verts[i as usize]), n: None, material }).collect()
+    faces.iter().map(|f| Triangle { p: f.map(|i| verts[i as usize]), n: None, material, attributes: None }).collect()
 }
 
 /// Icosphere: an icosahedron subdivided `subdivisions` times, 20 * 4^s triangles, closed
@@ -189,7 +189,7 @@ pub fn cube_sphere(n: u32, displace: impl Fn(Vec3) -> f32, material: u32) -> Vec
                     let quad =
                         if sign > 0 { [[p00, p10, p11], [p00, p11, p01]] } else { [[p00, p11, p10], [p00, p01, p11]] };
                     for p in quad {
-                        tris.push(Triangle { p, n: None, material });
+                        tris.push(Triangle { p, n: None, material, attributes: None });
                     }
                 }
             }
@@ -253,8 +253,8 @@ pub const BENCH_SCENES: &[&str] = &["cornell", "spheres", "displaced"];
 pub fn scene_cornell() -> BenchScene {
     let mut tris = Vec::new();
     let mut quad = |a: Vec3, b: Vec3, c: Vec3, d: Vec3, m: u32| {
-        tris.push(Triangle { p: [a, b, c], n: None, material: m });
-        tris.push(Triangle { p: [a, c, d], n: None, material: m });
+        tris.push(Triangle { p: [a, b, c], n: None, material: m, attributes: None });
+        tris.push(Triangle { p: [a, c, d], n: None, material: m, attributes: None });
     };
     let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
     quad(v(-1., -1., -1.), v(1., -1., -1.), v(1., -1., 1.), v(-1., -1., 1.), 0); // floor

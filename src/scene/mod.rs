@@ -3,17 +3,96 @@
 //! Units and conventions: right-handed, y-up (glTF). Radiometric quantities are linear
 //! RGB. Every light's meaning is stated on its variant.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3, Vec4};
 
 pub use environment::{EnvironmentLight, EnvironmentMap};
 
 /// A triangle in world space.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Triangle {
     pub p: [Vec3; 3],
     /// Per-vertex shading normals (world space, unit length) when the source gives them.
     pub n: Option<[Vec3; 3]>,
     pub material: u32,
+    /// Texture coordinates and colours of its vertices, when the source gives any (boxed:
+    /// most triangles of most scenes have none, and a scene holds millions of triangles).
+    pub attributes: Option<Box<VertexAttributes>>,
+}
+
+/// Per-vertex attributes of a triangle beyond position and normal.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct VertexAttributes {
+    /// TEXCOORD_0 and TEXCOORD_1 (glTF: (0, 0) is the image's top-left corner, u to the
+    /// right, v down).
+    pub uv: [Option<[Vec2; 3]>; 2],
+    /// COLOR_0, linear RGBA (it multiplies the base colour).
+    pub color: Option<[Vec4; 3]>,
+}
+
+/// A decoded texture image: RGBA8 texels, row by row from the top-left corner. The RGB
+/// of a base-colour texture is sRGB-encoded (decoded per texel by the kernels), alpha is
+/// linear.
+#[derive(Clone, PartialEq)]
+pub struct TextureImage {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub texels: Vec<[u8; 4]>,
+}
+
+impl std::fmt::Debug for TextureImage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "TextureImage({:?}, {}x{})", self.name, self.width, self.height)
+    }
+}
+
+/// How texture coordinates outside [0, 1] map into the image (glTF sampler wrap modes).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Wrap {
+    #[default]
+    Repeat,
+    ClampToEdge,
+    MirroredRepeat,
+}
+
+/// Texel filtering: the nearest texel, or bilinear between the four nearest (no mip-maps:
+/// a path tracer's pixel samples average the texture over the pixel's footprint).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Filter {
+    Nearest,
+    #[default]
+    Linear,
+}
+
+/// A texture as a material uses it: an image, its sampler, which texture coordinates
+/// and their KHR_texture_transform.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureRef {
+    /// Index into `Scene::images`.
+    pub image: u32,
+    pub wrap_s: Wrap,
+    pub wrap_t: Wrap,
+    pub filter: Filter,
+    /// 0: TEXCOORD_0, 1: TEXCOORD_1.
+    pub tex_coord: u32,
+    /// uv' = (row 0 . (u, v, 1), row 1 . (u, v, 1)) (KHR_texture_transform's matrix;
+    /// identity without it).
+    pub transform: [[f32; 3]; 2],
+}
+
+impl TextureRef {
+    pub const IDENTITY: [[f32; 3]; 2] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+}
+
+/// glTF's alpha modes: how a material's alpha (base colour factor x texture x vertex
+/// colour) makes it transparent.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum AlphaMode {
+    /// Alpha is ignored.
+    #[default]
+    Opaque,
+    /// A cut-out: where alpha < cutoff the surface is not there, for every ray.
+    Mask { cutoff: f32 },
 }
 
 /// An analytic sphere (glTF extension `VKVCM_spheres`).
@@ -46,6 +125,18 @@ pub struct Material {
     pub glossy: Vec3,
     /// Perceptual roughness of the GGX lobe; its alpha is roughness^2 (at least 1e-3).
     pub roughness: f32,
+    /// The base-colour texture. Where a triangle has texture coordinates or vertex
+    /// colours, its tint (the texel's linear colour, or white without a texture, times the
+    /// vertex colour) multiplies `diffuse` and `mirror`, and the GGX lobe's F0 becomes
+    /// `glossy_untinted + (glossy - glossy_untinted) x tint`.
+    pub base_color_texture: Option<TextureRef>,
+    /// The part of `glossy` the base colour does not tint (glTF: 0.04 (1 - metallic),
+    /// the dielectric's reflectance).
+    pub glossy_untinted: f32,
+    /// Opacity factor (glTF's baseColorFactor alpha), times the texel's and the vertex
+    /// colour's alpha; used by `alpha_mode`.
+    pub alpha: f32,
+    pub alpha_mode: AlphaMode,
     /// Schlick F0 of a dielectric interface over the diffuse lobe (glTF metallic/roughness:
     /// 0.04), which then reflects only what the interface transmits: it is weighted by
     /// (1 - F(cos_o)) (1 - F(cos_i)) / (1 - E_avg), glsl/bsdf.glsl. 0: plain Lambert.
@@ -65,6 +156,10 @@ impl Default for Material {
             glossy: Vec3::ZERO,
             roughness: 1.0,
             diffuse_fresnel_f0: 0.0,
+            base_color_texture: None,
+            glossy_untinted: 0.0,
+            alpha: 1.0,
+            alpha_mode: AlphaMode::Opaque,
         }
     }
 }
@@ -87,7 +182,8 @@ impl Material {
         let diffuse = base * (1.0 - metallic);
         let glossy = Vec3::splat(GLTF_DIELECTRIC_F0).lerp(base, metallic);
         let diffuse_fresnel_f0 = if diffuse == Vec3::ZERO { 0.0 } else { GLTF_DIELECTRIC_F0 };
-        Material { diffuse, glossy, roughness, diffuse_fresnel_f0, ..Material::default() }
+        let glossy_untinted = GLTF_DIELECTRIC_F0 * (1.0 - metallic);
+        Material { diffuse, glossy, roughness, diffuse_fresnel_f0, glossy_untinted, ..Material::default() }
     }
 }
 
@@ -158,6 +254,8 @@ pub struct Scene {
     pub lights: Vec<Light>,
     pub camera: Camera,
     pub report: LoadReport,
+    /// Texture images, referenced by `Material::base_color_texture`.
+    pub images: Vec<TextureImage>,
 }
 
 impl Scene {

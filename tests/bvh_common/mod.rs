@@ -36,6 +36,7 @@ pub fn triangle_soup(r: &mut Pcg64, n: usize) -> Vec<Triangle> {
                 p: [c + rand_vec(r, -s, s), c + rand_vec(r, -s, s), c + rand_vec(r, -s, s)],
                 n: None,
                 material: (i % 7) as u32,
+                attributes: None,
             }
         })
         .collect()
@@ -67,8 +68,8 @@ pub fn triangle_cube(center: Vec3, half: f32) -> Vec<Triangle> {
     let quads = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [3, 7, 6, 2], [0, 4, 7, 3], [1, 2, 6, 5]];
     let mut t = Vec::new();
     for (k, q) in quads.iter().enumerate() {
-        t.push(Triangle { p: [c[q[0]], c[q[1]], c[q[2]]], n: None, material: k as u32 });
-        t.push(Triangle { p: [c[q[0]], c[q[2]], c[q[3]]], n: None, material: k as u32 });
+        t.push(Triangle { p: [c[q[0]], c[q[1]], c[q[2]]], n: None, material: k as u32, attributes: None });
+        t.push(Triangle { p: [c[q[0]], c[q[2]], c[q[3]]], n: None, material: k as u32, attributes: None });
     }
     t
 }

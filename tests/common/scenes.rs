@@ -18,8 +18,8 @@ pub fn inward_box(h: f32, material: u32) -> Vec<Triangle> {
     ];
     let mut out = Vec::new();
     for f in faces {
-        out.push(Triangle { p: [f[0], f[1], f[2]], n: None, material });
-        out.push(Triangle { p: [f[0], f[2], f[3]], n: None, material });
+        out.push(Triangle { p: [f[0], f[1], f[2]], n: None, material, attributes: None });
+        out.push(Triangle { p: [f[0], f[2], f[3]], n: None, material, attributes: None });
     }
     for t in &out {
         let n = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]);
@@ -42,6 +42,7 @@ pub fn scene(name: &str, triangles: Vec<Triangle>, materials: Vec<Material>, lig
         lights,
         camera: cam,
         report: LoadReport::default(),
+        images: vec![],
     }
 }
 
@@ -69,7 +70,10 @@ pub fn glossy_floor_scene(left: Material, right: Material) -> Scene {
     };
     let lamp = Material { name: "lamp".into(), emission: Vec3::splat(2.0), ..Default::default() };
     let quad = |a: Vec3, b: Vec3, c: Vec3, d: Vec3, material: u32| {
-        vec![Triangle { p: [a, b, c], n: None, material }, Triangle { p: [a, c, d], n: None, material }]
+        vec![
+            Triangle { p: [a, b, c], n: None, material, attributes: None },
+            Triangle { p: [a, c, d], n: None, material, attributes: None },
+        ]
     };
     let v = Vec3::new;
     let mut tris = Vec::new();
@@ -93,8 +97,8 @@ pub fn environment_scene(map: vkvcm::scene::EnvironmentMap, rotation_deg: f32) -
     use vkvcm::scene::{EnvironmentLight, Sphere};
     let c = |x: f32, z: f32| Vec3::new(x, 0.0, z);
     let triangles = vec![
-        Triangle { p: [c(-2.0, -2.0), c(-2.0, 2.0), c(2.0, 2.0)], n: None, material: 0 },
-        Triangle { p: [c(-2.0, -2.0), c(2.0, 2.0), c(2.0, -2.0)], n: None, material: 0 },
+        Triangle { p: [c(-2.0, -2.0), c(-2.0, 2.0), c(2.0, 2.0)], n: None, material: 0, attributes: None },
+        Triangle { p: [c(-2.0, -2.0), c(2.0, 2.0), c(2.0, -2.0)], n: None, material: 0, attributes: None },
     ];
     let materials = vec![
         Material { name: "ground".into(), diffuse: Vec3::splat(0.5), ..Default::default() },
@@ -175,7 +179,12 @@ pub fn smooth_sphere_mesh(center: Vec3, radius: f32, rings: u32, segments: u32, 
         if ng.length() > 1e-9 {
             // Counter-clockwise seen from outside.
             let [a, b, c] = if ng.dot(a + b + c) > 0.0 { [a, b, c] } else { [a, c, b] };
-            out.push(Triangle { p: [a, b, c].map(|d| center + radius * d), n: Some([a, b, c]), material });
+            out.push(Triangle {
+                p: [a, b, c].map(|d| center + radius * d),
+                n: Some([a, b, c]),
+                material,
+                attributes: None,
+            });
         }
     };
     for i in 0..rings {

@@ -139,7 +139,7 @@ impl Importer<'_> {
                         n = None;
                     }
                 }
-                self.scene.triangles.push(Triangle { p, n, material });
+                self.scene.triangles.push(Triangle { p, n, material, attributes: None });
             }
         }
         Ok(())

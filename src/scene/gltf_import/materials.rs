@@ -85,7 +85,7 @@ impl Importer<'_> {
                 emission: Vec3::ZERO,
                 glossy: Vec3::ZERO,
                 roughness: 1.0,
-                diffuse_fresnel_f0: 0.0,
+                ..Material::default()
             }
         } else if let Some(t) = m.transmission().filter(|t| t.transmission_factor() > 0.0) {
             if t.transmission_factor() < 1.0 || roughness > 0.0 || base != Vec3::ONE {

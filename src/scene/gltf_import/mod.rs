@@ -110,6 +110,7 @@ fn import_bytes(bytes: &[u8], base_dir: &Path, name: String, options: &LoadOptio
                 yfov: std::f32::consts::FRAC_PI_4,
             },
             report: LoadReport::default(),
+            images: Vec::new(),
         },
         default_material: None,
         cameras: Vec::new(),
