@@ -72,11 +72,15 @@ fn point_light_on_plane_matches_analytic_irradiance() {
         vkvcm::scene::Triangle {
             p: [Vec3::new(-s, -s, 0.), Vec3::new(s, -s, 0.), Vec3::new(s, s, 0.)],
             n: None,
-            material: 0,, attributes: None },
+            material: 0,
+            attributes: None,
+        },
         vkvcm::scene::Triangle {
             p: [Vec3::new(-s, -s, 0.), Vec3::new(s, s, 0.), Vec3::new(-s, s, 0.)],
             n: None,
-            material: 0,, attributes: None },
+            material: 0,
+            attributes: None,
+        },
     ];
     let cam_pos = Vec3::new(0.0, 0.0, 2.0);
     let cam = camera(cam_pos, -Vec3::Z, Vec3::Y, 60.0);
