@@ -696,3 +696,188 @@ fn missing_position_bounds_are_tolerated_with_a_warning() {
     // Present bounds give no such warning.
     assert!(!Doc::triangle().load().unwrap().report.warnings.iter().any(|w| w.contains("min/max")));
 }
+
+// --- Sparse accessors, KHR_mesh_quantization, morph targets, skins, scenes (issue #18) ---
+
+fn khronos(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/khronos").join(format!("{name}.gltf"))
+}
+
+/// Every triangle's vertices, in order.
+fn vertices(s: &Scene) -> Vec<[Vec3; 3]> {
+    s.triangles.iter().map(|t| t.p).collect()
+}
+
+impl Doc {
+    /// Appends `bytes` to the buffer (4-byte aligned) as a new buffer view; its index.
+    fn push_view(&mut self, bytes: &[u8], stride: Option<usize>) -> usize {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        let mut v = json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()});
+        if let Some(s) = stride {
+            v["byteStride"] = json!(s);
+        }
+        self.bin.extend_from_slice(bytes);
+        self.json["buffers"][0]["byteLength"] = json!(self.bin.len());
+        let views = self.json["bufferViews"].as_array_mut().unwrap();
+        views.push(v);
+        views.len() - 1
+    }
+
+    /// Appends accessor `a`; its index.
+    fn push_accessor(&mut self, a: Value) -> usize {
+        let accs = self.json["accessors"].as_array_mut().unwrap();
+        accs.push(a);
+        accs.len() - 1
+    }
+
+    fn prim(&mut self) -> &mut Value {
+        &mut self.json["meshes"][0]["primitives"][0]
+    }
+}
+
+fn f32_bytes(v: &[f32]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+fn u16_bytes(v: &[u16]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+/// Khronos SimpleSparseAccessor: 14 vertices on two rows, (i, 0, 0) and (i - 7, 1, 0),
+/// of which the sparse substitution moves vertices 8, 10 and 12 to (1, 2, 0), (3, 3, 0)
+/// and (5, 4, 0) (the values in its buffer, bytes 240..284).
+#[test]
+fn sparse_accessor_khronos_sample() {
+    let s = load(&khronos("SimpleSparseAccessor")).unwrap();
+    let mut v: Vec<Vec3> = (0..14)
+        .map(|i| if i < 7 { Vec3::new(i as f32, 0.0, 0.0) } else { Vec3::new(i as f32 - 7.0, 1.0, 0.0) })
+        .collect();
+    v[8] = Vec3::new(1.0, 2.0, 0.0);
+    v[10] = Vec3::new(3.0, 3.0, 0.0);
+    v[12] = Vec3::new(5.0, 4.0, 0.0);
+    let idx = [
+        0, 8, 7, 0, 1, 8, 1, 9, 8, 1, 2, 9, 2, 10, 9, 2, 3, 10, 3, 11, 10, 3, 4, 11, 4, 12, 11, 4, 5, 12, 5, 13, 12, 5,
+        6, 13,
+    ];
+    let want: Vec<[Vec3; 3]> = idx.chunks(3).map(|c| [v[c[0]], v[c[1]], v[c[2]]]).collect();
+    assert_eq!(vertices(&s), want);
+    assert!(!s.report.warnings.iter().any(|w| w.contains("sparse")), "{:?}", s.report.warnings);
+}
+
+/// Sparse POSITION without a bufferView (zeros, then the substitution), sparse indices
+/// over a base, sparse NORMAL.
+#[test]
+fn sparse_accessors_without_and_with_a_base() {
+    let reference = Doc::triangle().load().unwrap();
+    // POSITION: zeros, with vertices 1 and 2 replaced.
+    let mut d = Doc::triangle();
+    let iv = d.push_view(&[1u32, 2].iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>(), None);
+    let vv = d.push_view(&f32_bytes(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0]), None);
+    let a = d
+        .push_accessor(json!({"componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0],
+        "sparse": {"count": 2, "indices": {"bufferView": iv, "componentType": 5125}, "values": {"bufferView": vv}}}));
+    d.prim()["attributes"]["POSITION"] = json!(a);
+    let s = d.load().unwrap();
+    assert_eq!(s.triangles, reference.triangles);
+
+    // Indices: a base of [0, 1, 2, 0, 1, 2] whose elements 3..6 become [2, 3, 0].
+    let quad = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+    let want = Doc::new(&quad, None, Some((&[0, 1, 2, 2, 3, 0], 5123))).load().unwrap();
+    let mut d = Doc::new(&quad, None, Some((&[0, 1, 2, 0, 1, 2], 5123)));
+    let iv = d.push_view(&u16_bytes(&[3, 4, 5]), None);
+    let vv = d.push_view(&u16_bytes(&[2, 3, 0]), None);
+    d.json["accessors"][1]["sparse"] =
+        json!({"count": 3, "indices": {"bufferView": iv, "componentType": 5123}, "values": {"bufferView": vv}});
+    let s = d.load().unwrap();
+    assert_eq!(s.triangles.len(), 2);
+    assert_eq!(s.triangles, want.triangles);
+
+    // NORMAL: all +Z, vertex 1 replaced by +X (one UNSIGNED_BYTE index).
+    let z = [0.0, 0.0, 1.0];
+    let mut d = Doc::new(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], Some(&[z, z, z]), None);
+    let iv = d.push_view(&[1u8], None);
+    let vv = d.push_view(&f32_bytes(&[1.0, 0.0, 0.0]), None);
+    d.json["accessors"][1]["sparse"] =
+        json!({"count": 1, "indices": {"bufferView": iv, "componentType": 5121}, "values": {"bufferView": vv}});
+    let n = d.load().unwrap().triangles[0].n.unwrap();
+    assert_eq!(n, [Vec3::Z, Vec3::X, Vec3::Z]);
+}
+
+/// KHR_mesh_quantization: integer POSITION (plain and normalized) and normalized NORMAL,
+/// decoded by glTF's int-to-float equations (SHORT: max(c / 32767, -1); BYTE:
+/// max(c / 127, -1); UNSIGNED_BYTE: c / 255). Without the extension they are refused.
+#[test]
+fn quantized_attributes_decode_per_the_spec() {
+    fn quantized(pos: (u32, bool, Vec<u8>, usize), normal: Option<(u32, bool, Vec<u8>, usize)>) -> Doc {
+        let mut d = Doc::triangle();
+        d.json["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
+        d.json["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+        let (ct, norm, bytes, stride) = pos;
+        let v = d.push_view(&bytes, Some(stride));
+        let a = d.push_accessor(
+            json!({"bufferView": v, "componentType": ct, "normalized": norm, "count": 3, "type": "VEC3",
+            "min": [-32768, -32768, -32768], "max": [32767, 32767, 32767]}),
+        );
+        d.prim()["attributes"]["POSITION"] = json!(a);
+        if let Some((ct, norm, bytes, stride)) = normal {
+            let v = d.push_view(&bytes, Some(stride));
+            let a = d.push_accessor(
+                json!({"bufferView": v, "componentType": ct, "normalized": norm, "count": 3, "type": "VEC3"}),
+            );
+            d.prim()["attributes"]["NORMAL"] = json!(a);
+        }
+        d
+    }
+    let shorts = |v: &[i16]| -> Vec<u8> {
+        // VEC3 of 2-byte components padded to 8 bytes per element (glTF's 4-byte alignment).
+        v.chunks(3).flat_map(|c| c.iter().flat_map(|x| x.to_le_bytes()).chain([0, 0])).collect()
+    };
+    // Plain UNSIGNED_SHORT positions are the integers themselves.
+    let raw = shorts(&[0, 0, 0, 2, 0, 0, 0, 3, 0]);
+    let s = quantized((5123, false, raw.clone(), 8), None).load().unwrap();
+    assert_eq!(vertices(&s), [[Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 3.0, 0.0)]]);
+    assert!(s.report.warnings.iter().all(|w| !w.contains("KHR_mesh_quantization")), "{:?}", s.report.warnings);
+
+    // SHORT normalized: 32767 -> 1, -32768 -> -1 (clamped), 16384 -> 16384/32767.
+    let raw = shorts(&[0, 0, 0, 32767, 0, 0, -32768, 16384, 0]);
+    // BYTE normalized normals, 4 bytes per element: 127 -> 1, -128 -> -1 (clamped: the
+    // direction of the third one depends on it), 64 -> 64/127.
+    let nb: Vec<u8> = [[0i8, 0, 127], [-127, 0, 0], [64, -128, 0]]
+        .iter()
+        .flat_map(|c| c.iter().map(|x| *x as u8).chain([0]).collect::<Vec<u8>>())
+        .collect();
+    let s = quantized((5122, true, raw, 8), Some((5120, true, nb, 4))).load().unwrap();
+    let t = &s.triangles[0];
+    assert_eq!(t.p, [Vec3::ZERO, Vec3::X, Vec3::new(-1.0, (16384.0f64 / 32767.0) as f32, 0.0)]);
+    let want_n2 = Vec3::new((64.0f64 / 127.0) as f32, -1.0, 0.0).normalize();
+    let n = t.n.unwrap();
+    assert_eq!((n[0], n[1]), (Vec3::Z, Vec3::NEG_X));
+    assert_close(n[2], want_n2);
+
+    // BYTE normalized positions: 127 -> 1, -128 -> -1, 64 -> 64/127.
+    let b: Vec<u8> = [[0i8, 0, 0], [127, 0, 0], [-128, 64, 0]]
+        .iter()
+        .flat_map(|c| c.iter().map(|x| *x as u8).chain([0]).collect::<Vec<u8>>())
+        .collect();
+    let s = quantized((5120, true, b, 4), None).load().unwrap();
+    assert_eq!(vertices(&s), [[Vec3::ZERO, Vec3::X, Vec3::new(-1.0, (64.0f64 / 127.0) as f32, 0.0)]]);
+
+    // UNSIGNED_BYTE normalized positions: c / 255 (51 -> 0.2).
+    let ub: Vec<u8> = vec![0, 0, 0, 0, 255, 0, 0, 0, 0, 51, 0, 0];
+    let s = quantized((5121, true, ub, 4), None).load().unwrap();
+    assert_eq!(vertices(&s), [[Vec3::ZERO, Vec3::X, Vec3::new(0.0, (51.0f64 / 255.0) as f32, 0.0)]]);
+
+    // Without the extension: refused, with the reason.
+    let mut d = quantized((5123, false, shorts(&[0, 0, 0, 2, 0, 0, 0, 3, 0]), 8), None);
+    d.json.as_object_mut().unwrap().remove("extensionsUsed");
+    d.json.as_object_mut().unwrap().remove("extensionsRequired");
+    let e = err_of(d.load());
+    assert!(e.contains("must be FLOAT VEC3") && e.contains("KHR_mesh_quantization"), "{e}");
+    // A normal must be normalized even with it (KHR_mesh_quantization allows BYTE/SHORT normalized only).
+    let nb: Vec<u8> = vec![0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0];
+    let e =
+        err_of(quantized((5123, false, shorts(&[0, 0, 0, 2, 0, 0, 0, 3, 0]), 8), Some((5120, false, nb, 4))).load());
+    assert!(e.contains("NORMAL") && e.contains("BYTE normalized"), "{e}");
+}
