@@ -881,3 +881,211 @@ fn quantized_attributes_decode_per_the_spec() {
         err_of(quantized((5123, false, shorts(&[0, 0, 0, 2, 0, 0, 0, 3, 0]), 8), Some((5120, false, nb, 4))).load());
     assert!(e.contains("NORMAL") && e.contains("BYTE normalized"), "{e}");
 }
+
+/// Writes `json` (a modified sample) as `scene.gltf` in a fresh folder and loads it.
+fn load_json(json: &Value, options: &LoadOptions) -> anyhow::Result<Scene> {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.gltf");
+    std::fs::write(&path, serde_json::to_vec(json).unwrap()).unwrap();
+    load_with(&path, options)
+}
+
+fn sample_json(name: &str) -> Value {
+    serde_json::from_slice(&std::fs::read(khronos(name)).unwrap()).unwrap()
+}
+
+/// Khronos SimpleMorph at its default weights (0.5, 0.5): vertex 2 (0.5, 0.5, 0) moves by
+/// 0.5 (-1, 1, 0) + 0.5 (1, 1, 0) to (0.5, 1.5, 0); node weights override the mesh's.
+#[test]
+fn morph_targets_at_the_default_weights() {
+    let s = load(&khronos("SimpleMorph")).unwrap();
+    assert_eq!(vertices(&s), [[Vec3::ZERO, Vec3::X, Vec3::new(0.5, 1.5, 0.0)]]);
+    let w = &s.report.warnings;
+    assert!(w.iter().any(|w| w.contains("animations are not supported")), "{w:?}");
+    assert!(!w.iter().any(|w| w.contains("morph")), "{w:?}");
+
+    let mut j = sample_json("SimpleMorph");
+    j["nodes"][0]["weights"] = json!([1.0, 0.25]);
+    // (0.5, 0.5) + (-1, 1) + 0.25 (1, 1) = (-0.25, 1.75)
+    let s = load_json(&j, &LoadOptions::default()).unwrap();
+    assert_eq!(vertices(&s), [[Vec3::ZERO, Vec3::X, Vec3::new(-0.25, 1.75, 0.0)]]);
+    // No weights anywhere: all 0, the base geometry.
+    j["nodes"][0].as_object_mut().unwrap().remove("weights");
+    j["meshes"][0].as_object_mut().unwrap().remove("weights");
+    let s = load_json(&j, &LoadOptions::default()).unwrap();
+    assert_eq!(vertices(&s), [[Vec3::ZERO, Vec3::X, Vec3::new(0.5, 0.5, 0.0)]]);
+    // A weight count that does not match the targets.
+    j["meshes"][0]["weights"] = json!([0.5]);
+    let e = err_of(load_json(&j, &LoadOptions::default()));
+    assert!(
+        e.contains("1 morph target weight(s)") && e.contains("2 morph target(s)") && e.contains("mesh 0 primitive 0"),
+        "{e}"
+    );
+}
+
+/// Morph targets with NORMAL displacements, and a sparse target (no bufferView).
+#[test]
+fn morph_target_normals_and_sparse_targets() {
+    let z = [0.0, 0.0, 1.0];
+    let mut d = Doc::new(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], Some(&[z, z, z]), None);
+    // Target 0: POSITION only vertex 2 moves by (0, 2, 0), sparse over zeros.
+    let iv = d.push_view(&[2u8], None);
+    let vv = d.push_view(&f32_bytes(&[0.0, 2.0, 0.0]), None);
+    let t0 = d
+        .push_accessor(json!({"componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [0, 2, 0],
+        "sparse": {"count": 1, "indices": {"bufferView": iv, "componentType": 5121}, "values": {"bufferView": vv}}}));
+    // Target 1: NORMAL displacements (1, 0, -1) on every vertex: +Z becomes +X.
+    let nv = d.push_view(&f32_bytes(&[1.0, 0.0, -1.0, 1.0, 0.0, -1.0, 1.0, 0.0, -1.0]), None);
+    let t1 = d.push_accessor(json!({"bufferView": nv, "componentType": 5126, "count": 3, "type": "VEC3"}));
+    d.prim()["targets"] = json!([{"POSITION": t0}, {"NORMAL": t1}]);
+    d.json["meshes"][0]["weights"] = json!([0.5, 1.0]);
+    let s = d.load().unwrap();
+    assert_eq!(s.triangles[0].p, [Vec3::ZERO, Vec3::X, Vec3::new(0.0, 2.0, 0.0)]);
+    assert_eq!(s.triangles[0].n.unwrap(), [Vec3::X; 3]);
+}
+
+/// Khronos SimpleSkin: its joints' node transforms are the bind pose (joint matrices =
+/// identity), so the skinned mesh is its stored geometry. With joint 1 (node 2) turned 90
+/// degrees about +Z the upper vertices bend around (0, 1, 0): J1 = T(0,1,0) R T(0,-1,0).
+#[test]
+fn skinned_mesh_in_its_joints_pose() {
+    let stored = |x: f32, y: f32| Vec3::new(x, y, 0.0);
+    let s = load(&khronos("SimpleSkin")).unwrap();
+    assert_eq!(s.triangles.len(), 8);
+    assert_eq!(s.triangles[0].p, [stored(-0.5, 0.0), stored(0.5, 0.0), stored(0.5, 0.5)]);
+    assert_eq!(s.triangles[7].p, [stored(-0.5, 1.5), stored(0.5, 2.0), stored(-0.5, 2.0)]);
+    assert!(!s.report.warnings.iter().any(|w| w.contains("skin")), "{:?}", s.report.warnings);
+
+    let mut j = sample_json("SimpleSkin");
+    j["nodes"][2]["rotation"] = json!([0.0, 0.0, S, S]);
+    // The skinned mesh node's own transform is ignored (glTF 2.0 section 3.7.3.2).
+    j["nodes"][0]["translation"] = json!([100.0, 0.0, 0.0]);
+    let s = load_json(&j, &LoadOptions::default()).unwrap();
+    // Vertex 9 (0.5, 2) has weight 1 on joint 1: (0.5, 1) turned -> (-1, 0.5), + (0, 1).
+    // Vertex 4 (-0.5, 1) has weights 0.5/0.5: 0.5 (-0.5, 1) + 0.5 (0, 0.5) = (-0.25, 0.75).
+    // Vertex 0 (-0.5, 0) has weight 1 on joint 0, which did not move.
+    let t7 = s.triangles[7].p; // vertices 6, 9, 8
+    assert_close(t7[1], Vec3::new(-1.0, 1.5, 0.0));
+    assert_close(t7[2], Vec3::new(-1.0, 0.5, 0.0));
+    // Vertex 5 (0.5, 1), weights 0.5/0.5: 0.5 (0.5, 1) + 0.5 (0, 1.5) = (0.25, 1.25).
+    // Vertex 2 (-0.5, 0.5), weights 0.75/0.25: 0.75 (-0.5, 0.5) + 0.25 (0.5, 0.5) = (-0.25, 0.5).
+    let t2 = s.triangles[2].p; // vertices 2, 3, 5
+    assert_close(t2[2], Vec3::new(0.25, 1.25, 0.0));
+    assert_close(t2[0], Vec3::new(-0.25, 0.5, 0.0));
+    assert_eq!(s.triangles[0].p[0], stored(-0.5, 0.0));
+    let t3 = s.triangles[3].p; // vertices 2, 5, 4
+    assert_close(t3[2], Vec3::new(-0.25, 0.75, 0.0));
+}
+
+/// Skinning errors name the accessor: a joint index past the skin's joints, a negative
+/// weight, too few inverse bind matrices.
+#[test]
+fn malformed_skins_are_errors() {
+    let mut j = sample_json("SimpleSkin");
+    j["skins"][0]["joints"] = json!([1]);
+    let e = err_of(load_json(&j, &LoadOptions::default()));
+    assert!(e.contains("JOINTS_0 accessor 2") && e.contains("joint 1") && e.contains("1 joints"), "{e}");
+    let mut j = sample_json("SimpleSkin");
+    j["skins"][0]["joints"] = json!([1, 2, 0]);
+    let e = err_of(load_json(&j, &LoadOptions::default()));
+    assert!(e.contains("inverseBindMatrices accessor 4 has 2 matrices for 3 joints"), "{e}");
+    // Without inverseBindMatrices every one is the identity: the mesh moves up by 1 (the
+    // joints' translation).
+    let mut j = sample_json("SimpleSkin");
+    j["skins"][0].as_object_mut().unwrap().remove("inverseBindMatrices");
+    let s = load_json(&j, &LoadOptions::default()).unwrap();
+    assert_eq!(s.triangles[0].p[0], Vec3::new(-0.5, 1.0, 0.0));
+}
+
+/// Khronos MultipleScenes: the default scene (1, a square) is rendered, with a warning
+/// naming it; LoadOptions::scene picks another by index or name; an unknown one is an
+/// error that lists the scenes.
+#[test]
+fn scenes_are_selected_by_name_or_index() {
+    let path = khronos("MultipleScenes");
+    let s = load(&path).unwrap();
+    assert_eq!(s.triangles.len(), 2);
+    let w = &s.report.warnings;
+    assert!(
+        w.iter().any(|w| w.contains("2 scenes") && w.contains("the default one") && w.contains("scene 1")),
+        "{w:?}"
+    );
+    let pick = |want: &str| load_with(&path, &LoadOptions { scene: Some(want.into()), ..Default::default() });
+    let s = pick("0").unwrap();
+    assert_eq!(vertices(&s), [[Vec3::ZERO, Vec3::X, Vec3::Y]]);
+    assert!(!s.report.warnings.iter().any(|w| w.contains("scenes")), "{:?}", s.report.warnings);
+    assert_eq!(pick("1").unwrap().triangles.len(), 2);
+    let e = err_of(pick("2"));
+    assert!(e.contains("'2'") && e.contains("available scenes: 0, 1"), "{e}");
+
+    // By name; a name wins over an index, and the list names the scenes.
+    let mut j = sample_json("MultipleScenes");
+    j["scenes"][0]["name"] = json!("1");
+    j["scenes"][1]["name"] = json!("square");
+    let opts = |want: &str| LoadOptions { scene: Some(want.into()), ..Default::default() };
+    assert_eq!(load_json(&j, &opts("square")).unwrap().triangles.len(), 2);
+    assert_eq!(load_json(&j, &opts("1")).unwrap().triangles.len(), 1, "scene 0 is named '1'");
+    let e = err_of(load_json(&j, &opts("nope")));
+    assert!(e.contains("'nope'") && e.contains("0 '1', 1 'square'"), "{e}");
+    // Without a default scene, the first is rendered (and the warning says so).
+    j.as_object_mut().unwrap().remove("scene");
+    let s = load_json(&j, &LoadOptions::default()).unwrap();
+    assert_eq!(s.triangles.len(), 1);
+    assert!(
+        s.report.warnings.iter().any(|w| w.contains("2 scenes") && w.contains("no default")),
+        "{:?}",
+        s.report.warnings
+    );
+}
+
+/// Orthographic cameras: skipped with a warning when the camera is chosen by default (a
+/// later perspective camera is used), an error that says so when `camera` names one.
+#[test]
+fn orthographic_cameras_are_skipped_or_refused() {
+    let mut d = Doc::triangle();
+    d.json["cameras"].as_array_mut().unwrap().insert(
+        0,
+        json!({"name": "flat", "type": "orthographic", "orthographic": {"xmag": 1.0, "ymag": 1.0, "znear": 0.1, "zfar": 10.0}}),
+    );
+    d.json["nodes"][1]["camera"] = json!(1);
+    d.json["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"name": "ortho_node", "camera": 0, "translation": [0.0, 0.0, 9.0]}));
+    d.json["scenes"][0]["nodes"] = json!([0, 2, 1]);
+    let dir = tempfile::tempdir().unwrap();
+    let path = d.write(dir.path());
+    let s = load(&path).unwrap();
+    assert_eq!(s.camera.position, Vec3::new(0.0, 0.0, 5.0), "the perspective camera after the orthographic one");
+    assert_eq!(s.report.warnings.iter().filter(|w| w.contains("orthographic cameras are not supported")).count(), 1);
+    for want in ["flat", "ortho_node"] {
+        let e = err_of(load_with(&path, &LoadOptions { camera: Some(want.into()), ..Default::default() }));
+        assert!(
+            e.contains(&format!("camera '{want}' (node 2) is orthographic")) && e.contains("perspective cameras: cam"),
+            "{e}"
+        );
+    }
+}
+
+/// Skin weights are divided by their sum (UNSIGNED_BYTE normalized 128/255 alone still
+/// moves the vertex the whole way); a vertex whose weights are all 0 stays as stored, with
+/// a warning.
+#[test]
+fn skin_weights_are_normalised() {
+    let mut d = Doc::triangle();
+    d.json["scenes"][0]["nodes"] = json!([0, 1, 2]);
+    d.json["nodes"].as_array_mut().unwrap().push(json!({"name": "joint", "translation": [0.0, 0.0, 1.0]}));
+    d.json["nodes"][0]["skin"] = json!(0);
+    d.json["skins"] = json!([{"joints": [2]}]);
+    let jv = d.push_view(&[0u8; 12], None);
+    let ja = d.push_accessor(json!({"bufferView": jv, "componentType": 5121, "count": 3, "type": "VEC4"}));
+    let wv = d.push_view(&[128, 0, 0, 0, 128, 0, 0, 0, 0, 0, 0, 0], None);
+    let wa = d.push_accessor(
+        json!({"bufferView": wv, "componentType": 5121, "normalized": true, "count": 3, "type": "VEC4"}),
+    );
+    d.prim()["attributes"]["JOINTS_0"] = json!(ja);
+    d.prim()["attributes"]["WEIGHTS_0"] = json!(wa);
+    let s = d.load().unwrap();
+    assert_eq!(s.triangles[0].p, [Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::Y]);
+    assert!(s.report.warnings.iter().any(|w| w.contains("weights are all 0")), "{:?}", s.report.warnings);
+}
