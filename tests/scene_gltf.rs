@@ -1089,3 +1089,18 @@ fn skin_weights_are_normalised() {
     assert_eq!(s.triangles[0].p, [Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::Y]);
     assert!(s.report.warnings.iter().any(|w| w.contains("weights are all 0")), "{:?}", s.report.warnings);
 }
+
+/// A skinned node whose primitive has no JOINTS_0/WEIGHTS_0: its vertices as stored (the
+/// node's transform is still ignored), with a warning.
+#[test]
+fn skinned_primitive_without_influences_warns() {
+    let mut j = sample_json("SimpleSkin");
+    let attrs = j["meshes"][0]["primitives"][0]["attributes"].as_object_mut().unwrap();
+    attrs.remove("JOINTS_0");
+    attrs.remove("WEIGHTS_0");
+    j["nodes"][0]["translation"] = json!([100.0, 0.0, 0.0]);
+    let s = load_json(&j, &LoadOptions::default()).unwrap();
+    assert_eq!(s.triangles[0].p, [Vec3::new(-0.5, 0.0, 0.0), Vec3::new(0.5, 0.0, 0.0), Vec3::new(0.5, 0.5, 0.0)]);
+    let w = &s.report.warnings;
+    assert_eq!(w.iter().filter(|w| w.contains("no JOINTS_0/WEIGHTS_0")).count(), 1, "{w:?}");
+}

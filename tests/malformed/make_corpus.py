@@ -208,6 +208,7 @@ case("sparse_count_beyond_accessor.gltf", doc(sparse([0, 1, 2, 2], [0.0] * 12)),
 case("sparse_indices_beyond_view.gltf", doc(sparse([1, 2], [0.0] * 6, idx_len=2)), "accessor 0 sparse.indices")
 case("sparse_values_beyond_view.gltf", doc(sparse([2], [0.0, 2.0, 0.0], val_len=8)), "accessor 0 sparse.values")
 case("sparse_count_huge.gltf", doc(sparse([2], [0.0, 2.0, 0.0], count=2**62)), "exceeds the accessor's count")
+case("sparse_without_view_huge.gltf", doc(lambda d: (sparse([2], [0.0, 2.0, 0.0], base_view=False)(d), d["accessors"][0].update(count=2**40))), "zero-initialised accessors of more than 33554432 components are refused")
 
 # KHR_mesh_quantization: SHORT positions (8-byte stride: 4-byte alignment), BYTE normals.
 QBIN = struct.pack("<12h", -1, -1, 0, 0, 1, -1, 0, 0, 0, 1, 0, 0) + struct.pack("<12b", 0, 0, 127, 0, 0, 0, 127, 0, 0, 0, 127, 0) + struct.pack("<3H", 0, 1, 2) + b"\0\0"

@@ -47,9 +47,10 @@ pub(super) const JOINTS_FORMATS: Formats = Formats { core: &[UBYTE, USHORT], qua
 pub(super) const WEIGHTS_FORMATS: Formats =
     Formats { core: &[FLOAT, UBYTE_N, USHORT_N], quantized: &[FLOAT, UBYTE_N, USHORT_N] };
 
-/// Zero-initialised accessors (no `bufferView`) are not bounded by any buffer: larger ones
-/// are refused rather than allocated (a 2^31-element count would exhaust memory).
-const MAX_ELEMENTS_WITHOUT_VIEW: usize = 1 << 24;
+/// Zero-initialised accessors (no `bufferView`) are not bounded by any buffer: ones with
+/// more components (elements × components per element) are refused rather than allocated
+/// (a 2^31-element count would exhaust memory). 2^25 is about 11 million VEC3 elements.
+const MAX_COMPONENTS_WITHOUT_VIEW: usize = 1 << 25;
 
 fn type_name(t: DataType) -> &'static str {
     match t {
@@ -244,9 +245,9 @@ fn read_components(buffers: &[Vec<u8>], acc: &gltf::Accessor) -> Result<Vec<f64>
             if acc.sparse().is_none() {
                 bail!("accessor {ai} has neither a bufferView nor sparse values");
             }
-            if count > MAX_ELEMENTS_WITHOUT_VIEW {
+            if count.checked_mul(n).is_none_or(|c| c > MAX_COMPONENTS_WITHOUT_VIEW) {
                 bail!(
-                    "accessor {ai} has no bufferView and {count} elements (zero-initialised accessors of more than {MAX_ELEMENTS_WITHOUT_VIEW} elements are refused)"
+                    "accessor {ai} has no bufferView and {count} elements of {n} components (zero-initialised accessors of more than {MAX_COMPONENTS_WITHOUT_VIEW} components are refused)"
                 );
             }
             vec![0.0; count * n]
