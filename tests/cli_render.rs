@@ -78,6 +78,23 @@ fn bad_arguments_one_error_line() {
     one_error(&run(&["--width", "16", "--height", "16", "-o", &unwritable]), &["--output", "cannot write"]);
 }
 
+/// `--gltf-scene` picks the glTF scene of a file with several (Khronos MultipleScenes): an
+/// unknown one is one error line listing the scenes; scene 0 renders (and, since it is
+/// chosen, no warning about the other scene).
+#[test]
+fn gltf_scene_option() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/khronos/MultipleScenes.gltf");
+    let o = tiny(d).arg(&file).args(["-i", "1", "--gltf-scene", "nope", "-o", "x.exr"]).output().unwrap();
+    one_error(&o, &["MultipleScenes.gltf", "'nope'", "available scenes: 0, 1"]);
+    let o = tiny(d).arg(&file).args(["-i", "1", "--gltf-scene", "0", "-o", "x.exr"]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(error_lines(&o).is_empty() && !err.contains("scenes"), "{err}");
+    assert!(d.join("x.exr").is_file());
+}
+
 /// Spawns `cmd` with stderr piped; lines arrive on the returned channel.
 fn spawn(mut cmd: Command) -> (Child, mpsc::Receiver<String>) {
     let mut child = cmd.stderr(Stdio::piped()).spawn().unwrap();

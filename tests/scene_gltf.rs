@@ -696,3 +696,411 @@ fn missing_position_bounds_are_tolerated_with_a_warning() {
     // Present bounds give no such warning.
     assert!(!Doc::triangle().load().unwrap().report.warnings.iter().any(|w| w.contains("min/max")));
 }
+
+// --- Sparse accessors, KHR_mesh_quantization, morph targets, skins, scenes (issue #18) ---
+
+fn khronos(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/khronos").join(format!("{name}.gltf"))
+}
+
+/// Every triangle's vertices, in order.
+fn vertices(s: &Scene) -> Vec<[Vec3; 3]> {
+    s.triangles.iter().map(|t| t.p).collect()
+}
+
+impl Doc {
+    /// Appends `bytes` to the buffer (4-byte aligned) as a new buffer view; its index.
+    fn push_view(&mut self, bytes: &[u8], stride: Option<usize>) -> usize {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        let mut v = json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()});
+        if let Some(s) = stride {
+            v["byteStride"] = json!(s);
+        }
+        self.bin.extend_from_slice(bytes);
+        self.json["buffers"][0]["byteLength"] = json!(self.bin.len());
+        let views = self.json["bufferViews"].as_array_mut().unwrap();
+        views.push(v);
+        views.len() - 1
+    }
+
+    /// Appends accessor `a`; its index.
+    fn push_accessor(&mut self, a: Value) -> usize {
+        let accs = self.json["accessors"].as_array_mut().unwrap();
+        accs.push(a);
+        accs.len() - 1
+    }
+
+    fn prim(&mut self) -> &mut Value {
+        &mut self.json["meshes"][0]["primitives"][0]
+    }
+}
+
+fn f32_bytes(v: &[f32]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+fn u16_bytes(v: &[u16]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+/// Khronos SimpleSparseAccessor: 14 vertices on two rows, (i, 0, 0) and (i - 7, 1, 0),
+/// of which the sparse substitution moves vertices 8, 10 and 12 to (1, 2, 0), (3, 3, 0)
+/// and (5, 4, 0) (the values in its buffer, bytes 240..284).
+#[test]
+fn sparse_accessor_khronos_sample() {
+    let s = load(&khronos("SimpleSparseAccessor")).unwrap();
+    let mut v: Vec<Vec3> = (0..14)
+        .map(|i| if i < 7 { Vec3::new(i as f32, 0.0, 0.0) } else { Vec3::new(i as f32 - 7.0, 1.0, 0.0) })
+        .collect();
+    v[8] = Vec3::new(1.0, 2.0, 0.0);
+    v[10] = Vec3::new(3.0, 3.0, 0.0);
+    v[12] = Vec3::new(5.0, 4.0, 0.0);
+    let idx = [
+        0, 8, 7, 0, 1, 8, 1, 9, 8, 1, 2, 9, 2, 10, 9, 2, 3, 10, 3, 11, 10, 3, 4, 11, 4, 12, 11, 4, 5, 12, 5, 13, 12, 5,
+        6, 13,
+    ];
+    let want: Vec<[Vec3; 3]> = idx.chunks(3).map(|c| [v[c[0]], v[c[1]], v[c[2]]]).collect();
+    assert_eq!(vertices(&s), want);
+    assert!(!s.report.warnings.iter().any(|w| w.contains("sparse")), "{:?}", s.report.warnings);
+}
+
+/// Sparse POSITION without a bufferView (zeros, then the substitution), sparse indices
+/// over a base, sparse NORMAL.
+#[test]
+fn sparse_accessors_without_and_with_a_base() {
+    let reference = Doc::triangle().load().unwrap();
+    // POSITION: zeros, with vertices 1 and 2 replaced.
+    let mut d = Doc::triangle();
+    let iv = d.push_view(&[1u32, 2].iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>(), None);
+    let vv = d.push_view(&f32_bytes(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0]), None);
+    let a = d
+        .push_accessor(json!({"componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0],
+        "sparse": {"count": 2, "indices": {"bufferView": iv, "componentType": 5125}, "values": {"bufferView": vv}}}));
+    d.prim()["attributes"]["POSITION"] = json!(a);
+    let s = d.load().unwrap();
+    assert_eq!(s.triangles, reference.triangles);
+
+    // Indices: a base of [0, 1, 2, 0, 1, 2] whose elements 3..6 become [2, 3, 0].
+    let quad = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+    let want = Doc::new(&quad, None, Some((&[0, 1, 2, 2, 3, 0], 5123))).load().unwrap();
+    let mut d = Doc::new(&quad, None, Some((&[0, 1, 2, 0, 1, 2], 5123)));
+    let iv = d.push_view(&u16_bytes(&[3, 4, 5]), None);
+    let vv = d.push_view(&u16_bytes(&[2, 3, 0]), None);
+    d.json["accessors"][1]["sparse"] =
+        json!({"count": 3, "indices": {"bufferView": iv, "componentType": 5123}, "values": {"bufferView": vv}});
+    let s = d.load().unwrap();
+    assert_eq!(s.triangles.len(), 2);
+    assert_eq!(s.triangles, want.triangles);
+
+    // NORMAL: all +Z, vertex 1 replaced by +X (one UNSIGNED_BYTE index).
+    let z = [0.0, 0.0, 1.0];
+    let mut d = Doc::new(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], Some(&[z, z, z]), None);
+    let iv = d.push_view(&[1u8], None);
+    let vv = d.push_view(&f32_bytes(&[1.0, 0.0, 0.0]), None);
+    d.json["accessors"][1]["sparse"] =
+        json!({"count": 1, "indices": {"bufferView": iv, "componentType": 5121}, "values": {"bufferView": vv}});
+    let n = d.load().unwrap().triangles[0].n.unwrap();
+    assert_eq!(n, [Vec3::Z, Vec3::X, Vec3::Z]);
+}
+
+/// KHR_mesh_quantization: integer POSITION (plain and normalized) and normalized NORMAL,
+/// decoded by glTF's int-to-float equations (SHORT: max(c / 32767, -1); BYTE:
+/// max(c / 127, -1); UNSIGNED_BYTE: c / 255). Without the extension they are refused.
+#[test]
+fn quantized_attributes_decode_per_the_spec() {
+    fn quantized(pos: (u32, bool, Vec<u8>, usize), normal: Option<(u32, bool, Vec<u8>, usize)>) -> Doc {
+        let mut d = Doc::triangle();
+        d.json["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
+        d.json["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+        let (ct, norm, bytes, stride) = pos;
+        let v = d.push_view(&bytes, Some(stride));
+        let a = d.push_accessor(
+            json!({"bufferView": v, "componentType": ct, "normalized": norm, "count": 3, "type": "VEC3",
+            "min": [-32768, -32768, -32768], "max": [32767, 32767, 32767]}),
+        );
+        d.prim()["attributes"]["POSITION"] = json!(a);
+        if let Some((ct, norm, bytes, stride)) = normal {
+            let v = d.push_view(&bytes, Some(stride));
+            let a = d.push_accessor(
+                json!({"bufferView": v, "componentType": ct, "normalized": norm, "count": 3, "type": "VEC3"}),
+            );
+            d.prim()["attributes"]["NORMAL"] = json!(a);
+        }
+        d
+    }
+    let shorts = |v: &[i16]| -> Vec<u8> {
+        // VEC3 of 2-byte components padded to 8 bytes per element (glTF's 4-byte alignment).
+        v.chunks(3).flat_map(|c| c.iter().flat_map(|x| x.to_le_bytes()).chain([0, 0])).collect()
+    };
+    // Plain UNSIGNED_SHORT positions are the integers themselves.
+    let raw = shorts(&[0, 0, 0, 2, 0, 0, 0, 3, 0]);
+    let s = quantized((5123, false, raw.clone(), 8), None).load().unwrap();
+    assert_eq!(vertices(&s), [[Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 3.0, 0.0)]]);
+    assert!(s.report.warnings.iter().all(|w| !w.contains("KHR_mesh_quantization")), "{:?}", s.report.warnings);
+
+    // SHORT normalized: 32767 -> 1, -32768 -> -1 (clamped), 16384 -> 16384/32767.
+    let raw = shorts(&[0, 0, 0, 32767, 0, 0, -32768, 16384, 0]);
+    // BYTE normalized normals, 4 bytes per element: 127 -> 1, -128 -> -1 (clamped: the
+    // direction of the third one depends on it), 64 -> 64/127.
+    let nb: Vec<u8> = [[0i8, 0, 127], [-127, 0, 0], [64, -128, 0]]
+        .iter()
+        .flat_map(|c| c.iter().map(|x| *x as u8).chain([0]).collect::<Vec<u8>>())
+        .collect();
+    let s = quantized((5122, true, raw, 8), Some((5120, true, nb, 4))).load().unwrap();
+    let t = &s.triangles[0];
+    assert_eq!(t.p, [Vec3::ZERO, Vec3::X, Vec3::new(-1.0, (16384.0f64 / 32767.0) as f32, 0.0)]);
+    let want_n2 = Vec3::new((64.0f64 / 127.0) as f32, -1.0, 0.0).normalize();
+    let n = t.n.unwrap();
+    assert_eq!((n[0], n[1]), (Vec3::Z, Vec3::NEG_X));
+    assert_close(n[2], want_n2);
+
+    // BYTE normalized positions: 127 -> 1, -128 -> -1, 64 -> 64/127.
+    let b: Vec<u8> = [[0i8, 0, 0], [127, 0, 0], [-128, 64, 0]]
+        .iter()
+        .flat_map(|c| c.iter().map(|x| *x as u8).chain([0]).collect::<Vec<u8>>())
+        .collect();
+    let s = quantized((5120, true, b, 4), None).load().unwrap();
+    assert_eq!(vertices(&s), [[Vec3::ZERO, Vec3::X, Vec3::new(-1.0, (64.0f64 / 127.0) as f32, 0.0)]]);
+
+    // UNSIGNED_BYTE normalized positions: c / 255 (51 -> 0.2).
+    let ub: Vec<u8> = vec![0, 0, 0, 0, 255, 0, 0, 0, 0, 51, 0, 0];
+    let s = quantized((5121, true, ub, 4), None).load().unwrap();
+    assert_eq!(vertices(&s), [[Vec3::ZERO, Vec3::X, Vec3::new(0.0, (51.0f64 / 255.0) as f32, 0.0)]]);
+
+    // Without the extension: refused, with the reason.
+    let mut d = quantized((5123, false, shorts(&[0, 0, 0, 2, 0, 0, 0, 3, 0]), 8), None);
+    d.json.as_object_mut().unwrap().remove("extensionsUsed");
+    d.json.as_object_mut().unwrap().remove("extensionsRequired");
+    let e = err_of(d.load());
+    assert!(e.contains("must be FLOAT VEC3") && e.contains("KHR_mesh_quantization"), "{e}");
+    // A normal must be normalized even with it (KHR_mesh_quantization allows BYTE/SHORT normalized only).
+    let nb: Vec<u8> = vec![0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0];
+    let e =
+        err_of(quantized((5123, false, shorts(&[0, 0, 0, 2, 0, 0, 0, 3, 0]), 8), Some((5120, false, nb, 4))).load());
+    assert!(e.contains("NORMAL") && e.contains("BYTE normalized"), "{e}");
+}
+
+/// Writes `json` (a modified sample) as `scene.gltf` in a fresh folder and loads it.
+fn load_json(json: &Value, options: &LoadOptions) -> anyhow::Result<Scene> {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.gltf");
+    std::fs::write(&path, serde_json::to_vec(json).unwrap()).unwrap();
+    load_with(&path, options)
+}
+
+fn sample_json(name: &str) -> Value {
+    serde_json::from_slice(&std::fs::read(khronos(name)).unwrap()).unwrap()
+}
+
+/// Khronos SimpleMorph at its default weights (0.5, 0.5): vertex 2 (0.5, 0.5, 0) moves by
+/// 0.5 (-1, 1, 0) + 0.5 (1, 1, 0) to (0.5, 1.5, 0); node weights override the mesh's.
+#[test]
+fn morph_targets_at_the_default_weights() {
+    let s = load(&khronos("SimpleMorph")).unwrap();
+    assert_eq!(vertices(&s), [[Vec3::ZERO, Vec3::X, Vec3::new(0.5, 1.5, 0.0)]]);
+    let w = &s.report.warnings;
+    assert!(w.iter().any(|w| w.contains("animations are not supported")), "{w:?}");
+    assert!(!w.iter().any(|w| w.contains("morph")), "{w:?}");
+
+    let mut j = sample_json("SimpleMorph");
+    j["nodes"][0]["weights"] = json!([1.0, 0.25]);
+    // (0.5, 0.5) + (-1, 1) + 0.25 (1, 1) = (-0.25, 1.75)
+    let s = load_json(&j, &LoadOptions::default()).unwrap();
+    assert_eq!(vertices(&s), [[Vec3::ZERO, Vec3::X, Vec3::new(-0.25, 1.75, 0.0)]]);
+    // No weights anywhere: all 0, the base geometry.
+    j["nodes"][0].as_object_mut().unwrap().remove("weights");
+    j["meshes"][0].as_object_mut().unwrap().remove("weights");
+    let s = load_json(&j, &LoadOptions::default()).unwrap();
+    assert_eq!(vertices(&s), [[Vec3::ZERO, Vec3::X, Vec3::new(0.5, 0.5, 0.0)]]);
+    // A weight count that does not match the targets.
+    j["meshes"][0]["weights"] = json!([0.5]);
+    let e = err_of(load_json(&j, &LoadOptions::default()));
+    assert!(
+        e.contains("1 morph target weight(s)") && e.contains("2 morph target(s)") && e.contains("mesh 0 primitive 0"),
+        "{e}"
+    );
+}
+
+/// Morph targets with NORMAL displacements, and a sparse target (no bufferView).
+#[test]
+fn morph_target_normals_and_sparse_targets() {
+    let z = [0.0, 0.0, 1.0];
+    let mut d = Doc::new(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], Some(&[z, z, z]), None);
+    // Target 0: POSITION only vertex 2 moves by (0, 2, 0), sparse over zeros.
+    let iv = d.push_view(&[2u8], None);
+    let vv = d.push_view(&f32_bytes(&[0.0, 2.0, 0.0]), None);
+    let t0 = d
+        .push_accessor(json!({"componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [0, 2, 0],
+        "sparse": {"count": 1, "indices": {"bufferView": iv, "componentType": 5121}, "values": {"bufferView": vv}}}));
+    // Target 1: NORMAL displacements (1, 0, -1) on every vertex: +Z becomes +X.
+    let nv = d.push_view(&f32_bytes(&[1.0, 0.0, -1.0, 1.0, 0.0, -1.0, 1.0, 0.0, -1.0]), None);
+    let t1 = d.push_accessor(json!({"bufferView": nv, "componentType": 5126, "count": 3, "type": "VEC3"}));
+    d.prim()["targets"] = json!([{"POSITION": t0}, {"NORMAL": t1}]);
+    d.json["meshes"][0]["weights"] = json!([0.5, 1.0]);
+    let s = d.load().unwrap();
+    assert_eq!(s.triangles[0].p, [Vec3::ZERO, Vec3::X, Vec3::new(0.0, 2.0, 0.0)]);
+    assert_eq!(s.triangles[0].n.unwrap(), [Vec3::X; 3]);
+}
+
+/// Khronos SimpleSkin: its joints' node transforms are the bind pose (joint matrices =
+/// identity), so the skinned mesh is its stored geometry. With joint 1 (node 2) turned 90
+/// degrees about +Z the upper vertices bend around (0, 1, 0): J1 = T(0,1,0) R T(0,-1,0).
+#[test]
+fn skinned_mesh_in_its_joints_pose() {
+    let stored = |x: f32, y: f32| Vec3::new(x, y, 0.0);
+    let s = load(&khronos("SimpleSkin")).unwrap();
+    assert_eq!(s.triangles.len(), 8);
+    assert_eq!(s.triangles[0].p, [stored(-0.5, 0.0), stored(0.5, 0.0), stored(0.5, 0.5)]);
+    assert_eq!(s.triangles[7].p, [stored(-0.5, 1.5), stored(0.5, 2.0), stored(-0.5, 2.0)]);
+    assert!(!s.report.warnings.iter().any(|w| w.contains("skin")), "{:?}", s.report.warnings);
+
+    let mut j = sample_json("SimpleSkin");
+    j["nodes"][2]["rotation"] = json!([0.0, 0.0, S, S]);
+    // The skinned mesh node's own transform is ignored (glTF 2.0 section 3.7.3.2).
+    j["nodes"][0]["translation"] = json!([100.0, 0.0, 0.0]);
+    let s = load_json(&j, &LoadOptions::default()).unwrap();
+    // Vertex 9 (0.5, 2) has weight 1 on joint 1: (0.5, 1) turned -> (-1, 0.5), + (0, 1).
+    // Vertex 4 (-0.5, 1) has weights 0.5/0.5: 0.5 (-0.5, 1) + 0.5 (0, 0.5) = (-0.25, 0.75).
+    // Vertex 0 (-0.5, 0) has weight 1 on joint 0, which did not move.
+    let t7 = s.triangles[7].p; // vertices 6, 9, 8
+    assert_close(t7[1], Vec3::new(-1.0, 1.5, 0.0));
+    assert_close(t7[2], Vec3::new(-1.0, 0.5, 0.0));
+    // Vertex 5 (0.5, 1), weights 0.5/0.5: 0.5 (0.5, 1) + 0.5 (0, 1.5) = (0.25, 1.25).
+    // Vertex 2 (-0.5, 0.5), weights 0.75/0.25: 0.75 (-0.5, 0.5) + 0.25 (0.5, 0.5) = (-0.25, 0.5).
+    let t2 = s.triangles[2].p; // vertices 2, 3, 5
+    assert_close(t2[2], Vec3::new(0.25, 1.25, 0.0));
+    assert_close(t2[0], Vec3::new(-0.25, 0.5, 0.0));
+    assert_eq!(s.triangles[0].p[0], stored(-0.5, 0.0));
+    let t3 = s.triangles[3].p; // vertices 2, 5, 4
+    assert_close(t3[2], Vec3::new(-0.25, 0.75, 0.0));
+}
+
+/// Skinning errors name the accessor: a joint index past the skin's joints, a negative
+/// weight, too few inverse bind matrices.
+#[test]
+fn malformed_skins_are_errors() {
+    let mut j = sample_json("SimpleSkin");
+    j["skins"][0]["joints"] = json!([1]);
+    let e = err_of(load_json(&j, &LoadOptions::default()));
+    assert!(e.contains("JOINTS_0 accessor 2") && e.contains("joint 1") && e.contains("1 joints"), "{e}");
+    let mut j = sample_json("SimpleSkin");
+    j["skins"][0]["joints"] = json!([1, 2, 0]);
+    let e = err_of(load_json(&j, &LoadOptions::default()));
+    assert!(e.contains("inverseBindMatrices accessor 4 has 2 matrices for 3 joints"), "{e}");
+    // Without inverseBindMatrices every one is the identity: the mesh moves up by 1 (the
+    // joints' translation).
+    let mut j = sample_json("SimpleSkin");
+    j["skins"][0].as_object_mut().unwrap().remove("inverseBindMatrices");
+    let s = load_json(&j, &LoadOptions::default()).unwrap();
+    assert_eq!(s.triangles[0].p[0], Vec3::new(-0.5, 1.0, 0.0));
+}
+
+/// Khronos MultipleScenes: the default scene (1, a square) is rendered, with a warning
+/// naming it; LoadOptions::scene picks another by index or name; an unknown one is an
+/// error that lists the scenes.
+#[test]
+fn scenes_are_selected_by_name_or_index() {
+    let path = khronos("MultipleScenes");
+    let s = load(&path).unwrap();
+    assert_eq!(s.triangles.len(), 2);
+    let w = &s.report.warnings;
+    assert!(
+        w.iter().any(|w| w.contains("2 scenes") && w.contains("the default one") && w.contains("scene 1")),
+        "{w:?}"
+    );
+    let pick = |want: &str| load_with(&path, &LoadOptions { scene: Some(want.into()), ..Default::default() });
+    let s = pick("0").unwrap();
+    assert_eq!(vertices(&s), [[Vec3::ZERO, Vec3::X, Vec3::Y]]);
+    assert!(!s.report.warnings.iter().any(|w| w.contains("scenes")), "{:?}", s.report.warnings);
+    assert_eq!(pick("1").unwrap().triangles.len(), 2);
+    let e = err_of(pick("2"));
+    assert!(e.contains("'2'") && e.contains("available scenes: 0, 1"), "{e}");
+
+    // By name; a name wins over an index, and the list names the scenes.
+    let mut j = sample_json("MultipleScenes");
+    j["scenes"][0]["name"] = json!("1");
+    j["scenes"][1]["name"] = json!("square");
+    let opts = |want: &str| LoadOptions { scene: Some(want.into()), ..Default::default() };
+    assert_eq!(load_json(&j, &opts("square")).unwrap().triangles.len(), 2);
+    assert_eq!(load_json(&j, &opts("1")).unwrap().triangles.len(), 1, "scene 0 is named '1'");
+    let e = err_of(load_json(&j, &opts("nope")));
+    assert!(e.contains("'nope'") && e.contains("0 '1', 1 'square'"), "{e}");
+    // Without a default scene, the first is rendered (and the warning says so).
+    j.as_object_mut().unwrap().remove("scene");
+    let s = load_json(&j, &LoadOptions::default()).unwrap();
+    assert_eq!(s.triangles.len(), 1);
+    assert!(
+        s.report.warnings.iter().any(|w| w.contains("2 scenes") && w.contains("no default")),
+        "{:?}",
+        s.report.warnings
+    );
+}
+
+/// Orthographic cameras: skipped with a warning when the camera is chosen by default (a
+/// later perspective camera is used), an error that says so when `camera` names one.
+#[test]
+fn orthographic_cameras_are_skipped_or_refused() {
+    let mut d = Doc::triangle();
+    d.json["cameras"].as_array_mut().unwrap().insert(
+        0,
+        json!({"name": "flat", "type": "orthographic", "orthographic": {"xmag": 1.0, "ymag": 1.0, "znear": 0.1, "zfar": 10.0}}),
+    );
+    d.json["nodes"][1]["camera"] = json!(1);
+    d.json["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"name": "ortho_node", "camera": 0, "translation": [0.0, 0.0, 9.0]}));
+    d.json["scenes"][0]["nodes"] = json!([0, 2, 1]);
+    let dir = tempfile::tempdir().unwrap();
+    let path = d.write(dir.path());
+    let s = load(&path).unwrap();
+    assert_eq!(s.camera.position, Vec3::new(0.0, 0.0, 5.0), "the perspective camera after the orthographic one");
+    assert_eq!(s.report.warnings.iter().filter(|w| w.contains("orthographic cameras are not supported")).count(), 1);
+    for want in ["flat", "ortho_node"] {
+        let e = err_of(load_with(&path, &LoadOptions { camera: Some(want.into()), ..Default::default() }));
+        assert!(
+            e.contains(&format!("camera '{want}' (node 2) is orthographic")) && e.contains("perspective cameras: cam"),
+            "{e}"
+        );
+    }
+}
+
+/// Skin weights are divided by their sum (UNSIGNED_BYTE normalized 128/255 alone still
+/// moves the vertex the whole way); a vertex whose weights are all 0 stays as stored, with
+/// a warning.
+#[test]
+fn skin_weights_are_normalised() {
+    let mut d = Doc::triangle();
+    d.json["scenes"][0]["nodes"] = json!([0, 1, 2]);
+    d.json["nodes"].as_array_mut().unwrap().push(json!({"name": "joint", "translation": [0.0, 0.0, 1.0]}));
+    d.json["nodes"][0]["skin"] = json!(0);
+    d.json["skins"] = json!([{"joints": [2]}]);
+    let jv = d.push_view(&[0u8; 12], None);
+    let ja = d.push_accessor(json!({"bufferView": jv, "componentType": 5121, "count": 3, "type": "VEC4"}));
+    let wv = d.push_view(&[128, 0, 0, 0, 128, 0, 0, 0, 0, 0, 0, 0], None);
+    let wa = d.push_accessor(
+        json!({"bufferView": wv, "componentType": 5121, "normalized": true, "count": 3, "type": "VEC4"}),
+    );
+    d.prim()["attributes"]["JOINTS_0"] = json!(ja);
+    d.prim()["attributes"]["WEIGHTS_0"] = json!(wa);
+    let s = d.load().unwrap();
+    assert_eq!(s.triangles[0].p, [Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::Y]);
+    assert!(s.report.warnings.iter().any(|w| w.contains("weights are all 0")), "{:?}", s.report.warnings);
+}
+
+/// A skinned node whose primitive has no JOINTS_0/WEIGHTS_0: its vertices as stored (the
+/// node's transform is still ignored), with a warning.
+#[test]
+fn skinned_primitive_without_influences_warns() {
+    let mut j = sample_json("SimpleSkin");
+    let attrs = j["meshes"][0]["primitives"][0]["attributes"].as_object_mut().unwrap();
+    attrs.remove("JOINTS_0");
+    attrs.remove("WEIGHTS_0");
+    j["nodes"][0]["translation"] = json!([100.0, 0.0, 0.0]);
+    let s = load_json(&j, &LoadOptions::default()).unwrap();
+    assert_eq!(s.triangles[0].p, [Vec3::new(-0.5, 0.0, 0.0), Vec3::new(0.5, 0.0, 0.0), Vec3::new(0.5, 0.5, 0.0)]);
+    let w = &s.report.warnings;
+    assert_eq!(w.iter().filter(|w| w.contains("no JOINTS_0/WEIGHTS_0")).count(), 1, "{w:?}");
+}

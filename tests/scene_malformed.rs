@@ -4,7 +4,8 @@
 //!   `tests/malformed/make_corpus.py`): the error's `{:#}` text is one line, names the file
 //!   and contains the expected substring (`ok`: the file loads).
 //! * `mutations_never_panic`: a few thousand deterministic mutations of the reference
-//!   scenes (.gltf and .glb): byte flips, truncations, splices, and JSON-aware edits
+//!   scenes (.gltf and .glb) and of small files with sparse accessors, morph targets, skins,
+//!   quantized attributes and several scenes (.gltf): byte flips, truncations, splices, and JSON-aware edits
 //!   (numbers replaced by huge / negative / out-of-range values, keys deleted, types
 //!   swapped). The loader must return `Ok` or a one-line error, never panic. A panicking
 //!   input is written to `$CARGO_TARGET_TMPDIR` and named in the failure.
@@ -393,6 +394,21 @@ fn mutations_never_panic() {
         let text = std::fs::read(scene::builtin_path(name).unwrap()).unwrap();
         inputs.push((format!("{name}.glb"), to_glb(&text)));
         inputs.push((format!("{name}.gltf"), text));
+    }
+    // Sparse accessors, morph targets, skins, quantized attributes and several scenes
+    // (embedded buffers: the mutations reach their accessor and skin reads).
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for file in [
+        "tests/khronos/SimpleSparseAccessor.gltf",
+        "tests/khronos/SimpleMorph.gltf",
+        "tests/khronos/SimpleSkin.gltf",
+        "tests/khronos/MultipleScenes.gltf",
+        "tests/malformed/quantized_mesh.gltf",
+        "tests/malformed/skinned.gltf",
+        "tests/malformed/sparse_without_view.gltf",
+    ] {
+        let name = Path::new(file).file_name().unwrap().to_string_lossy().into_owned();
+        inputs.push((name, std::fs::read(root.join(file)).unwrap()));
     }
     let (mut ok, mut errors) = (0usize, 0usize);
     let start = std::time::Instant::now();

@@ -39,7 +39,8 @@ impl EnvArgs {
         Ok(())
     }
 
-    /// Scene load options with the map read (`camera` as `--camera` gives it).
+    /// Scene load options with the map read (`camera` as `--camera` gives it; the file's
+    /// default glTF scene).
     pub fn load_options(&self, camera: Option<String>) -> Result<vkvcm::scene::LoadOptions> {
         let environment = match &self.env {
             Some(path) => Some(vkvcm::scene::EnvironmentLight {
@@ -49,7 +50,7 @@ impl EnvArgs {
             }),
             None => None,
         };
-        Ok(vkvcm::scene::LoadOptions { camera, environment })
+        Ok(vkvcm::scene::LoadOptions { camera, scene: None, environment })
     }
 }
 

@@ -58,6 +58,10 @@ pub struct RenderArgs {
     /// camera gets one that frames the scene).
     #[arg(long)]
     pub camera: Option<String>,
+    /// glTF files with several scenes: render the scene with this name, else with this
+    /// index (default: the file's default scene, else the first).
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub gltf_scene: Option<String>,
     /// Put the camera at X,Y,Z (the file's world coordinates); it then looks at the
     /// centre of the scene unless --look-at says otherwise.
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3)]
@@ -231,7 +235,8 @@ fn check_args(a: &RenderArgs) -> Result<()> {
 pub fn render_cmd(a: RenderArgs) -> Result<()> {
     check_args(&a)?;
     let scene_name = a.scene.clone().unwrap_or_else(|| "default".into());
-    let mut scene = scene::load_named_with(&scene_name, &a.env.load_options(a.camera.clone())?)?;
+    let options = vkvcm::scene::LoadOptions { scene: a.gltf_scene.clone(), ..a.env.load_options(a.camera.clone())? };
+    let mut scene = scene::load_named_with(&scene_name, &options)?;
     scene.set_view(a.look_from, a.look_at, a.fov.map(f32::to_radians)).context("--look-from / --look-at / --fov")?;
     for w in &scene.report.warnings {
         eprintln!("warning: {w}");

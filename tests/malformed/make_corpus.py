@@ -176,6 +176,93 @@ case("environment_not_an_image.gltf", doc(set_(["extensions"], {"VKVCM_environme
 case("environment_negative_strength.gltf", doc(set_(["extensions"], {"VKVCM_environment": {"uri": data_uri(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 3 +X 2\n" + bytes([128, 128, 128, 129]) * 6), "strength": -1}})), "strength must not be negative")
 case("environment_and_background.gltf", doc(set_(["extensions"], {"VKVCM_background": {"radiance": [1, 1, 1]}, "VKVCM_environment": {"uri": "sky.hdr"}})), "a scene has one background")
 
+# Sparse accessors (glTF 2.0 section 3.6.2.3): POSITION (accessor 0) with elements replaced.
+# Buffer: BIN (44 bytes), the UNSIGNED_SHORT sparse indices (padded to 4), the values.
+def sparse(indices, values, count=None, idx_len=None, val_len=None, base_view=True):
+    def edit(d):
+        b = BIN + struct.pack("<%dH" % len(indices), *indices)
+        b += b"\0" * (-len(b) % 4)
+        val_off = len(b)
+        b += f32s(values)
+        with_bin(b)(d)
+        d["bufferViews"] += [
+            {"buffer": 0, "byteOffset": 44, "byteLength": 2 * len(indices) if idx_len is None else idx_len},
+            {"buffer": 0, "byteOffset": val_off, "byteLength": 4 * len(values) if val_len is None else val_len},
+        ]
+        d["accessors"][0]["sparse"] = {
+            "count": len(indices) if count is None else count,
+            "indices": {"bufferView": 2, "componentType": 5123},
+            "values": {"bufferView": 3},
+        }
+        d["accessors"][0]["max"] = [1, 2, 0]
+        if not base_view:
+            del d["accessors"][0]["bufferView"]
+    return edit
+
+
+case("sparse_position.gltf", doc(sparse([2], [0.0, 2.0, 0.0])), "ok")
+case("sparse_without_view.gltf", doc(sparse([0, 1, 2], POS, base_view=False)), "ok")
+case("sparse_index_out_of_range.gltf", doc(sparse([3], [0.0, 2.0, 0.0])), "accessor 0: sparse index 0 = 3 is out of range")
+case("sparse_indices_not_increasing.gltf", doc(sparse([2, 1], [0.0, 2.0, 0.0] * 2)), "sparse indices must strictly increase")
+case("sparse_count_beyond_accessor.gltf", doc(sparse([0, 1, 2, 2], [0.0] * 12)), "sparse.count 4 exceeds the accessor's count 3")
+case("sparse_indices_beyond_view.gltf", doc(sparse([1, 2], [0.0] * 6, idx_len=2)), "accessor 0 sparse.indices")
+case("sparse_values_beyond_view.gltf", doc(sparse([2], [0.0, 2.0, 0.0], val_len=8)), "accessor 0 sparse.values")
+case("sparse_count_huge.gltf", doc(sparse([2], [0.0, 2.0, 0.0], count=2**62)), "exceeds the accessor's count")
+case("sparse_without_view_huge.gltf", doc(lambda d: (sparse([2], [0.0, 2.0, 0.0], base_view=False)(d), d["accessors"][0].update(count=2**40))), "zero-initialised accessors of more than 33554432 components are refused")
+
+# KHR_mesh_quantization: SHORT positions (8-byte stride: 4-byte alignment), BYTE normals.
+QBIN = struct.pack("<12h", -1, -1, 0, 0, 1, -1, 0, 0, 0, 1, 0, 0) + struct.pack("<12b", 0, 0, 127, 0, 0, 0, 127, 0, 0, 0, 127, 0) + struct.pack("<3H", 0, 1, 2) + b"\0\0"
+
+
+def quantized(normal_normalized=True, ext=True):
+    def edit(d):
+        with_bin(QBIN)(d)
+        d["bufferViews"] = [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 24, "byteStride": 8},
+            {"buffer": 0, "byteOffset": 36, "byteLength": 6},
+            {"buffer": 0, "byteOffset": 24, "byteLength": 12, "byteStride": 4},
+        ]
+        d["accessors"][0].update(componentType=5122)
+        d["accessors"].append({"bufferView": 2, "componentType": 5120, "normalized": normal_normalized, "count": 3, "type": "VEC3"})
+        d["meshes"][0]["primitives"][0]["attributes"]["NORMAL"] = 2
+        if ext:
+            d.update(extensionsUsed=["KHR_mesh_quantization"], extensionsRequired=["KHR_mesh_quantization"])
+    return edit
+
+
+case("quantized_mesh.gltf", doc(quantized()), "ok")
+case("quantized_without_extension.gltf", doc(quantized(ext=False)), "integer formats need the KHR_mesh_quantization extension")
+case("quantized_normal_not_normalized.gltf", doc(quantized(normal_normalized=False)), "must be FLOAT or BYTE normalized or SHORT normalized VEC3, is BYTE VEC3")
+
+# Morph targets (glTF 2.0 section 3.7.2.2).
+case("morph_weights_mismatch.gltf", doc(lambda d: (d["meshes"][0]["primitives"][0].update(targets=[{"POSITION": 0}]), d["meshes"][0].update(weights=[1.0, 1.0]))), "2 morph target weight(s) (node or mesh weights), but the primitive has 1 morph target(s)")
+case("morph_target_short.gltf", doc(lambda d: (d["accessors"].append({"bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3"}), d["meshes"][0]["primitives"][0].update(targets=[{"POSITION": 2}]))), "morph target POSITION accessor 2 has 2 elements, the primitive has 3 vertices")
+
+# Skins (glTF 2.0 section 3.7.3): JOINTS_0 (UNSIGNED_BYTE), WEIGHTS_0 (FLOAT), inverse bind matrices.
+def skinned(joint=0, weight=1.0, joints=(1,), ibm_count=None):
+    def edit(d):
+        b = BIN + bytes([joint, 0, 0, 0] * 3) + f32s([weight, 0, 0, 0] * 3) + f32s([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1])
+        with_bin(b)(d)
+        d["bufferViews"] += [{"buffer": 0, "byteOffset": 44, "byteLength": 12}, {"buffer": 0, "byteOffset": 56, "byteLength": 48}, {"buffer": 0, "byteOffset": 104, "byteLength": 64}]
+        d["accessors"] += [
+            {"bufferView": 2, "componentType": 5121, "count": 3, "type": "VEC4"},
+            {"bufferView": 3, "componentType": 5126, "count": 3, "type": "VEC4"},
+            {"bufferView": 4, "componentType": 5126, "count": 1 if ibm_count is None else ibm_count, "type": "MAT4"},
+        ]
+        d["meshes"][0]["primitives"][0]["attributes"].update(JOINTS_0=2, WEIGHTS_0=3)
+        d["nodes"][0]["skin"] = 0
+        d["nodes"].append({"name": "joint"})
+        d["scenes"][0]["nodes"].append(2)
+        d["skins"] = [{"joints": [2 if j == 1 else j for j in joints], "inverseBindMatrices": 4}]
+    return edit
+
+
+case("skinned.gltf", doc(skinned()), "ok")
+case("skin_joint_out_of_range.gltf", doc(skinned(joint=1)), "JOINTS_0 accessor 2 vertex 0 names joint 1, but the skin has 1 joints")
+case("skin_negative_weight.gltf", doc(skinned(weight=-1.0)), "weights must be finite and not negative")
+case("skin_too_few_inverse_bind_matrices.gltf", doc(skinned(joints=(1, 0))), "inverseBindMatrices accessor 4 has 1 matrices for 2 joints")
+case("skin_ibm_beyond_view.gltf", doc(skinned(ibm_count=2)), "accessor 4 (2 elements of 64 bytes")
+
 if __name__ == "__main__":
     for f in os.listdir(HERE):
         if f.endswith((".gltf", ".glb", ".expect")):

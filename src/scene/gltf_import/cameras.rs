@@ -1,5 +1,7 @@
 //! Cameras: the perspective cameras of the walked nodes and the choice of the one that is
-//! rendered (by name, else the first in node order).
+//! rendered (by name, else the first in node order). Orthographic cameras are not
+//! supported: skipped with a warning when the camera is chosen by default, an error when
+//! `LoadOptions::camera` names one.
 
 use super::{Importer, LoadOptions};
 use crate::scene::Camera;
@@ -29,16 +31,22 @@ impl Importer<'_> {
                 yfov: p.yfov(),
                 node: node.index(),
             }),
-            gltf::camera::Projection::Orthographic(_) => self
-                .warnings
-                .warn("orthographic cameras are not supported (skipped)", format!("camera {} on {label}", cam.index())),
+            gltf::camera::Projection::Orthographic(_) => {
+                self.orthographic.push((node.name().map(str::to_string), cam.name().map(str::to_string), node.index()));
+                self.warnings.warn(
+                    "orthographic cameras are not supported (skipped)",
+                    format!("camera {} on {label}", cam.index()),
+                )
+            }
         }
     }
 
     /// The rendered camera: the candidate whose node or camera name is `options.camera`,
     /// else the first one, else (no camera in the file) a default camera framing the
-    /// geometry ([`Camera::framing`], with a warning). Its up vector is made orthogonal to its forward vector; a
-    /// degenerate transform or a yfov outside (0, pi) is an error.
+    /// geometry ([`Camera::framing`], with a warning). Its up vector is made orthogonal to
+    /// its forward vector; a degenerate transform or a yfov outside (0, pi) is an error, and
+    /// so is a name that matches no perspective camera (the message says when it names an
+    /// orthographic one, and lists the perspective cameras).
     pub(super) fn choose_camera(&mut self, options: &LoadOptions) -> Result<Camera> {
         let chosen = match &options.camera {
             Some(want) => self
@@ -55,10 +63,16 @@ impl Importer<'_> {
                             c.node_name.clone().or(c.camera_name.clone()).unwrap_or_else(|| format!("node {}", c.node))
                         })
                         .collect();
-                    anyhow!(
-                        "no perspective camera named '{want}' (available: {})",
-                        if names.is_empty() { "none".to_string() } else { names.join(", ") }
-                    )
+                    let names = if names.is_empty() { "none".to_string() } else { names.join(", ") };
+                    let ortho = self.orthographic.iter().find(|(node_name, camera_name, _)| {
+                        node_name.as_deref() == Some(want.as_str()) || camera_name.as_deref() == Some(want.as_str())
+                    });
+                    match ortho {
+                        Some((_, _, node)) => anyhow!(
+                            "camera '{want}' (node {node}) is orthographic: orthographic cameras are not supported (perspective cameras: {names})"
+                        ),
+                        None => anyhow!("no perspective camera named '{want}' (available: {names})"),
+                    }
                 })?,
             None => {
                 match self.cameras.first() {

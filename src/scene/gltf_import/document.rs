@@ -7,14 +7,23 @@ use super::warnings::Warnings;
 use anyhow::{bail, Result};
 use gltf::json;
 
+/// A parsed and validated document.
+pub(super) struct Parsed {
+    pub root: json::Root,
+    /// The GLB binary chunk, if any.
+    pub blob: Option<Vec<u8>>,
+    /// The file uses `KHR_mesh_quantization` (integer vertex attributes are allowed).
+    pub quantized: bool,
+}
+
 /// The validated JSON of `bytes` (`.gltf` or `.glb`) and the GLB binary chunk, if any.
-pub(super) fn parse_document(bytes: &[u8], warnings: &mut Warnings) -> Result<(json::Root, Option<Vec<u8>>)> {
+pub(super) fn parse_document(bytes: &[u8], warnings: &mut Warnings) -> Result<Parsed> {
     let (mut root, blob) = read_container(bytes)?;
     check_version(&root)?;
-    check_extensions(&mut root, warnings)?;
+    let quantized = check_extensions(&mut root, warnings)?;
     check_attribute_indices(&root)?;
     validate(&root, warnings)?;
-    Ok((root, blob))
+    Ok(Parsed { root, blob, quantized })
 }
 
 /// Refuses a file that is not glTF 2.x: glTF 1.0 is another format (materials as

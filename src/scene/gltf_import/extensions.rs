@@ -12,6 +12,8 @@ pub const EXT_SPHERES: &str = "VKVCM_spheres";
 pub const EXT_MATERIALS_PHONG: &str = "VKVCM_materials_phong";
 pub const EXT_BACKGROUND: &str = "VKVCM_background";
 pub const EXT_ENVIRONMENT: &str = "VKVCM_environment";
+/// Integer vertex attributes (positions, normals, morph-target displacements).
+pub const KHR_MESH_QUANTIZATION: &str = "KHR_mesh_quantization";
 
 /// All extensions the importer interprets; any other one in `extensionsUsed` or
 /// `extensionsRequired` is reported as a warning.
@@ -20,6 +22,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_materials_emissive_strength",
+    KHR_MESH_QUANTIZATION,
     EXT_SPHERES,
     EXT_MATERIALS_PHONG,
     EXT_BACKGROUND,
@@ -31,8 +34,10 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
 /// are errors; unknown extensions that are only used become warnings (one per name).
 /// Afterwards `extensionsRequired` keeps only the extensions the `gltf` crate knows, since
 /// its validation refuses required extensions it does not know (vkvcm's own extensions are
-/// read here, from the raw JSON).
-pub(super) fn check_extensions(root: &mut json::Root, warnings: &mut Warnings) -> Result<()> {
+/// read here, from the raw JSON). Returns whether the file uses `KHR_mesh_quantization`
+/// (listed in `extensionsUsed` or `extensionsRequired`), which allows integer vertex
+/// attributes.
+pub(super) fn check_extensions(root: &mut json::Root, warnings: &mut Warnings) -> Result<bool> {
     let unsupported: Vec<&str> =
         root.extensions_required.iter().map(String::as_str).filter(|e| !SUPPORTED_EXTENSIONS.contains(e)).collect();
     if !unsupported.is_empty() {
@@ -50,8 +55,9 @@ pub(super) fn check_extensions(root: &mut json::Root, warnings: &mut Warnings) -
         seen.push(ext.clone());
         warnings.warn(format!("extension {ext} is not supported and was ignored"), "");
     }
+    let quantized = root.extensions_used.iter().chain(&root.extensions_required).any(|e| e == KHR_MESH_QUANTIZATION);
     root.extensions_required.retain(|e| json::extensions::ENABLED_EXTENSIONS.contains(&e.as_str()));
-    Ok(())
+    Ok(quantized)
 }
 
 /// The 3-vector `v[field]` of an extension payload, `default` when absent; `ctx` is the

@@ -1,7 +1,9 @@
-//! Geometry: mesh primitives triangulated into world-space triangles, and the spheres of
-//! vkvcm's `VKVCM_spheres` node extension.
+//! Geometry: mesh primitives (morphed and skinned as stored, then triangulated) into
+//! world-space triangles, and the spheres of vkvcm's `VKVCM_spheres` node extension.
 
-use super::accessors::{read_indices, read_vec3};
+use super::accessors::{
+    read_indices, read_vec3, Formats, NORMAL_FORMATS, NORMAL_TARGET_FORMATS, POSITION_FORMATS, POSITION_TARGET_FORMATS,
+};
 use super::extensions::{ext_vec3, EXT_SPHERES};
 use super::Importer;
 use crate::scene::{Sphere, Triangle};
@@ -10,14 +12,31 @@ use glam::{Mat3, Mat4, Vec3};
 use gltf::mesh::{Mode, Semantic};
 use serde_json::Value;
 
+/// How a mesh's vertices reach world space.
+pub(super) enum Placement {
+    /// By the node's world transform (re-centred, f32).
+    Rigid(Mat4),
+    /// By a skin: the joint matrices of [`Importer::joint_matrices`], blended per vertex
+    /// (the node's own transform is not used: glTF 2.0 section 3.7.3.2).
+    Skinned(Vec<Mat4>),
+}
+
 impl Importer<'_> {
-    /// Adds the triangles of every primitive of `mesh`, transformed by `world`. Triangles
-    /// that are degenerate after the transform are counted in the report and dropped; a
-    /// mirroring transform keeps each triangle's geometric normal on the authored side.
-    pub(super) fn add_mesh(&mut self, mesh: &gltf::Mesh, world: Mat4, label: &str) -> Result<()> {
+    /// Adds the triangles of every primitive of `mesh`, placed by `placement`. Morph
+    /// targets are applied first, at the weights `node_weights` (the node's `weights`) or
+    /// else the mesh's `weights` (glTF 2.0 section 3.7.2.2: none given means all 0), then
+    /// the skin, if any. Triangles that are degenerate after the transform are counted in
+    /// the report and dropped; a mirroring transform keeps each triangle's geometric normal
+    /// on the authored side.
+    pub(super) fn add_mesh(
+        &mut self,
+        mesh: &gltf::Mesh,
+        placement: &Placement,
+        node_weights: Option<&[f32]>,
+        label: &str,
+    ) -> Result<()> {
         let mi = mesh.index();
-        let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
-        let flip = Mat3::from_mat4(world).determinant() < 0.0;
+        let weights = node_weights.or(mesh.weights());
         for prim in mesh.primitives() {
             let pi = prim.index();
             let where_ = format!("mesh {mi} primitive {pi} (on {label})");
@@ -33,9 +52,6 @@ impl Importer<'_> {
                 self.warnings.warn(format!("primitive mode {name} is not supported (primitive skipped)"), where_);
                 continue;
             }
-            if prim.morph_targets().len() > 0 {
-                self.warnings.warn("morph targets are not supported (base geometry used)", where_.clone());
-            }
             if prim.get(&Semantic::Colors(0)).is_some() {
                 self.warnings.warn("vertex colors (COLOR_0) are not supported (ignored)", where_.clone());
             }
@@ -45,21 +61,13 @@ impl Importer<'_> {
             };
             let normal_acc = prim.get(&Semantic::Normals);
             let index_acc = prim.indices();
-            let sparse = [Some(&pos_acc), normal_acc.as_ref(), index_acc.as_ref()]
-                .into_iter()
-                .flatten()
-                .find(|a| a.sparse().is_some());
-            if let Some(a) = sparse {
-                self.warnings.warn(
-                    "sparse accessors are not supported (primitive skipped)",
-                    format!("accessor {} of {where_}", a.index()),
-                );
-                continue;
-            }
-            let positions = read_vec3(&self.buffers, &pos_acc, "POSITION").with_context(|| where_.clone())?;
-            let normals = match &normal_acc {
+            let q = self.quantized;
+            let mut positions =
+                read_vec3(&self.buffers, &pos_acc, "POSITION", &POSITION_FORMATS, q).with_context(|| where_.clone())?;
+            let mut normals = match &normal_acc {
                 Some(a) => {
-                    let n = read_vec3(&self.buffers, a, "NORMAL").with_context(|| where_.clone())?;
+                    let n =
+                        read_vec3(&self.buffers, a, "NORMAL", &NORMAL_FORMATS, q).with_context(|| where_.clone())?;
                     if n.len() != positions.len() {
                         bail!(
                             "{where_}: NORMAL accessor {} has {} elements, POSITION accessor {} has {}",
@@ -73,6 +81,7 @@ impl Importer<'_> {
                 }
                 None => None,
             };
+            self.apply_morph_targets(&prim, weights, &mut positions, normals.as_mut(), &where_)?;
             let indices: Vec<u32> = match &index_acc {
                 Some(a) => {
                     let idx = read_indices(&self.buffers, a).with_context(|| where_.clone())?;
@@ -87,6 +96,37 @@ impl Importer<'_> {
                     idx
                 }
                 None => (0..positions.len() as u32).collect(),
+            };
+            // Skinned: per vertex, the matrix that takes it to world space.
+            let vertex_matrices = match placement {
+                Placement::Rigid(_) => None,
+                Placement::Skinned(joints) => self.skin_vertex_matrices(&prim, joints, positions.len(), &where_)?,
+            };
+            let (world_p, world_n, flips) = match vertex_matrices {
+                None => {
+                    let world = match placement {
+                        Placement::Rigid(world) => *world,
+                        // A skinned node whose primitive has no JOINTS_0/WEIGHTS_0 (warned):
+                        // its vertices as stored, in world coordinates.
+                        Placement::Skinned(_) => self.rebase.as_mat4(),
+                    };
+                    let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+                    let flip = Mat3::from_mat4(world).determinant() < 0.0;
+                    let p: Vec<Vec3> = positions.iter().map(|v| world.transform_point3(*v)).collect();
+                    let n = normals.map(|ns| ns.iter().map(|v| (normal_matrix * *v).normalize_or_zero()).collect());
+                    (p, n, vec![flip; positions.len()])
+                }
+                Some(ms) => {
+                    let p: Vec<Vec3> = positions.iter().zip(&ms).map(|(v, m)| m.transform_point3(*v)).collect();
+                    let n: Option<Vec<Vec3>> = normals.map(|ns| {
+                        ns.iter()
+                            .zip(&ms)
+                            .map(|(v, m)| (Mat3::from_mat4(*m).inverse().transpose() * *v).normalize_or_zero())
+                            .collect()
+                    });
+                    let flips = ms.iter().map(|m| Mat3::from_mat4(*m).determinant() < 0.0).collect();
+                    (p, n, flips)
+                }
             };
             let tris: Vec<[u32; 3]> = match mode {
                 Mode::Triangles => {
@@ -114,11 +154,12 @@ impl Importer<'_> {
                 None => self.default_material(),
             };
             for t in tris {
-                let mut p = t.map(|i| world.transform_point3(positions[i as usize]));
-                let mut n = normals.as_ref().map(|ns| t.map(|i| (normal_matrix * ns[i as usize]).normalize_or_zero()));
-                if flip {
+                let mut p = t.map(|i| world_p[i as usize]);
+                let mut n = world_n.as_ref().map(|ns| t.map(|i| ns[i as usize]));
+                if flips[t[0] as usize] {
                     // A mirroring transform reverses the winding; keep the geometric normal
-                    // on the side the author meant.
+                    // on the side the author meant. (A skinned triangle follows the
+                    // transform of its first vertex.)
                     p.swap(1, 2);
                     if let Some(n) = n.as_mut() {
                         n.swap(1, 2);
@@ -140,6 +181,65 @@ impl Importer<'_> {
                     }
                 }
                 self.scene.triangles.push(Triangle { p, n, material, attributes: None });
+            }
+        }
+        Ok(())
+    }
+
+    /// Adds the morph-target displacements of `prim` to `positions` (and `normals`, when
+    /// both the primitive and a target have them) at the `weights` in force (glTF 2.0
+    /// section 3.7.2.2: p = p0 + sum_i w_i d_i; `None`: every weight is 0). A weight count
+    /// other than the primitive's target count is an error, as is a target accessor whose
+    /// count differs from POSITION's. TANGENT displacements are not read (tangents are
+    /// not used).
+    fn apply_morph_targets(
+        &self,
+        prim: &gltf::Primitive,
+        weights: Option<&[f32]>,
+        positions: &mut [Vec3],
+        mut normals: Option<&mut Vec<Vec3>>,
+        where_: &str,
+    ) -> Result<()> {
+        let targets: Vec<_> = prim.morph_targets().collect();
+        if targets.is_empty() {
+            return Ok(());
+        }
+        let zeros = vec![0.0; targets.len()];
+        let weights = weights.unwrap_or(&zeros);
+        if weights.len() != targets.len() {
+            bail!(
+                "{where_}: {} morph target weight(s) (node or mesh weights), but the primitive has {} morph target(s)",
+                weights.len(),
+                targets.len()
+            );
+        }
+        let q = self.quantized;
+        for (ti, (target, &w)) in targets.iter().zip(weights).enumerate() {
+            let ctx = || format!("{where_}, morph target {ti}");
+            if !w.is_finite() {
+                bail!("{}: weight {w} is not finite", ctx());
+            }
+            let apply = |acc: &gltf::Accessor, what: &str, formats: &Formats, out: &mut [Vec3]| -> Result<()> {
+                let d = read_vec3(&self.buffers, acc, what, formats, q).with_context(ctx)?;
+                if d.len() != out.len() {
+                    bail!(
+                        "{}: {what} accessor {} has {} elements, the primitive has {} vertices",
+                        ctx(),
+                        acc.index(),
+                        d.len(),
+                        out.len()
+                    );
+                }
+                for (v, dv) in out.iter_mut().zip(d) {
+                    *v += w * dv;
+                }
+                Ok(())
+            };
+            if let Some(acc) = target.positions() {
+                apply(&acc, "morph target POSITION", &POSITION_TARGET_FORMATS, positions)?;
+            }
+            if let (Some(acc), Some(ns)) = (target.normals(), normals.as_deref_mut()) {
+                apply(&acc, "morph target NORMAL", &NORMAL_TARGET_FORMATS, ns)?;
             }
         }
         Ok(())

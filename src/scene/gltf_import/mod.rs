@@ -3,10 +3,12 @@
 //! What is read, what is approximated and what is refused is specified in
 //! `docs/scene-format.md`; in short: the default scene's node hierarchy with world
 //! transforms, triangle primitives (TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN; indexed or
-//! not) with optional normals, the metallic/roughness material mapped to vkvcm's
-//! diffuse + GGX + mirror/dielectric model, emission (one area light per emitting
-//! triangle), `KHR_lights_punctual`, the first perspective camera, and the vkvcm
-//! extensions `VKVCM_spheres`, `VKVCM_materials_phong` and `VKVCM_background`.
+//! not) with optional normals, sparse accessors, `KHR_mesh_quantization`, morph targets at
+//! their default weights, skins in the pose their joints' node transforms give, the
+//! metallic/roughness material mapped to vkvcm's diffuse + GGX + mirror/dielectric model,
+//! emission (one area light per emitting triangle), `KHR_lights_punctual`, the first
+//! perspective camera, and the vkvcm extensions `VKVCM_spheres`, `VKVCM_materials_phong`
+//! and `VKVCM_background`.
 //!
 //! Everything that is not represented produces one warning per kind in
 //! [`LoadReport::warnings`]; malformed input produces an error that names the file and the
@@ -19,8 +21,10 @@
 //!   URIs and the folder sandbox;
 //! - `document.rs`: validation of the parsed JSON before the `gltf` crate's reader sees it;
 //! - `extensions.rs`: the extensions the importer understands and readers for their payloads;
-//! - `accessors.rs`: bounds-checked accessor reads (positions, normals, indices);
-//! - `geometry.rs`: meshes (triangulation, transforms) and `VKVCM_spheres`;
+//! - `accessors.rs`: bounds-checked accessor reads (sparse and normalized/quantized
+//!   attributes, indices, skin matrices);
+//! - `geometry.rs`: meshes (morph targets, skinning, triangulation, transforms) and
+//!   `VKVCM_spheres`;
 //! - `materials.rs`: the glTF material -> vkvcm material mapping;
 //! - `lights.rs`: punctual lights, area lights from emission and the background;
 //! - `cameras.rs`: camera candidates and the choice of the rendered camera;
@@ -33,6 +37,7 @@ mod extensions;
 mod geometry;
 mod lights;
 mod materials;
+mod skins;
 mod sources;
 mod warnings;
 
@@ -52,6 +57,9 @@ pub struct LoadOptions {
     /// Select the camera whose node name or camera name equals this; `None`: the first
     /// perspective camera in node order.
     pub camera: Option<String>,
+    /// Render the glTF scene (`scenes[i]`) with this name, else the one with this index
+    /// (`vkvcm render --gltf-scene`); `None`: the file's `scene`, else scene 0.
+    pub scene: Option<String>,
     /// Light the scene with this environment instead of the file's background
     /// (`VKVCM_background` / `VKVCM_environment`, which are then not read) or the default
     /// white sky (`vkvcm render --env`).
@@ -89,13 +97,14 @@ pub(crate) fn one_line(path: &Path, e: &anyhow::Error) -> anyhow::Error {
 /// [`super::validate`]) to the scene's report.
 fn import_bytes(bytes: &[u8], base_dir: &Path, name: String, options: &LoadOptions) -> Result<Scene> {
     let mut warnings = Warnings::default();
-    let (root, blob) = document::parse_document(bytes, &mut warnings)?;
-    let doc = gltf::Document::from_json_without_validation(root);
-    let buffers = sources::load_buffers(&doc, blob, base_dir)?;
+    let parsed = document::parse_document(bytes, &mut warnings)?;
+    let doc = gltf::Document::from_json_without_validation(parsed.root);
+    let buffers = sources::load_buffers(&doc, parsed.blob, base_dir)?;
     let mut importer = Importer {
         doc: &doc,
         base_dir,
         buffers,
+        quantized: parsed.quantized,
         warnings,
         scene: Scene {
             name,
@@ -114,7 +123,10 @@ fn import_bytes(bytes: &[u8], base_dir: &Path, name: String, options: &LoadOptio
         },
         default_material: None,
         cameras: Vec::new(),
+        orthographic: Vec::new(),
         punctual: Vec::new(),
+        node_world: Vec::new(),
+        rebase: DMat4::IDENTITY,
     };
     importer.run(options)?;
     let Importer { mut scene, mut warnings, .. } = importer;
@@ -133,6 +145,8 @@ struct Importer<'d> {
     base_dir: &'d Path,
     /// The document's buffers, indexed like `doc.buffers()`, each at least `byteLength` long.
     buffers: Vec<Vec<u8>>,
+    /// The file uses `KHR_mesh_quantization`: integer vertex attributes are allowed.
+    quantized: bool,
     warnings: Warnings,
     /// The scene being built; its camera is a placeholder until [`Importer::run`] chooses one.
     scene: Scene,
@@ -140,8 +154,17 @@ struct Importer<'d> {
     default_material: Option<u32>,
     /// Perspective cameras met in node order.
     cameras: Vec<CameraCandidate>,
+    /// Orthographic cameras met in node order, by name (node name, else camera name, else
+    /// `node N`): skipped, but named when `--camera` asks for one.
+    orthographic: Vec<(Option<String>, Option<String>, usize)>,
     /// Punctual lights met in node order; appended after the area lights.
     punctual: Vec<Light>,
+    /// World transform (f64, not re-centred) of every node of the rendered scene, by node
+    /// index; `None` for nodes outside it. Skins read their joints' transforms here.
+    node_world: Vec<Option<DMat4>>,
+    /// The re-centring applied to every world transform (translation by minus the chosen
+    /// camera's position, docs/numerics.md).
+    rebase: DMat4,
 }
 
 impl<'d> Importer<'d> {
@@ -158,7 +181,7 @@ impl<'d> Importer<'d> {
             );
         }
 
-        let scene = self.scene_to_render()?;
+        let scene = self.scene_to_render(options.scene.as_deref())?;
         // World transforms are composed in f64 and the scene is re-centred on the chosen
         // camera before it is rounded to f32 (camera-relative coordinates,
         // docs/numerics.md): a scene 1e5 units from the origin keeps the precision it has
@@ -167,6 +190,11 @@ impl<'d> Importer<'d> {
         let origin = cameras::camera_origin(&order, options.camera.as_deref());
         self.scene.report.origin = origin.to_array();
         let rebase = DMat4::from_translation(-origin);
+        self.rebase = rebase;
+        self.node_world = vec![None; doc.nodes().len()];
+        for (node, world) in &order {
+            self.node_world[node.index()] = Some(*world);
+        }
         for (node, world) in &order {
             self.visit_node(node, (rebase * *world).as_mat4())?;
         }
@@ -175,16 +203,39 @@ impl<'d> Importer<'d> {
         self.collect_lights(options)
     }
 
-    /// The default scene, or else the first scene (with a warning when there are several).
-    fn scene_to_render(&mut self) -> Result<gltf::Scene<'d>> {
+    /// The scene to render: the one `want` names (a scene name, else a scene index), else
+    /// the default scene (`scene`), else the first one. Names the choice in a warning when
+    /// the file has several scenes and `want` is `None`, since the others are not rendered.
+    fn scene_to_render(&mut self, want: Option<&str>) -> Result<gltf::Scene<'d>> {
         let doc = self.doc;
-        if let Some(s) = doc.default_scene() {
-            return Ok(s);
+        let n = doc.scenes().len();
+        let describe = |s: &gltf::Scene| match s.name() {
+            Some(name) => format!("{} '{name}'", s.index()),
+            None => s.index().to_string(),
+        };
+        if let Some(w) = want {
+            let by_name = doc.scenes().find(|s| s.name() == Some(w));
+            let by_index = || w.trim().parse::<usize>().ok().and_then(|i| doc.scenes().nth(i));
+            return by_name.or_else(by_index).ok_or_else(|| {
+                let names: Vec<String> = doc.scenes().map(|s| describe(&s)).collect();
+                anyhow!(
+                    "no glTF scene named or numbered '{w}' (available scenes: {})",
+                    if names.is_empty() { "none".to_string() } else { names.join(", ") }
+                )
+            });
         }
-        let s = doc.scenes().next().ok_or_else(|| anyhow!("the file has no scene"))?;
-        if doc.scenes().len() > 1 {
-            self.warnings
-                .warn("no default scene: the first scene is rendered", format!("{} scenes", doc.scenes().len()));
+        let (s, how) = match doc.default_scene() {
+            Some(s) => (s, "the default one (`scene`)"),
+            None => (
+                doc.scenes().next().ok_or_else(|| anyhow!("the file has no scene"))?,
+                "the first (the file has no default `scene`)",
+            ),
+        };
+        if n > 1 {
+            self.warnings.warn(
+                format!("the file has {n} scenes: only {how} is rendered (--gltf-scene NAME|INDEX selects another)"),
+                format!("scene {}", describe(&s)),
+            );
         }
         Ok(s)
     }
@@ -200,13 +251,6 @@ impl<'d> Importer<'d> {
         if !world.is_finite() {
             bail!("{label}: world transform is not finite");
         }
-        if node.skin().is_some() {
-            self.warnings
-                .warn("skins are not supported (meshes are placed by their node transform, unskinned)", label.clone());
-        }
-        if node.weights().is_some() {
-            self.warnings.warn("morph targets are not supported (base geometry used)", label.clone());
-        }
         if let Some(cam) = node.camera() {
             self.add_camera(node, &cam, world, &label);
         }
@@ -214,7 +258,12 @@ impl<'d> Importer<'d> {
             self.add_light(&light, world, &label)?;
         }
         if let Some(mesh) = node.mesh() {
-            self.add_mesh(&mesh, world, &label)?;
+            // glTF 2.0 section 3.7.3.2: a skinned mesh is placed by its joints alone.
+            let placement = match node.skin() {
+                Some(skin) => geometry::Placement::Skinned(self.joint_matrices(&skin, &label)?),
+                None => geometry::Placement::Rigid(world),
+            };
+            self.add_mesh(&mesh, &placement, node.weights(), &label)?;
         }
         if let Some(v) = node.extensions().and_then(|e| e.get(EXT_SPHERES)) {
             self.add_spheres(v, world, ni)?;
