@@ -54,7 +54,31 @@ struct Bsdf {
     bool valid;
     bool delta;      // only specular components
     bool from_light; // fixed direction belongs to a light subpath (adjoint BSDF)
+    vec3 tint;       // the surface point's tint of the base colour (glsl/textures.glsl)
 };
+
+// The material's colours at a point with tint `tint` (the header of glsl/textures.glsl):
+// diffuse and mirror are multiplied by it; of the GGX F0 only the part above the
+// untinted dielectric reflectance (surface.w) is (glTF: F0 = mix(0.04, base, metallic)).
+// Without attributes the tint is exactly 1 and the colours are the material's own.
+vec3 diffuse_colour(GpuMaterial m, vec3 tint) {
+#if HAS_VERTEX_ATTRIBUTES
+    if (tint != vec3(1.0)) return m.diffuse.rgb * tint;
+#endif
+    return m.diffuse.rgb;
+}
+vec3 mirror_colour(GpuMaterial m, vec3 tint) {
+#if HAS_VERTEX_ATTRIBUTES
+    if (tint != vec3(1.0)) return m.mirror.rgb * tint;
+#endif
+    return m.mirror.rgb;
+}
+vec3 glossy_colour(GpuMaterial m, vec3 tint) {
+#if HAS_VERTEX_ATTRIBUTES
+    if (tint != vec3(1.0)) return vec3(m.surface.w) + (m.glossy.rgb - vec3(m.surface.w)) * tint;
+#endif
+    return m.glossy.rgb;
+}
 
 // Fresnel reflectance of a smooth dielectric; cos_i > 0 means the incident direction is
 // outside (pbrt's FrDielectric).
@@ -131,14 +155,15 @@ float diffuse_fresnel_weight(float f0, float cos_o, float cos_i) {
 }
 
 // `ng`: geometric normal (for a dielectric it must point outwards); `ns`: shading normal
-// on the same side as ng (== ng for flat shading).
-Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light) {
+// on the same side as ng (== ng for flat shading); `tint`: the point's tint (Surface.tint).
+Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, vec3 tint) {
     Bsdf b;
     GpuMaterial m = material_at(material);
     float ior = m.phong.w;
     b.material = material;
     b.wo = wo;
     b.from_light = from_light;
+    b.tint = tint;
     float c = dot(ng, wo);
     // wo must lie off the geometric surface and, on the same side, above the shading one.
     b.valid = abs(c) >= EPS_COSINE && (c >= 0.0 ? dot(ns, wo) : -dot(ns, wo)) >= EPS_COSINE;
@@ -163,20 +188,23 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light) {
     float a_d = 0.0, a_p = 0.0, a_g = 0.0, a_r = 0.0, a_t = 0.0;
     vec3 albedo = vec3(0.0);
 #if HAS_DIFFUSE
-    a_d = luminance(m.diffuse.rgb);
-    albedo += m.diffuse.rgb;
+    vec3 diffuse = diffuse_colour(m, tint);
+    a_d = luminance(diffuse);
+    albedo += diffuse;
 #endif
 #if HAS_PHONG
     a_p = luminance(m.phong.rgb);
     albedo += m.phong.rgb;
 #endif
 #if HAS_GGX
-    a_g = luminance(m.glossy.rgb);
-    albedo += m.glossy.rgb;
+    vec3 glossy = glossy_colour(m, tint);
+    a_g = luminance(glossy);
+    albedo += glossy;
 #endif
 #if HAS_MIRROR
-    a_r = b.fresnel * luminance(m.mirror.rgb);
-    albedo += b.fresnel * m.mirror.rgb;
+    vec3 mirror = mirror_colour(m, tint);
+    a_r = b.fresnel * luminance(mirror);
+    albedo += b.fresnel * mirror;
 #endif
 #if HAS_DIELECTRIC
     a_t = ior < 0.0 ? 0.0 : 1.0 - b.fresnel;
@@ -215,9 +243,9 @@ vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
     if (b.prob_diffuse > 0.0) {
         float f0 = m.mirror.w;
         if (f0 > 0.0) {
-            f += m.diffuse.rgb * (INV_PI * diffuse_fresnel_weight(f0, cos_o, cos_i));
+            f += diffuse_colour(m, b.tint) * (INV_PI * diffuse_fresnel_weight(f0, cos_o, cos_i));
         } else {
-            f += m.diffuse.rgb * INV_PI;
+            f += diffuse_colour(m, b.tint) * INV_PI;
         }
         pdf_fwd += b.prob_diffuse * cos_i * INV_PI;
         pdf_rev += b.prob_diffuse * cos_o * INV_PI;
@@ -240,7 +268,7 @@ vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
 #if HAS_GGX
     if (b.prob_glossy > 0.0) {
         float pf, pr;
-        f += ggx_eval(b.n, b.wo, wi, cos_o, cos_i, m.glossy.rgb, m.glossy.w, pf, pr);
+        f += ggx_eval(b.n, b.wo, wi, cos_o, cos_i, glossy_colour(m, b.tint), m.glossy.w, pf, pr);
         pdf_fwd += b.prob_glossy * pf;
         pdf_rev += b.prob_glossy * pr;
     }
@@ -343,7 +371,7 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
         s.pdf_rev = b.prob_reflect;
         s.cos_wi = bsdf_cos_geometric(b, s.wi);
         // f bsdf_cos / pdf with f = F mirror / |n.wi|.
-        s.weight = b.fresnel * m.mirror.rgb * shading_correction(b, s.wi) / b.prob_reflect;
+        s.weight = b.fresnel * mirror_colour(m, b.tint) * shading_correction(b, s.wi) / b.prob_reflect;
     } else
 #endif
     {

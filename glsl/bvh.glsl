@@ -50,6 +50,12 @@
 #define BVH_DONE 0xffffffffu
 #define BVH_ROBUST_SCALE 1.000002
 
+// Optional: `#define BVH_ALPHA_TEST` and define alpha_visible (glsl/textures.glsl): a
+// candidate hit it rejects is not a hit (cut-outs), for closest and any hits alike.
+#ifdef BVH_ALPHA_TEST
+bool alpha_visible(uint id, uint material, float u, float v);
+#endif
+
 #ifndef BVH_TEXEL
 #define BVH_TEXEL 0
 #endif
@@ -226,6 +232,9 @@ int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hi
                 hit = intersect_triangle(o, sh, uintBitsToFloat(pa.xyz), uintBitsToFloat(pb.xyz),
                                          v2, tmin, tmax, t, u, v);
             }
+#ifdef BVH_ALPHA_TEST
+            if (hit && !alpha_visible(pa.w, pb.w, u, v)) hit = false;
+#endif
             if (hit) {
                 tmax = t;
                 best = int(i);

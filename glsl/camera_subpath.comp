@@ -198,7 +198,7 @@ void main() {
             if (max3(le) > 0.0) L += st.thr * le * mis_weight_hit(st, dpdf_a, epdf, pick, USE_VC != 0);
         }
         if (st.len >= max_len) continue;
-        Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, false);
+        Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, false, s.tint);
         if (!b.valid) continue;
 #if USE_VC
         if (!b.delta) {

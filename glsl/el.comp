@@ -1,6 +1,7 @@
 #version 460
-// Eye light (`el`): |cos(normal, view ray)| of the first hit, a preview and not a
-// radiance estimate (as SmallVCM's EyeLight). Back faces are not distinguished.
+// Eye light (`el`): |cos(normal, view ray)| of the first hit times its tint (texture and
+// vertex colour, glsl/textures.glsl), a preview and not a radiance estimate (as
+// SmallVCM's EyeLight). Back faces are not distinguished.
 #extension GL_GOOGLE_include_directive : require
 layout(local_size_x = WORKGROUP_SIZE) in;
 #include "scene.glsl"
@@ -16,7 +17,7 @@ void main() {
     vec3 v = vec3(0.0);
     if (trace_closest(params.cam_pos.xyz, d, 0.0, 1e30, h)) {
         Surface s = surface_at(h, params.cam_pos.xyz, d);
-        v = vec3(abs(dot(s.ns, d)));
+        v = abs(dot(s.ns, d)) * s.tint;
     }
     film_add(pixel, v);
     COUNT_RAYS_FLUSH();

@@ -52,6 +52,17 @@
 #ifndef HAS_SHADING_NORMALS
 #define HAS_SHADING_NORMALS 1
 #endif
+// Surface detail (glsl/textures.glsl): per-vertex texture coordinates and colours (the
+// tint), base-colour textures, alpha cut-outs.
+#ifndef HAS_VERTEX_ATTRIBUTES
+#define HAS_VERTEX_ATTRIBUTES 1
+#endif
+#ifndef HAS_TEXTURES
+#define HAS_TEXTURES 1
+#endif
+#ifndef HAS_ALPHA_MASK
+#define HAS_ALPHA_MASK 1
+#endif
 // Profiling: count traced rays into stats[2..3] (glsl/scene.glsl, COUNT_RAYS_FLUSH).
 #ifndef COUNT_RAYS
 #define COUNT_RAYS 0

@@ -102,13 +102,13 @@ void main() {
         Hit h;
         if (!trace_closest(st.o, st.d, 0.0, 1e30, h)) continue;
         Surface s = surface_at(h, st.o, st.d);
-        Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, true);
+        Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, true, s.tint);
         if (!b.valid) continue;
         mis_on_hit(st, h.t, abs(dot(s.ng, st.d)), st.len == 1u && !st.finite_light);
         if (!b.delta) {
 #if STORE_VERTICES
             LightVertex v;
-            v.p = s.p; v.thr = st.thr; v.wo = -st.d; v.n = s.ng; v.ns = s.ns;
+            v.p = s.p; v.thr = st.thr; v.wo = -st.d; v.n = s.ng; v.ns = s.ns; v.tint = s.tint;
             v.material = s.material; v.len = st.len;
             v.dvcm = st.dvcm; v.dvc = st.dvc; v.dvm = st.dvm;
             lv_store(path * lv_slots() + stored, v);

@@ -72,7 +72,7 @@ void main() {
             }
         }
         if (len >= max_len) continue;
-        Bsdf b = bsdf_init(s.material, s.ng, s.ns, -d, false);
+        Bsdf b = bsdf_init(s.material, s.ng, s.ns, -d, false, s.tint);
         if (!b.valid) continue;
 #if NEE
         if (!b.delta && len + 1u >= min_len) {

@@ -1,8 +1,9 @@
 // Scene buffers shared by every render kernel (the bindings scene_params, bvh_nodes,
 // bvh_prims, triangles, spheres, materials, lights and shading_normals, bound by name:
 // src/render/scene_gpu.rs; with HAS_ENVIRONMENT_MAP also env_texels and env_distribution,
-// declared by glsl/environment.glsl), the camera, and the conversion of a BVH hit into a
-// shading point.
+// declared by glsl/environment.glsl; with HAS_VERTEX_ATTRIBUTES / HAS_TEXTURES
+// vertex_attributes, texture_refs and texture_texels, declared by glsl/textures.glsl),
+// the camera, and the conversion of a BVH hit into a shading point.
 // Scene features the scene lacks compile out (glsl/features.glsl): spheres, shading
 // normals, area lights (then no surface is an emitter) and the background.
 #ifndef SCENE_GLSL
@@ -47,13 +48,15 @@ GpuSphere sphere_at(uint i) {
 }
 GpuMaterial material_at(uint i) {
     GpuMaterial m;
-    m.diffuse = texel_vec4(materials, 5u * i);
-    m.phong = texel_vec4(materials, 5u * i + 1u);
-    m.mirror = texel_vec4(materials, 5u * i + 2u);
-    m.emission = texel_vec4(materials, 5u * i + 3u);
-    m.glossy = texel_vec4(materials, 5u * i + 4u);
+    m.diffuse = texel_vec4(materials, 6u * i);
+    m.phong = texel_vec4(materials, 6u * i + 1u);
+    m.mirror = texel_vec4(materials, 6u * i + 2u);
+    m.emission = texel_vec4(materials, 6u * i + 3u);
+    m.glossy = texel_vec4(materials, 6u * i + 4u);
+    m.surface = texel_vec4(materials, 6u * i + 5u);
     return m;
 }
+vec4 material_surface(uint i) { return texel_vec4(materials, 6u * i + 5u); }
 GpuLight light_at(uint i) {
     GpuLight l;
     l.a = texel_vec4(lights, 5u * i);
@@ -73,11 +76,16 @@ layout(std430) readonly buffer shading_normals { vec4 shading_normal_data[]; };
 GpuTriangle triangle_at(uint i) { return triangle_data[i]; }
 GpuSphere sphere_at(uint i) { return sphere_data[i]; }
 GpuMaterial material_at(uint i) { return material_data[i]; }
+vec4 material_surface(uint i) { return material_data[i].surface; }
 GpuLight light_at(uint i) { return light_data[i]; }
 vec4 shading_normal_at(uint i) { return shading_normal_data[i]; }
 #endif
 
+#if HAS_ALPHA_MASK
+#define BVH_ALPHA_TEST
+#endif
 #include "bvh.glsl"
+#include "textures.glsl"
 
 // COUNT_RAYS (profiling): every trace_closest / trace_any call of the kernel is counted in
 // a private counter, and COUNT_RAYS_FLUSH(), the last statement of a kernel's main, adds
@@ -145,6 +153,7 @@ struct Surface {
     vec3 p;
     vec3 ng;        // geometric normal (triangles: (p1-p0)x(p2-p0); spheres: outward)
     vec3 ns;        // shading normal (== ng unless the mesh has normals), same side as ng
+    vec3 tint;      // multiplies the material's base colour (glsl/textures.glsl; else 1)
     uint material;
     uint light;     // light index or NO_LIGHT
 };
@@ -160,6 +169,7 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
         s.p = c + r * n;  // re-projected onto the surface
         s.ng = n;
         s.ns = n;
+        s.tint = vec3(1.0);
         s.material = sp.info.x;
         s.light = sp.info.y;
     } else
@@ -182,6 +192,10 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
         }
 #endif
         s.material = floatBitsToUint(tri.p0.w);
+        s.tint = vec3(1.0);
+#if HAS_VERTEX_ATTRIBUTES
+        s.tint = surface_tint_alpha(h.prim, s.material, h.u, h.v).rgb;
+#endif
 #if HAS_AREA_LIGHTS
         s.light = floatBitsToUint(tri.p1.w);
 #else

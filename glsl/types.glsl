@@ -9,19 +9,35 @@
 #define LIGHT_DIRECTIONAL 3u
 #define LIGHT_BACKGROUND 4u
 #define NO_LIGHT 0xffffffffu
+#define NO_TEXTURE 0xffffffffu
+#define TEXTURE_NEAREST 16u
+#define TEXTURE_UV1 32u
 
 struct GpuMaterial {
     vec4 diffuse;   // rgb, w: Phong exponent
     vec4 phong;     // rgb, w: IOR (< 0: not a dielectric)
-    vec4 mirror;    // rgb
+    vec4 mirror;    // rgb, w: F0 of the interface over the diffuse lobe (0: plain Lambert)
     vec4 emission;  // rgb radiance
     vec4 glossy;    // rgb: GGX lobe colour (Schlick F0), w: GGX alpha (>= 1e-3)
+    vec4 surface;   // x: base-colour texture or NO_TEXTURE (bits), y: alpha factor,
+                    // z: alpha cutoff (< 0: opaque), w: untinted part of the GGX F0
+};
+
+struct GpuTextureRef {
+    uvec4 image;  // first texel, width, height, flags (wrap s: bits 0-1, t: 2-3, TEXTURE_*)
+    vec4 row0;    // uv' = (dot(row0.xyz, (u, v, 1)), dot(row1.xyz, (u, v, 1)))
+    vec4 row1;
+};
+
+struct GpuVertexAttributes {
+    vec4 uv;     // xy: TEXCOORD_0, zw: TEXCOORD_1 (NaN: none)
+    vec4 color;  // COLOR_0 (1: none)
 };
 
 struct GpuTriangle {
     vec4 p0;  // w: material (bits)
     vec4 p1;  // w: light index (bits)
-    vec4 p2;  // w: first shading normal index or 0xffffffff (bits)
+    vec4 p2;  // w: first vertex in the per-vertex arrays, or 0xffffffff (bits)
 };
 
 struct GpuSphere {

@@ -25,19 +25,20 @@ struct SubpathState {
 // vertices of "its" light subpath p = pixel index without search, as in SmallVCM.
 //   lv_a[2i] = (position, dVCM)      lv_a[2i+1] = (throughput, dVC)
 //   lv_b[Bi] = (wo, dVM)             lv_b[Bi+1] = (normal, material | length << 24)
-//   with HAS_SHADING_NORMALS (B = 3):  lv_b[Bi+2] = (shading normal, 0); else B = 2
-// (src/render/passes/light_subpaths.rs, LightVertexPlan, sizes the store the same way).
-#if HAS_SHADING_NORMALS
-#define LV_B_STRIDE 3u
-#else
-#define LV_B_STRIDE 2u
-#endif
+//   with HAS_SHADING_NORMALS:        lv_b[Bi+2] = (shading normal, 0)
+//   with HAS_VERTEX_ATTRIBUTES:      lv_b[Bi+LV_TINT] = (tint, 0)
+// B = 2 + the two (src/render/passes/light_subpaths.rs, LightVertexPlan, sizes the store
+// the same way).
+#define LV_NORMAL_SLOTS (HAS_SHADING_NORMALS != 0 ? 1u : 0u)
+#define LV_TINT (2u + LV_NORMAL_SLOTS)
+#define LV_B_STRIDE (LV_TINT + (HAS_VERTEX_ATTRIBUTES != 0 ? 1u : 0u))
 struct LightVertex {
     vec3 p;
     vec3 thr;
     vec3 wo;   // direction towards the previous vertex
     vec3 n;    // geometric normal
     vec3 ns;   // shading normal (== n for flat shading)
+    vec3 tint; // the point's tint of the base colour (1 without attributes)
     uint material;
     uint len;        // segments from the light
     float dvcm, dvc, dvm;
@@ -54,6 +55,9 @@ void lv_store(uint slot, LightVertex v) {
 #if HAS_SHADING_NORMALS
     lv_b[LV_B_STRIDE * slot + 2u] = vec4(v.ns, 0.0);
 #endif
+#if HAS_VERTEX_ATTRIBUTES
+    lv_b[LV_B_STRIDE * slot + LV_TINT] = vec4(v.tint, 0.0);
+#endif
 }
 #endif
 
@@ -69,6 +73,11 @@ LightVertex lv_load(uint slot) {
     v.ns = lv_b_at(LV_B_STRIDE * slot + 2u).xyz;
 #else
     v.ns = v.n;
+#endif
+#if HAS_VERTEX_ATTRIBUTES
+    v.tint = lv_b_at(LV_B_STRIDE * slot + LV_TINT).xyz;
+#else
+    v.tint = vec3(1.0);
 #endif
     uint info = floatBitsToUint(b1.w);
     v.material = info & 0xffffffu;
@@ -182,7 +191,7 @@ float connection_eval(SubpathState st, vec3 p, Bsdf b, LightVertex v, out vec3 f
     float cpf, cpr;
     fc = bsdf_eval(b, dir, cpf, cpr);
     if (max3(fc) <= 0.0) return 0.0;
-    Bsdf lb = bsdf_init(v.material, v.n, v.ns, v.wo, true);
+    Bsdf lb = bsdf_init(v.material, v.n, v.ns, v.wo, true, v.tint);
     float lpf, lpr;
     fl = bsdf_eval(lb, -dir, lpf, lpr);
     if (max3(fl) <= 0.0) return 0.0;
@@ -214,7 +223,7 @@ vec3 merge_eval(SubpathState st, Bsdf b, LightVertex v, out float w) {
     // (which lies at the light vertex), so its continuation probability is the light
     // vertex's BSDF's, as in SmallVCM's RangeQuery (the two differ where a merge spans two
     // materials).
-    pr *= bsdf_init(v.material, v.n, v.ns, v.wo, true).cont_prob;
+    pr *= bsdf_init(v.material, v.n, v.ns, v.wo, true, v.tint).cont_prob;
     float w_light = v.dvcm * push.mis_vc + v.dvm * pf;
     float w_camera = st.dvcm * push.mis_vc + st.dvm * pr;
     w = 1.0 / (w_light + 1.0 + w_camera);

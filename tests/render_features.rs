@@ -211,7 +211,7 @@ fn feature_derivation() {
             assert_eq!(got, want, "{name} {}", algo.name());
             assert!(!defines(&f).iter().any(|d| d.starts_with("BVH_NO_SPHERES")));
             let text = f.to_string();
-            assert!(text.contains("textures: none"), "{text}");
+            assert!(text.contains("surface detail: none"), "{text}");
             assert!(text.contains("compiled out: ggx"), "{text}");
             // Generic: everything on, whatever the scene.
             let g = FeatureSet::new(&scene, true);

@@ -10,6 +10,8 @@ layout(std430, binding = 2) buffer C { GpuSphere a_spheres[]; };
 layout(std430, binding = 3) buffer D { GpuLight a_lights[]; };
 layout(std430, binding = 4) buffer E { GpuParams a_params[]; };
 layout(std430, binding = 5) buffer F { GpuPush a_push[]; };
+layout(std430, binding = 6) buffer G { GpuTextureRef a_texture_refs[]; };
+layout(std430, binding = 7) buffer H { GpuVertexAttributes a_vertex_attributes[]; };
 void main() {
     // Touch every struct so none is optimised away.
     a_materials[1] = a_materials[0];
@@ -18,4 +20,6 @@ void main() {
     a_lights[1] = a_lights[0];
     a_params[1] = a_params[0];
     a_push[1] = a_push[0];
+    a_texture_refs[1] = a_texture_refs[0];
+    a_vertex_attributes[1] = a_vertex_attributes[0];
 }

@@ -39,6 +39,7 @@ layout(std430) buffer mis_results { float result[]; };
 vec3 vp[MAXV];    // position (y_0 of an infinite light: unused)
 vec3 vn[MAXV];    // geometric normal (y_0: the area light's normal, else 0)
 vec3 vns[MAXV];   // shading normal (y_1..y_{k-1})
+vec3 vtint[MAXV]; // tint of the base colour (y_1..y_{k-1})
 uint vmat[MAXV];  // material
 bool vdelta[MAXV];
 bool infinite0;   // y_0 lies on an infinite light (directional, background)
@@ -120,9 +121,9 @@ void main() {
             Hit h;
             if (!trace_closest(st.o, st.d, 0.0, 1e30, h)) return;
             Surface s = surface_at(h, st.o, st.d);
-            Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, true);
+            Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, true, s.tint);
             if (!b.valid) return;
-            vp[i] = s.p; vn[i] = s.ng; vns[i] = s.ns; vmat[i] = s.material; vdelta[i] = b.delta;
+            vp[i] = s.p; vn[i] = s.ng; vns[i] = s.ns; vtint[i] = s.tint; vmat[i] = s.material; vdelta[i] = b.delta;
             if (i + 1u < s_gen && !scatter(st, b, s.p, s.ng, rng)) return;
         }
     }
@@ -158,9 +159,9 @@ void main() {
             }
             if (!hit) return;
             Surface s = surface_at(h, st.o, st.d);
-            Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, false);
+            Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, false, s.tint);
             if (!b.valid) return;
-            vp[i] = s.p; vn[i] = s.ng; vns[i] = s.ns; vmat[i] = s.material; vdelta[i] = b.delta;
+            vp[i] = s.p; vn[i] = s.ng; vns[i] = s.ns; vtint[i] = s.tint; vmat[i] = s.material; vdelta[i] = b.delta;
             if (j < k - s_gen && !scatter(st, b, s.p, s.ng, rng)) return;
         }
     }
@@ -177,15 +178,15 @@ void main() {
             vn[0] = ls.light_normal;
         }
         float pf, pr;
-        Bsdf b = bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false);
+        Bsdf b = bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false, vtint[1]);
         if (max3(bsdf_eval(b, ls.wi, pf, pr)) <= 0.0) return;
         if (!light_sample_visible(vp[1], vn[1], ls)) return;
     } else if (s_gen >= 2u && s_gen < k) {
         uint a = s_gen - 1u, c = s_gen;
         if (vdelta[a] || vdelta[c]) return;
         float pf, pr;
-        Bsdf bl = bsdf_init(vmat[a], vn[a], vns[a], dir_to(a, a - 1u), true);
-        Bsdf bc = bsdf_init(vmat[c], vn[c], vns[c], dir_to(c, c + 1u), false);
+        Bsdf bl = bsdf_init(vmat[a], vn[a], vns[a], dir_to(a, a - 1u), true, vtint[a]);
+        Bsdf bc = bsdf_init(vmat[c], vn[c], vns[c], dir_to(c, c + 1u), false, vtint[c]);
         if (max3(bsdf_eval(bl, dir_to(a, c), pf, pr)) <= 0.0) return;
         if (max3(bsdf_eval(bc, dir_to(c, a), pf, pr)) <= 0.0) return;
         if (!visible(vp[a], vn[a], vp[c], vn[c])) return;
@@ -195,7 +196,7 @@ void main() {
         vec2 raster;
         if (!camera_raster(vp[a], raster)) return;
         float pf, pr;
-        Bsdf bl = bsdf_init(vmat[a], vn[a], vns[a], dir_to(a, a - 1u), true);
+        Bsdf bl = bsdf_init(vmat[a], vn[a], vns[a], dir_to(a, a - 1u), true, vtint[a]);
         if (max3(bsdf_eval(bl, dir_to(a, k), pf, pr)) <= 0.0) return;
         if (!visible(vp[a], vn[a], params.cam_pos.xyz, vec3(0.0))) return;
     }
@@ -231,7 +232,7 @@ void main() {
         mis_on_hit(st, i == 1u && infinite0 ? 0.0 : distance(vp[i - 1u], vp[i]), abs(dot(vn[i], d)),
                    i == 1u && infinite0);
         L[i] = st;
-        if (i + 1u < k) mis_on_scatter_to(st, bsdf_init(vmat[i], vn[i], vns[i], -d, true), dir_to(i, i + 1u));
+        if (i + 1u < k) mis_on_scatter_to(st, bsdf_init(vmat[i], vn[i], vns[i], -d, true, vtint[i]), dir_to(i, i + 1u));
     }
     st.specular = true;
     mis_camera_start(st, dir_to(k, k - 1u));
@@ -241,7 +242,7 @@ void main() {
         st.len = j;
         if (!(i == 0u && infinite0)) mis_on_hit(st, distance(vp[i + 1u], vp[i]), abs(dot(vn[i], d)), false);
         C[i] = st;
-        if (i > 0u) mis_on_scatter_to(st, bsdf_init(vmat[i], vn[i], vns[i], -d, false), dir_to(i, i - 1u));
+        if (i > 0u) mis_on_scatter_to(st, bsdf_init(vmat[i], vn[i], vns[i], -d, false, vtint[i]), dir_to(i, i - 1u));
     }
 
     // ---- 3. Every technique's weight.
@@ -268,7 +269,7 @@ void main() {
             LightSample ls = light_sample_fixed(li, vp[1]);
             vec3 f;
             float cos_x;
-            w = nee_eval(C[1], bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false), ls, pick, f, cos_x);
+            w = nee_eval(C[1], bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false, vtint[1]), ls, pick, f, cos_x);
             if (!ls.ok || max3(f) <= 0.0) w = -2.0;  // cannot happen for a sampled path
             write_out(base, 9u, w);
             sum += w; n += 1u; bad += (w >= 0.0 && !isinf(w)) ? 0u : 1u;
@@ -277,11 +278,11 @@ void main() {
         for (uint s = 2u; s < k; ++s) {
             if (vdelta[s - 1u] || vdelta[s]) continue;
             LightVertex v;
-            v.p = vp[s - 1u]; v.n = vn[s - 1u]; v.ns = vns[s - 1u]; v.wo = dir_to(s - 1u, s - 2u); v.material = vmat[s - 1u];
+            v.p = vp[s - 1u]; v.n = vn[s - 1u]; v.ns = vns[s - 1u]; v.tint = vtint[s - 1u]; v.wo = dir_to(s - 1u, s - 2u); v.material = vmat[s - 1u];
             v.len = s - 1u; v.dvcm = L[s - 1u].dvcm; v.dvc = L[s - 1u].dvc; v.dvm = L[s - 1u].dvm;
             vec3 fc, fl;
             float g;
-            w = connection_eval(C[s], vp[s], bsdf_init(vmat[s], vn[s], vns[s], dir_to(s, s + 1u), false), v, fc, fl, g);
+            w = connection_eval(C[s], vp[s], bsdf_init(vmat[s], vn[s], vns[s], dir_to(s, s + 1u), false, vtint[s]), v, fc, fl, g);
             if (max3(fc) <= 0.0 || max3(fl) <= 0.0) w = -2.0;
             write_out(base, 8u + s, w);
             sum += w; n += 1u; bad += (w >= 0.0 && !isinf(w)) ? 0u : 1u;
@@ -291,7 +292,7 @@ void main() {
             vec3 f;
             float pdf_a, importance;
             vec2 raster;
-            Bsdf b = bsdf_init(vmat[k - 1u], vn[k - 1u], vns[k - 1u], dir_to(k - 1u, k - 2u), true);
+            Bsdf b = bsdf_init(vmat[k - 1u], vn[k - 1u], vns[k - 1u], dir_to(k - 1u, k - 2u), true, vtint[k - 1u]);
             if (!camera_connection_eval(L[k - 1u], vp[k - 1u], b, false, w, f, pdf_a, importance, raster) || max3(f) <= 0.0)
                 w = -2.0;
             write_out(base, 8u + k, w);
@@ -303,9 +304,9 @@ void main() {
         for (uint i = 1u; i < k; ++i) {
             if (vdelta[i]) continue;
             LightVertex v;
-            v.p = vp[i]; v.n = vn[i]; v.ns = vns[i]; v.wo = dir_to(i, i - 1u); v.material = vmat[i];
+            v.p = vp[i]; v.n = vn[i]; v.ns = vns[i]; v.tint = vtint[i]; v.wo = dir_to(i, i - 1u); v.material = vmat[i];
             v.len = i; v.dvcm = L[i].dvcm; v.dvc = L[i].dvc; v.dvm = L[i].dvm;
-            vec3 f = merge_eval(C[i], bsdf_init(vmat[i], vn[i], vns[i], dir_to(i, i + 1u), false), v, w);
+            vec3 f = merge_eval(C[i], bsdf_init(vmat[i], vn[i], vns[i], dir_to(i, i + 1u), false, vtint[i]), v, w);
             if (max3(f) <= 0.0) w = -2.0;
             write_out(base, 8u + MAXV + i, w);
             sum += w; n += 1u; bad += (w >= 0.0 && !isinf(w)) ? 0u : 1u;

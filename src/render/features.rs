@@ -44,6 +44,15 @@ pub struct FeatureSet {
     pub shading_normals: bool,
     /// The scene has shading normals (whether or not the kernels read them).
     pub scene_has_shading_normals: bool,
+    /// Triangles carry texture coordinates or vertex colours, which tint the materials
+    /// they use (glsl/textures.glsl): the per-vertex attributes are uploaded, surfaces
+    /// and light vertices carry a tint.
+    pub vertex_attributes: bool,
+    /// Some material has a base-colour texture: the texture lookup is compiled in.
+    pub textures: bool,
+    /// Some material is a cut-out (alphaMode MASK): traversal tests alpha at every
+    /// candidate hit.
+    pub alpha_mask: bool,
 }
 
 fn nonzero(v: Vec3) -> bool {
@@ -66,6 +75,7 @@ impl FeatureSet {
         let any_mat = |f: &dyn Fn(&crate::scene::Material) -> bool| mats.iter().any(|m| f(m));
         let any_light = |f: &dyn Fn(&Light) -> bool| scene.lights.iter().any(f);
         let scene_has_shading_normals = scene.triangles.iter().any(|t| t.n.is_some());
+        let vertex_attributes = scene.triangles.iter().any(|t| t.attributes.is_some());
         let g = generic;
         FeatureSet {
             generic,
@@ -85,6 +95,9 @@ impl FeatureSet {
             spheres: g || !scene.spheres.is_empty(),
             shading_normals: g || scene_has_shading_normals,
             scene_has_shading_normals,
+            vertex_attributes: g || vertex_attributes,
+            textures: g || (vertex_attributes && any_mat(&|m| m.base_color_texture.is_some())),
+            alpha_mask: g || any_mat(&|m| matches!(m.alpha_mode, crate::scene::AlphaMode::Mask { .. })),
         }
     }
 
@@ -112,6 +125,9 @@ impl FeatureSet {
             ("HAS_ENVIRONMENT_MAP", self.environment_map),
             ("HAS_SPHERES", self.spheres),
             ("HAS_SHADING_NORMALS", self.shading_normals),
+            ("HAS_VERTEX_ATTRIBUTES", self.vertex_attributes),
+            ("HAS_TEXTURES", self.textures),
+            ("HAS_ALPHA_MASK", self.alpha_mask),
             ("COUNT_RAYS", self.count_rays),
         ] {
             d = d.flag(name, on);
@@ -161,7 +177,12 @@ impl fmt::Display for FeatureSet {
             (false, false) => "none in the scene (flat shading)",
         };
         writeln!(f, "  shading normals: {normals}")?;
-        writeln!(f, "  textures: none (not supported by vkvcm)")?;
+        let surface = [
+            ("vertex colours / texture coordinates", self.vertex_attributes),
+            ("base-colour textures", self.textures),
+            ("alpha cut-outs", self.alpha_mask),
+        ];
+        writeln!(f, "  surface detail: {}", list(&surface))?;
         write!(f, "  ray counter: {}", if self.count_rays { "on (--profile)" } else { "off" })
     }
 }

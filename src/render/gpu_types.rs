@@ -14,6 +14,14 @@ pub const LIGHT_BACKGROUND: u32 = 4;
 /// No light attached to a primitive.
 pub const NO_LIGHT: u32 = u32::MAX;
 
+/// No texture (`GpuMaterial::surface` x).
+pub const NO_TEXTURE: u32 = u32::MAX;
+
+/// `GpuTextureRef::image` w: wrap mode of s in bits 0-1 and of t in bits 2-3 (0 repeat,
+/// 1 clamp to edge, 2 mirrored repeat), bit 4 nearest filtering, bit 5 TEXCOORD_1.
+pub const TEXTURE_NEAREST: u32 = 1 << 4;
+pub const TEXTURE_UV1: u32 = 1 << 5;
+
 /// A material (see `scene::Material`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -30,6 +38,35 @@ pub struct GpuMaterial {
     /// rgb: GGX microfacet lobe colour (Schlick's F0); w: GGX alpha = roughness^2, at
     /// least `MIN_GGX_ALPHA`.
     pub glossy: [f32; 4],
+    /// x: index of its base-colour texture in `texture_refs`, or `NO_TEXTURE` (bits);
+    /// y: alpha factor; z: alpha cutoff of a cut-out (alphaMode MASK), negative when opaque;
+    /// w: the part of the GGX F0 that the base colour does not tint
+    /// (`Material::glossy_untinted`).
+    pub surface: [f32; 4],
+}
+
+/// A texture as a material uses it (`scene::TextureRef`): where its image's texels are,
+/// how it is sampled and the transform of its texture coordinates.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTextureRef {
+    /// x: first texel in `texture_texels`; y: width; z: height; w: flags (`TEXTURE_*`, wrap
+    /// modes).
+    pub image: [u32; 4],
+    /// uv' = (dot(row0.xyz, (u, v, 1)), dot(row1.xyz, (u, v, 1))); w unused.
+    pub row0: [f32; 4],
+    pub row1: [f32; 4],
+}
+
+/// Attributes of one triangle vertex (`scene::VertexAttributes`): texture coordinates
+/// (NaN where the triangle has none) and colour (1 where it has none).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuVertexAttributes {
+    /// xy: TEXCOORD_0; zw: TEXCOORD_1.
+    pub uv: [f32; 4],
+    /// COLOR_0, linear RGBA.
+    pub color: [f32; 4],
 }
 
 /// Smallest GGX alpha the kernels see (a smaller one makes D(h) overflow-prone and the
@@ -44,8 +81,8 @@ pub struct GpuTriangle {
     pub p0: [f32; 4],
     /// xyz: vertex 1; w: light index or `NO_LIGHT` (bits).
     pub p1: [f32; 4],
-    /// xyz: vertex 2; w: index of its first shading normal in the normal array, or
-    /// `u32::MAX` when it has none (bits).
+    /// xyz: vertex 2; w: index of its first vertex in the per-vertex arrays
+    /// (`shading_normals`, `vertex_attributes`), or `u32::MAX` when it has neither (bits).
     pub p2: [f32; 4],
 }
 

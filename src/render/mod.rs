@@ -119,8 +119,8 @@ impl Renderer {
         settings.check()?;
         let pixels = frame.width.saturating_mul(frame.height);
         let k = regen::resolve(gpu, info.regenerates_paths, settings.paths_per_invocation, pixels);
-        let shading_normals = features::FeatureSet::new(scene, settings.generic).shading_normals;
-        let plan = plan::FramePlan::new(scene, settings, info.techniques, k, shading_normals)?;
+        let features = features::FeatureSet::new(scene, settings.generic);
+        let plan = plan::FramePlan::new(scene, settings, info.techniques, k, &features)?;
         plan.check(gpu, &format!("a {}x{} {} render", frame.width, frame.height, info.name))?;
         Ok(plan)
     }

@@ -9,6 +9,7 @@
 
 use anyhow::{bail, Result};
 
+use super::features::FeatureSet;
 use super::film::FilmPlan;
 use super::passes::hash_grid::{grid_buckets, GridPlan};
 use super::passes::light_subpaths::LightVertexPlan;
@@ -42,15 +43,14 @@ pub struct FramePlan {
 impl FramePlan {
     /// The plan of a render of `scene` with `s` (already checked: `RenderSettings::check`,
     /// as `Renderer::plan_for` does) by an estimator with `techniques`, tracing
-    /// `paths_per_invocation` paths per invocation, with kernels that shade with the
-    /// scene's shading normals or not (`FeatureSet::shading_normals`: light vertices then
-    /// carry them).
+    /// `paths_per_invocation` paths per invocation, with kernels compiled for `features`
+    /// (with shading normals and vertex attributes light vertices carry more).
     pub fn new(
         scene: &Scene,
         s: &RenderSettings,
         techniques: Techniques,
         paths_per_invocation: u32,
-        shading_normals: bool,
+        features: &FeatureSet,
     ) -> Result<FramePlan> {
         let prims = scene.triangles.len() + scene.spheres.len();
         if prims > crate::bvh::layout::MAX_PRIMS {
@@ -68,7 +68,8 @@ impl FramePlan {
                 light_paths,
                 s.frame.max_path_length,
                 techniques.store_vertices,
-                shading_normals,
+                features.shading_normals,
+                features.vertex_attributes,
             )
         });
         let cache = match (&light_vertices, s.connect) {

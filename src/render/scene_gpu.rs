@@ -19,12 +19,12 @@ use super::variants::SceneVariant;
 use crate::bvh;
 use crate::bvh::layout::{GpuNode, GpuPrim};
 use crate::gpu::{Bind, Buffer, Gpu, SHADER_INT64};
-use crate::scene::{EnvironmentMap, Light, Scene};
+use crate::scene::{AlphaMode, EnvironmentMap, Filter, Light, Scene, VertexAttributes, Wrap};
 
 /// Upper bounds of the scene's buffers, known before the BVH is built.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ScenePlan {
-    pub buffers: [BufferSize; 10],
+    pub buffers: [BufferSize; 13],
 }
 
 fn size<T>(n: u64) -> u64 {
@@ -35,7 +35,10 @@ impl ScenePlan {
     pub fn new(scene: &Scene) -> ScenePlan {
         let tris = scene.triangles.len() as u64;
         let prims = tris + scene.spheres.len() as u64;
-        let normals = scene.triangles.iter().filter(|t| t.n.is_some()).count() as u64 * 3;
+        // Per-vertex arrays: three entries per triangle with normals or attributes.
+        let vertices = scene.triangles.iter().filter(|t| t.n.is_some() || t.attributes.is_some()).count() as u64 * 3;
+        let refs = scene.materials.iter().filter(|m| m.base_color_texture.is_some()).count() as u64;
+        let texels: u64 = scene.images.iter().map(|i| i.texels.len() as u64).sum();
         let (env_w, env_h) = environment_map(scene).map_or((0, 0), |m| (m.width as u64, m.height as u64));
         ScenePlan {
             buffers: [
@@ -47,7 +50,11 @@ impl ScenePlan {
                 BufferSize::new("spheres", size::<GpuSphere>(scene.spheres.len() as u64)),
                 BufferSize::new("materials", size::<GpuMaterial>(scene.materials.len() as u64)),
                 BufferSize::new("lights", size::<GpuLight>(scene.lights.len() as u64)),
-                BufferSize::new("shading_normals", size::<[f32; 4]>(normals)),
+                BufferSize::new("shading_normals", size::<[f32; 4]>(vertices)),
+                BufferSize::new("vertex_attributes", size::<GpuVertexAttributes>(vertices)),
+                BufferSize::new("texture_refs", size::<GpuTextureRef>(refs)),
+                // RGBA8 texels, four to a 16-byte element.
+                BufferSize::new("texture_texels", size::<[u32; 4]>(texels.div_ceil(4))),
                 BufferSize::new("env_texels", size::<[f32; 4]>(env_w * env_h)),
                 BufferSize::new("env_distribution", size::<f32>(env_h + env_h.saturating_sub(1) * (env_w + 1))),
             ],
@@ -82,6 +89,61 @@ fn environment_map(scene: &Scene) -> Option<&EnvironmentMap> {
         Light::Environment(e) => Some(e.map.as_ref()),
         _ => None,
     })
+}
+
+/// Vertex `k`'s attributes: NaN texture coordinates where a set is missing (no texture
+/// applies), white where the colour is.
+fn vertex_attributes(a: Option<&VertexAttributes>, k: usize) -> GpuVertexAttributes {
+    let uv = |set: usize| a.and_then(|a| a.uv[set]).map_or([f32::NAN; 2], |uv| uv[k].to_array());
+    let (uv0, uv1) = (uv(0), uv(1));
+    GpuVertexAttributes {
+        uv: [uv0[0], uv0[1], uv1[0], uv1[1]],
+        color: a.and_then(|a| a.color).map_or([1.0; 4], |c| c[k].to_array()),
+    }
+}
+
+/// The texture references of the materials that have a base-colour texture, in material
+/// order, and the texels of the scene's images (RGBA8 packed little-endian, R lowest;
+/// four to a 16-byte element).
+fn gpu_textures(scene: &Scene) -> Result<(Vec<GpuTextureRef>, Vec<[u32; 4]>)> {
+    let mut first = Vec::with_capacity(scene.images.len());
+    let mut flat: Vec<u32> = Vec::new();
+    for img in &scene.images {
+        if img.width == 0 || img.height == 0 || img.texels.len() as u64 != img.width as u64 * img.height as u64 {
+            bail!("texture image {:?}: {} texels for {}x{}", img.name, img.texels.len(), img.width, img.height);
+        }
+        first.push(flat.len() as u32);
+        flat.extend(img.texels.iter().map(|t| u32::from_le_bytes(*t)));
+    }
+    flat.resize(flat.len().div_ceil(4) * 4, 0);
+    let texels = flat.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect();
+    let wrap = |w: Wrap| match w {
+        Wrap::Repeat => 0,
+        Wrap::ClampToEdge => 1,
+        Wrap::MirroredRepeat => 2,
+    };
+    let mut refs = Vec::new();
+    for (i, m) in scene.materials.iter().enumerate() {
+        let Some(t) = &m.base_color_texture else { continue };
+        let img = scene
+            .images
+            .get(t.image as usize)
+            .ok_or_else(|| anyhow::anyhow!("material {i} names missing texture image {}", t.image))?;
+        let mut flags = wrap(t.wrap_s) | (wrap(t.wrap_t) << 2);
+        if t.filter == Filter::Nearest {
+            flags |= TEXTURE_NEAREST;
+        }
+        if t.tex_coord == 1 {
+            flags |= TEXTURE_UV1;
+        }
+        let [r0, r1] = t.transform;
+        refs.push(GpuTextureRef {
+            image: [first[t.image as usize], img.width, img.height, flags],
+            row0: [r0[0], r0[1], r0[2], 0.0],
+            row1: [r1[0], r1[1], r1[2], 0.0],
+        });
+    }
+    Ok((refs, texels))
 }
 
 /// The lights in GPU form, and the index of the background light (constant or
@@ -205,19 +267,29 @@ impl SceneGpu {
                 light_of_triangle[*triangle as usize] = i as u32;
             }
         }
+        // The per-vertex arrays share one index per triangle: entries for the normals the
+        // kernels read (zero where a triangle has none: flat) and for the attributes
+        // (none: NaN texture coordinates, white).
         let mut normals: Vec<[f32; 4]> = Vec::new();
+        let mut attributes: Vec<GpuVertexAttributes> = Vec::new();
         let triangles: Vec<GpuTriangle> = scene
             .triangles
             .iter()
             .enumerate()
             .map(|(i, t)| {
-                let first = match &t.n {
-                    Some(n) if features.shading_normals => {
-                        let first = normals.len() as u32;
-                        normals.extend(n.iter().map(|v| v4(*v, 0.0)));
-                        first
+                let n = t.n.as_ref().filter(|_| features.shading_normals);
+                let a = t.attributes.as_deref().filter(|_| features.vertex_attributes);
+                let first = if n.is_some() || a.is_some() {
+                    let first = (normals.len().max(attributes.len())) as u32;
+                    if features.shading_normals {
+                        normals.extend((0..3).map(|k| n.map_or([0.0; 4], |n| v4(n[k], 0.0))));
                     }
-                    _ => u32::MAX,
+                    if features.vertex_attributes {
+                        attributes.extend((0..3).map(|k| vertex_attributes(a, k)));
+                    }
+                    first
+                } else {
+                    u32::MAX
                 };
                 GpuTriangle {
                     p0: v4(t.p[0], bits(t.material)),
@@ -231,15 +303,31 @@ impl SceneGpu {
             .iter()
             .map(|s| GpuSphere { center_radius: v4(s.center, s.radius), info: [s.material, NO_LIGHT, 0, 0] })
             .collect();
+        let (texture_refs, texels) = if features.textures { gpu_textures(scene)? } else { (Vec::new(), Vec::new()) };
+        let mut next_ref = 0u32;
         let materials: Vec<GpuMaterial> = scene
             .materials
             .iter()
-            .map(|m| GpuMaterial {
-                diffuse: v4(m.diffuse, m.phong_exponent),
-                phong: v4(m.phong, m.ior),
-                mirror: v4(m.mirror, m.diffuse_fresnel_f0),
-                emission: v4(m.emission, 0.0),
-                glossy: v4(m.glossy, (m.roughness * m.roughness).max(MIN_GGX_ALPHA)),
+            .map(|m| {
+                let texture = match &m.base_color_texture {
+                    Some(_) if features.textures => {
+                        next_ref += 1;
+                        next_ref - 1
+                    }
+                    _ => NO_TEXTURE,
+                };
+                let cutoff = match m.alpha_mode {
+                    AlphaMode::Mask { cutoff } if features.alpha_mask => cutoff,
+                    _ => -1.0,
+                };
+                GpuMaterial {
+                    diffuse: v4(m.diffuse, m.phong_exponent),
+                    phong: v4(m.phong, m.ior),
+                    mirror: v4(m.mirror, m.diffuse_fresnel_f0),
+                    emission: v4(m.emission, 0.0),
+                    glossy: v4(m.glossy, (m.roughness * m.roughness).max(MIN_GGX_ALPHA)),
+                    surface: [bits(texture), m.alpha, cutoff, m.glossy_untinted],
+                }
             })
             .collect();
         let env = match environment_map(scene) {
@@ -255,6 +343,9 @@ impl SceneGpu {
             gpu.buffer_from_slice("materials", &materials)?,
             gpu.buffer_from_slice("lights", &lights)?,
             gpu.buffer_from_slice("shading_normals", &normals)?,
+            gpu.buffer_from_slice("vertex_attributes", &attributes)?,
+            gpu.buffer_from_slice("texture_refs", &texture_refs)?,
+            gpu.buffer_from_slice("texture_texels", &texels)?,
             gpu.buffer_from_slice("env_texels", &env.texels)?,
             gpu.buffer_from_slice("env_distribution", &env.distribution)?,
         ];

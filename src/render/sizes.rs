@@ -39,7 +39,9 @@ pub fn mib(bytes: u64) -> String {
 fn remedy(name: &str) -> &'static str {
     match name {
         n if n.starts_with("env_") => "use a smaller environment map (20 bytes per texel)",
-        "bvh_nodes" | "bvh_prims" | "triangles" | "spheres" | "materials" | "lights" | "shading_normals" => {
+        n if n.starts_with("texture_") => "use smaller textures (4 bytes per texel, all images in one buffer)",
+        "bvh_nodes" | "bvh_prims" | "triangles" | "spheres" | "materials" | "lights" | "shading_normals"
+        | "vertex_attributes" => {
             "the scene is too large for this device (fewer triangles, or a device with a larger maxStorageBufferRange)"
         }
         n if n.contains("vert") || n.starts_with("grid") => "lower the resolution or --max-path-length",

@@ -25,14 +25,10 @@ pub const NAME: &str = "light subpaths";
 pub const LIGHT_VERTEX_A_BYTES: u64 = 32;
 
 /// Bytes of one light vertex in `light_vertices_b`: (wo, dVM) and (normal, material and
-/// length), and with shading normals a third vec4 holding the shading normal
-/// (glsl/vcm.glsl, LV_B_STRIDE).
-pub fn light_vertex_b_bytes(shading_normals: bool) -> u64 {
-    if shading_normals {
-        48
-    } else {
-        32
-    }
+/// length), with shading normals a vec4 holding the shading normal, with vertex
+/// attributes one holding the tint (glsl/vcm.glsl, LV_B_STRIDE).
+pub fn light_vertex_b_bytes(shading_normals: bool, vertex_attributes: bool) -> u64 {
+    32 + 16 * shading_normals as u64 + 16 * vertex_attributes as u64
 }
 
 /// The sizes of the light-vertex store and the splat sums.
@@ -59,6 +55,7 @@ impl LightVertexPlan {
         max_path_length: u32,
         store_vertices: bool,
         shading_normals: bool,
+        vertex_attributes: bool,
     ) -> LightVertexPlan {
         let slots_per_path = max_path_length.saturating_sub(1).max(1);
         let capacity = if store_vertices { light_paths as u64 * slots_per_path as u64 } else { 1 };
@@ -71,7 +68,7 @@ impl LightVertexPlan {
             vertices_a: BufferSize::new("light_vertices_a", capacity.saturating_mul(LIGHT_VERTEX_A_BYTES)),
             vertices_b: BufferSize::new(
                 "light_vertices_b",
-                capacity.saturating_mul(light_vertex_b_bytes(shading_normals)),
+                capacity.saturating_mul(light_vertex_b_bytes(shading_normals, vertex_attributes)),
             ),
             counts: BufferSize::new("light_vertex_counts", count_entries * 4),
         }

@@ -1,0 +1,128 @@
+// Surface detail: per-vertex attributes (texture coordinates, colours) and base-colour
+// textures, and what they make of a point on a triangle: its tint (the texel's linear
+// colour times the vertex colour, multiplying the material's base colour, glsl/bsdf.glsl)
+// and its alpha (the material's alpha factor times the texel's and the vertex colour's:
+// cut-outs, alpha_visible, which the traversal calls at every candidate hit).
+//
+// Bindings (src/render/scene_gpu.rs): vertex_attributes (GpuVertexAttributes, three per
+// triangle that has attributes, at the triangle's first-vertex index p2.w), with
+// HAS_TEXTURES texture_refs (GpuTextureRef per textured material) and texture_texels
+// (RGBA8, R in the lowest byte, four texels per uvec4, all images one after another).
+//
+// Sampling is done in software, the same on every device: texel (i, j) covers
+// [i, i+1) x [j, j+1) of the texture's coordinates times its size, (0, 0) is the image's
+// top-left corner (glTF); nearest takes the texel under the point, linear interpolates
+// the four texels around it bilinearly; the wrap modes are glTF's (OpenGL's) REPEAT,
+// CLAMP_TO_EDGE and MIRRORED_REPEAT, applied to the integer texel coordinates. RGB is
+// sRGB-decoded per texel before filtering (glTF: base colour textures are sRGB). No
+// mip-maps: the pixel samples of a render average the texture over each pixel.
+//
+// Requires: types.glsl, features.glsl, material_at / material_surface and triangle_at
+// (scene.glsl).
+#ifndef TEXTURES_GLSL
+#define TEXTURES_GLSL
+
+#if HAS_VERTEX_ATTRIBUTES
+layout(std430) readonly buffer vertex_attributes { GpuVertexAttributes vertex_attribute_data[]; };
+#endif
+
+#if HAS_TEXTURES
+layout(std430) readonly buffer texture_refs { GpuTextureRef texture_ref_data[]; };
+layout(std430) readonly buffer texture_texels { uvec4 texture_texel_data[]; };
+
+// The sRGB transfer function's inverse (IEC 61966-2-1).
+float srgb_to_linear(float c) { return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4); }
+
+// Texel `i` of the image whose texels start at `first`: linear RGB and alpha.
+vec4 texel_rgba(uint first, uint i) {
+    uint k = first + i;
+    uint w = texture_texel_data[k >> 2][k & 3u];
+    vec4 c = vec4((uvec4(w, w >> 8, w >> 16, w >> 24) & 0xffu)) / 255.0;
+    return vec4(srgb_to_linear(c.r), srgb_to_linear(c.g), srgb_to_linear(c.b), c.a);
+}
+
+// Integer texel coordinate `i` wrapped into [0, n) by `mode` (0 repeat, 1 clamp to edge,
+// 2 mirrored repeat: ... 1 0 | 0 1 ... n-1 | n-1 ... 0 | 0 ...).
+int wrap_texel(int i, int n, uint mode) {
+    if (mode == 1u) return clamp(i, 0, n - 1);
+    if (mode == 2u) {
+        int p = 2 * n;
+        int m = ((i % p) + p) % p;
+        return m < n ? m : p - 1 - m;
+    }
+    return ((i % n) + n) % n;
+}
+
+// Texture reference `ref` at texture coordinates `uv` (finite): linear RGBA.
+vec4 texture_sample(uint ref, vec2 uv) {
+    GpuTextureRef t = texture_ref_data[ref];
+    vec3 h = vec3(uv, 1.0);
+    vec2 st = vec2(dot(t.row0.xyz, h), dot(t.row1.xyz, h));
+    int w = int(t.image.y);
+    int ht = int(t.image.z);
+    uint ms = t.image.w & 3u;
+    uint mt = (t.image.w >> 2) & 3u;
+    // Texel space, kept where floor() fits an int (beyond that nothing is resolved anyway).
+    vec2 x = clamp(st * vec2(w, ht), vec2(-8388608.0), vec2(8388608.0));
+    if ((t.image.w & TEXTURE_NEAREST) != 0u) {
+        ivec2 i = ivec2(floor(x));
+        return texel_rgba(t.image.x, uint(wrap_texel(i.y, ht, mt) * w + wrap_texel(i.x, w, ms)));
+    }
+    vec2 y = x - 0.5;
+    vec2 y0 = floor(y);
+    vec2 f = y - y0;
+    ivec2 i0 = ivec2(y0);
+    int xa = wrap_texel(i0.x, w, ms), xb = wrap_texel(i0.x + 1, w, ms);
+    int ya = wrap_texel(i0.y, ht, mt), yb = wrap_texel(i0.y + 1, ht, mt);
+    vec4 c00 = texel_rgba(t.image.x, uint(ya * w + xa));
+    vec4 c10 = texel_rgba(t.image.x, uint(ya * w + xb));
+    vec4 c01 = texel_rgba(t.image.x, uint(yb * w + xa));
+    vec4 c11 = texel_rgba(t.image.x, uint(yb * w + xb));
+    return mix(mix(c00, c10, f.x), mix(c01, c11, f.x), f.y);
+}
+#endif
+
+// The tint (rgb) and alpha (times the material's alpha factor) of triangle `tri` with
+// material `material` at barycentric weights (u, v): (1, 1, 1, factor) where it has no
+// attributes.
+vec4 surface_tint_alpha(uint tri, uint material, float u, float v) {
+    vec4 r = vec4(1.0, 1.0, 1.0, material_surface(material).y);
+#if HAS_VERTEX_ATTRIBUTES
+    uint first = floatBitsToUint(triangle_at(tri).p2.w);
+    if (first == 0xffffffffu) return r;
+    GpuVertexAttributes a0 = vertex_attribute_data[first];
+    GpuVertexAttributes a1 = vertex_attribute_data[first + 1u];
+    GpuVertexAttributes a2 = vertex_attribute_data[first + 2u];
+    float w0 = 1.0 - u - v;
+    // A constant colour (white where there is none) is taken as it is, not interpolated.
+    vec4 color = (a0.color == a1.color && a0.color == a2.color) ? a0.color
+                                                               : w0 * a0.color + u * a1.color + v * a2.color;
+    r *= color;
+#if HAS_TEXTURES
+    uint ref = floatBitsToUint(material_surface(material).x);
+    if (ref != NO_TEXTURE) {
+        bool uv1 = (texture_ref_data[ref].image.w & TEXTURE_UV1) != 0u;
+        vec2 t0 = uv1 ? a0.uv.zw : a0.uv.xy;
+        vec2 t1 = uv1 ? a1.uv.zw : a1.uv.xy;
+        vec2 t2 = uv1 ? a2.uv.zw : a2.uv.xy;
+        vec2 uv = w0 * t0 + u * t1 + v * t2;
+        // NaN: the triangle has no such texture coordinates (the factor alone applies).
+        if (!any(isnan(uv)) && !any(isinf(uv))) r *= texture_sample(ref, uv);
+    }
+#endif
+#endif
+    return r;
+}
+
+// Whether a candidate hit (primitive id `id` with the BVH's sphere flag, `material`, at
+// (u, v)) is there: false on the cut-away part of an alphaMode MASK material (alpha below
+// its cutoff, surface.z), for every ray (glTF: MASK is opaque where alpha >= cutoff).
+// Spheres have no attributes: their alpha is the material's factor.
+bool alpha_visible(uint id, uint material, float u, float v) {
+    vec4 srf = material_surface(material);
+    if (srf.z < 0.0) return true;
+    float alpha = (id & BVH_SPHERE_FLAG) != 0u ? srf.y : surface_tint_alpha(id, material, u, v).a;
+    return alpha >= srf.z;
+}
+
+#endif

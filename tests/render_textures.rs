@@ -1,0 +1,392 @@
+//! Textures, vertex colours and alpha cut-outs in the kernels (glsl/textures.glsl), against
+//! analytic images computed here on the CPU with an independent sampler, and between
+//! estimators. Lavapipe, validation on.
+//!
+//! The analytic scenes: a camera looking straight down at a textured diffuse quad that
+//! fills its view exactly (texture coordinates (0, 0) at the image's top-left corner,
+//! u along x, v along y, so that a 4 x 4 texture covers 6 x 6 pixels per texel of the
+//! 24 x 24 frame), under a uniform white sky, with paths of at most 2 segments: a point of
+//! the quad reflects its albedo times the sky's radiance, so each pixel's expectation is
+//! the texture (times the vertex colour) averaged over the pixel — computed here by
+//! supersampling the pixel with this file's own sampler (sRGB decode, wrap modes,
+//! bilinear filtering). Per-pixel z-tests as in tests/render_bidir.rs (ALPHA per
+//! comparison, Šidák-corrected).
+
+mod common;
+
+use std::sync::Arc;
+
+use common::scenes::{camera, scene};
+use common::{render_stats, with_gpu};
+use glam::{Vec2, Vec3, Vec4};
+use vkvcm::gpu::Gpu;
+use vkvcm::image::stats::{one_sample_test, welch_test};
+use vkvcm::image::Image;
+use vkvcm::render::{self, Algorithm, Budget, RenderOutput, RenderSettings};
+use vkvcm::scene::{
+    AlphaMode, Filter, Light, Material, Scene, TextureImage, TextureRef, Triangle, VertexAttributes, Wrap,
+};
+
+const ALPHA: f64 = 1e-3;
+const W: u32 = 24;
+const H: u32 = 24;
+/// Camera height over the quad y = 0, and the quad's half size: exactly the view's
+/// footprint for a 45 degree field of view.
+const CAM_H: f32 = 3.0;
+
+fn half_size() -> f32 {
+    CAM_H * (22.5f32).to_radians().tan()
+}
+
+/// A 4 x 4 RGBA8 image whose texels all differ (so that a flip or transpose shows), with
+/// alpha 0 on the texels where i + j is odd (the cut-out pattern).
+fn test_image() -> TextureImage {
+    let texels = (0..16)
+        .map(|k| {
+            let (i, j) = (k % 4, k / 4);
+            [
+                (40 + 50 * i) as u8,
+                (30 + 60 * j) as u8,
+                (220 - 40 * i - 10 * j) as u8,
+                if (i + j) % 2 == 1 { 0 } else { 255 },
+            ]
+        })
+        .collect();
+    TextureImage { name: "test".into(), width: 4, height: 4, texels }
+}
+
+fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn texel(img: &TextureImage, i: i32, j: i32) -> Vec4 {
+    let t = img.texels[(j * img.width as i32 + i) as usize];
+    let c = |b: u8| b as f32 / 255.0;
+    Vec4::new(srgb_to_linear(c(t[0])), srgb_to_linear(c(t[1])), srgb_to_linear(c(t[2])), c(t[3]))
+}
+
+fn wrap(i: i32, n: i32, w: Wrap) -> i32 {
+    match w {
+        Wrap::Repeat => i.rem_euclid(n),
+        Wrap::ClampToEdge => i.clamp(0, n - 1),
+        Wrap::MirroredRepeat => {
+            let m = i.rem_euclid(2 * n);
+            if m < n {
+                m
+            } else {
+                2 * n - 1 - m
+            }
+        }
+    }
+}
+
+/// The reference sampler: glTF's conventions, written independently of the GLSL.
+fn sample(img: &TextureImage, t: &TextureRef, uv: Vec2) -> Vec4 {
+    let [r0, r1] = t.transform;
+    let st = Vec2::new(r0[0] * uv.x + r0[1] * uv.y + r0[2], r1[0] * uv.x + r1[1] * uv.y + r1[2]);
+    let (w, h) = (img.width as i32, img.height as i32);
+    let x = st * Vec2::new(w as f32, h as f32);
+    let at = |i: i32, j: i32| texel(img, wrap(i, w, t.wrap_s), wrap(j, h, t.wrap_t));
+    match t.filter {
+        Filter::Nearest => at(x.x.floor() as i32, x.y.floor() as i32),
+        Filter::Linear => {
+            let y = x - Vec2::splat(0.5);
+            let (i, j) = (y.x.floor() as i32, y.y.floor() as i32);
+            let f = y - Vec2::new(i as f32, j as f32);
+            let top = at(i, j).lerp(at(i + 1, j), f.x);
+            let bottom = at(i, j + 1).lerp(at(i + 1, j + 1), f.x);
+            top.lerp(bottom, f.y)
+        }
+    }
+}
+
+/// The quad y = 0 filling the view, with texture coordinates `uv_of(u, v)` at its
+/// corners (u, v in {0, 1}: the image's corners) and vertex colours `color_of(u, v)`.
+fn quad(material: u32, uv_of: &dyn Fn(f32, f32) -> Vec2, color_of: Option<&dyn Fn(f32, f32) -> Vec4>) -> Vec<Triangle> {
+    let s = half_size();
+    // Image x is world +x, image y (down) world +z (camera up = -z).
+    let corner = |u: f32, v: f32| Vec3::new(-s + 2.0 * s * u, 0.0, -s + 2.0 * s * v);
+    let tri = |c: [(f32, f32); 3]| Triangle {
+        p: c.map(|(u, v)| corner(u, v)),
+        n: None,
+        material,
+        attributes: Some(Box::new(VertexAttributes {
+            uv: [Some(c.map(|(u, v)| uv_of(u, v))), None],
+            color: color_of.map(|f| c.map(|(u, v)| f(u, v))),
+        })),
+    };
+    // Both counter-clockwise seen from above (+y), the camera's side.
+    vec![tri([(0.0, 0.0), (0.0, 1.0), (1.0, 1.0)]), tri([(0.0, 0.0), (1.0, 1.0), (1.0, 0.0)])]
+}
+
+fn top_camera() -> vkvcm::scene::Camera {
+    camera(Vec3::new(0.0, CAM_H, 0.0), Vec3::NEG_Y, Vec3::NEG_Z, 45.0)
+}
+
+fn textured_scene(
+    texture: TextureRef,
+    uv_of: &dyn Fn(f32, f32) -> Vec2,
+    color_of: Option<&dyn Fn(f32, f32) -> Vec4>,
+) -> Scene {
+    let mat = Material {
+        name: "textured".into(),
+        diffuse: Vec3::ONE,
+        base_color_texture: Some(texture),
+        ..Default::default()
+    };
+    let sky = Light::Background { radiance: Vec3::ONE };
+    let mut s = scene("textured quad", quad(0, uv_of, color_of), vec![mat], vec![sky], top_camera());
+    s.images = vec![test_image()];
+    s
+}
+
+/// Each pixel's expectation: the tint (texture times vertex colour) averaged over 16 x 16
+/// points of the pixel, image coordinates (u, v) = (x / W, y / H).
+fn expected_image(scene: &Scene, color_of: Option<&dyn Fn(f32, f32) -> Vec4>) -> Image {
+    let t = scene.materials[0].base_color_texture.as_ref().unwrap();
+    let img = &scene.images[0];
+    let n = 16;
+    let mut out = Image::filled(W, H, [0.0; 3]);
+    for py in 0..H {
+        for px in 0..W {
+            let mut sum = Vec3::ZERO;
+            for k in 0..n * n {
+                let u = (px as f32 + ((k % n) as f32 + 0.5) / n as f32) / W as f32;
+                let v = (py as f32 + ((k / n) as f32 + 0.5) / n as f32) / H as f32;
+                let uv = t_uv(u, v);
+                let c = color_of.map_or(Vec4::ONE, |f| f(u, v));
+                sum += (sample(img, t, uv) * c).truncate();
+            }
+            out.data[(py * W + px) as usize] = (sum / (n * n) as f32).to_array();
+        }
+    }
+    out
+}
+
+/// The texture coordinates of the image point (u, v) in these tests: [-0.5, 1.5]^2, so
+/// that the wrap modes matter.
+fn t_uv(u: f32, v: f32) -> Vec2 {
+    Vec2::new(2.0 * u - 0.5, 2.0 * v - 0.5)
+}
+
+fn render_with(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, iterations: u64, generic: bool) -> RenderOutput {
+    let mut s = RenderSettings::new(algo, W, H, Budget::Iterations(iterations));
+    s.frame.max_path_length = 2;
+    s.frame.seed = 9 + algo as u32;
+    s.generic = generic;
+    let out = render::render(gpu, scene, &s, None, &mut |_| {}).unwrap();
+    assert_eq!(out.rejected_samples, 0, "{algo:?}: rejected samples");
+    out
+}
+
+/// Nearest and linear filtering with each wrap mode, a texture transform, and vertex
+/// colours (varying across the quad: red 1, green = u, blue 1, linear in u so that the
+/// interpolation over the two triangles is exact): pt and bpt per pixel against the CPU
+/// image. Sabotaged (sRGB decode left out; v flipped; mirrored repeat as repeat) it
+/// fails.
+#[test]
+fn textured_quad_matches_the_cpu_sampler() {
+    let scale_offset = [[0.5, 0.0, 0.25], [0.0, 2.0, -0.5]];
+    let cases: [(&str, Wrap, Wrap, Filter, [[f32; 3]; 2]); 4] = [
+        ("nearest, repeat", Wrap::Repeat, Wrap::Repeat, Filter::Nearest, TextureRef::IDENTITY),
+        ("linear, clamp / mirrored", Wrap::ClampToEdge, Wrap::MirroredRepeat, Filter::Linear, TextureRef::IDENTITY),
+        ("linear, mirrored / repeat", Wrap::MirroredRepeat, Wrap::Repeat, Filter::Linear, TextureRef::IDENTITY),
+        ("nearest, transformed", Wrap::Repeat, Wrap::MirroredRepeat, Filter::Nearest, scale_offset),
+    ];
+    let green_ramp = |u: f32, _v: f32| Vec4::new(1.0, u, 1.0, 1.0);
+    with_gpu(|gpu| {
+        for (label, wrap_s, wrap_t, filter, transform) in cases {
+            let t = TextureRef { image: 0, wrap_s, wrap_t, filter, tex_coord: 0, transform };
+            for colours in [false, true] {
+                let color_of: Option<&dyn Fn(f32, f32) -> Vec4> = if colours { Some(&green_ramp) } else { None };
+                let sc = textured_scene(t.clone(), &t_uv, color_of);
+                let expected = expected_image(&sc, color_of);
+                for (algo, iterations) in [(Algorithm::Pt, 256), (Algorithm::Bpt, 128)] {
+                    let st = render_stats(&render_with(gpu, &sc, algo, iterations, false), None);
+                    let name = format!("{label}{}, {algo:?}", if colours { ", vertex colours" } else { "" });
+                    let r = one_sample_test(&st, &expected, ALPHA).unwrap();
+                    assert!(r.passed(), "{name}: {r}");
+                }
+            }
+        }
+    });
+}
+
+/// TEXCOORD_1: a texture that names the second set reads it (the first set is a
+/// constant, wrong on purpose): the image is the first set's image of the same
+/// coordinates.
+#[test]
+fn second_texture_coordinate_set() {
+    let t = |tex_coord| TextureRef {
+        image: 0,
+        wrap_s: Wrap::Repeat,
+        wrap_t: Wrap::Repeat,
+        filter: Filter::Nearest,
+        tex_coord,
+        transform: TextureRef::IDENTITY,
+    };
+    let identity = |u: f32, v: f32| Vec2::new(u, v);
+    let reference = textured_scene(t(0), &identity, None);
+    let mut sc = textured_scene(t(1), &identity, None);
+    for tri in &mut sc.triangles {
+        let a = tri.attributes.as_mut().unwrap();
+        a.uv[1] = a.uv[0];
+        a.uv[0] = Some([Vec2::new(0.9, 0.1); 3]);
+    }
+    with_gpu(|gpu| {
+        let st = render_stats(&render_with(gpu, &sc, Algorithm::Pt, 128, false), None);
+        let r = one_sample_test(&st, &expected_image_for_uvs(&reference), ALPHA).unwrap();
+        assert!(r.passed(), "TEXCOORD_1: {r}");
+    });
+}
+
+/// The expected image of a quad whose TEXCOORD_0 at the image corners is the quad's own
+/// (bilinear in the image, as the quad's two triangles interpolate it).
+fn expected_image_for_uvs(scene: &Scene) -> Image {
+    let a = scene.triangles[0].attributes.as_ref().unwrap().uv[0].unwrap();
+    let b = scene.triangles[1].attributes.as_ref().unwrap().uv[0].unwrap();
+    // Corners: (0,0) = a[0], (0,1) = a[1], (1,1) = a[2], (1,0) = b[2]; the coordinates
+    // here are affine in the image, so the corners define them.
+    let (c00, c01, c11, c10) = (a[0], a[1], a[2], b[2]);
+    assert!((c00 + c11 - c01 - c10).length() < 1e-6, "the test's coordinates are affine");
+    let t = scene.materials[0].base_color_texture.as_ref().unwrap();
+    let img = &scene.images[0];
+    let n = 16;
+    let mut out = Image::filled(W, H, [0.0; 3]);
+    for py in 0..H {
+        for px in 0..W {
+            let mut sum = Vec3::ZERO;
+            for k in 0..n * n {
+                let u = (px as f32 + ((k % n) as f32 + 0.5) / n as f32) / W as f32;
+                let v = (py as f32 + ((k / n) as f32 + 0.5) / n as f32) / H as f32;
+                let uv = c00 + (c10 - c00) * u + (c01 - c00) * v;
+                sum += sample(img, t, uv).truncate();
+            }
+            out.data[(py * W + px) as usize] = (sum / (n * n) as f32).to_array();
+        }
+    }
+    out
+}
+
+/// An alphaMode MASK quad (the test image's alpha: 0 on half of its texels, in a
+/// checkerboard) over a grey diffuse floor 0.002 below it, under the white sky. The
+/// cut-outs are holes for every ray: camera rays see the floor through them, and the
+/// floor is lit through them. So pt (shadow rays: any-hit traversal) and bpt and lt (light
+/// subpaths through the holes, connections) agree per pixel; and the quad's opaque
+/// texels, whose upper hemisphere is all sky, show exactly their texture colour.
+/// Sabotaged (the alpha test only in closest-hit traversal, not in shadow rays; or no
+/// alpha test at all) it fails.
+#[test]
+fn alpha_cutouts_are_holes_for_every_ray() {
+    let t = TextureRef {
+        image: 0,
+        wrap_s: Wrap::Repeat,
+        wrap_t: Wrap::Repeat,
+        filter: Filter::Nearest,
+        tex_coord: 0,
+        transform: TextureRef::IDENTITY,
+    };
+    let mut sc = textured_scene(t, &|u, v| Vec2::new(u, v), None);
+    sc.materials[0].alpha_mode = AlphaMode::Mask { cutoff: 0.5 };
+    // The floor: larger than the view, 0.002 below, grey, flat.
+    let f = 3.0 * half_size();
+    let y = -0.002;
+    let floor_mat = sc.materials.len() as u32;
+    sc.materials.push(Material { name: "floor".into(), diffuse: Vec3::splat(0.5), ..Default::default() });
+    let c = |x: f32, z: f32| Vec3::new(x, y, z);
+    sc.triangles.push(Triangle { p: [c(-f, -f), c(-f, f), c(f, f)], n: None, material: floor_mat, attributes: None });
+    sc.triangles.push(Triangle { p: [c(-f, -f), c(f, f), c(f, -f)], n: None, material: floor_mat, attributes: None });
+    let img = test_image();
+    // Pixels (6 x 6 per texel) wholly inside an opaque texel, away from its edges.
+    let opaque: Vec<bool> = (0..W * H)
+        .map(|i| {
+            let (x, y) = (i % W, i / W);
+            let (ti, tj) = (x / 6, y / 6);
+            img.texels[(tj * 4 + ti) as usize][3] == 255
+        })
+        .collect();
+    with_gpu(|gpu| {
+        let pt_out = render_with(gpu, &sc, Algorithm::Pt, 512, false);
+        let pt = render_stats(&pt_out, None);
+        // Opaque texels: the texture's colour (the whole upper hemisphere is sky).
+        let mut expected = Image::filled(W, H, [0.0; 3]);
+        for (i, e) in expected.data.iter_mut().enumerate() {
+            if opaque[i] {
+                let (x, y) = (i as u32 % W, i as u32 / W);
+                *e = texel(&img, (x / 6) as i32, (y / 6) as i32).truncate().to_array();
+            }
+        }
+        let on_quad = render_stats(&pt_out, Some(&opaque));
+        let r = one_sample_test(&on_quad, &expected, ALPHA).unwrap();
+        assert!(r.passed(), "opaque texels: {r}");
+        // Holes: the grey floor (lit through the hole: at most its albedo 0.5 within five
+        // standard errors, not black), not the texture's colour there (whose channels
+        // differ by 0.1 or more; the floor's are equal).
+        for (i, (m, v)) in pt.mean.iter().zip(&pt.variance).enumerate() {
+            if !opaque[i] {
+                let se = (v[1] / pt.count as f64).sqrt();
+                let grey = (m[0] - m[1]).abs() < 0.05 && (m[1] - m[2]).abs() < 0.05;
+                assert!(
+                    grey && m[1] > 0.05 && m[1] < 0.5 + 5.0 * se,
+                    "pixel {i} in a hole: {m:?} +- {se} (the grey floor)"
+                );
+            }
+        }
+        let mut s = RenderSettings::new(Algorithm::Pt, W, H, Budget::Iterations(1));
+        s.frame.max_path_length = 4;
+        let run = |algo: Algorithm, iterations: u64| {
+            let mut s = s.clone();
+            s.algorithm = algo;
+            s.budget = Budget::Iterations(iterations);
+            s.frame.seed = 77 + algo as u32;
+            render_stats(&render::render(gpu, &sc, &s, None, &mut |_| {}).unwrap(), None)
+        };
+        let pt4 = run(Algorithm::Pt, 2048);
+        let bpt4 = run(Algorithm::Bpt, 1024);
+        let r = welch_test(&pt4, &bpt4, ALPHA).unwrap();
+        assert!(r.passed(), "cut-outs: PT vs BPT: {r}");
+        // Every pixel sees a diffuse surface (the quad or, through a hole, the floor), so
+        // light tracing reaches all of them.
+        let lt4 = render_stats(
+            &{
+                let mut s = s.clone();
+                s.algorithm = Algorithm::Lt;
+                s.budget = Budget::Iterations(4096);
+                s.frame.seed = 5;
+                render::render(gpu, &sc, &s, None, &mut |_| {}).unwrap()
+            },
+            None,
+        );
+        let r = welch_test(&lt4, &bpt4, ALPHA).unwrap();
+        assert!(r.passed(), "cut-outs: LT vs BPT: {r}");
+    });
+}
+
+/// The generic kernels (every feature compiled in) render a textured scene as the
+/// specialised ones do (same random numbers: bit-identical), and a scene without
+/// attributes is untouched by the texture code (its generic render equals its
+/// specialised render).
+#[test]
+fn generic_kernels_render_textures_identically() {
+    let t = TextureRef {
+        image: 0,
+        wrap_s: Wrap::MirroredRepeat,
+        wrap_t: Wrap::ClampToEdge,
+        filter: Filter::Linear,
+        tex_coord: 0,
+        transform: TextureRef::IDENTITY,
+    };
+    let mut sc = textured_scene(t, &t_uv, None);
+    sc.materials[0].alpha_mode = AlphaMode::Mask { cutoff: 0.5 };
+    with_gpu(|gpu| {
+        for algo in [Algorithm::Pt, Algorithm::Vcm, Algorithm::El] {
+            let a = render_with(gpu, &sc, algo, 4, false);
+            let b = render_with(gpu, &sc, algo, 4, true);
+            assert!(a.pixels == b.pixels, "{algo:?}: generic and specialised kernels differ on the textured scene");
+        }
+    });
+}
