@@ -191,7 +191,8 @@ fn render_with(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, iterations: u64, 
 #[test]
 fn textured_quad_matches_the_cpu_sampler() {
     let scale_offset = [[0.5, 0.0, 0.25], [0.0, 2.0, -0.5]];
-    let cases: [(&str, Wrap, Wrap, Filter, [[f32; 3]; 2]); 4] = [
+    type Case = (&'static str, Wrap, Wrap, Filter, [[f32; 3]; 2]);
+    let cases: [Case; 4] = [
         ("nearest, repeat", Wrap::Repeat, Wrap::Repeat, Filter::Nearest, TextureRef::IDENTITY),
         ("linear, clamp / mirrored", Wrap::ClampToEdge, Wrap::MirroredRepeat, Filter::Linear, TextureRef::IDENTITY),
         ("linear, mirrored / repeat", Wrap::MirroredRepeat, Wrap::Repeat, Filter::Linear, TextureRef::IDENTITY),
