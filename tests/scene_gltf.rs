@@ -401,8 +401,8 @@ fn unsupported_features_warn_once_per_kind() {
     d.json["images"] = json!([{"uri": "never_loaded.png"}]);
     d.json["textures"] = json!([{"source": 0}]);
     d.json["materials"] = json!([
-        {"name": "a", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},
-        {"name": "b", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},
+        {"name": "a", "normalTexture": {"index": 0}},
+        {"name": "b", "normalTexture": {"index": 0}},
     ]);
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
     let mut lines = d.json["meshes"][0]["primitives"][0].clone();
@@ -1103,4 +1103,451 @@ fn skinned_primitive_without_influences_warns() {
     assert_eq!(s.triangles[0].p, [Vec3::new(-0.5, 0.0, 0.0), Vec3::new(0.5, 0.0, 0.0), Vec3::new(0.5, 0.5, 0.0)]);
     let w = &s.report.warnings;
     assert_eq!(w.iter().filter(|w| w.contains("no JOINTS_0/WEIGHTS_0")).count(), 1, "{w:?}");
+}
+
+// --- Textures, texture coordinates, vertex colours and alpha (issue #18 items 1-2) ---
+
+use glam::{Vec2, Vec4};
+use vkvcm::scene::{AlphaMode, Filter, TextureRef, Wrap};
+
+/// A 2 x 2 RGBA image: red, green / blue, half-transparent white (row by row from the top).
+const TEXELS: [[u8; 4]; 4] = [[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 255, 255], [255, 255, 255, 128]];
+
+fn encode(w: u32, h: u32, texels: &[[u8; 4]], format: image::ImageFormat) -> Vec<u8> {
+    let img = image::RgbaImage::from_raw(w, h, texels.concat()).unwrap();
+    let mut out = Vec::new();
+    match format {
+        // JPEG has no alpha.
+        image::ImageFormat::Jpeg => {
+            image::DynamicImage::ImageRgba8(img).to_rgb8().write_to(&mut std::io::Cursor::new(&mut out), format)
+        }
+        _ => img.write_to(&mut std::io::Cursor::new(&mut out), format),
+    }
+    .unwrap();
+    out
+}
+
+fn png_2x2() -> Vec<u8> {
+    encode(2, 2, &TEXELS, image::ImageFormat::Png)
+}
+
+impl Doc {
+    /// Adds a FLOAT VEC2 TEXCOORD_`k` with these per-vertex values.
+    fn texcoord(&mut self, k: u32, uv: &[[f32; 2]]) {
+        let v = self.push_view(&f32_bytes(&uv.concat()), None);
+        let a = self.push_accessor(json!({"bufferView": v, "componentType": 5126, "count": uv.len(), "type": "VEC2"}));
+        self.prim()["attributes"][format!("TEXCOORD_{k}")] = json!(a);
+    }
+
+    /// A triangle with TEXCOORD_0 (0,0), (1,0), (0,1) and material 0 using texture 0 (image
+    /// 0: the 2 x 2 PNG as a data URI), without a sampler.
+    fn textured() -> Doc {
+        let mut d = Doc::triangle();
+        d.texcoord(0, &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]);
+        d.json["images"] = json!([{"name": "checker", "uri": scene::encode_data_uri(&png_2x2())}]);
+        d.json["textures"] = json!([{"source": 0}]);
+        d.json["materials"] = json!([{"name": "m", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+        d.prim()["material"] = json!(0);
+        d
+    }
+}
+
+fn texture_of(s: &Scene, material: usize) -> TextureRef {
+    s.materials[material].base_color_texture.clone().expect("a base colour texture")
+}
+
+#[test]
+fn base_color_texture_from_a_data_uri() {
+    let s = Doc::textured().load().unwrap();
+    assert_eq!(s.images.len(), 1);
+    let img = &s.images[0];
+    assert_eq!((img.width, img.height, img.name.as_str()), (2, 2, "checker"));
+    assert_eq!(img.texels, TEXELS.to_vec(), "texels row by row from the top-left, unchanged (sRGB stays encoded)");
+    let t = texture_of(&s, 0);
+    // No sampler: repeat wrapping and (auto =) linear filtering; no transform.
+    assert_eq!(
+        t,
+        TextureRef {
+            image: 0,
+            wrap_s: Wrap::Repeat,
+            wrap_t: Wrap::Repeat,
+            filter: Filter::Linear,
+            tex_coord: 0,
+            transform: TextureRef::IDENTITY
+        }
+    );
+    let a = s.triangles[0].attributes.as_ref().expect("attributes");
+    assert_eq!(a.uv, [Some([Vec2::ZERO, Vec2::X, Vec2::Y]), None]);
+    assert_eq!(a.color, None);
+    // The metallic/roughness factors are still those of the material (base factor 1).
+    assert_eq!(s.materials[0].diffuse, Vec3::ZERO, "glTF's default metallic is 1");
+    assert!(s.report.warnings.iter().all(|w| !w.contains("texture")), "{:?}", s.report.warnings);
+}
+
+#[test]
+fn samplers_and_shared_images() {
+    let mut d = Doc::textured();
+    d.json["samplers"] = json!([
+        {"wrapS": 33071, "wrapT": 33648, "magFilter": 9728, "minFilter": 9984},
+        {"wrapT": 33071, "magFilter": 9729, "minFilter": 9987},
+        {"minFilter": 9728},
+    ]);
+    d.json["textures"] = json!([{"source": 0, "sampler": 0}, {"source": 0, "sampler": 1}, {"source": 0, "sampler": 2}]);
+    d.json["materials"] = json!([
+        {"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}},
+        {"pbrMetallicRoughness": {"baseColorTexture": {"index": 1}}},
+        {"pbrMetallicRoughness": {"baseColorTexture": {"index": 2}}},
+    ]);
+    let s = d.load().unwrap();
+    assert_eq!(s.images.len(), 1, "one image decoded once for three textures");
+    let t: Vec<TextureRef> = (0..3).map(|i| texture_of(&s, i)).collect();
+    assert!(t.iter().all(|t| t.image == 0));
+    assert_eq!((t[0].wrap_s, t[0].wrap_t, t[0].filter), (Wrap::ClampToEdge, Wrap::MirroredRepeat, Filter::Nearest));
+    // A mip-map minification filter: bilinear (no mip-maps are used).
+    assert_eq!((t[1].wrap_s, t[1].wrap_t, t[1].filter), (Wrap::Repeat, Wrap::ClampToEdge, Filter::Linear));
+    // Only the magnification filter selects NEAREST.
+    assert_eq!(t[2].filter, Filter::Linear);
+
+    // A bad enum value is a validation error naming the field.
+    let mut d = Doc::textured();
+    d.json["samplers"] = json!([{"wrapS": 12345}]);
+    d.json["textures"][0]["sampler"] = json!(0);
+    let e = err_of(d.load());
+    assert!(e.contains("samplers[0].wrapS"), "{e}");
+}
+
+#[test]
+fn images_from_buffer_views_files_and_jpeg() {
+    // A PNG in a buffer view (mimeType required there).
+    let mut d = Doc::textured();
+    let v = d.push_view(&png_2x2(), None);
+    d.json["images"] = json!([{"bufferView": v, "mimeType": "image/png"}]);
+    let s = d.load().unwrap();
+    assert_eq!(s.images[0].texels, TEXELS.to_vec());
+    assert_eq!(s.images[0].name, "image0");
+
+    // A JPEG file next to the scene (a uniform colour survives the compression closely).
+    let dir = tempfile::tempdir().unwrap();
+    let grey = [[200u8, 100, 50, 255]; 64];
+    std::fs::write(dir.path().join("tex.jpg"), encode(8, 8, &grey, image::ImageFormat::Jpeg)).unwrap();
+    let mut d = Doc::textured();
+    d.json["images"] = json!([{"uri": "tex.jpg"}]);
+    let s = load(&d.write(dir.path())).unwrap();
+    let img = &s.images[0];
+    assert_eq!((img.width, img.height, img.name.as_str()), (8, 8, "tex.jpg"));
+    for t in &img.texels {
+        assert!(t.iter().zip([200u8, 100, 50, 255]).all(|(a, b)| a.abs_diff(b) <= 3), "{t:?}");
+    }
+
+    // Unreadable images: errors naming the material, the texture and the image.
+    let mut d = Doc::textured();
+    d.json["images"] = json!([{"uri": "missing.png"}]);
+    let e = err_of(d.load());
+    assert!(
+        e.contains("material 0 'm' baseColorTexture (texture 0)") && e.contains("image 0") && e.contains("missing.png"),
+        "{e}"
+    );
+    let mut d = Doc::textured();
+    d.json["images"] = json!([{"name": "junk", "uri": scene::encode_data_uri(b"not an image")}]);
+    let e = err_of(d.load());
+    assert!(e.contains("image 0 'junk'") && e.contains("not a PNG or JPEG"), "{e}");
+    let mut d = Doc::textured();
+    d.json["images"] = json!([{"uri": "../outside.png"}]);
+    assert!(err_of(d.load()).contains("images must stay inside the scene's folder"));
+    // A truncated PNG: a decoder error, not a panic.
+    let mut d = Doc::textured();
+    let png = png_2x2();
+    d.json["images"] = json!([{"uri": scene::encode_data_uri(&png[..png.len() - 20])}]);
+    let e = err_of(d.load());
+    assert!(e.contains("cannot decode the PNG image"), "{e}");
+}
+
+#[test]
+fn texture_transform_and_tex_coord_override() {
+    let mut d = Doc::textured();
+    d.texcoord(1, &[[0.5, 0.5], [0.25, 0.5], [0.5, 0.25]]);
+    d.json["extensionsUsed"] = json!(["KHR_texture_transform"]);
+    d.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] = json!({
+        "KHR_texture_transform": {"offset": [0.25, 0.5], "rotation": std::f64::consts::FRAC_PI_2, "scale": [2.0, 3.0], "texCoord": 1}
+    });
+    let s = d.load().unwrap();
+    let t = texture_of(&s, 0);
+    assert_eq!(t.tex_coord, 1, "texCoord of KHR_texture_transform overrides the textureInfo's");
+    // T * R * S at r = pi/2 (cos 0, sin 1): rows [0, sy, ox] and [-sx, 0, oy].
+    let want = [[0.0, 3.0, 0.25], [-2.0, 0.0, 0.5]];
+    let got = t.transform.iter().flatten();
+    assert!(got.zip(want.iter().flatten()).all(|(a, b)| (a - b).abs() < 1e-6), "{:?}", t.transform);
+    assert!(s.report.warnings.iter().all(|w| !w.contains("KHR_texture_transform")), "{:?}", s.report.warnings);
+    let a = s.triangles[0].attributes.as_ref().unwrap();
+    assert_eq!(a.uv[1], Some([Vec2::splat(0.5), Vec2::new(0.25, 0.5), Vec2::new(0.5, 0.25)]));
+
+    let mut d = Doc::textured();
+    d.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] =
+        json!({"KHR_texture_transform": {"scale": [1.0, "x"]}});
+    let e = err_of(d.load());
+    assert!(e.contains("KHR_texture_transform.scale[1] must be a finite number"), "{e}");
+}
+
+#[test]
+fn texture_on_missing_texture_coordinates_is_not_applied() {
+    let mut d = Doc::textured();
+    d.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = json!(1);
+    let s = d.load().unwrap();
+    assert_eq!(texture_of(&s, 0).tex_coord, 1);
+    assert_eq!(s.triangles[0].attributes, None, "no uv and no colour left");
+    assert!(
+        s.report.warnings.iter().any(|w| w.contains("TEXCOORD_1, which the primitive does not have")),
+        "{:?}",
+        s.report.warnings
+    );
+    // TEXCOORD_2 and above are not read: the texture is dropped.
+    let mut d = Doc::textured();
+    d.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = json!(2);
+    let s = d.load().unwrap();
+    assert_eq!(s.materials[0].base_color_texture, None);
+    assert!(
+        s.report.warnings.iter().any(|w| w.contains("only TEXCOORD_0 and TEXCOORD_1 are read")),
+        "{:?}",
+        s.report.warnings
+    );
+}
+
+#[test]
+fn extension_only_texture_sources_are_ignored() {
+    let mut d = Doc::textured();
+    d.json["extensionsUsed"] = json!(["KHR_texture_basisu"]);
+    d.json["textures"] = json!([{"extensions": {"KHR_texture_basisu": {"source": 0}}}]);
+    let s = d.load().unwrap();
+    assert_eq!(s.materials[0].base_color_texture, None);
+    assert!(s.images.is_empty());
+    assert!(
+        s.report.warnings.iter().any(|w| w.contains("given only by KHR_texture_basisu")),
+        "{:?}",
+        s.report.warnings
+    );
+    // With a core `source` as well (the extension's fallback), that one is used.
+    let mut d = Doc::textured();
+    d.json["extensionsUsed"] = json!(["EXT_texture_webp"]);
+    d.json["textures"] = json!([{"source": 0, "extensions": {"EXT_texture_webp": {"source": 0}}}]);
+    let s = d.load().unwrap();
+    assert_eq!(texture_of(&s, 0).image, 0);
+    assert_eq!(s.images[0].texels, TEXELS.to_vec());
+}
+
+#[test]
+fn alpha_factor_and_modes() {
+    let load_mode = |m: Value| {
+        let mut d = Doc::triangle();
+        d.json["materials"] = json!([m]);
+        d.prim()["material"] = json!(0);
+        d.load()
+    };
+    let s = load_mode(json!({"pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 0.25]}})).unwrap();
+    assert_eq!((s.materials[0].alpha, s.materials[0].alpha_mode), (0.25, AlphaMode::Opaque));
+    let s = load_mode(json!({"alphaMode": "MASK"})).unwrap();
+    assert_eq!((s.materials[0].alpha, s.materials[0].alpha_mode), (1.0, AlphaMode::Mask { cutoff: 0.5 }));
+    let s = load_mode(json!({"alphaMode": "MASK", "alphaCutoff": 0.75})).unwrap();
+    assert_eq!(s.materials[0].alpha_mode, AlphaMode::Mask { cutoff: 0.75 });
+    assert!(s.report.warnings.iter().all(|w| !w.contains("alpha")), "{:?}", s.report.warnings);
+    let s = load_mode(
+        json!({"alphaMode": "BLEND", "alphaCutoff": 0.75, "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 0.5]}}),
+    )
+    .unwrap();
+    assert_eq!((s.materials[0].alpha, s.materials[0].alpha_mode), (0.5, AlphaMode::Mask { cutoff: 0.5 }));
+    assert!(
+        s.report.warnings.iter().any(|w| w.contains("alphaMode BLEND is approximated as MASK")),
+        "{:?}",
+        s.report.warnings
+    );
+    let e = err_of(load_mode(json!({"alphaMode": "MASK", "alphaCutoff": -1})));
+    assert!(e.contains("alphaCutoff -1 must be a finite number >= 0"), "{e}");
+}
+
+#[test]
+fn texcoord_formats_decode_per_the_spec() {
+    let with_uv = |ct: u32, norm: bool, bytes: Vec<u8>, stride: usize, quantized: bool| {
+        let mut d = Doc::triangle();
+        if quantized {
+            d.json["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
+        }
+        let v = d.push_view(&bytes, Some(stride));
+        let a = d.push_accessor(
+            json!({"bufferView": v, "componentType": ct, "normalized": norm, "count": 3, "type": "VEC2"}),
+        );
+        d.prim()["attributes"]["TEXCOORD_0"] = json!(a);
+        d.load().map(|s| s.triangles[0].attributes.as_ref().unwrap().uv[0].unwrap())
+    };
+    // UNSIGNED_BYTE normalized (core): c / 255; elements padded to 4 bytes.
+    let uv = with_uv(5121, true, vec![0, 0, 0, 0, 255, 0, 0, 0, 0, 51, 0, 0], 4, false).unwrap();
+    assert_eq!(uv, [Vec2::ZERO, Vec2::X, Vec2::new(0.0, (51.0f64 / 255.0) as f32)]);
+    // UNSIGNED_SHORT normalized (core): c / 65535.
+    let us: Vec<u8> = [0u16, 0, 65535, 0, 0, 13107].iter().flat_map(|x| x.to_le_bytes()).collect();
+    let uv = with_uv(5123, true, us, 4, false).unwrap();
+    assert_eq!(uv, [Vec2::ZERO, Vec2::X, Vec2::new(0.0, (13107.0f64 / 65535.0) as f32)]);
+    // KHR_mesh_quantization: plain SHORT as integers, BYTE normalized max(c / 127, -1).
+    let sh: Vec<u8> = [0i16, 0, -3, 7, 2, -1].iter().flat_map(|x| x.to_le_bytes()).collect();
+    let uv = with_uv(5122, false, sh.clone(), 4, true).unwrap();
+    assert_eq!(uv, [Vec2::ZERO, Vec2::new(-3.0, 7.0), Vec2::new(2.0, -1.0)]);
+    let b: Vec<u8> = [0i8, 0, 0, 0, 127, -128, 0, 0, 64, 0, 0, 0].iter().map(|x| *x as u8).collect();
+    let uv = with_uv(5120, true, b, 4, true).unwrap();
+    assert_eq!(uv, [Vec2::ZERO, Vec2::new(1.0, -1.0), Vec2::new((64.0f64 / 127.0) as f32, 0.0)]);
+    // Without the extension, SHORT is refused with the reason.
+    let e = err_of(with_uv(5122, false, sh, 4, false).map(|_| unreachable!()));
+    assert!(e.contains("TEXCOORD_0") && e.contains("KHR_mesh_quantization"), "{e}");
+}
+
+#[test]
+fn vertex_colours() {
+    let with_color = |ct: u32, ty: &str, bytes: Vec<u8>| {
+        let mut d = Doc::triangle();
+        let v = d.push_view(&bytes, None);
+        let norm = ct != 5126;
+        let a =
+            d.push_accessor(json!({"bufferView": v, "componentType": ct, "normalized": norm, "count": 3, "type": ty}));
+        d.prim()["attributes"]["COLOR_0"] = json!(a);
+        d.load()
+    };
+    // FLOAT VEC3: alpha 1.
+    let s = with_color(5126, "VEC3", f32_bytes(&[1.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, 0.25])).unwrap();
+    let a = s.triangles[0].attributes.as_ref().unwrap();
+    assert_eq!(a.uv, [None, None]);
+    assert_eq!(
+        a.color,
+        Some([Vec4::new(1.0, 0.0, 0.0, 1.0), Vec4::new(0.0, 0.5, 0.0, 1.0), Vec4::new(0.0, 0.0, 0.25, 1.0)])
+    );
+    assert!(s.report.warnings.iter().all(|w| !w.contains("COLOR")), "{:?}", s.report.warnings);
+    // UNSIGNED_BYTE normalized VEC4: c / 255.
+    let s = with_color(5121, "VEC4", vec![255, 0, 0, 51, 0, 255, 0, 255, 0, 0, 255, 0]).unwrap();
+    let c = s.triangles[0].attributes.as_ref().unwrap().color.unwrap();
+    assert_eq!(c[0], Vec4::new(1.0, 0.0, 0.0, (51.0f64 / 255.0) as f32));
+    assert_eq!(c[2], Vec4::new(0.0, 0.0, 1.0, 0.0));
+    // Out-of-range floats are clamped, with one warning.
+    let s =
+        with_color(5126, "VEC4", f32_bytes(&[2.0, -1.0, 0.5, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0])).unwrap();
+    assert_eq!(s.triangles[0].attributes.as_ref().unwrap().color.unwrap()[0], Vec4::new(1.0, 0.0, 0.5, 1.0));
+    assert!(s.report.warnings.iter().any(|w| w.contains("COLOR_0 values outside [0, 1] are clamped")));
+    // A wrong type is an error naming the attribute.
+    let e = err_of(with_color(5126, "VEC2", f32_bytes(&[0.0; 6])));
+    assert!(e.contains("COLOR_0") && e.contains("VEC3/VEC4"), "{e}");
+    // A count other than POSITION's is an error.
+    let e = err_of(with_color(5126, "VEC3", f32_bytes(&[0.0; 9])).and_then(|_| {
+        let mut d = Doc::triangle();
+        let v = d.push_view(&f32_bytes(&[0.0; 6]), None);
+        let a = d.push_accessor(json!({"bufferView": v, "componentType": 5126, "count": 2, "type": "VEC3"}));
+        d.prim()["attributes"]["COLOR_0"] = json!(a);
+        d.load()
+    }));
+    assert!(e.contains("COLOR_0 accessor 1 has 2 elements, the primitive has 3 vertices"), "{e}");
+}
+
+#[test]
+fn mirrored_nodes_swap_attributes_with_vertices() {
+    let mut d = Doc::textured();
+    let v = d.push_view(&f32_bytes(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]), None);
+    let a = d.push_accessor(json!({"bufferView": v, "componentType": 5126, "count": 3, "type": "VEC3"}));
+    d.prim()["attributes"]["COLOR_0"] = json!(a);
+    d.json["nodes"][0]["scale"] = json!([-1.0, 1.0, 1.0]);
+    let s = d.load().unwrap();
+    let t = &s.triangles[0];
+    assert_eq!(t.p, [Vec3::ZERO, Vec3::new(0.0, 1.0, 0.0), Vec3::new(-1.0, 0.0, 0.0)]);
+    let a = t.attributes.as_ref().unwrap();
+    assert_eq!(a.uv[0], Some([Vec2::ZERO, Vec2::Y, Vec2::X]), "uvs follow their vertices");
+    assert_eq!(a.color.unwrap().map(|c| c.truncate()), [Vec3::X, Vec3::Z, Vec3::Y]);
+}
+
+#[test]
+fn triangles_without_texcoords_or_colours_have_no_attributes() {
+    let s = Doc::triangle().load().unwrap();
+    assert_eq!(s.triangles[0].attributes, None);
+    assert!(s.images.is_empty());
+}
+
+#[test]
+fn morph_targets_of_texture_coordinates_are_not_applied() {
+    let mut d = Doc::textured();
+    d.prim()["targets"] = json!([{"POSITION": 0, "TEXCOORD_0": 1}]);
+    let s = d.load().unwrap();
+    assert!(
+        s.report
+            .warnings
+            .iter()
+            .any(|w| w.contains("morph-target displacements of attributes other than POSITION and NORMAL")
+                && w.contains("targets[0].TEXCOORD_0")),
+        "{:?}",
+        s.report.warnings
+    );
+}
+
+#[test]
+fn fingerprint_covers_texture_coordinates_colours_and_texels() {
+    let base = Doc::textured().load().unwrap().fingerprint();
+    let mut d = Doc::textured();
+    d.texcoord(0, &[[0.0, 0.0], [1.0, 0.0], [0.0, 0.5]]);
+    assert_ne!(d.load().unwrap().fingerprint(), base, "a texture coordinate");
+    let mut texels = TEXELS;
+    texels[3][3] = 127;
+    let mut d = Doc::textured();
+    d.json["images"][0]["uri"] = json!(scene::encode_data_uri(&encode(2, 2, &texels, image::ImageFormat::Png)));
+    assert_ne!(d.load().unwrap().fingerprint(), base, "a texel");
+    let mut d = Doc::textured();
+    d.json["samplers"] = json!([{"magFilter": 9728}]);
+    d.json["textures"][0]["sampler"] = json!(0);
+    assert_ne!(d.load().unwrap().fingerprint(), base, "a sampler");
+    let mut s = Doc::textured().load().unwrap();
+    assert_eq!(s.fingerprint(), base);
+    s.triangles[0].attributes.as_mut().unwrap().color = Some([Vec4::ONE; 3]);
+    assert_ne!(s.fingerprint(), base, "a vertex colour");
+}
+
+/// Khronos BoxTextured: 12 triangles, all with TEXCOORD_0; its one material's
+/// baseColorTexture is a 211 x 211 PNG (its IHDR), sampler REPEAT/REPEAT, LINEAR magnification
+/// (LINEAR_MIPMAP_LINEAR minification: bilinear here).
+#[test]
+fn khronos_box_textured() {
+    let s = load(&khronos("BoxTextured")).unwrap();
+    assert_eq!(s.triangles.len(), 12);
+    assert!(s
+        .triangles
+        .iter()
+        .all(|t| t.attributes.as_ref().is_some_and(|a| a.uv[0].is_some() && a.uv[1].is_none() && a.color.is_none())));
+    assert_eq!(s.images.len(), 1);
+    let img = &s.images[0];
+    assert_eq!(img.texels.len(), (img.width * img.height) as usize);
+    assert_eq!((img.width, img.height), (211, 211));
+    let t = texture_of(&s, 0);
+    assert_eq!((t.wrap_s, t.wrap_t, t.filter, t.tex_coord), (Wrap::Repeat, Wrap::Repeat, Filter::Linear, 0));
+    assert_eq!(s.materials[0].alpha_mode, AlphaMode::Opaque);
+    assert!(s.report.warnings.iter().all(|w| !w.contains("texture")), "{:?}", s.report.warnings);
+}
+
+/// Khronos TextureCoordinateTest: four textured quads (materials 1-4 share texture 0, so
+/// one image) and an untextured back plane without TEXCOORD_0 (no attributes).
+#[test]
+fn khronos_texture_coordinate_test() {
+    let s = load(&khronos("TextureCoordinateTest")).unwrap();
+    assert_eq!(s.images.len(), 1);
+    assert_eq!(s.materials[0].base_color_texture, None);
+    for m in 1..5 {
+        let t = texture_of(&s, m);
+        assert_eq!((t.image, t.wrap_s, t.wrap_t, t.filter), (0, Wrap::Repeat, Wrap::Repeat, Filter::Linear));
+    }
+    let with = s.triangles.iter().filter(|t| t.attributes.is_some()).count();
+    assert_eq!(with, 8, "four quads of two triangles");
+    assert!(s.triangles.iter().filter(|t| t.material == 0).all(|t| t.attributes.is_none()));
+    assert!(s.report.warnings.iter().all(|w| !w.contains("texture")), "{:?}", s.report.warnings);
+}
+
+/// Khronos BoxVertexColors: 12 triangles with FLOAT VEC4 COLOR_0 (and TEXCOORD_0).
+#[test]
+fn khronos_box_vertex_colors() {
+    let s = load(&khronos("BoxVertexColors")).unwrap();
+    assert_eq!(s.triangles.len(), 12);
+    for t in &s.triangles {
+        let a = t.attributes.as_ref().expect("attributes");
+        let c = a.color.expect("COLOR_0");
+        assert!(c.iter().all(|c| c.min_element() >= 0.0 && c.max_element() <= 1.0));
+        assert!(a.uv[0].is_some());
+    }
+    assert!(s.images.is_empty());
+    assert!(s.report.warnings.iter().all(|w| !w.contains("COLOR")), "{:?}", s.report.warnings);
 }

@@ -260,8 +260,9 @@ pub struct Scene {
 
 impl Scene {
     /// A checksum (CRC-32, 8 hex digits) of everything in the scene that shapes an image:
-    /// triangles (positions, shading normals, materials), spheres, materials, lights and the
-    /// camera; not its name or load report. Resumed renders compare it, so that an edited
+    /// triangles (positions, shading normals, materials, texture coordinates and colours),
+    /// spheres, materials, texture images (sizes and texels), lights and the camera; not
+    /// its name or load report. Resumed renders compare it, so that an edited
     /// scene file of the same name is not mixed into an old image. CRC-32 is meant for
     /// accidental changes, which is all this guards against.
     pub fn fingerprint(&self) -> String {
@@ -276,6 +277,33 @@ impl Scene {
                 None => h.update(&[0]),
             }
             h.update(&t.material.to_le_bytes());
+            match &t.attributes {
+                Some(a) => {
+                    h.update(&[1]);
+                    for uv in &a.uv {
+                        match uv {
+                            Some(uv) => {
+                                h.update(&[1]);
+                                h.update(bytemuck::cast_slice(uv));
+                            }
+                            None => h.update(&[0]),
+                        }
+                    }
+                    match &a.color {
+                        Some(c) => {
+                            h.update(&[1]);
+                            h.update(bytemuck::cast_slice(c));
+                        }
+                        None => h.update(&[0]),
+                    }
+                }
+                None => h.update(&[0]),
+            }
+        }
+        for img in &self.images {
+            h.update(&img.width.to_le_bytes());
+            h.update(&img.height.to_le_bytes());
+            h.update(bytemuck::cast_slice(&img.texels));
         }
         // Few and small: their Debug text (floats print as the shortest round-trip string).
         let rest = format!("{:?}{:?}{:?}{:?}", self.spheres, self.materials, self.lights, self.camera);

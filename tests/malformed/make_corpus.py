@@ -6,7 +6,7 @@ substring the loader's error must contain ("ok": the file must load and render-c
 cleanly). Re-run after changing a case: python3 tests/malformed/make_corpus.py
 (The symbolic-link case is built at test time in a temporary folder.)
 """
-import base64, copy, json, os, struct
+import base64, copy, json, os, struct, zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -171,7 +171,7 @@ case("sphere_bad_material.gltf", doc(lambda d: d["nodes"][0].update(extensions={
 case("phong_not_object.gltf", doc(set_(["materials", 0, "extensions"], {"VKVCM_materials_phong": 3})), "must be an object")
 case("background_string.gltf", doc(set_(["extensions"], {"VKVCM_background": {"radiance": [1, "x", 1]}})), "VKVCM_background.radiance[1]")
 case("environment_without_uri.gltf", doc(set_(["extensions"], {"VKVCM_environment": {"strength": 1}})), "VKVCM_environment.uri must be a string")
-case("environment_file_missing.gltf", doc(set_(["extensions"], {"VKVCM_environment": {"uri": "no_such_sky.hdr"}})), "cannot read buffer file")
+case("environment_file_missing.gltf", doc(set_(["extensions"], {"VKVCM_environment": {"uri": "no_such_sky.hdr"}})), "cannot read environment map file")
 case("environment_not_an_image.gltf", doc(set_(["extensions"], {"VKVCM_environment": {"uri": data_uri(b"not an image at all")}})), "neither a Radiance HDR")
 case("environment_negative_strength.gltf", doc(set_(["extensions"], {"VKVCM_environment": {"uri": data_uri(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 3 +X 2\n" + bytes([128, 128, 128, 129]) * 6), "strength": -1}})), "strength must not be negative")
 case("environment_and_background.gltf", doc(set_(["extensions"], {"VKVCM_background": {"radiance": [1, 1, 1]}, "VKVCM_environment": {"uri": "sky.hdr"}})), "a scene has one background")
@@ -262,6 +262,52 @@ case("skin_joint_out_of_range.gltf", doc(skinned(joint=1)), "JOINTS_0 accessor 2
 case("skin_negative_weight.gltf", doc(skinned(weight=-1.0)), "weights must be finite and not negative")
 case("skin_too_few_inverse_bind_matrices.gltf", doc(skinned(joints=(1, 0))), "inverseBindMatrices accessor 4 has 1 matrices for 2 joints")
 case("skin_ibm_beyond_view.gltf", doc(skinned(ibm_count=2)), "accessor 4 (2 elements of 64 bytes")
+
+# Textures (glTF 2.0 section 3.8): material 0's baseColorTexture is texture 0, image 0.
+def png_chunk(kind, data):
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+
+def png(w, h, rows=None):
+    """An 8-bit RGBA PNG; `rows` None: an IDAT of w x h zero texels."""
+    ihdr = png_chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0))
+    raw = rows if rows is not None else b"".join(b"\0" + b"\0" * 4 * w for _ in range(h))
+    return b"\x89PNG\r\n\x1a\n" + ihdr + png_chunk(b"IDAT", zlib.compress(raw)) + png_chunk(b"IEND", b"")
+
+
+def textured(image, sampler=None, extra=None):
+    def edit(d):
+        d["images"] = [image]
+        d["textures"] = [{"source": 0}]
+        if sampler is not None:
+            d["samplers"] = [sampler]
+            d["textures"][0]["sampler"] = 0
+        d["materials"][0]["pbrMetallicRoughness"] = {"baseColorTexture": {"index": 0}}
+        if extra:
+            extra(d)
+    return edit
+
+
+def image_data_uri(b):
+    return "data:image/png;base64," + base64.b64encode(b).decode()
+
+
+case("texture_ok.gltf", doc(textured({"uri": image_data_uri(png(2, 2))})), "ok")
+case("image_file_missing.gltf", doc(textured({"uri": "no_such_texture.png"})), "material 0 'lamp' baseColorTexture (texture 0): image 0: cannot read image file")
+case("image_data_uri_undecodable.gltf", doc(textured({"uri": image_data_uri(b"this is not a PNG")})), "image 0: the data is not a PNG or JPEG image")
+case("image_truncated_png.gltf", doc(textured({"uri": image_data_uri(png(2, 2)[:-30])})), "cannot decode the PNG image")
+case("image_view_beyond_buffer.gltf", doc(textured({"bufferView": 2, "mimeType": "image/png"}, extra=lambda d: d["bufferViews"].append({"buffer": 0, "byteOffset": 40, "byteLength": 100}))), "buffer view 2 (offset 40, length 100) exceeds buffer 0 (44 bytes)")
+case("image_view_without_mime_type.gltf", doc(textured({"bufferView": 0}, extra=lambda d: d["bufferViews"].append({"buffer": 0, "byteOffset": 0, "byteLength": 4}))), "the data is not a PNG or JPEG image")
+case("image_huge_declared_size.gltf", doc(textured({"uri": image_data_uri(png(100000, 100000, rows=b"\0" * 8))})), "the PNG image is 100000 x 100000 texels")
+case("image_without_uri_or_view.gltf", doc(textured({"name": "nothing"})), "image 0 'nothing' has neither a uri nor a bufferView")
+case("sampler_bad_wrap.gltf", doc(textured({"uri": image_data_uri(png(2, 2))}, sampler={"wrapS": 12345})), "samplers[0].wrapS")
+case("sampler_bad_filter.gltf", doc(textured({"uri": image_data_uri(png(2, 2))}, sampler={"magFilter": 9986})), "samplers[0].magFilter")
+case("texture_transform_bad.gltf", doc(textured({"uri": image_data_uri(png(2, 2))}, extra=lambda d: d["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"].update(extensions={"KHR_texture_transform": {"offset": [0, "x"]}}))), "KHR_texture_transform.offset[1] must be a finite number")
+case("texture_basisu_only.gltf", doc(textured({"uri": "never_read.ktx2", "mimeType": "image/ktx2"}, extra=lambda d: d["textures"].__setitem__(0, {"extensions": {"KHR_texture_basisu": {"source": 0}}}))), "ok")
+case("alpha_cutoff_negative.gltf", doc(set_(["materials", 0], {"name": "lamp", "emissiveFactor": [1, 1, 1], "alphaMode": "MASK", "alphaCutoff": -0.5})), "alphaCutoff -0.5 must be a finite number >= 0")
+case("texcoord_wrong_type.gltf", doc(lambda d: d["meshes"][0]["primitives"][0]["attributes"].update(TEXCOORD_0=0)), "accessor 0 (TEXCOORD_0) must be FLOAT or UNSIGNED_BYTE normalized or UNSIGNED_SHORT normalized VEC2, is FLOAT VEC3")
+case("color_count_mismatch.gltf", doc(lambda d: (d["accessors"].append({"bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3"}), d["meshes"][0]["primitives"][0]["attributes"].update(COLOR_0=2))), "COLOR_0 accessor 2 has 2 elements, the primitive has 3 vertices")
+
 
 if __name__ == "__main__":
     for f in os.listdir(HERE):

@@ -8,7 +8,7 @@
 //! below first check that the accessor has one of the formats the attribute allows.
 
 use anyhow::{anyhow, bail, Result};
-use glam::{DMat4, Vec3};
+use glam::{DMat4, Vec2, Vec3, Vec4};
 use gltf::accessor::{DataType, Dimensions};
 
 /// A component type with its `normalized` flag: one format an attribute may be stored in.
@@ -45,6 +45,19 @@ pub(super) const NORMAL_TARGET_FORMATS: Formats = NORMAL_FORMATS;
 pub(super) const JOINTS_FORMATS: Formats = Formats { core: &[UBYTE, USHORT], quantized: &[UBYTE, USHORT] };
 /// WEIGHTS_n (glTF 2.0 section 3.7.3.3); KHR_mesh_quantization adds nothing.
 pub(super) const WEIGHTS_FORMATS: Formats =
+    Formats { core: &[FLOAT, UBYTE_N, USHORT_N], quantized: &[FLOAT, UBYTE_N, USHORT_N] };
+
+/// TEXCOORD_n (glTF 2.0 section 3.7.2.1: FLOAT, UNSIGNED_BYTE/SHORT normalized);
+/// KHR_mesh_quantization adds BYTE, UNSIGNED_BYTE, SHORT and UNSIGNED_SHORT, normalized or
+/// not (non-normalized texture coordinates are then usually scaled back by a
+/// `KHR_texture_transform`).
+pub(super) const TEXCOORD_FORMATS: Formats = Formats {
+    core: &[FLOAT, UBYTE_N, USHORT_N],
+    quantized: &[FLOAT, BYTE, BYTE_N, UBYTE, UBYTE_N, SHORT, SHORT_N, USHORT, USHORT_N],
+};
+/// COLOR_n (glTF 2.0 section 3.7.2.1: VEC3 or VEC4 of FLOAT, UNSIGNED_BYTE/SHORT
+/// normalized); KHR_mesh_quantization adds nothing.
+pub(super) const COLOR_FORMATS: Formats =
     Formats { core: &[FLOAT, UBYTE_N, USHORT_N], quantized: &[FLOAT, UBYTE_N, USHORT_N] };
 
 /// Zero-initialised accessors (no `bufferView`) are not bounded by any buffer: ones with
@@ -97,9 +110,20 @@ fn component_count(d: Dimensions) -> usize {
 /// Fails unless `acc` is `dims` in one of the formats `formats` allows (`quantized`:
 /// `KHR_mesh_quantization` is used); `what` names the attribute.
 fn check_format(acc: &gltf::Accessor, what: &str, dims: Dimensions, formats: &Formats, quantized: bool) -> Result<()> {
+    check_formats(acc, what, &[dims], formats, quantized)
+}
+
+/// [`check_format`] for an attribute that may have one of several element types `dims`.
+fn check_formats(
+    acc: &gltf::Accessor,
+    what: &str,
+    dims: &[Dimensions],
+    formats: &Formats,
+    quantized: bool,
+) -> Result<()> {
     let allowed = if quantized { formats.quantized } else { formats.core };
     let have = Format(acc.data_type(), acc.normalized());
-    if acc.dimensions() == dims && allowed.contains(&have) {
+    if dims.contains(&acc.dimensions()) && allowed.contains(&have) {
         return Ok(());
     }
     let names: Vec<String> = allowed.iter().map(|f| format_name(*f)).collect();
@@ -112,14 +136,14 @@ fn check_format(acc: &gltf::Accessor, what: &str, dims: Dimensions, formats: &Fo
         "accessor {} ({what}) must be {} {}, is {} {}{hint}",
         acc.index(),
         names.join(" or "),
-        dims_name(dims),
+        dims.iter().map(|d| dims_name(*d)).collect::<Vec<_>>().join("/"),
         format_name(have),
         dims_name(acc.dimensions())
     )
 }
 
 /// The bytes of buffer view `view`, checked to lie inside its buffer.
-fn view_slice<'b>(buffers: &'b [Vec<u8>], view: &gltf::buffer::View) -> Result<&'b [u8]> {
+pub(super) fn view_slice<'b>(buffers: &'b [Vec<u8>], view: &gltf::buffer::View) -> Result<&'b [u8]> {
     let vi = view.index();
     let bi = view.buffer().index();
     let data = &buffers[bi];
@@ -311,6 +335,37 @@ pub(super) fn read_vec3(
     check_format(acc, what, Dimensions::Vec3, formats, quantized)?;
     let c = read_components(buffers, acc)?;
     Ok(c.chunks_exact(3).map(|v| Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32)).collect())
+}
+
+/// The elements of a VEC2 accessor (TEXCOORD_n) in one of `formats` (`quantized`:
+/// `KHR_mesh_quantization` is used), decoded to floats (normalized integers by glTF's
+/// equations, plain integers as they are).
+pub(super) fn read_vec2(
+    buffers: &[Vec<u8>],
+    acc: &gltf::Accessor,
+    what: &str,
+    formats: &Formats,
+    quantized: bool,
+) -> Result<Vec<Vec2>> {
+    check_format(acc, what, Dimensions::Vec2, formats, quantized)?;
+    let c = read_components(buffers, acc)?;
+    Ok(c.chunks_exact(2).map(|v| Vec2::new(v[0] as f32, v[1] as f32)).collect())
+}
+
+/// The elements of a colour accessor (COLOR_n: VEC3 or VEC4 in one of `formats`) as RGBA,
+/// alpha 1 for a VEC3 accessor.
+pub(super) fn read_color(
+    buffers: &[Vec<u8>],
+    acc: &gltf::Accessor,
+    what: &str,
+    formats: &Formats,
+) -> Result<Vec<Vec4>> {
+    check_formats(acc, what, &[Dimensions::Vec3, Dimensions::Vec4], formats, false)?;
+    let n = component_count(acc.dimensions());
+    let c = read_components(buffers, acc)?;
+    Ok(c.chunks_exact(n)
+        .map(|v| Vec4::new(v[0] as f32, v[1] as f32, v[2] as f32, if n == 4 { v[3] as f32 } else { 1.0 }))
+        .collect())
 }
 
 /// The elements of a VEC4 accessor (JOINTS_n, WEIGHTS_n) in one of `formats`, decoded:

@@ -18,7 +18,10 @@ pub(super) struct Parsed {
 
 /// The validated JSON of `bytes` (`.gltf` or `.glb`) and the GLB binary chunk, if any.
 pub(super) fn parse_document(bytes: &[u8], warnings: &mut Warnings) -> Result<Parsed> {
-    let (mut root, blob) = read_container(bytes)?;
+    let (mut root, blob, morph_attributes) = read_container(bytes)?;
+    for path in &morph_attributes {
+        warnings.warn("morph-target displacements of attributes other than POSITION and NORMAL are not applied", path);
+    }
     check_version(&root)?;
     let quantized = check_extensions(&mut root, warnings)?;
     check_attribute_indices(&root)?;
@@ -67,8 +70,17 @@ fn validate(root: &json::Root, warnings: &mut Warnings) -> Result<()> {
     use json::validation::{Error as VError, Validate};
     let mut errors = Vec::new();
     let mut missing_bounds = None;
+    // Textures whose image is given only by an image-format extension (KHR_texture_basisu
+    // and the like) have no `source`; textures.rs ignores them with a warning.
+    let extension_only: Vec<String> = (root.textures.iter().enumerate())
+        .filter(|(_, t)| super::textures::image_format_extension(t.extensions.as_ref().map(|e| &e.others)).is_some())
+        .map(|(i, _)| format!("textures[{i}].source"))
+        .collect();
     root.validate(root, json::Path::new, &mut |path, error| {
         let path = path().to_string();
+        if matches!(error, VError::Missing) && extension_only.contains(&path) {
+            return;
+        }
         if matches!(error, VError::Missing)
             && path.contains("[\"POSITION\"]")
             && (path.ends_with(".min") || path.ends_with(".max"))

@@ -14,6 +14,8 @@ pub const EXT_BACKGROUND: &str = "VKVCM_background";
 pub const EXT_ENVIRONMENT: &str = "VKVCM_environment";
 /// Integer vertex attributes (positions, normals, morph-target displacements).
 pub const KHR_MESH_QUANTIZATION: &str = "KHR_mesh_quantization";
+/// Offset, rotation and scale of texture coordinates (read on `baseColorTexture`).
+pub const KHR_TEXTURE_TRANSFORM: &str = "KHR_texture_transform";
 
 /// All extensions the importer interprets; any other one in `extensionsUsed` or
 /// `extensionsRequired` is reported as a warning.
@@ -23,6 +25,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_ior",
     "KHR_materials_emissive_strength",
     KHR_MESH_QUANTIZATION,
+    KHR_TEXTURE_TRANSFORM,
     EXT_SPHERES,
     EXT_MATERIALS_PHONG,
     EXT_BACKGROUND,

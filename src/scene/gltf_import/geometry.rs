@@ -2,13 +2,14 @@
 //! world-space triangles, and the spheres of vkvcm's `VKVCM_spheres` node extension.
 
 use super::accessors::{
-    read_indices, read_vec3, Formats, NORMAL_FORMATS, NORMAL_TARGET_FORMATS, POSITION_FORMATS, POSITION_TARGET_FORMATS,
+    read_color, read_indices, read_vec2, read_vec3, Formats, COLOR_FORMATS, NORMAL_FORMATS, NORMAL_TARGET_FORMATS,
+    POSITION_FORMATS, POSITION_TARGET_FORMATS, TEXCOORD_FORMATS,
 };
 use super::extensions::{ext_vec3, EXT_SPHERES};
 use super::Importer;
-use crate::scene::{Sphere, Triangle};
+use crate::scene::{Sphere, Triangle, VertexAttributes};
 use anyhow::{anyhow, bail, Context, Result};
-use glam::{Mat3, Mat4, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use gltf::mesh::{Mode, Semantic};
 use serde_json::Value;
 
@@ -52,9 +53,6 @@ impl Importer<'_> {
                 self.warnings.warn(format!("primitive mode {name} is not supported (primitive skipped)"), where_);
                 continue;
             }
-            if prim.get(&Semantic::Colors(0)).is_some() {
-                self.warnings.warn("vertex colors (COLOR_0) are not supported (ignored)", where_.clone());
-            }
             let Some(pos_acc) = prim.get(&Semantic::Positions) else {
                 self.warnings.warn("primitive without POSITION (skipped)", where_.clone());
                 continue;
@@ -82,6 +80,21 @@ impl Importer<'_> {
                 None => None,
             };
             self.apply_morph_targets(&prim, weights, &mut positions, normals.as_mut(), &where_)?;
+            let material = match prim.material().index() {
+                Some(i) => i as u32,
+                None => self.default_material(),
+            };
+            let (mut uvs, colors) = self.vertex_attributes(&prim, positions.len(), &where_)?;
+            // A base-colour texture on texture coordinates the primitive lacks cannot apply:
+            // its triangles get no texture coordinates (the kernels use the factor alone).
+            let tex_coord = self.scene.materials[material as usize].base_color_texture.as_ref().map(|t| t.tex_coord);
+            if let Some(k) = tex_coord.filter(|&k| uvs[k as usize].is_none()) {
+                self.warnings.warn(
+                    format!("baseColorTexture on TEXCOORD_{k}, which the primitive does not have (the texture is not applied)"),
+                    where_.clone(),
+                );
+                uvs = [None, None];
+            }
             let indices: Vec<u32> = match &index_acc {
                 Some(a) => {
                     let idx = read_indices(&self.buffers, a).with_context(|| where_.clone())?;
@@ -149,22 +162,13 @@ impl Importer<'_> {
                     .collect(),
                 _ => (1..indices.len().saturating_sub(1)).map(|i| [indices[i], indices[i + 1], indices[0]]).collect(),
             };
-            let material = match prim.material().index() {
-                Some(i) => i as u32,
-                None => self.default_material(),
-            };
             for t in tris {
-                let mut p = t.map(|i| world_p[i as usize]);
+                // A mirroring transform reverses the winding; keep the geometric normal on
+                // the side the author meant by swapping vertices 1 and 2 (with all their
+                // attributes). A skinned triangle follows the transform of its first vertex.
+                let t = if flips[t[0] as usize] { [t[0], t[2], t[1]] } else { t };
+                let p = t.map(|i| world_p[i as usize]);
                 let mut n = world_n.as_ref().map(|ns| t.map(|i| ns[i as usize]));
-                if flips[t[0] as usize] {
-                    // A mirroring transform reverses the winding; keep the geometric normal
-                    // on the side the author meant. (A skinned triangle follows the
-                    // transform of its first vertex.)
-                    p.swap(1, 2);
-                    if let Some(n) = n.as_mut() {
-                        n.swap(1, 2);
-                    }
-                }
                 let area2 = (p[1] - p[0]).cross(p[2] - p[0]);
                 let zero_area = area2.length_squared().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater);
                 if !p.iter().all(|q| q.is_finite()) || zero_area || !area2.normalize().is_finite() {
@@ -180,10 +184,80 @@ impl Importer<'_> {
                         n = None;
                     }
                 }
-                self.scene.triangles.push(Triangle { p, n, material, attributes: None });
+                let attributes = (uvs.iter().any(Option::is_some) || colors.is_some()).then(|| {
+                    Box::new(VertexAttributes {
+                        uv: [0, 1].map(|k| uvs[k].as_ref().map(|uv| t.map(|i| uv[i as usize]))),
+                        color: colors.as_ref().map(|c| t.map(|i| c[i as usize])),
+                    })
+                });
+                self.scene.triangles.push(Triangle { p, n, material, attributes });
             }
         }
         Ok(())
+    }
+
+    /// The TEXCOORD_0, TEXCOORD_1 and COLOR_0 of `prim` (`vertices` of them each, when
+    /// present), checked for count and finiteness; colours are clamped to [0, 1] (glTF:
+    /// COLOR_0 is within it) with a warning. Other TEXCOORD_n and COLOR_n are not read
+    /// (warning).
+    #[allow(clippy::type_complexity)]
+    fn vertex_attributes(
+        &mut self,
+        prim: &gltf::Primitive,
+        vertices: usize,
+        where_: &str,
+    ) -> Result<([Option<Vec<Vec2>>; 2], Option<Vec<Vec4>>)> {
+        let q = self.quantized;
+        let check_count = |acc: &gltf::Accessor, what: &str, n: usize| -> Result<()> {
+            if n != vertices {
+                bail!(
+                    "{where_}: {what} accessor {} has {n} elements, the primitive has {vertices} vertices",
+                    acc.index()
+                );
+            }
+            Ok(())
+        };
+        let not_finite = |acc: &gltf::Accessor, what: &str, k: usize| {
+            anyhow!("{where_}: {what} accessor {} element {k} is not finite", acc.index())
+        };
+        let mut uvs: [Option<Vec<Vec2>>; 2] = [None, None];
+        for (k, slot) in uvs.iter_mut().enumerate() {
+            let Some(acc) = prim.get(&Semantic::TexCoords(k as u32)) else { continue };
+            let what = format!("TEXCOORD_{k}");
+            let uv = read_vec2(&self.buffers, &acc, &what, &TEXCOORD_FORMATS, q).with_context(|| where_.to_string())?;
+            check_count(&acc, &what, uv.len())?;
+            if let Some(i) = uv.iter().position(|v| !v.is_finite()) {
+                return Err(not_finite(&acc, &what, i));
+            }
+            *slot = Some(uv);
+        }
+        let colors = match prim.get(&Semantic::Colors(0)) {
+            None => None,
+            Some(acc) => {
+                let c =
+                    read_color(&self.buffers, &acc, "COLOR_0", &COLOR_FORMATS).with_context(|| where_.to_string())?;
+                check_count(&acc, "COLOR_0", c.len())?;
+                if let Some(i) = c.iter().position(|v| !v.is_finite()) {
+                    return Err(not_finite(&acc, "COLOR_0", i));
+                }
+                if c.iter().any(|v| v.min_element() < 0.0 || v.max_element() > 1.0) {
+                    self.warnings.warn("COLOR_0 values outside [0, 1] are clamped", where_.to_string());
+                }
+                Some(c.into_iter().map(|v| v.clamp(Vec4::ZERO, Vec4::ONE)).collect())
+            }
+        };
+        for (sem, _) in prim.attributes() {
+            let name = match sem {
+                Semantic::TexCoords(k) if k > 1 => format!("TEXCOORD_{k}"),
+                Semantic::Colors(k) if k > 0 => format!("COLOR_{k}"),
+                _ => continue,
+            };
+            self.warnings.warn(
+                "vertex attributes TEXCOORD_n (n > 1) and COLOR_n (n > 0) are not read (ignored)",
+                format!("{where_} {name}"),
+            );
+        }
+        Ok((uvs, colors))
     }
 
     /// Adds the morph-target displacements of `prim` to `positions` (and `normals`, when

@@ -116,7 +116,7 @@ impl Importer<'_> {
             .and_then(|u| u.as_str())
             .ok_or_else(|| anyhow!("{ctx}.uri must be a string (the environment map's file or data URI)"))?;
         let shown: String = if uri.starts_with("data:") { "data URI".into() } else { uri.into() };
-        let bytes = sources::load_uri(uri, self.base_dir).with_context(|| format!("{ctx}.uri"))?;
+        let bytes = sources::load_uri(uri, self.base_dir, "environment map").with_context(|| format!("{ctx}.uri"))?;
         let map = EnvironmentMap::decode(&bytes, &shown).with_context(|| format!("{ctx}.uri"))?;
         let strength = ext_f32(env, "strength", 1.0, &ctx)?;
         if strength < 0.0 {

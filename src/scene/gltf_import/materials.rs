@@ -4,7 +4,7 @@
 
 use super::extensions::{ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG};
 use super::Importer;
-use crate::scene::Material;
+use crate::scene::{AlphaMode, Material};
 use anyhow::{bail, Result};
 use glam::Vec3;
 
@@ -25,8 +25,9 @@ impl Importer<'_> {
     }
 
     /// The vkvcm material of `m`: `VKVCM_materials_phong` if present, else clear glass for
-    /// a transmissive material, else the metallic/roughness mapping; plus emission.
-    /// Textures and alpha modes are reported as warnings (the constant factors are used).
+    /// a transmissive material, else the metallic/roughness mapping, whose base colour
+    /// may come from `baseColorTexture`; plus emission, alpha and the alpha mode. The
+    /// other textures are reported as warnings (the constant factors are used).
     pub(super) fn convert_material(&mut self, m: &gltf::Material) -> Result<Material> {
         let index = m.index().unwrap_or(0);
         let name = m.name().map(str::to_string).unwrap_or_else(|| format!("material{index}"));
@@ -37,33 +38,8 @@ impl Importer<'_> {
         let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
         let roughness = pbr.roughness_factor().clamp(0.0, 1.0);
 
-        let mut textures = Vec::new();
-        if pbr.base_color_texture().is_some() {
-            textures.push("baseColorTexture");
-        }
-        if pbr.metallic_roughness_texture().is_some() {
-            textures.push("metallicRoughnessTexture");
-        }
-        if m.normal_texture().is_some() {
-            textures.push("normalTexture");
-        }
-        if m.occlusion_texture().is_some() {
-            textures.push("occlusionTexture");
-        }
-        if m.emissive_texture().is_some() {
-            textures.push("emissiveTexture");
-        }
-        if m.transmission().and_then(|t| t.transmission_texture()).is_some() {
-            textures.push("transmissionTexture");
-        }
-        for t in textures {
-            self.warnings.warn("textures are not supported (the constant factors are used)", format!("{label} {t}"));
-        }
-        if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
-            self.warnings.warn("alphaMode MASK/BLEND is not supported (materials are opaque)", label.clone());
-        }
-
         let phong_ext = m.extensions().and_then(|e| e.get(EXT_MATERIALS_PHONG));
+        let mut base_texture_read = false;
         let mut out = if let Some(v) = phong_ext {
             let ctx = format!("materials[{index}].extensions.{EXT_MATERIALS_PHONG}");
             if !v.is_object() {
@@ -98,7 +74,60 @@ impl Importer<'_> {
             }
             Material { mirror: Vec3::ONE, ior, ..Material::default() }
         } else {
-            Material::metallic_roughness(base, metallic, roughness)
+            let mut mr = Material::metallic_roughness(base, metallic, roughness);
+            if let Some(info) = pbr.base_color_texture() {
+                mr.base_color_texture = self.base_color_texture(&info, &label)?;
+                base_texture_read = true;
+            }
+            mr
+        };
+
+        // The textures that are not read; baseColorTexture only on the paths above that
+        // do not use it.
+        let mut textures = Vec::new();
+        if pbr.base_color_texture().is_some() && !base_texture_read {
+            textures.push("baseColorTexture");
+        }
+        if pbr.metallic_roughness_texture().is_some() {
+            textures.push("metallicRoughnessTexture");
+        }
+        if m.normal_texture().is_some() {
+            textures.push("normalTexture");
+        }
+        if m.occlusion_texture().is_some() {
+            textures.push("occlusionTexture");
+        }
+        if m.emissive_texture().is_some() {
+            textures.push("emissiveTexture");
+        }
+        if m.transmission().and_then(|t| t.transmission_texture()).is_some() {
+            textures.push("transmissionTexture");
+        }
+        for t in textures {
+            self.warnings.warn("textures are not supported (the constant factors are used)", format!("{label} {t}"));
+        }
+
+        // glTF 2.0 section 3.9.4 ("Alpha Coverage"): alpha = baseColorFactor alpha (times
+        // the texture's and COLOR_0's); OPAQUE ignores it, MASK cuts out where it is below
+        // alphaCutoff (default 0.5), BLEND composites. Without partial transparency in the
+        // kernels BLEND becomes MASK with cutoff 0.5.
+        out.alpha = bc[3].clamp(0.0, 1.0);
+        out.alpha_mode = match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+            gltf::material::AlphaMode::Mask => {
+                let cutoff = m.alpha_cutoff().unwrap_or(0.5);
+                if !(cutoff >= 0.0 && cutoff.is_finite()) {
+                    bail!("{label}: alphaCutoff {cutoff} must be a finite number >= 0");
+                }
+                AlphaMode::Mask { cutoff }
+            }
+            gltf::material::AlphaMode::Blend => {
+                self.warnings.warn(
+                    "alphaMode BLEND is approximated as MASK with alphaCutoff 0.5 (no partial transparency)",
+                    label.clone(),
+                );
+                AlphaMode::Mask { cutoff: 0.5 }
+            }
         };
         let strength = m.emissive_strength().unwrap_or(1.0);
         let ef = m.emissive_factor();

@@ -7,8 +7,10 @@
 //! their default weights, skins in the pose their joints' node transforms give, the
 //! metallic/roughness material mapped to vkvcm's diffuse + GGX + mirror/dielectric model,
 //! emission (one area light per emitting triangle), `KHR_lights_punctual`, the first
-//! perspective camera, and the vkvcm extensions `VKVCM_spheres`, `VKVCM_materials_phong`
-//! and `VKVCM_background`.
+//! perspective camera, base-colour textures (PNG/JPEG images, samplers,
+//! `KHR_texture_transform`) with TEXCOORD_0/1, vertex colours (COLOR_0), alpha modes (BLEND
+//! as MASK), and the vkvcm extensions `VKVCM_spheres`, `VKVCM_materials_phong` and
+//! `VKVCM_background`.
 //!
 //! Everything that is not represented produces one warning per kind in
 //! [`LoadReport::warnings`]; malformed input produces an error that names the file and the
@@ -39,10 +41,12 @@ mod lights;
 mod materials;
 mod skins;
 mod sources;
+mod textures;
 mod warnings;
 
 pub use extensions::{EXT_BACKGROUND, EXT_MATERIALS_PHONG, EXT_SPHERES, SUPPORTED_EXTENSIONS};
 pub use sources::{decode_data_uri, encode_data_uri};
+pub use textures::{MAX_IMAGE_SIDE, MAX_IMAGE_TEXELS};
 
 use super::{Camera, EnvironmentLight, Light, LoadReport, Scene};
 use anyhow::{anyhow, bail, Result};
@@ -122,6 +126,7 @@ fn import_bytes(bytes: &[u8], base_dir: &Path, name: String, options: &LoadOptio
             images: Vec::new(),
         },
         default_material: None,
+        image_cache: vec![None; doc.images().len()],
         cameras: Vec::new(),
         orthographic: Vec::new(),
         punctual: Vec::new(),
@@ -152,6 +157,8 @@ struct Importer<'d> {
     scene: Scene,
     /// Index of glTF's default material in `scene.materials`, added on first use.
     default_material: Option<u32>,
+    /// Index in `scene.images` of each glTF image decoded so far, by glTF image index.
+    image_cache: Vec<Option<u32>>,
     /// Perspective cameras met in node order.
     cameras: Vec<CameraCandidate>,
     /// Orthographic cameras met in node order, by name (node name, else camera name, else

@@ -10,19 +10,59 @@ use gltf::json;
 use std::borrow::Cow;
 use std::path::{Component, Path};
 
-/// The glTF JSON of a `.gltf` file or of a `.glb` file's JSON chunk, and the `.glb`
-/// binary chunk if there is one.
-pub(super) fn read_container(bytes: &[u8]) -> Result<(json::Root, Option<Vec<u8>>)> {
+/// The glTF JSON of a `.gltf` file or of a `.glb` file's JSON chunk, the `.glb` binary
+/// chunk if there is one, and the morph-target attributes that [`json::Root`] drops
+/// ([`morph_target_attributes`]).
+pub(super) fn read_container(bytes: &[u8]) -> Result<(json::Root, Option<Vec<u8>>, Vec<String>)> {
     if bytes.starts_with(b"glTF") {
         check_glb_header(bytes)?;
         let glb = gltf::binary::Glb::from_slice(bytes).map_err(|e| anyhow!("invalid GLB container: {e}"))?;
         let root =
             serde_json::from_slice(&glb.json).map_err(|e| anyhow!("invalid glTF JSON in the GLB JSON chunk: {e}"))?;
-        Ok((root, glb.bin.map(|b| b.into_owned())))
+        let morph = morph_target_attributes(&glb.json);
+        Ok((root, glb.bin.map(|b| b.into_owned()), morph))
     } else {
         let root = serde_json::from_slice(bytes).map_err(|e| anyhow!("invalid glTF JSON: {e}"))?;
-        Ok((root, None))
+        Ok((root, None, morph_target_attributes(bytes)))
     }
+}
+
+/// The morph-target attributes other than POSITION, NORMAL and TANGENT (TEXCOORD_n,
+/// COLOR_n, ...) in the glTF JSON `json`, as JSON paths: gltf-json's `MorphTarget` has no
+/// field for them, so they would be dropped without a word. Empty when `json` does not
+/// have the expected shape (the main parse reports that).
+fn morph_target_attributes(json: &[u8]) -> Vec<String> {
+    use serde::de::IgnoredAny;
+    use std::collections::BTreeMap;
+    #[derive(serde::Deserialize)]
+    struct Doc {
+        #[serde(default)]
+        meshes: Vec<Mesh>,
+    }
+    #[derive(serde::Deserialize)]
+    struct Mesh {
+        #[serde(default)]
+        primitives: Vec<Prim>,
+    }
+    #[derive(serde::Deserialize)]
+    struct Prim {
+        #[serde(default)]
+        targets: Vec<BTreeMap<String, IgnoredAny>>,
+    }
+    let Ok(doc) = serde_json::from_slice::<Doc>(json) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for (mi, m) in doc.meshes.iter().enumerate() {
+        for (pi, p) in m.primitives.iter().enumerate() {
+            for (ti, t) in p.targets.iter().enumerate() {
+                for name in t.keys().filter(|k| !matches!(k.as_str(), "POSITION" | "NORMAL" | "TANGENT")) {
+                    out.push(format!("meshes[{mi}].primitives[{pi}].targets[{ti}].{name}"));
+                }
+            }
+        }
+    }
+    out
 }
 
 /// Checks the 12-byte GLB header before `gltf::binary::Glb::from_slice`, which computes
@@ -56,7 +96,9 @@ pub(super) fn load_buffers(doc: &gltf::Document, blob: Option<Vec<u8>>, base_dir
             gltf::buffer::Source::Bin => blob
                 .take()
                 .ok_or_else(|| anyhow!("buffer {i} has no uri and there is no (unused) GLB binary chunk for it"))?,
-            gltf::buffer::Source::Uri(uri) => load_uri(uri, base_dir).with_context(|| format!("buffer {i}"))?,
+            gltf::buffer::Source::Uri(uri) => {
+                load_uri(uri, base_dir, "buffer").with_context(|| format!("buffer {i}"))?
+            }
         };
         if data.len() < buffer.length() {
             bail!("buffer {i} holds {} bytes but its byteLength is {}", data.len(), buffer.length());
@@ -76,13 +118,14 @@ pub fn decode_data_uri(uri: &str) -> Result<Vec<u8>> {
     if !uri.starts_with("data:") {
         bail!("not a data: URI");
     }
-    load_uri(uri, Path::new("."))
+    load_uri(uri, Path::new("."), "buffer")
 }
 
-/// The bytes a buffer URI names: a base64 `data:` URI, or a relative file path
-/// (%-escapes decoded) that must stay inside `base_dir`, symbolic links included. Other
-/// schemes and absolute paths are refused.
-pub(super) fn load_uri(uri: &str, base_dir: &Path) -> Result<Vec<u8>> {
+/// The bytes a buffer (or image, or environment map) URI names: a base64 `data:` URI, or a
+/// relative file path (%-escapes decoded) that must stay inside `base_dir`, symbolic links
+/// included. Other schemes and absolute paths are refused. `what` ("buffer", "image", ...)
+/// names the kind of file in errors.
+pub(super) fn load_uri(uri: &str, base_dir: &Path, what: &str) -> Result<Vec<u8>> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let (meta, payload) = rest.split_once(',').ok_or_else(|| anyhow!("malformed data URI (no ',')"))?;
         if !meta.ends_with(";base64") {
@@ -103,17 +146,17 @@ pub(super) fn load_uri(uri: &str, base_dir: &Path) -> Result<Vec<u8>> {
         || decoded.starts_with('\\')
         || (bytes.len() >= 2 && bytes[0].is_ascii_alphabetic() && bytes[1] == b':');
     if absolute {
-        bail!("URI '{uri}' is an absolute path; buffers must be given relative to the scene's folder");
+        bail!("URI '{uri}' is an absolute path; {what}s must be given relative to the scene's folder");
     }
     if decoded.split(['/', '\\']).any(|c| c == "..") {
-        bail!("URI '{uri}' contains '..'; buffers must stay inside the scene's folder");
+        bail!("URI '{uri}' contains '..'; {what}s must stay inside the scene's folder");
     }
     let rel = Path::new(&decoded);
     if rel.components().any(|c| !matches!(c, Component::Normal(_) | Component::CurDir)) {
         bail!("URI '{uri}' does not name a file inside the scene's folder");
     }
     let file = base_dir.join(rel);
-    let cannot = |e: std::io::Error| anyhow!("cannot read buffer file {}: {e}", file.display());
+    let cannot = |e: std::io::Error| anyhow!("cannot read {what} file {}: {e}", file.display());
     // A symbolic link may still lead outside: compare the resolved paths.
     let real = std::fs::canonicalize(&file).map_err(cannot)?;
     let real_base = std::fs::canonicalize(base_dir).map_err(cannot)?;
@@ -210,14 +253,14 @@ mod tests {
     #[test]
     fn uri_rules() {
         let d = Path::new("/nonexistent-dir");
-        assert!(load_uri("../x.bin", d).unwrap_err().to_string().contains(".."));
-        assert!(load_uri("a/../../x.bin", d).is_err());
-        assert!(load_uri("/etc/passwd", d).unwrap_err().to_string().contains("absolute"));
-        assert!(load_uri("C:/x.bin", d).unwrap_err().to_string().contains("absolute"));
-        assert!(load_uri("http://x/y.bin", d).unwrap_err().to_string().contains("scheme"));
-        assert!(load_uri("%2e%2e/x.bin", d).unwrap_err().to_string().contains(".."));
-        assert_eq!(load_uri("data:application/octet-stream;base64,TWFu", d).unwrap(), b"Man");
-        let e = load_uri("missing%20file.bin", d).unwrap_err().to_string();
+        assert!(load_uri("../x.bin", d, "buffer").unwrap_err().to_string().contains(".."));
+        assert!(load_uri("a/../../x.bin", d, "buffer").is_err());
+        assert!(load_uri("/etc/passwd", d, "buffer").unwrap_err().to_string().contains("absolute"));
+        assert!(load_uri("C:/x.bin", d, "buffer").unwrap_err().to_string().contains("absolute"));
+        assert!(load_uri("http://x/y.bin", d, "buffer").unwrap_err().to_string().contains("scheme"));
+        assert!(load_uri("%2e%2e/x.bin", d, "buffer").unwrap_err().to_string().contains(".."));
+        assert_eq!(load_uri("data:application/octet-stream;base64,TWFu", d, "buffer").unwrap(), b"Man");
+        let e = load_uri("missing%20file.bin", d, "buffer").unwrap_err().to_string();
         assert!(e.contains("missing file.bin"), "{e}");
     }
 }
