@@ -23,6 +23,10 @@ scene=$3
 shift 3
 variants=("$@")
 n=${#variants[@]}
+# bench render names a glTF scene by its file stem.
+label=$(basename "$scene")
+label=${label%.gltf}
+label=${label%.glb}
 run() {
     local name dir bin extra item
     local envs=() opts=()
@@ -36,7 +40,7 @@ run() {
     done
     env VKVCM_GLSL_DIR="$dir" "${envs[@]}" "$bin" bench render --size "${SIZE:-256}" \
         --iterations "${ITERATIONS:-8}" --scenes "$scene" --algos "$algos" "${opts[@]}" 2>/dev/null |
-        awk -F'|' -v name="$name" -v round="$2" -v scene="$scene" \
+        awk -F'|' -v name="$name" -v round="$2" -v scene="$label" \
             '{ s = $2; a = $3; x = $9; gsub(/ /, "", s); gsub(/ /, "", a); gsub(/ /, "", x);
                if (s == scene) print name, round, a, x }'
 }
