@@ -328,28 +328,7 @@ fn smooth_shaded_mesh_matches_mitsuba() {
 fn matches_mitsuba(gltf: &str, reference_stem: &str) {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/env");
     let scene = vkvcm::scene::load_with(&dir.join(gltf), &Default::default()).unwrap();
-    let (mean, _) = vkvcm::image::read_exr(&dir.join(format!("{reference_stem}_mean.exr"))).unwrap();
-    let (var, _) = vkvcm::image::read_exr(&dir.join(format!("{reference_stem}_var.exr"))).unwrap();
-    let k = 16usize;
-    let sum: Vec<[f64; 3]> = mean.data.iter().map(|m| m.map(|x| x as f64 * k as f64)).collect();
-    let sum_sq: Vec<[f64; 3]> = mean
-        .data
-        .iter()
-        .zip(&var.data)
-        .map(|(m, v)| [0, 1, 2].map(|c| (k - 1) as f64 * v[c] as f64 + k as f64 * (m[c] as f64).powi(2)))
-        .collect();
-    let reference = PixelStats::from_sums(mean.width, mean.height, k, &sum, &sum_sq).unwrap();
     with_gpu(|gpu| {
-        for (algo, iterations) in [(Algorithm::Pt, 2048), (Algorithm::Vcm, 256)] {
-            let mut s = RenderSettings::new(algo, mean.width, mean.height, Budget::Iterations(iterations));
-            s.frame.max_path_length = 8;
-            s.frame.seed = 5;
-            let st = render_stats(&render_with(gpu, &scene, &s), None);
-            welch_test(&st, &reference, ALPHA).unwrap().assert_passed(&format!("{reference_stem}_{}", algo.name()));
-            let m = |p: &PixelStats| p.mean.iter().map(|c| c[1]).sum::<f64>() / p.mean.len() as f64;
-            let (a, b) = (m(&st), m(&reference));
-            eprintln!("{gltf}: {} x {iterations}: image mean (green) {a:.5}, Mitsuba's {b:.5}", algo.name());
-            assert!((a - b).abs() < 0.005 * b, "{}: image mean {a}, Mitsuba's {b}", algo.name());
-        }
+        common::assert_matches_mitsuba(gpu, &scene, reference_stem, 8, &[(Algorithm::Pt, 2048), (Algorithm::Vcm, 256)])
     });
 }

@@ -99,3 +99,54 @@ pub fn primary_hit_mask(
     }
     mask
 }
+
+/// The Mitsuba 3 reference `stem` of tests/env/ (scripts/env_reference.py,
+/// scripts/texture_reference.py): per-pixel statistics of its independent renders, from
+/// their mean and unbiased variance images (`STEM_mean.exr`, `STEM_var.exr`) and their
+/// count (`seeds` in `STEM.json`).
+pub fn mitsuba_reference(stem: &str) -> vkvcm::image::stats::PixelStats {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/env");
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join(format!("{stem}.json"))).unwrap()).unwrap();
+    let k = meta["seeds"].as_u64().expect("seeds") as usize;
+    let (mean, _) = vkvcm::image::read_exr(&dir.join(format!("{stem}_mean.exr"))).unwrap();
+    let (var, _) = vkvcm::image::read_exr(&dir.join(format!("{stem}_var.exr"))).unwrap();
+    let sum: Vec<[f64; 3]> = mean.data.iter().map(|m| m.map(|x| x as f64 * k as f64)).collect();
+    let sum_sq: Vec<[f64; 3]> = mean
+        .data
+        .iter()
+        .zip(&var.data)
+        .map(|(m, v)| [0, 1, 2].map(|c| (k - 1) as f64 * v[c] as f64 + k as f64 * (m[c] as f64).powi(2)))
+        .collect();
+    vkvcm::image::stats::PixelStats::from_sums(mean.width, mean.height, k, &sum, &sum_sq).unwrap()
+}
+
+/// Renders `scene` with each of `cases` (estimator, iterations) at the reference's size
+/// with at most `max_path_length` segments and tests it per pixel against the Mitsuba 3
+/// reference `stem` (Welch test, the reference's renders as its samples, ALPHA 1e-3
+/// Šidák-corrected), and its image mean to 0.5%.
+pub fn assert_matches_mitsuba(
+    gpu: &Arc<Gpu>,
+    scene: &vkvcm::scene::Scene,
+    stem: &str,
+    max_path_length: u32,
+    cases: &[(vkvcm::render::Algorithm, u64)],
+) {
+    use vkvcm::render::{Budget, RenderSettings};
+    let reference = mitsuba_reference(stem);
+    for &(algo, iterations) in cases {
+        let mut s = RenderSettings::new(algo, reference.width, reference.height, Budget::Iterations(iterations));
+        s.frame.max_path_length = max_path_length;
+        s.frame.seed = 5;
+        let out = vkvcm::render::render(gpu, scene, &s, None, &mut |_| {}).unwrap();
+        assert_eq!(out.rejected_samples, 0, "{stem} {algo:?}: rejected samples");
+        let st = render_stats(&out, None);
+        vkvcm::image::stats::welch_test(&st, &reference, 1e-3)
+            .unwrap()
+            .assert_passed(&format!("{stem}_{}", algo.name()));
+        let m = |p: &vkvcm::image::stats::PixelStats| p.mean.iter().map(|c| c[1]).sum::<f64>() / p.mean.len() as f64;
+        let (a, b) = (m(&st), m(&reference));
+        eprintln!("{stem}: {} x {iterations}: image mean (green) {a:.5}, Mitsuba's {b:.5}", algo.name());
+        assert!((a - b).abs() < 0.005 * b, "{stem} {}: image mean {a}, Mitsuba's {b}", algo.name());
+    }
+}
