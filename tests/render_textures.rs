@@ -144,11 +144,9 @@ fn textured_scene(
     s
 }
 
-/// Each pixel's expectation: the tint (texture times vertex colour) averaged over 16 x 16
-/// points of the pixel, image coordinates (u, v) = (x / W, y / H).
-fn expected_image(scene: &Scene, color_of: Option<&dyn Fn(f32, f32) -> Vec4>) -> Image {
-    let t = scene.materials[0].base_color_texture.as_ref().unwrap();
-    let img = &scene.images[0];
+/// The image whose pixels average `f` over 16 x 16 points of the pixel, at image
+/// coordinates (u, v) = (x / W, y / H).
+fn pixel_averages(f: &dyn Fn(f32, f32) -> Vec3) -> Image {
     let n = 16;
     let mut out = Image::filled(W, H, [0.0; 3]);
     for py in 0..H {
@@ -157,14 +155,19 @@ fn expected_image(scene: &Scene, color_of: Option<&dyn Fn(f32, f32) -> Vec4>) ->
             for k in 0..n * n {
                 let u = (px as f32 + ((k % n) as f32 + 0.5) / n as f32) / W as f32;
                 let v = (py as f32 + ((k / n) as f32 + 0.5) / n as f32) / H as f32;
-                let uv = t_uv(u, v);
-                let c = color_of.map_or(Vec4::ONE, |f| f(u, v));
-                sum += (sample(img, t, uv) * c).truncate();
+                sum += f(u, v);
             }
             out.data[(py * W + px) as usize] = (sum / (n * n) as f32).to_array();
         }
     }
     out
+}
+
+/// Each pixel's expectation: the tint (texture at `t_uv`, times the vertex colour).
+fn expected_image(scene: &Scene, color_of: Option<&dyn Fn(f32, f32) -> Vec4>) -> Image {
+    let t = scene.materials[0].base_color_texture.as_ref().unwrap();
+    let img = &scene.images[0];
+    pixel_averages(&|u, v| (sample(img, t, t_uv(u, v)) * color_of.map_or(Vec4::ONE, |f| f(u, v))).truncate())
 }
 
 /// The texture coordinates of the image point (u, v) in these tests: [-0.5, 1.5]^2, so
@@ -256,21 +259,7 @@ fn expected_image_for_uvs(scene: &Scene) -> Image {
     assert!((c00 + c11 - c01 - c10).length() < 1e-6, "the test's coordinates are affine");
     let t = scene.materials[0].base_color_texture.as_ref().unwrap();
     let img = &scene.images[0];
-    let n = 16;
-    let mut out = Image::filled(W, H, [0.0; 3]);
-    for py in 0..H {
-        for px in 0..W {
-            let mut sum = Vec3::ZERO;
-            for k in 0..n * n {
-                let u = (px as f32 + ((k % n) as f32 + 0.5) / n as f32) / W as f32;
-                let v = (py as f32 + ((k / n) as f32 + 0.5) / n as f32) / H as f32;
-                let uv = c00 + (c10 - c00) * u + (c01 - c00) * v;
-                sum += sample(img, t, uv).truncate();
-            }
-            out.data[(py * W + px) as usize] = (sum / (n * n) as f32).to_array();
-        }
-    }
-    out
+    pixel_averages(&|u, v| sample(img, t, c00 + (c10 - c00) * u + (c01 - c00) * v).truncate())
 }
 
 /// An alphaMode MASK quad (the test image's alpha: 0 on half of its texels, in a
