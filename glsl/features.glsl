@@ -63,6 +63,9 @@
 #ifndef HAS_ALPHA_MASK
 #define HAS_ALPHA_MASK 1
 #endif
+#ifndef HAS_NORMAL_MAPS
+#define HAS_NORMAL_MAPS 1
+#endif
 // Profiling: count traced rays into stats[2..3] (glsl/scene.glsl, COUNT_RAYS_FLUSH).
 #ifndef COUNT_RAYS
 #define COUNT_RAYS 0

@@ -48,15 +48,17 @@ GpuSphere sphere_at(uint i) {
 }
 GpuMaterial material_at(uint i) {
     GpuMaterial m;
-    m.diffuse = texel_vec4(materials, 6u * i);
-    m.phong = texel_vec4(materials, 6u * i + 1u);
-    m.mirror = texel_vec4(materials, 6u * i + 2u);
-    m.emission = texel_vec4(materials, 6u * i + 3u);
-    m.glossy = texel_vec4(materials, 6u * i + 4u);
-    m.surface = texel_vec4(materials, 6u * i + 5u);
+    m.diffuse = texel_vec4(materials, 7u * i);
+    m.phong = texel_vec4(materials, 7u * i + 1u);
+    m.mirror = texel_vec4(materials, 7u * i + 2u);
+    m.emission = texel_vec4(materials, 7u * i + 3u);
+    m.glossy = texel_vec4(materials, 7u * i + 4u);
+    m.surface = texel_vec4(materials, 7u * i + 5u);
+    m.maps = texel_vec4(materials, 7u * i + 6u);
     return m;
 }
-vec4 material_surface(uint i) { return texel_vec4(materials, 6u * i + 5u); }
+vec4 material_surface(uint i) { return texel_vec4(materials, 7u * i + 5u); }
+vec4 material_maps(uint i) { return texel_vec4(materials, 7u * i + 6u); }
 GpuLight light_at(uint i) {
     GpuLight l;
     l.a = texel_vec4(lights, 5u * i);
@@ -77,6 +79,7 @@ GpuTriangle triangle_at(uint i) { return triangle_data[i]; }
 GpuSphere sphere_at(uint i) { return sphere_data[i]; }
 GpuMaterial material_at(uint i) { return material_data[i]; }
 vec4 material_surface(uint i) { return material_data[i].surface; }
+vec4 material_maps(uint i) { return material_data[i].maps; }
 GpuLight light_at(uint i) { return light_data[i]; }
 vec4 shading_normal_at(uint i) { return shading_normal_data[i]; }
 #endif
@@ -181,6 +184,7 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
         s.p = tri.p0.xyz + h.u * e1 + h.v * e2;
         s.ng = normalize(cross(e1, e2));
         s.ns = s.ng;
+        s.material = floatBitsToUint(tri.p0.w);
 #if HAS_SHADING_NORMALS
         uint first_normal = floatBitsToUint(tri.p2.w);
         if (first_normal != 0xffffffffu) {
@@ -188,10 +192,14 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
                    + h.u * shading_normal_at(first_normal + 1u).xyz
                    + h.v * shading_normal_at(first_normal + 2u).xyz;
             float len = length(n);
-            if (len > 0.0) s.ns = (dot(n, s.ng) < 0.0 ? -n : n) / len;
+            vec3 ns = len > 0.0 ? n / len : s.ng;
+#if HAS_NORMAL_MAPS
+            ns = normal_mapped(h.prim, s.material, h.u, h.v, ns);
+#endif
+            // On the geometric normal's side (glsl/bsdf.glsl decides sides by ng).
+            s.ns = dot(ns, s.ng) < 0.0 ? -ns : ns;
         }
 #endif
-        s.material = floatBitsToUint(tri.p0.w);
         s.tint = vec3(1.0);
 #if HAS_VERTEX_ATTRIBUTES
         s.tint = surface_tint_alpha(h.prim, s.material, h.u, h.v).rgb;

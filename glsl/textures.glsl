@@ -33,11 +33,13 @@ layout(std430) readonly buffer texture_texels { uvec4 texture_texel_data[]; };
 // The sRGB transfer function's inverse (IEC 61966-2-1).
 float srgb_to_linear(float c) { return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4); }
 
-// Texel `i` of the image whose texels start at `first`: linear RGB and alpha.
-vec4 texel_rgba(uint first, uint i) {
+// Texel `i` of the image whose texels start at `first`: RGB (sRGB-decoded unless
+// `linear`) and alpha.
+vec4 texel_rgba(uint first, uint i, bool linear) {
     uint k = first + i;
     uint w = texture_texel_data[k >> 2][k & 3u];
     vec4 c = vec4((uvec4(w, w >> 8, w >> 16, w >> 24) & 0xffu)) / 255.0;
+    if (linear) return c;
     return vec4(srgb_to_linear(c.r), srgb_to_linear(c.g), srgb_to_linear(c.b), c.a);
 }
 
@@ -53,9 +55,11 @@ int wrap_texel(int i, int n, uint mode) {
     return ((i % n) + n) % n;
 }
 
-// Texture reference `ref` at texture coordinates `uv` (finite): linear RGBA.
+// Texture reference `ref` at texture coordinates `uv` (finite): linear RGBA (normal maps,
+// TEXTURE_LINEAR, as stored).
 vec4 texture_sample(uint ref, vec2 uv) {
     GpuTextureRef t = texture_ref_data[ref];
+    bool lin = (t.image.w & TEXTURE_LINEAR) != 0u;
     vec3 h = vec3(uv, 1.0);
     vec2 st = vec2(dot(t.row0.xyz, h), dot(t.row1.xyz, h));
     int w = int(t.image.y);
@@ -66,7 +70,7 @@ vec4 texture_sample(uint ref, vec2 uv) {
     vec2 x = clamp(st * vec2(w, ht), vec2(-8388608.0), vec2(8388608.0));
     if ((t.image.w & TEXTURE_NEAREST) != 0u) {
         ivec2 i = ivec2(floor(x));
-        return texel_rgba(t.image.x, uint(wrap_texel(i.y, ht, mt) * w + wrap_texel(i.x, w, ms)));
+        return texel_rgba(t.image.x, uint(wrap_texel(i.y, ht, mt) * w + wrap_texel(i.x, w, ms)), lin);
     }
     vec2 y = x - 0.5;
     vec2 y0 = floor(y);
@@ -74,10 +78,10 @@ vec4 texture_sample(uint ref, vec2 uv) {
     ivec2 i0 = ivec2(y0);
     int xa = wrap_texel(i0.x, w, ms), xb = wrap_texel(i0.x + 1, w, ms);
     int ya = wrap_texel(i0.y, ht, mt), yb = wrap_texel(i0.y + 1, ht, mt);
-    vec4 c00 = texel_rgba(t.image.x, uint(ya * w + xa));
-    vec4 c10 = texel_rgba(t.image.x, uint(ya * w + xb));
-    vec4 c01 = texel_rgba(t.image.x, uint(yb * w + xa));
-    vec4 c11 = texel_rgba(t.image.x, uint(yb * w + xb));
+    vec4 c00 = texel_rgba(t.image.x, uint(ya * w + xa), lin);
+    vec4 c10 = texel_rgba(t.image.x, uint(ya * w + xb), lin);
+    vec4 c01 = texel_rgba(t.image.x, uint(yb * w + xa), lin);
+    vec4 c11 = texel_rgba(t.image.x, uint(yb * w + xb), lin);
     return mix(mix(c00, c10, f.x), mix(c01, c11, f.x), f.y);
 }
 #endif
@@ -113,6 +117,39 @@ vec4 surface_tint_alpha(uint tri, uint material, float u, float v) {
 #endif
     return r;
 }
+
+#if HAS_NORMAL_MAPS
+// The unit shading normal `n` of triangle `tri` (with per-vertex attributes) at (u, v),
+// bent by its material's normal map (glTF 2.0 section 3.9.3, normalTexture): the
+// texel's RGB as (x, y, z) * 2 - 1, x and y times the map's scale, in the frame of the
+// interpolated tangent T (made orthogonal to n), B = w cross(n, T) (w: the tangent's
+// bitangent sign) and n. Unchanged where the material has no normal map or the triangle
+// no texture coordinates for it or no tangent.
+vec3 normal_mapped(uint tri, uint material, float u, float v, vec3 n) {
+    vec4 maps = material_maps(material);
+    uint ref = floatBitsToUint(maps.x);
+    if (ref == NO_TEXTURE) return n;
+    uint first = floatBitsToUint(triangle_at(tri).p2.w);
+    GpuVertexAttributes a0 = vertex_attribute_data[first];
+    GpuVertexAttributes a1 = vertex_attribute_data[first + 1u];
+    GpuVertexAttributes a2 = vertex_attribute_data[first + 2u];
+    float w0 = 1.0 - u - v;
+    vec4 t = w0 * a0.tangent + u * a1.tangent + v * a2.tangent;
+    bool uv1 = (texture_ref_data[ref].image.w & TEXTURE_UV1) != 0u;
+    vec2 uv = w0 * (uv1 ? a0.uv.zw : a0.uv.xy) + u * (uv1 ? a1.uv.zw : a1.uv.xy) + v * (uv1 ? a2.uv.zw : a2.uv.xy);
+    if (any(isnan(t)) || any(isnan(uv)) || any(isinf(uv))) return n;
+    vec3 tg = t.xyz - n * dot(n, t.xyz);
+    float tl = length(tg);
+    if (!(tl > 1e-8)) return n;
+    tg /= tl;
+    vec3 b = cross(n, tg) * (t.w < 0.0 ? -1.0 : 1.0);
+    vec3 m = texture_sample(ref, uv).xyz * 2.0 - 1.0;
+    m.xy *= maps.y;
+    vec3 bent = m.x * tg + m.y * b + m.z * n;
+    float bl = length(bent);
+    return bl > 0.0 ? bent / bl : n;
+}
+#endif
 
 // Whether a candidate hit (primitive id `id` with the BVH's sphere flag, `material`, at
 // (u, v)) is there: false on the cut-away part of an alphaMode MASK material (alpha below

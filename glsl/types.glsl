@@ -12,6 +12,7 @@
 #define NO_TEXTURE 0xffffffffu
 #define TEXTURE_NEAREST 16u
 #define TEXTURE_UV1 32u
+#define TEXTURE_LINEAR 64u
 
 struct GpuMaterial {
     vec4 diffuse;   // rgb, w: Phong exponent
@@ -21,6 +22,7 @@ struct GpuMaterial {
     vec4 glossy;    // rgb: GGX lobe colour (Schlick F0), w: GGX alpha (>= 1e-3)
     vec4 surface;   // x: base-colour texture or NO_TEXTURE (bits), y: alpha factor,
                     // z: alpha cutoff (< 0: opaque), w: untinted part of the GGX F0
+    vec4 maps;      // x: normal map or NO_TEXTURE (bits), y: normal map scale
 };
 
 struct GpuTextureRef {
@@ -32,6 +34,7 @@ struct GpuTextureRef {
 struct GpuVertexAttributes {
     vec4 uv;     // xy: TEXCOORD_0, zw: TEXCOORD_1 (NaN: none)
     vec4 color;  // COLOR_0 (1: none)
+    vec4 tangent;  // xyz tangent, w bitangent sign (NaN: none)
 };
 
 struct GpuTriangle {

@@ -71,9 +71,9 @@ fn rust_and_glsl_layouts_match() {
     let spirv = shader::compile_glsl_opt("tests/layout.comp", &src, &[], false).unwrap();
     let glsl = reflect(&spirv);
     let rust = [
-        rust_layout!(GpuMaterial { diffuse, phong, mirror, emission, glossy, surface }),
+        rust_layout!(GpuMaterial { diffuse, phong, mirror, emission, glossy, surface, maps }),
         rust_layout!(GpuTextureRef { image, row0, row1 }),
-        rust_layout!(GpuVertexAttributes { uv, color }),
+        rust_layout!(GpuVertexAttributes { uv, color, tangent }),
         rust_layout!(GpuTriangle { p0, p1, p2 }),
         rust_layout!(GpuSphere { center_radius, info }),
         rust_layout!(GpuLight { a, b, c, d, radiance }),

@@ -117,6 +117,7 @@ fn quad(material: u32, uv_of: &dyn Fn(f32, f32) -> Vec2, color_of: Option<&dyn F
         attributes: Some(Box::new(VertexAttributes {
             uv: [Some(c.map(|(u, v)| uv_of(u, v))), None],
             color: color_of.map(|f| c.map(|(u, v)| f(u, v))),
+            tangent: None,
         })),
     };
     // Both counter-clockwise seen from above (+y), the camera's side.
@@ -407,5 +408,68 @@ fn textured_and_masked_scene_matches_mitsuba() {
             24,
             &[(Algorithm::Pt, 2048), (Algorithm::Vcm, 256)],
         )
+    });
+}
+
+/// A normal map bends the shading normal, for every estimator: the quad with a constant
+/// normal map (34 degrees off its normal, between its tangent +x and bitangent -z)
+/// renders as the same quad with that bent normal as its vertex normals (per pixel, pt
+/// and bpt against pt), and unlike the flat quad. Lit by a low sun and a dim sky, so that
+/// the normal's tilt shows. Sabotaged (the bitangent's sign flipped; the map ignored) it
+/// fails.
+#[test]
+fn normal_map_bends_the_shading_normal_in_every_estimator() {
+    let tn = Vec3::new(0.4, 0.4, 0.68f32.sqrt());
+    let enc = |c: f32| ((c * 0.5 + 0.5) * 255.0).round() as u8;
+    let texel = [enc(tn.x), enc(tn.y), enc(tn.z), 255];
+    // What the kernels decode; the frame: T = +x (u along x), N = +y (the quad's normal),
+    // B = cross(N, T) = -z.
+    let d = texel.map(|b| b as f32 / 255.0 * 2.0 - 1.0);
+    let bent = (Vec3::X * d[0] + Vec3::NEG_Z * d[1] + Vec3::Y * d[2]).normalize();
+    let map = TextureRef {
+        image: 0,
+        wrap_s: Wrap::Repeat,
+        wrap_t: Wrap::Repeat,
+        filter: Filter::Linear,
+        tex_coord: 0,
+        transform: TextureRef::IDENTITY,
+    };
+    let lights = vec![
+        Light::Directional { direction: Vec3::new(1.0, -0.6, 0.2).normalize(), irradiance: Vec3::splat(2.0) },
+        Light::Background { radiance: Vec3::splat(0.2) },
+    ];
+    let make = |normal_map: bool, normals: bool| {
+        let mat = Material {
+            name: "bumpy".into(),
+            diffuse: Vec3::splat(0.8),
+            normal_texture: normal_map.then(|| map.clone()),
+            ..Default::default()
+        };
+        let mut tris = quad(0, &|u, v| Vec2::new(u, v), None);
+        for t in &mut tris {
+            if normal_map {
+                t.attributes.as_mut().unwrap().tangent = Some([Vec4::new(1.0, 0.0, 0.0, 1.0); 3]);
+            } else {
+                t.attributes = None;
+            }
+            if normals {
+                t.n = Some([bent; 3]);
+            }
+        }
+        let mut s = scene("normal map", tris, vec![mat], lights.clone(), top_camera());
+        s.images = vec![TextureImage { name: "normals".into(), width: 2, height: 2, texels: vec![texel; 4] }];
+        s
+    };
+    let (mapped, explicit, flat) = (make(true, false), make(false, true), make(false, false));
+    assert!(vkvcm::render::features::FeatureSet::new(&mapped, false).normal_maps);
+    with_gpu(|gpu| {
+        let reference = render_stats(&render_with(gpu, &explicit, Algorithm::Pt, 256, false), None);
+        for (algo, iterations) in [(Algorithm::Pt, 256), (Algorithm::Bpt, 256)] {
+            let st = render_stats(&render_with(gpu, &mapped, algo, iterations, false), None);
+            let r = welch_test(&st, &reference, ALPHA).unwrap();
+            assert!(r.passed(), "{algo:?} with the normal map vs vertex normals: {r}");
+        }
+        let st = render_stats(&render_with(gpu, &flat, Algorithm::Pt, 256, false), None);
+        assert!(!welch_test(&st, &reference, ALPHA).unwrap().passed(), "the flat quad renders as the bent one");
     });
 }

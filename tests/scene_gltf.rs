@@ -1551,3 +1551,44 @@ fn khronos_box_vertex_colors() {
     assert!(s.images.is_empty());
     assert!(s.report.warnings.iter().all(|w| !w.contains("COLOR")), "{:?}", s.report.warnings);
 }
+
+/// `Doc::textured` with the texture as a normal map (scale 0.5) instead of a base colour.
+fn normal_mapped() -> Doc {
+    let mut d = Doc::textured();
+    d.json["materials"] = json!([{"name": "bumpy", "normalTexture": {"index": 0, "scale": 0.5}}]);
+    d
+}
+
+#[test]
+fn normal_maps_get_mikktspace_tangents_when_the_file_has_none() {
+    let s = normal_mapped().load().unwrap();
+    let m = &s.materials[0];
+    assert_eq!(m.normal_texture.as_ref().map(|t| (t.image, t.tex_coord)), Some((0, 0)));
+    assert_eq!(m.normal_scale, 0.5);
+    assert!(s.report.warnings.iter().all(|w| !w.contains("normalTexture")), "{:?}", s.report.warnings);
+    // The triangle (0,0,0), (1,0,0), (0,1,0) with uv (0,0), (1,0), (0,1): u grows along +x
+    // and v along +y; its normal is +z, so MikkTSpace's tangent is +x with bitangent
+    // +y = cross(+z, +x): sign +1.
+    let t = s.triangles[0].attributes.as_ref().unwrap().tangent.expect("generated tangents");
+    for v in t {
+        assert!((v - glam::Vec4::new(1.0, 0.0, 0.0, 1.0)).abs().max_element() < 1e-5, "{v:?}");
+    }
+}
+
+#[test]
+fn tangents_are_read_and_follow_mirroring() {
+    let mut d = normal_mapped();
+    let tangents = [[0.0f32, 1.0, 0.0, -1.0]; 3];
+    let v = d.push_view(&f32_bytes(&tangents.concat()), None);
+    let a = d.push_accessor(json!({"bufferView": v, "componentType": 5126, "count": 3, "type": "VEC4"}));
+    d.prim()["attributes"]["TANGENT"] = json!(a);
+    let s = d.load().unwrap();
+    let t = s.triangles[0].attributes.as_ref().unwrap().tangent.unwrap();
+    assert_eq!(t, [glam::Vec4::new(0.0, 1.0, 0.0, -1.0); 3], "the file's tangents, not generated ones");
+    // Mirrored in x: the tangent (0, 1, 0) stays, its bitangent sign flips (the bitangent
+    // w cross(n, t) must follow the mirrored surface).
+    d.json["nodes"][0]["scale"] = json!([-1.0, 1.0, 1.0]);
+    let s = d.load().unwrap();
+    let t = s.triangles[0].attributes.as_ref().unwrap().tangent.unwrap();
+    assert_eq!(t, [glam::Vec4::new(0.0, 1.0, 0.0, 1.0); 3]);
+}

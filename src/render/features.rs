@@ -53,6 +53,9 @@ pub struct FeatureSet {
     /// Some material is a cut-out (alphaMode MASK): traversal tests alpha at every
     /// candidate hit.
     pub alpha_mask: bool,
+    /// Some material has a normal map and some triangle tangents: the shading normal is
+    /// bent by it (with the shading-normal code compiled in).
+    pub normal_maps: bool,
 }
 
 fn nonzero(v: Vec3) -> bool {
@@ -76,6 +79,8 @@ impl FeatureSet {
         let any_light = |f: &dyn Fn(&Light) -> bool| scene.lights.iter().any(f);
         let scene_has_shading_normals = scene.triangles.iter().any(|t| t.n.is_some());
         let vertex_attributes = scene.triangles.iter().any(|t| t.attributes.is_some());
+        let tangents = scene.triangles.iter().any(|t| t.attributes.as_ref().is_some_and(|a| a.tangent.is_some()));
+        let normal_maps = tangents && any_mat(&|m| m.normal_texture.is_some());
         let g = generic;
         FeatureSet {
             generic,
@@ -93,11 +98,12 @@ impl FeatureSet {
             background: g || any_light(&Light::is_environment),
             environment_map: g || any_light(&|l| matches!(l, Light::Environment(_))),
             spheres: g || !scene.spheres.is_empty(),
-            shading_normals: g || scene_has_shading_normals,
+            shading_normals: g || scene_has_shading_normals || normal_maps,
             scene_has_shading_normals,
             vertex_attributes: g || vertex_attributes,
-            textures: g || (vertex_attributes && any_mat(&|m| m.base_color_texture.is_some())),
+            textures: g || (vertex_attributes && any_mat(&|m| m.base_color_texture.is_some())) || normal_maps,
             alpha_mask: g || any_mat(&|m| matches!(m.alpha_mode, crate::scene::AlphaMode::Mask { .. })),
+            normal_maps: g || normal_maps,
         }
     }
 
@@ -128,6 +134,7 @@ impl FeatureSet {
             ("HAS_VERTEX_ATTRIBUTES", self.vertex_attributes),
             ("HAS_TEXTURES", self.textures),
             ("HAS_ALPHA_MASK", self.alpha_mask),
+            ("HAS_NORMAL_MAPS", self.normal_maps),
             ("COUNT_RAYS", self.count_rays),
         ] {
             d = d.flag(name, on);
@@ -181,6 +188,7 @@ impl fmt::Display for FeatureSet {
             ("vertex colours / texture coordinates", self.vertex_attributes),
             ("base-colour textures", self.textures),
             ("alpha cut-outs", self.alpha_mask),
+            ("normal maps", self.normal_maps),
         ];
         writeln!(f, "  surface detail: {}", list(&surface))?;
         write!(f, "  ray counter: {}", if self.count_rays { "on (--profile)" } else { "off" })

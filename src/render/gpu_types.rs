@@ -21,6 +21,8 @@ pub const NO_TEXTURE: u32 = u32::MAX;
 /// 1 clamp to edge, 2 mirrored repeat), bit 4 nearest filtering, bit 5 TEXCOORD_1.
 pub const TEXTURE_NEAREST: u32 = 1 << 4;
 pub const TEXTURE_UV1: u32 = 1 << 5;
+/// `GpuTextureRef::image` w bit 6: the texels are linear (a normal map), not sRGB.
+pub const TEXTURE_LINEAR: u32 = 1 << 6;
 
 /// A material (see `scene::Material`).
 #[repr(C)]
@@ -43,6 +45,9 @@ pub struct GpuMaterial {
     /// w: the part of the GGX F0 that the base colour does not tint
     /// (`Material::glossy_untinted`).
     pub surface: [f32; 4],
+    /// x: index of its normal map in `texture_refs`, or `NO_TEXTURE` (bits); y: the normal
+    /// map's scale; zw unused.
+    pub maps: [f32; 4],
 }
 
 /// A texture as a material uses it (`scene::TextureRef`): where its image's texels are,
@@ -67,6 +72,8 @@ pub struct GpuVertexAttributes {
     pub uv: [f32; 4],
     /// COLOR_0, linear RGBA.
     pub color: [f32; 4],
+    /// Tangent (xyz) and bitangent sign (w) for normal maps; NaN where there is none.
+    pub tangent: [f32; 4],
 }
 
 /// Smallest GGX alpha the kernels see (a smaller one makes D(h) overflow-prone and the

@@ -37,7 +37,11 @@ impl ScenePlan {
         let prims = tris + scene.spheres.len() as u64;
         // Per-vertex arrays: three entries per triangle with normals or attributes.
         let vertices = scene.triangles.iter().filter(|t| t.n.is_some() || t.attributes.is_some()).count() as u64 * 3;
-        let refs = scene.materials.iter().filter(|m| m.base_color_texture.is_some()).count() as u64;
+        let refs = scene
+            .materials
+            .iter()
+            .map(|m| m.base_color_texture.is_some() as u64 + m.normal_texture.is_some() as u64)
+            .sum::<u64>();
         let texels: u64 = scene.images.iter().map(|i| i.texels.len() as u64).sum();
         let (env_w, env_h) = environment_map(scene).map_or((0, 0), |m| (m.width as u64, m.height as u64));
         ScenePlan {
@@ -99,13 +103,17 @@ fn vertex_attributes(a: Option<&VertexAttributes>, k: usize) -> GpuVertexAttribu
     GpuVertexAttributes {
         uv: [uv0[0], uv0[1], uv1[0], uv1[1]],
         color: a.and_then(|a| a.color).map_or([1.0; 4], |c| c[k].to_array()),
+        tangent: a.and_then(|a| a.tangent).map_or([f32::NAN; 4], |t| t[k].to_array()),
     }
 }
 
-/// The texture references of the materials that have a base-colour texture, in material
-/// order, and the texels of the scene's images (RGBA8 packed little-endian, R lowest;
-/// four to a 16-byte element).
-fn gpu_textures(scene: &Scene) -> Result<(Vec<GpuTextureRef>, Vec<[u32; 4]>)> {
+/// The scene's textures on the GPU: the texture references of the materials (each
+/// material's base-colour texture, then its normal map, in material order), per material
+/// the indices of its two (or `NO_TEXTURE`), and the texels of the scene's images (RGBA8
+/// packed little-endian, R lowest; four to a 16-byte element).
+type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 2]>, Vec<[u32; 4]>);
+
+fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     let mut first = Vec::with_capacity(scene.images.len());
     let mut flat: Vec<u32> = Vec::new();
     for img in &scene.images {
@@ -123,27 +131,36 @@ fn gpu_textures(scene: &Scene) -> Result<(Vec<GpuTextureRef>, Vec<[u32; 4]>)> {
         Wrap::MirroredRepeat => 2,
     };
     let mut refs = Vec::new();
+    let mut indices = Vec::with_capacity(scene.materials.len());
     for (i, m) in scene.materials.iter().enumerate() {
-        let Some(t) = &m.base_color_texture else { continue };
-        let img = scene
-            .images
-            .get(t.image as usize)
-            .ok_or_else(|| anyhow::anyhow!("material {i} names missing texture image {}", t.image))?;
-        let mut flags = wrap(t.wrap_s) | (wrap(t.wrap_t) << 2);
-        if t.filter == Filter::Nearest {
-            flags |= TEXTURE_NEAREST;
+        let mut index = [NO_TEXTURE; 2];
+        for (slot, (t, linear)) in [(&m.base_color_texture, false), (&m.normal_texture, true)].into_iter().enumerate() {
+            let Some(t) = t else { continue };
+            let img = scene
+                .images
+                .get(t.image as usize)
+                .ok_or_else(|| anyhow::anyhow!("material {i} names missing texture image {}", t.image))?;
+            let mut flags = wrap(t.wrap_s) | (wrap(t.wrap_t) << 2);
+            if t.filter == Filter::Nearest {
+                flags |= TEXTURE_NEAREST;
+            }
+            if t.tex_coord == 1 {
+                flags |= TEXTURE_UV1;
+            }
+            if linear {
+                flags |= TEXTURE_LINEAR;
+            }
+            let [r0, r1] = t.transform;
+            index[slot] = refs.len() as u32;
+            refs.push(GpuTextureRef {
+                image: [first[t.image as usize], img.width, img.height, flags],
+                row0: [r0[0], r0[1], r0[2], 0.0],
+                row1: [r1[0], r1[1], r1[2], 0.0],
+            });
         }
-        if t.tex_coord == 1 {
-            flags |= TEXTURE_UV1;
-        }
-        let [r0, r1] = t.transform;
-        refs.push(GpuTextureRef {
-            image: [first[t.image as usize], img.width, img.height, flags],
-            row0: [r0[0], r0[1], r0[2], 0.0],
-            row1: [r1[0], r1[1], r1[2], 0.0],
-        });
+        indices.push(index);
     }
-    Ok((refs, texels))
+    Ok((refs, indices, texels))
 }
 
 /// The lights in GPU form, and the index of the background light (constant or
@@ -303,19 +320,17 @@ impl SceneGpu {
             .iter()
             .map(|s| GpuSphere { center_radius: v4(s.center, s.radius), info: [s.material, NO_LIGHT, 0, 0] })
             .collect();
-        let (texture_refs, texels) = if features.textures { gpu_textures(scene)? } else { (Vec::new(), Vec::new()) };
-        let mut next_ref = 0u32;
+        let (texture_refs, texture_indices, texels) = if features.textures {
+            gpu_textures(scene)?
+        } else {
+            (Vec::new(), vec![[NO_TEXTURE; 2]; scene.materials.len()], Vec::new())
+        };
         let materials: Vec<GpuMaterial> = scene
             .materials
             .iter()
-            .map(|m| {
-                let texture = match &m.base_color_texture {
-                    Some(_) if features.textures => {
-                        next_ref += 1;
-                        next_ref - 1
-                    }
-                    _ => NO_TEXTURE,
-                };
+            .zip(&texture_indices)
+            .map(|(m, &[texture, normal_map])| {
+                let normal_map = if features.normal_maps { normal_map } else { NO_TEXTURE };
                 let cutoff = match m.alpha_mode {
                     AlphaMode::Mask { cutoff } if features.alpha_mask => cutoff,
                     _ => -1.0,
@@ -327,6 +342,7 @@ impl SceneGpu {
                     emission: v4(m.emission, 0.0),
                     glossy: v4(m.glossy, (m.roughness * m.roughness).max(MIN_GGX_ALPHA)),
                     surface: [bits(texture), m.alpha, cutoff, m.glossy_untinted],
+                    maps: [bits(normal_map), m.normal_scale, 0.0, 0.0],
                 }
             })
             .collect();

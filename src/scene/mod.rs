@@ -27,6 +27,10 @@ pub struct VertexAttributes {
     pub uv: [Option<[Vec2; 3]>; 2],
     /// COLOR_0, linear RGBA (it multiplies the base colour).
     pub color: Option<[Vec4; 3]>,
+    /// Tangents for normal maps, world space: xyz the unit tangent (the direction of
+    /// increasing u of the normal map's texture coordinates), w = ±1 the bitangent's sign
+    /// (bitangent = w cross(normal, tangent), glTF's TANGENT).
+    pub tangent: Option<[Vec4; 3]>,
 }
 
 /// A decoded texture image: RGBA8 texels, row by row from the top-left corner. The RGB
@@ -137,6 +141,11 @@ pub struct Material {
     /// colour's alpha; used by `alpha_mode`.
     pub alpha: f32,
     pub alpha_mode: AlphaMode,
+    /// A tangent-space normal map (glTF normalTexture, linear RGB = (n + 1) / 2) and its
+    /// scale of the normal's x and y; it bends the shading normal where a triangle has
+    /// texture coordinates and tangents (glsl/textures.glsl).
+    pub normal_texture: Option<TextureRef>,
+    pub normal_scale: f32,
     /// Schlick F0 of a dielectric interface over the diffuse lobe (glTF metallic/roughness:
     /// 0.04), which then reflects only what the interface transmits: it is weighted by
     /// (1 - F(cos_o)) (1 - F(cos_i)) / (1 - E_avg), glsl/bsdf.glsl. 0: plain Lambert.
@@ -160,6 +169,8 @@ impl Default for Material {
             glossy_untinted: 0.0,
             alpha: 1.0,
             alpha_mode: AlphaMode::Opaque,
+            normal_texture: None,
+            normal_scale: 1.0,
         }
     }
 }

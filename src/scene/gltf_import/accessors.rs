@@ -55,6 +55,9 @@ pub(super) const TEXCOORD_FORMATS: Formats = Formats {
     core: &[FLOAT, UBYTE_N, USHORT_N],
     quantized: &[FLOAT, BYTE, BYTE_N, UBYTE, UBYTE_N, SHORT, SHORT_N, USHORT, USHORT_N],
 };
+/// TANGENT (glTF 2.0 section 3.7.2.1: FLOAT VEC4); KHR_mesh_quantization adds BYTE and
+/// SHORT normalized.
+pub(super) const TANGENT_FORMATS: Formats = Formats { core: &[FLOAT], quantized: &[FLOAT, BYTE_N, SHORT_N] };
 /// COLOR_n (glTF 2.0 section 3.7.2.1: VEC3 or VEC4 of FLOAT, UNSIGNED_BYTE/SHORT
 /// normalized); KHR_mesh_quantization adds nothing.
 pub(super) const COLOR_FORMATS: Formats =
@@ -350,6 +353,19 @@ pub(super) fn read_vec2(
     check_format(acc, what, Dimensions::Vec2, formats, quantized)?;
     let c = read_components(buffers, acc)?;
     Ok(c.chunks_exact(2).map(|v| Vec2::new(v[0] as f32, v[1] as f32)).collect())
+}
+
+/// The elements of a TANGENT accessor (VEC4: xyz the tangent, w the bitangent's sign) in
+/// one of `formats` (`quantized`: `KHR_mesh_quantization` is used), decoded to floats.
+pub(super) fn read_tangents(
+    buffers: &[Vec<u8>],
+    acc: &gltf::Accessor,
+    formats: &Formats,
+    quantized: bool,
+) -> Result<Vec<Vec4>> {
+    check_format(acc, "TANGENT", Dimensions::Vec4, formats, quantized)?;
+    let c = read_components(buffers, acc)?;
+    Ok(c.chunks_exact(4).map(|v| Vec4::new(v[0] as f32, v[1] as f32, v[2] as f32, v[3] as f32)).collect())
 }
 
 /// The elements of a colour accessor (COLOR_n: VEC3 or VEC4 in one of `formats`) as RGBA,

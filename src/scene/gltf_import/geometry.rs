@@ -2,8 +2,8 @@
 //! world-space triangles, and the spheres of vkvcm's `VKVCM_spheres` node extension.
 
 use super::accessors::{
-    read_color, read_indices, read_vec2, read_vec3, Formats, COLOR_FORMATS, NORMAL_FORMATS, NORMAL_TARGET_FORMATS,
-    POSITION_FORMATS, POSITION_TARGET_FORMATS, TEXCOORD_FORMATS,
+    read_color, read_indices, read_tangents, read_vec2, read_vec3, Formats, COLOR_FORMATS, NORMAL_FORMATS,
+    NORMAL_TARGET_FORMATS, POSITION_FORMATS, POSITION_TARGET_FORMATS, TANGENT_FORMATS, TEXCOORD_FORMATS,
 };
 use super::extensions::{ext_vec3, EXT_SPHERES};
 use super::Importer;
@@ -95,6 +95,38 @@ impl Importer<'_> {
                 );
                 uvs = [None, None];
             }
+            // A normal map needs its texture coordinates, and tangents: the primitive's
+            // TANGENT, or MikkTSpace's (glTF 2.0 section 3.7.2.1) generated below.
+            let normal_map =
+                self.scene.materials[material as usize].normal_texture.as_ref().map(|t| t.tex_coord as usize);
+            let normal_map = match normal_map {
+                Some(k) if uvs[k].is_none() => {
+                    self.warnings.warn(
+                        format!("normalTexture on TEXCOORD_{k}, which the primitive does not have (the normal map is not applied)"),
+                        where_.clone(),
+                    );
+                    None
+                }
+                other => other,
+            };
+            let tangents = match (normal_map, prim.get(&Semantic::Tangents)) {
+                (Some(_), Some(acc)) => {
+                    let t = read_tangents(&self.buffers, &acc, &TANGENT_FORMATS, q).with_context(|| where_.clone())?;
+                    if t.len() != positions.len() {
+                        bail!(
+                            "{where_}: TANGENT accessor {} has {} elements, the primitive has {} vertices",
+                            acc.index(),
+                            t.len(),
+                            positions.len()
+                        );
+                    }
+                    if let Some(i) = t.iter().position(|v| !v.is_finite()) {
+                        bail!("{where_}: TANGENT accessor {} element {i} is not finite", acc.index());
+                    }
+                    Some(t)
+                }
+                _ => None,
+            };
             let indices: Vec<u32> = match &index_acc {
                 Some(a) => {
                     let idx = read_indices(&self.buffers, a).with_context(|| where_.clone())?;
@@ -115,32 +147,37 @@ impl Importer<'_> {
                 Placement::Rigid(_) => None,
                 Placement::Skinned(joints) => self.skin_vertex_matrices(&prim, joints, positions.len(), &where_)?,
             };
-            let (world_p, world_n, flips) = match vertex_matrices {
-                None => {
-                    let world = match placement {
-                        Placement::Rigid(world) => *world,
-                        // A skinned node whose primitive has no JOINTS_0/WEIGHTS_0 (warned):
-                        // its vertices as stored, in world coordinates.
-                        Placement::Skinned(_) => self.rebase.as_mat4(),
-                    };
-                    let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
-                    let flip = Mat3::from_mat4(world).determinant() < 0.0;
-                    let p: Vec<Vec3> = positions.iter().map(|v| world.transform_point3(*v)).collect();
-                    let n = normals.map(|ns| ns.iter().map(|v| (normal_matrix * *v).normalize_or_zero()).collect());
-                    (p, n, vec![flip; positions.len()])
-                }
-                Some(ms) => {
-                    let p: Vec<Vec3> = positions.iter().zip(&ms).map(|(v, m)| m.transform_point3(*v)).collect();
-                    let n: Option<Vec<Vec3>> = normals.map(|ns| {
-                        ns.iter()
-                            .zip(&ms)
-                            .map(|(v, m)| (Mat3::from_mat4(*m).inverse().transpose() * *v).normalize_or_zero())
-                            .collect()
-                    });
-                    let flips = ms.iter().map(|m| Mat3::from_mat4(*m).determinant() < 0.0).collect();
-                    (p, n, flips)
-                }
-            };
+            let (world_p, world_n, world_t, flips): (Vec<Vec3>, Option<Vec<Vec3>>, Option<Vec<Vec4>>, Vec<bool>) =
+                match vertex_matrices {
+                    None => {
+                        let world = match placement {
+                            Placement::Rigid(world) => *world,
+                            // A skinned node whose primitive has no JOINTS_0/WEIGHTS_0 (warned):
+                            // its vertices as stored, in world coordinates.
+                            Placement::Skinned(_) => self.rebase.as_mat4(),
+                        };
+                        let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+                        let flip = Mat3::from_mat4(world).determinant() < 0.0;
+                        let p: Vec<Vec3> = positions.iter().map(|v| world.transform_point3(*v)).collect();
+                        let n = normals.map(|ns| ns.iter().map(|v| (normal_matrix * *v).normalize_or_zero()).collect());
+                        let t = tangents.as_ref().map(|ts| ts.iter().map(|t| world_tangent(world, *t)).collect());
+                        (p, n, t, vec![flip; positions.len()])
+                    }
+                    Some(ms) => {
+                        let p: Vec<Vec3> = positions.iter().zip(&ms).map(|(v, m)| m.transform_point3(*v)).collect();
+                        let n: Option<Vec<Vec3>> = normals.map(|ns| {
+                            ns.iter()
+                                .zip(&ms)
+                                .map(|(v, m)| (Mat3::from_mat4(*m).inverse().transpose() * *v).normalize_or_zero())
+                                .collect()
+                        });
+                        let t = tangents
+                            .as_ref()
+                            .map(|ts| ts.iter().zip(&ms).map(|(t, m)| world_tangent(*m, *t)).collect());
+                        let flips = ms.iter().map(|m| Mat3::from_mat4(*m).determinant() < 0.0).collect();
+                        (p, n, t, flips)
+                    }
+                };
             let tris: Vec<[u32; 3]> = match mode {
                 Mode::Triangles => {
                     if !indices.len().is_multiple_of(3) {
@@ -162,6 +199,7 @@ impl Importer<'_> {
                     .collect(),
                 _ => (1..indices.len().saturating_sub(1)).map(|i| [indices[i], indices[i + 1], indices[0]]).collect(),
             };
+            let first_triangle = self.scene.triangles.len();
             for t in tris {
                 // A mirroring transform reverses the winding; keep the geometric normal on
                 // the side the author meant by swapping vertices 1 and 2 (with all their
@@ -188,9 +226,14 @@ impl Importer<'_> {
                     Box::new(VertexAttributes {
                         uv: [0, 1].map(|k| uvs[k].as_ref().map(|uv| t.map(|i| uv[i as usize]))),
                         color: colors.as_ref().map(|c| t.map(|i| c[i as usize])),
+                        tangent: world_t.as_ref().map(|ts| t.map(|i| ts[i as usize])),
                     })
                 });
                 self.scene.triangles.push(Triangle { p, n, material, attributes });
+            }
+            if let (Some(set), None) = (normal_map, &world_t) {
+                super::tangents::generate(&mut self.scene.triangles[first_triangle..], set)
+                    .with_context(|| format!("{where_}: generating tangents"))?;
             }
         }
         Ok(())
@@ -368,4 +411,14 @@ impl Importer<'_> {
         }
         Ok(())
     }
+}
+
+/// A TANGENT in world space under the node matrix `m`: the tangent direction transformed
+/// by m (it lies in the surface, unlike a normal) and normalised; the bitangent's sign
+/// flips with a mirroring m, so that w cross(normal, tangent) stays the transformed
+/// bitangent.
+fn world_tangent(m: Mat4, t: Vec4) -> Vec4 {
+    let m3 = Mat3::from_mat4(m);
+    let sign = if m3.determinant() < 0.0 { -1.0 } else { 1.0 };
+    (m3 * t.truncate()).normalize_or_zero().extend(t.w * sign)
 }

@@ -91,7 +91,7 @@ impl Importer<'_> {
         if pbr.metallic_roughness_texture().is_some() {
             textures.push("metallicRoughnessTexture");
         }
-        if m.normal_texture().is_some() {
+        if m.normal_texture().is_some() && phong_ext.is_some() {
             textures.push("normalTexture");
         }
         if m.occlusion_texture().is_some() {
@@ -105,6 +105,15 @@ impl Importer<'_> {
         }
         for t in textures {
             self.warnings.warn("textures are not supported (the constant factors are used)", format!("{label} {t}"));
+        }
+
+        // The normal map bends the shading normal of every lobe, so it applies to every
+        // material kind but the VKVCM_materials_phong one (SmallVCM's exact materials).
+        if let (Some(info), None) = (m.normal_texture(), phong_ext) {
+            if let Some((t, scale)) = self.normal_texture(&info, &label)? {
+                out.normal_texture = Some(t);
+                out.normal_scale = scale;
+            }
         }
 
         // glTF 2.0 section 3.9.4 ("Alpha Coverage"): alpha = baseColorFactor alpha (times

@@ -41,6 +41,7 @@ mod lights;
 mod materials;
 mod skins;
 mod sources;
+mod tangents;
 mod textures;
 mod warnings;
 

@@ -37,9 +37,35 @@ impl Importer<'_> {
     /// or it uses texture coordinates other than TEXCOORD_0/1. Errors: a malformed
     /// `KHR_texture_transform`, an image that cannot be read or decoded or is too large.
     pub(super) fn base_color_texture(&mut self, info: &gltf::texture::Info, label: &str) -> Result<Option<TextureRef>> {
-        let texture = info.texture();
+        let transform = info.extension_value(KHR_TEXTURE_TRANSFORM);
+        self.texture_ref(info.texture(), info.tex_coord(), transform, label, "baseColorTexture")
+    }
+
+    /// The material's `normalTexture` (with its `scale`, glTF 2.0 section 5.19.4), as
+    /// `base_color_texture` reads a base-colour texture.
+    pub(super) fn normal_texture(
+        &mut self,
+        info: &gltf::material::NormalTexture,
+        label: &str,
+    ) -> Result<Option<(TextureRef, f32)>> {
+        let transform = info.extension_value(KHR_TEXTURE_TRANSFORM);
+        let t = self.texture_ref(info.texture(), info.tex_coord(), transform, label, "normalTexture")?;
+        Ok(t.map(|t| (t, info.scale())))
+    }
+
+    /// The texture reference of `texture` read through texture coordinate set `tex_coord`
+    /// with an optional KHR_texture_transform payload, for the material `label`'s `slot`
+    /// (`baseColorTexture`, `normalTexture`); `None` (with a warning) when it cannot apply.
+    fn texture_ref(
+        &mut self,
+        texture: gltf::Texture,
+        tex_coord: u32,
+        transform: Option<&Value>,
+        label: &str,
+        slot: &str,
+    ) -> Result<Option<TextureRef>> {
         let ti = texture.index();
-        let ctx = format!("{label} baseColorTexture (texture {ti})");
+        let ctx = format!("{label} {slot} (texture {ti})");
         let json = &self.doc.as_json().textures[ti];
         // Without `allow_empty_texture`, gltf's `Texture::source` unwraps the image index;
         // an extension-only texture has none (document.rs lets it through validation).
@@ -52,16 +78,16 @@ impl Importer<'_> {
             return Ok(None);
         }
 
-        let (transform, tex_coord_override) = match info.extension_value(KHR_TEXTURE_TRANSFORM) {
+        let (transform, tex_coord_override) = match transform {
             Some(v) => texture_transform(v, &format!("{ctx} extensions.{KHR_TEXTURE_TRANSFORM}"))?,
             None => (TextureRef::IDENTITY, None),
         };
         // KHR_texture_transform: "texCoord: Overrides the textureInfo texCoord value if
         // supplied".
-        let tex_coord = tex_coord_override.unwrap_or(info.tex_coord());
+        let tex_coord = tex_coord_override.unwrap_or(tex_coord);
         if tex_coord > 1 {
             self.warnings.warn(
-                format!("baseColorTexture on TEXCOORD_{tex_coord}: only TEXCOORD_0 and TEXCOORD_1 are read (the texture is ignored; the constant factor is used)"),
+                format!("{slot} on TEXCOORD_{tex_coord}: only TEXCOORD_0 and TEXCOORD_1 are read (the texture is ignored; the constant factor is used)"),
                 ctx,
             );
             return Ok(None);
