@@ -147,37 +147,35 @@ impl Importer<'_> {
                 Placement::Rigid(_) => None,
                 Placement::Skinned(joints) => self.skin_vertex_matrices(&prim, joints, positions.len(), &where_)?,
             };
-            let (world_p, world_n, world_t, flips): (Vec<Vec3>, Option<Vec<Vec3>>, Option<Vec<Vec4>>, Vec<bool>) =
-                match vertex_matrices {
-                    None => {
-                        let world = match placement {
-                            Placement::Rigid(world) => *world,
-                            // A skinned node whose primitive has no JOINTS_0/WEIGHTS_0 (warned):
-                            // its vertices as stored, in world coordinates.
-                            Placement::Skinned(_) => self.rebase.as_mat4(),
-                        };
-                        let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
-                        let flip = Mat3::from_mat4(world).determinant() < 0.0;
-                        let p: Vec<Vec3> = positions.iter().map(|v| world.transform_point3(*v)).collect();
-                        let n = normals.map(|ns| ns.iter().map(|v| (normal_matrix * *v).normalize_or_zero()).collect());
-                        let t = tangents.as_ref().map(|ts| ts.iter().map(|t| world_tangent(world, *t)).collect());
-                        (p, n, t, vec![flip; positions.len()])
-                    }
-                    Some(ms) => {
-                        let p: Vec<Vec3> = positions.iter().zip(&ms).map(|(v, m)| m.transform_point3(*v)).collect();
-                        let n: Option<Vec<Vec3>> = normals.map(|ns| {
-                            ns.iter()
-                                .zip(&ms)
-                                .map(|(v, m)| (Mat3::from_mat4(*m).inverse().transpose() * *v).normalize_or_zero())
-                                .collect()
-                        });
-                        let t = tangents
-                            .as_ref()
-                            .map(|ts| ts.iter().zip(&ms).map(|(t, m)| world_tangent(*m, *t)).collect());
-                        let flips = ms.iter().map(|m| Mat3::from_mat4(*m).determinant() < 0.0).collect();
-                        (p, n, t, flips)
-                    }
-                };
+            let (world_p, world_n, world_t, flips): WorldVertices = match vertex_matrices {
+                None => {
+                    let world = match placement {
+                        Placement::Rigid(world) => *world,
+                        // A skinned node whose primitive has no JOINTS_0/WEIGHTS_0 (warned):
+                        // its vertices as stored, in world coordinates.
+                        Placement::Skinned(_) => self.rebase.as_mat4(),
+                    };
+                    let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+                    let flip = Mat3::from_mat4(world).determinant() < 0.0;
+                    let p: Vec<Vec3> = positions.iter().map(|v| world.transform_point3(*v)).collect();
+                    let n = normals.map(|ns| ns.iter().map(|v| (normal_matrix * *v).normalize_or_zero()).collect());
+                    let t = tangents.as_ref().map(|ts| ts.iter().map(|t| world_tangent(world, *t)).collect());
+                    (p, n, t, vec![flip; positions.len()])
+                }
+                Some(ms) => {
+                    let p: Vec<Vec3> = positions.iter().zip(&ms).map(|(v, m)| m.transform_point3(*v)).collect();
+                    let n: Option<Vec<Vec3>> = normals.map(|ns| {
+                        ns.iter()
+                            .zip(&ms)
+                            .map(|(v, m)| (Mat3::from_mat4(*m).inverse().transpose() * *v).normalize_or_zero())
+                            .collect()
+                    });
+                    let t =
+                        tangents.as_ref().map(|ts| ts.iter().zip(&ms).map(|(t, m)| world_tangent(*m, *t)).collect());
+                    let flips = ms.iter().map(|m| Mat3::from_mat4(*m).determinant() < 0.0).collect();
+                    (p, n, t, flips)
+                }
+            };
             let tris: Vec<[u32; 3]> = match mode {
                 Mode::Triangles => {
                     if !indices.len().is_multiple_of(3) {
@@ -412,6 +410,10 @@ impl Importer<'_> {
         Ok(())
     }
 }
+
+/// A primitive's vertices in world space: positions, normals, tangents, and whether the
+/// transform of each mirrors.
+type WorldVertices = (Vec<Vec3>, Option<Vec<Vec3>>, Option<Vec<Vec4>>, Vec<bool>);
 
 /// A TANGENT in world space under the node matrix `m`: the tangent direction transformed
 /// by m (it lies in the surface, unlike a normal) and normalised; the bitangent's sign
