@@ -1497,6 +1497,9 @@ fn fingerprint_covers_texture_coordinates_colours_and_texels() {
     assert_eq!(s.fingerprint(), base);
     s.triangles[0].attributes.as_mut().unwrap().color = Some([Vec4::ONE; 3]);
     assert_ne!(s.fingerprint(), base, "a vertex colour");
+    let mut s = Doc::textured().load().unwrap();
+    s.triangles[0].attributes.as_mut().unwrap().tangent = Some([Vec4::X; 3]);
+    assert_ne!(s.fingerprint(), base, "a tangent");
 }
 
 /// Khronos BoxTextured: 12 triangles, all with TEXCOORD_0; its one material's

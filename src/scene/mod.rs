@@ -300,12 +300,14 @@ impl Scene {
                             None => h.update(&[0]),
                         }
                     }
-                    match &a.color {
-                        Some(c) => {
-                            h.update(&[1]);
-                            h.update(bytemuck::cast_slice(c));
+                    for v in [&a.color, &a.tangent] {
+                        match v {
+                            Some(c) => {
+                                h.update(&[1]);
+                                h.update(bytemuck::cast_slice(c));
+                            }
+                            None => h.update(&[0]),
                         }
-                        None => h.update(&[0]),
                     }
                 }
                 None => h.update(&[0]),
