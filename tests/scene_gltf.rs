@@ -401,8 +401,8 @@ fn unsupported_features_warn_once_per_kind() {
     d.json["images"] = json!([{"uri": "never_loaded.png"}]);
     d.json["textures"] = json!([{"source": 0}]);
     d.json["materials"] = json!([
-        {"name": "a", "normalTexture": {"index": 0}},
-        {"name": "b", "normalTexture": {"index": 0}},
+        {"name": "a", "emissiveTexture": {"index": 0}},
+        {"name": "b", "emissiveTexture": {"index": 0}},
     ]);
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
     let mut lines = d.json["meshes"][0]["primitives"][0].clone();
