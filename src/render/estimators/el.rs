@@ -1,5 +1,6 @@
 //! Eye light (`el`): |cos| between the shading normal and the view ray at the first hit,
-//! a preview and not a radiance estimate (SmallVCM's EyeLight). One pass: the camera
+//! times the surface's tint (base-colour texture and vertex colour, docs/textures.md), a
+//! preview and not a radiance estimate (SmallVCM's EyeLight, which has no textures). One pass: the camera
 //! kernel glsl/el.comp, one ray per pixel.
 
 use anyhow::Result;
@@ -13,7 +14,7 @@ use crate::render::passes::PassInfo;
 pub const INFO: EstimatorInfo = EstimatorInfo {
     algorithm: Algorithm::El,
     name: "el",
-    description: "Eye light: |cos| at the first hit (a preview, not radiance).",
+    description: "Eye light: |cos| at the first hit, times its texture (a preview, not radiance).",
     techniques: Techniques::NONE,
     radiance: false,
     consistent_only: false,
