@@ -376,6 +376,21 @@ fn choose(infos: &[DeviceInfo], wanted: Option<&str>) -> Result<usize> {
     Ok(idx)
 }
 
+/// What `Gpu::open` creates from the instance: the device and what comes with it.
+struct DeviceParts {
+    physical: vk::PhysicalDevice,
+    device: ash::Device,
+    queue: vk::Queue,
+    queue_family: u32,
+    allocator: Allocator,
+    timestamps: bool,
+    info: DeviceInfo,
+    props: vk::PhysicalDeviceProperties,
+    subgroup_size: u32,
+    pipelines: PipelineCache,
+    kernel_cache: Option<CacheDir>,
+}
+
 impl Gpu {
     /// Opens a device as `opts` says.
     pub fn new(opts: &GpuOptions) -> Result<Arc<Gpu>> {
@@ -400,7 +415,7 @@ impl Gpu {
         opts: &GpuOptions,
         validation: Option<Validation>,
     ) -> std::result::Result<Gpu, (anyhow::Error, Option<Validation>)> {
-        let step = || -> Result<_> {
+        let step = || -> Result<DeviceParts> {
             // SAFETY: valid instance.
             let pds = unsafe { instance.enumerate_physical_devices() }?;
             let infos: Vec<DeviceInfo> = pds.iter().enumerate().map(|(i, &pd)| describe(&instance, i, pd)).collect();
@@ -452,49 +467,37 @@ impl Gpu {
             let props = p2.properties;
             let kernel_cache = opts.kernel_cache.clone().map(CacheDir::new);
             let pipelines = PipelineCache::open(&device, &props, kernel_cache.clone());
-            Ok((
+            Ok(DeviceParts {
                 physical,
                 device,
                 queue,
                 queue_family,
                 allocator,
                 timestamps,
-                infos[idx].clone(),
+                info: infos[idx].clone(),
                 props,
-                sub.subgroup_size,
+                subgroup_size: sub.subgroup_size,
                 pipelines,
                 kernel_cache,
-            ))
+            })
         };
         match step() {
-            Ok((
-                physical,
-                device,
-                queue,
-                queue_family,
-                allocator,
-                timestamps,
-                info,
-                props,
-                subgroup_size,
-                pipelines,
-                kernel_cache,
-            )) => Ok(Gpu {
+            Ok(p) => Ok(Gpu {
                 entry,
                 instance,
-                physical,
-                device,
-                queue,
-                queue_family,
-                allocator: ManuallyDrop::new(Mutex::new(allocator)),
-                shaders: ShaderCache::new(kernel_cache.clone()),
-                pipelines,
-                kernel_cache,
-                timestamp_period_ns: props.limits.timestamp_period as f64,
-                timestamps,
-                info,
-                limits: props.limits,
-                subgroup_size,
+                physical: p.physical,
+                device: p.device,
+                queue: p.queue,
+                queue_family: p.queue_family,
+                allocator: ManuallyDrop::new(Mutex::new(p.allocator)),
+                shaders: ShaderCache::new(p.kernel_cache.clone()),
+                pipelines: p.pipelines,
+                kernel_cache: p.kernel_cache,
+                timestamp_period_ns: p.props.limits.timestamp_period as f64,
+                timestamps: p.timestamps,
+                info: p.info,
+                limits: p.props.limits,
+                subgroup_size: p.subgroup_size,
                 validation,
             }),
             Err(e) => Err((e, validation)),
