@@ -93,6 +93,14 @@ float fresnel_dielectric(float cos_i, float ior) {
     return 0.5 * (r_par * r_par + r_perp * r_perp);
 }
 
+// Schlick's Fresnel reflectance for F0 = `f0` at cos(theta) = `c`, per channel and scalar.
+vec3 schlick(vec3 f0, float c) {
+    float s = 1.0 - c;
+    float s2 = s * s;
+    return f0 + (vec3(1.0) - f0) * (s2 * s2 * s);
+}
+float schlick(float f0, float c) { return schlick(vec3(f0), c).x; }
+
 // GGX (Trowbridge-Reitz) normal distribution D(h) for cos(theta_h) = `ch` > 0, width
 // `a` (Walter et al. 2007, eq. 33, written with cos only).
 float ggx_d(float ch, float a) {
@@ -125,19 +133,10 @@ vec3 ggx_eval(vec3 n, vec3 wo, vec3 wi, float cos_o, float cos_i, vec3 f0, float
     if (ch < EPS_COSINE || oh < EPS_COSINE || ih < EPS_COSINE) return vec3(0.0);
     float d = ggx_d(ch, a);
     float g2 = 1.0 / (1.0 + ggx_lambda(cos_o, a) + ggx_lambda(cos_i, a));
-    float s = 1.0 - oh;
-    float s2 = s * s;
-    vec3 fr = f0 + (vec3(1.0) - f0) * (s2 * s2 * s);
+    vec3 fr = schlick(f0, oh);
     pdf_fwd = d * ch / (4.0 * oh);
     pdf_rev = d * ch / (4.0 * ih);
     return fr * (d * g2 / (4.0 * cos_o * cos_i));
-}
-
-// Schlick's Fresnel reflectance for F0 = `f0` at cos(theta) = `c`.
-float schlick(float f0, float c) {
-    float s = 1.0 - c;
-    float s2 = s * s;
-    return f0 + (1.0 - f0) * (s2 * s2 * s);
 }
 
 // The weight of a diffuse lobe under a dielectric interface of Schlick F0 `f0` (glTF's

@@ -86,6 +86,21 @@ vec4 texture_sample(uint ref, vec2 uv) {
 }
 #endif
 
+#if HAS_TEXTURES
+// The texture coordinates that texture reference `ref` reads (its set, TEXCOORD_0 or _1)
+// at barycentric weights (w0, u, v) of the triangle with vertex attributes a0, a1, a2;
+// false where the triangle has no such coordinates (NaN) or they are not finite.
+bool texture_uv(uint ref, GpuVertexAttributes a0, GpuVertexAttributes a1, GpuVertexAttributes a2, float w0,
+                float u, float v, out vec2 uv) {
+    bool uv1 = (texture_ref_data[ref].image.w & TEXTURE_UV1) != 0u;
+    vec2 t0 = uv1 ? a0.uv.zw : a0.uv.xy;
+    vec2 t1 = uv1 ? a1.uv.zw : a1.uv.xy;
+    vec2 t2 = uv1 ? a2.uv.zw : a2.uv.xy;
+    uv = w0 * t0 + u * t1 + v * t2;
+    return !any(isnan(uv)) && !any(isinf(uv));
+}
+#endif
+
 // The tint (rgb) and alpha (times the material's alpha factor) of triangle `tri` with
 // material `material` at barycentric weights (u, v): (1, 1, 1, factor) where it has no
 // attributes.
@@ -104,15 +119,9 @@ vec4 surface_tint_alpha(uint tri, uint material, float u, float v) {
     r *= color;
 #if HAS_TEXTURES
     uint ref = floatBitsToUint(material_surface(material).x);
-    if (ref != NO_TEXTURE) {
-        bool uv1 = (texture_ref_data[ref].image.w & TEXTURE_UV1) != 0u;
-        vec2 t0 = uv1 ? a0.uv.zw : a0.uv.xy;
-        vec2 t1 = uv1 ? a1.uv.zw : a1.uv.xy;
-        vec2 t2 = uv1 ? a2.uv.zw : a2.uv.xy;
-        vec2 uv = w0 * t0 + u * t1 + v * t2;
-        // NaN: the triangle has no such texture coordinates (the factor alone applies).
-        if (!any(isnan(uv)) && !any(isinf(uv))) r *= texture_sample(ref, uv);
-    }
+    vec2 uv;
+    // Without such coordinates the factor alone applies.
+    if (ref != NO_TEXTURE && texture_uv(ref, a0, a1, a2, w0, u, v, uv)) r *= texture_sample(ref, uv);
 #endif
 #endif
     return r;
@@ -135,9 +144,8 @@ vec3 normal_mapped(uint tri, uint material, float u, float v, vec3 n) {
     GpuVertexAttributes a2 = vertex_attribute_data[first + 2u];
     float w0 = 1.0 - u - v;
     vec4 t = w0 * a0.tangent + u * a1.tangent + v * a2.tangent;
-    bool uv1 = (texture_ref_data[ref].image.w & TEXTURE_UV1) != 0u;
-    vec2 uv = w0 * (uv1 ? a0.uv.zw : a0.uv.xy) + u * (uv1 ? a1.uv.zw : a1.uv.xy) + v * (uv1 ? a2.uv.zw : a2.uv.xy);
-    if (any(isnan(t)) || any(isnan(uv)) || any(isinf(uv))) return n;
+    vec2 uv;
+    if (any(isnan(t)) || !texture_uv(ref, a0, a1, a2, w0, u, v, uv)) return n;
     vec3 tg = t.xyz - n * dot(n, t.xyz);
     float tl = length(tg);
     if (!(tl > 1e-8)) return n;
