@@ -52,6 +52,13 @@ SCENE = {
 }
 
 
+def write_json(path, value):
+    """`value` as indented JSON with a final newline."""
+    with open(path, "w") as f:
+        json.dump(value, f, indent=1)
+        f.write("\n")
+
+
 def look_at_quaternion(eye, target, up):
     """The glTF node rotation (x, y, z, w) whose -Z looks from eye to target, +Y near up."""
     f = [t - e for t, e in zip(target, eye)]
@@ -153,9 +160,7 @@ def write_gltf(path, smooth):
         "bufferViews": views,
         "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}],
     }
-    with open(path, "w") as f:
-        json.dump(doc, f, indent=1)
-        f.write("\n")
+    write_json(path, doc)
     print(f"wrote {path}")
 
 
@@ -235,9 +240,7 @@ def render_mitsuba(seeds, spp, variant, smooth):
     meta = {"renderer": f"Mitsuba {mi.__version__} {variant}, integrator path", "seeds": seeds, "spp_per_seed": spp,
             "scene": SCENE, "smooth_sphere": [SMOOTH_RINGS, SMOOTH_SEGMENTS] if smooth else None,
             "command": " ".join(sys.argv)}
-    with open(os.path.join(OUT, f"{stem}.json"), "w") as f:
-        json.dump(meta, f, indent=1)
-        f.write("\n")
+    write_json(os.path.join(OUT, f"{stem}.json"), meta)
     print(f"wrote tests/env/{stem}_mean.exr, {stem}_var.exr ({seeds} seeds x {spp} spp, {time.time() - t0:.0f} s)")
 
 

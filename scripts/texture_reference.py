@@ -35,7 +35,7 @@ import time
 import zlib
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from env_reference import OUT, SCENE as ENV_SCENE, look_at_quaternion  # noqa: E402
+from env_reference import OUT, SCENE as ENV_SCENE, look_at_quaternion, write_json  # noqa: E402
 
 MAX_PATH_LENGTH = 24
 GROUND_H = 2.0
@@ -138,9 +138,7 @@ def write_gltf(path):
         "bufferViews": views,
         "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}],
     }
-    with open(path, "w") as f:
-        json.dump(doc, f, indent=1)
-        f.write("\n")
+    write_json(path, doc)
     print(f"wrote {path}")
 
 
@@ -211,9 +209,7 @@ def render_mitsuba(seeds, spp, variant):
     mi.Bitmap(stack.var(axis=0, ddof=1).astype(np.float32)).write(os.path.join(OUT, "mitsuba_textured_var.exr"))
     meta = {"renderer": f"Mitsuba {mi.__version__} {variant}, integrator path", "seeds": seeds, "spp_per_seed": spp,
             "max_path_length": MAX_PATH_LENGTH, "command": " ".join(sys.argv)}
-    with open(os.path.join(OUT, "mitsuba_textured.json"), "w") as f:
-        json.dump(meta, f, indent=1)
-        f.write("\n")
+    write_json(os.path.join(OUT, "mitsuba_textured.json"), meta)
     print(f"wrote tests/env/mitsuba_textured_mean.exr, _var.exr ({seeds} seeds x {spp} spp, {time.time() - t0:.0f} s)")
 
 
