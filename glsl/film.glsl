@@ -2,29 +2,37 @@
 // square (for per-pixel variance: error estimates and statistical tests), both float32
 // with Kahan compensation (Kahan 1965), so long renders lose no precision without float64.
 // Each pixel has one writer per dispatch, so the result is deterministic.
-// Declares the bindings `film` (film_sums[]: vec4, four per pixel: sum, its
-// compensation, sum of squares, its compensation) and `film_stats` (stats[], uint: [0]
-// rejected samples, [1] overflowing splats, [2..3] the 64-bit count of traced rays when
-// profiling: COUNT_RAYS in glsl/scene.glsl), src/render/film.rs; with HAS_SPLAT also
-// `splat` (below).
+// The film's sums (FILM_SUMS[]: vec4, four per pixel: sum, its compensation, sum of
+// squares, its compensation) are reached by device address (DEVICE_ADDRESSES,
+// glsl/addresses.glsl) or as the binding `film`; the binding `film_stats` (stats[], uint:
+// [0] rejected samples, [1] overflowing splats, [2..3] the 64-bit count of traced rays
+// when profiling: COUNT_RAYS in glsl/scene.glsl), src/render/film.rs; with HAS_SPLAT also
+// the splat sums (below).
 #ifndef FILM_GLSL
 #define FILM_GLSL
+#include "addresses.glsl"
 
+#if DEVICE_ADDRESSES
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer FilmSums { vec4 v[]; };
+#define FILM_SUMS FilmSums(addresses.film).v
+#else
 layout(std430) buffer film { vec4 film_sums[]; };
+#define FILM_SUMS film_sums
+#endif
 layout(std430) buffer film_stats { uint stats[]; };
 
-// Kahan step: adds `v` to the sum at film_sums[i] with compensation at film_sums[i + 1].
+// Kahan step: adds `v` to the sum at FILM_SUMS[i] with compensation at FILM_SUMS[i + 1].
 // `precise` forbids the compiler from reassociating these operations, which would cancel
 // the compensation to zero (seen on lavapipe: 2048 iterations of a constant 0.5294118
 // summed to 0.5294181 without it; tests/render_pt.rs catches this).
 void film_kahan_add(uint i, vec4 v) {
-    vec4 sum = film_sums[i];
-    vec4 c = film_sums[i + 1u];
+    vec4 sum = FILM_SUMS[i];
+    vec4 c = FILM_SUMS[i + 1u];
     precise vec4 y = v - c;
     precise vec4 t = sum + y;
     precise vec4 comp = (t - sum) - y;
-    film_sums[i + 1u] = comp;
-    film_sums[i] = t;
+    FILM_SUMS[i + 1u] = comp;
+    FILM_SUMS[i] = t;
 }
 
 // Adds this iteration's value `v` of `pixel`; rejects (and counts) NaN, Inf and negative
@@ -60,12 +68,23 @@ void film_add(uint pixel, vec3 v) {
 #define SPLAT_SCALE 16777216.0
 #define SPLAT_MAX 134217728.0
 
+// The sums are reached by device address or as the binding `splat`, like the film's.
 #if SPLAT_ATOMICS_64
 #extension GL_EXT_shader_atomic_int64 : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#if DEVICE_ADDRESSES
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer SplatSums { uint64_t v[]; };
+#define splat_sums SplatSums(addresses.splat).v
+#else
 layout(std430) buffer splat { uint64_t splat_sums[]; };
+#endif
+#else
+#if DEVICE_ADDRESSES
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer SplatWords { uint v[]; };
+#define splat_words SplatWords(addresses.splat).v
 #else
 layout(std430) buffer splat { uint splat_words[]; };
+#endif
 #endif
 
 void splat_add(uint pixel, vec3 v) {

@@ -66,6 +66,11 @@ struct GpuParams {
     uvec4 misc;         // seed, min path length, background light, flags
 };
 
+struct GpuAddresses {
+    uvec2 film;   // (low, high) words of the film's device address
+    uvec2 splat;  // of the splat sums
+};
+
 struct GpuPush {
     uint iteration;    // 0-based iteration index
     uint count;        // paths (pixels, light subpaths) in this dispatch

@@ -12,6 +12,7 @@ layout(std430, binding = 4) buffer E { GpuParams a_params[]; };
 layout(std430, binding = 5) buffer F { GpuPush a_push[]; };
 layout(std430, binding = 6) buffer G { GpuTextureRef a_texture_refs[]; };
 layout(std430, binding = 7) buffer H { GpuVertexAttributes a_vertex_attributes[]; };
+layout(std430, binding = 8) buffer I { GpuAddresses a_addresses[]; };
 void main() {
     // Touch every struct so none is optimised away.
     a_materials[1] = a_materials[0];
@@ -22,4 +23,5 @@ void main() {
     a_push[1] = a_push[0];
     a_texture_refs[1] = a_texture_refs[0];
     a_vertex_attributes[1] = a_vertex_attributes[0];
+    a_addresses[1] = a_addresses[0];
 }

@@ -26,14 +26,16 @@ pub struct Buffer {
 impl Gpu {
     fn raw_buffer(self: &Arc<Self>, name: &str, size: u64, location: MemoryLocation) -> Result<Buffer> {
         let alloc_size = size.max(16);
+        let mut usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_SRC
+            | vk::BufferUsageFlags::TRANSFER_DST;
+        if self.has(super::BUFFER_DEVICE_ADDRESS) {
+            usage |= vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
+        }
         let info = vk::BufferCreateInfo::default()
             .size(alloc_size)
-            .usage(
-                vk::BufferUsageFlags::STORAGE_BUFFER
-                    | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
-                    | vk::BufferUsageFlags::TRANSFER_SRC
-                    | vk::BufferUsageFlags::TRANSFER_DST,
-            )
+            .usage(usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
         // SAFETY: valid device and create info.
         let raw = unsafe { self.device.create_buffer(&info, None) }
@@ -124,6 +126,19 @@ impl Buffer {
 
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// The buffer's device address (GLSL's `buffer_reference`), on a device with
+    /// buffer device addresses.
+    pub fn device_address(&self) -> Result<u64> {
+        if !self.gpu.has(super::BUFFER_DEVICE_ADDRESS) {
+            bail!("buffer {:?}: the device has no buffer device addresses", self.name);
+        }
+        // SAFETY: the buffer was created with SHADER_DEVICE_ADDRESS usage and bound to
+        // memory allocated with the device-address flag (gpu-allocator's setting).
+        Ok(unsafe {
+            self.gpu.device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(self.raw))
+        })
     }
 
     fn mapped(&self) -> Option<*mut u8> {

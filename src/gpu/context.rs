@@ -25,6 +25,11 @@ pub struct GpuOptions {
     /// The folder of the kernel cache (compiled SPIR-V and the driver's pipeline cache,
     /// docs/kernel-cache.md); `None` builds every kernel afresh and writes nothing.
     pub kernel_cache: Option<PathBuf>,
+    /// Use buffer device addresses where the device has them (`bufferDeviceAddress`);
+    /// `false` makes the device look as if it lacked them, so the film and the other frame
+    /// buffers are bound as storage buffers (docs/devices.md). `VKVCM_DEVICE_ADDRESSES=0`
+    /// sets it from the environment.
+    pub device_addresses: bool,
 }
 
 impl GpuOptions {
@@ -33,13 +38,19 @@ impl GpuOptions {
     /// `VKVCM_CACHE_DIR`, `XDG_CACHE_HOME` or `HOME`; `VKVCM_CACHE_DIR=` turns it off).
     pub fn from_env(device: Option<String>) -> Self {
         let validation = std::env::var("VKVCM_VALIDATION").is_ok_and(|v| v != "0" && !v.is_empty());
-        GpuOptions { device, validation, kernel_cache: kernel_cache::default_dir() }
+        let device_addresses = std::env::var("VKVCM_DEVICE_ADDRESSES").map_or(true, |v| v != "0");
+        GpuOptions { device, validation, kernel_cache: kernel_cache::default_dir(), device_addresses }
     }
 
     /// Tests always run with validation and without a kernel cache (they neither depend
     /// on nor write the user's); `VKVCM_TEST_DEVICE` may choose the device.
     pub fn for_tests() -> Self {
-        GpuOptions { device: std::env::var("VKVCM_TEST_DEVICE").ok(), validation: true, kernel_cache: None }
+        GpuOptions {
+            device: std::env::var("VKVCM_TEST_DEVICE").ok(),
+            validation: true,
+            kernel_cache: None,
+            device_addresses: true,
+        }
     }
 }
 
@@ -120,6 +131,8 @@ pub struct Gpu {
     pub info: DeviceInfo,
     pub limits: vk::PhysicalDeviceLimits,
     pub subgroup_size: u32,
+    /// maxMemoryAllocationSize: the largest buffer (a buffer lies in one allocation).
+    pub max_allocation_bytes: u64,
     validation: Option<Validation>,
 }
 
@@ -168,6 +181,7 @@ pub const SHADER_INT64: &str = "shaderInt64";
 pub const SHADER_INT64_ATOMICS: &str = "shaderBufferInt64Atomics";
 pub const TEXEL_BUFFER_FORMATS: &str = "uniform texel buffers of R32G32B32A32_UINT and R32_UINT";
 pub const TIMESTAMPS: &str = "timestampComputeAndGraphics";
+pub const BUFFER_DEVICE_ADDRESS: &str = "bufferDeviceAddress";
 
 /// Every feature and limit the kernels use (docs/devices.md): required ones, and
 /// optional ones with the fallback vkvcm uses without them.
@@ -227,6 +241,12 @@ fn feature_status(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Vec<Featu
             false,
             texel_ok,
             "read-only buffers are read as storage buffers (--reads storage)",
+        ),
+        FeatureStatus::feature(
+            BUFFER_DEVICE_ADDRESS,
+            false,
+            f12.buffer_device_address == vk::TRUE,
+            "the film and the other frame buffers are bound as storage buffers, each at most maxStorageBufferRange",
         ),
         FeatureStatus::feature(
             TIMESTAMPS,
@@ -386,6 +406,7 @@ struct DeviceParts {
     timestamps: bool,
     info: DeviceInfo,
     props: vk::PhysicalDeviceProperties,
+    max_allocation_bytes: u64,
     subgroup_size: u32,
     pipelines: PipelineCache,
     kernel_cache: Option<CacheDir>,
@@ -420,6 +441,10 @@ impl Gpu {
             let pds = unsafe { instance.enumerate_physical_devices() }?;
             let infos: Vec<DeviceInfo> = pds.iter().enumerate().map(|(i, &pd)| describe(&instance, i, pd)).collect();
             let idx = choose(&infos, opts.device.as_deref())?;
+            let mut info = infos[idx].clone();
+            if !opts.device_addresses {
+                info.features.iter_mut().filter(|f| f.name == BUFFER_DEVICE_ADDRESS).for_each(|f| f.present = false);
+            }
             let physical = pds[idx];
             // SAFETY: valid handle.
             let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
@@ -434,10 +459,12 @@ impl Gpu {
             let qinfo = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&prio)];
             // Only what the device has is enabled; kernels that would need more are not
             // built (src/render/variants.rs chooses the 32-bit fallbacks).
-            let has = |name: &str| infos[idx].features.iter().any(|f| f.name == name && f.present);
+            let has = |name: &str| info.features.iter().any(|f| f.name == name && f.present);
+            let device_addresses = has(BUFFER_DEVICE_ADDRESS);
             let base = vk::PhysicalDeviceFeatures::default().shader_int64(has(SHADER_INT64));
-            let mut f12 =
-                vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(has(SHADER_INT64_ATOMICS));
+            let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
+                .shader_buffer_int64_atomics(has(SHADER_INT64_ATOMICS))
+                .buffer_device_address(device_addresses);
             let dinfo =
                 vk::DeviceCreateInfo::default().queue_create_infos(&qinfo).enabled_features(&base).push_next(&mut f12);
             // SAFETY: features were checked present by `choose`.
@@ -449,7 +476,7 @@ impl Gpu {
                 device: device.clone(),
                 physical_device: physical,
                 debug_settings: Default::default(),
-                buffer_device_address: false,
+                buffer_device_address: device_addresses,
                 allocation_sizes: Default::default(),
             });
             let allocator = match allocator {
@@ -461,7 +488,8 @@ impl Gpu {
                 }
             };
             let mut sub = vk::PhysicalDeviceSubgroupProperties::default();
-            let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut sub);
+            let mut m3 = vk::PhysicalDeviceMaintenance3Properties::default();
+            let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut sub).push_next(&mut m3);
             // SAFETY: valid handle.
             unsafe { instance.get_physical_device_properties2(physical, &mut p2) };
             let props = p2.properties;
@@ -474,8 +502,9 @@ impl Gpu {
                 queue_family,
                 allocator,
                 timestamps,
-                info: infos[idx].clone(),
+                info,
                 props,
+                max_allocation_bytes: m3.max_memory_allocation_size,
                 subgroup_size: sub.subgroup_size,
                 pipelines,
                 kernel_cache,
@@ -496,8 +525,9 @@ impl Gpu {
                 timestamp_period_ns: p.props.limits.timestamp_period as f64,
                 timestamps: p.timestamps,
                 info: p.info,
-                limits: p.props.limits,
+                limits: super::fault_injection::capped_binding_limits(p.props.limits),
                 subgroup_size: p.subgroup_size,
+                max_allocation_bytes: p.max_allocation_bytes,
                 validation,
             }),
             Err(e) => Err((e, validation)),

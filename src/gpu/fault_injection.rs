@@ -1,4 +1,4 @@
-//! Fault injection for tests — not a feature. Two environment variables, each read once
+//! Fault injection for tests — not a feature. Three environment variables, each read once
 //! per process:
 //!
 //! * `VKVCM_TEST_FAIL_AFTER_BATCHES=N`: the (N+1)-th and every later `Batch::submit_wait`
@@ -6,7 +6,9 @@
 //!   `VK_ERROR_DEVICE_LOST` as a lost device would, so that tests/cli_render.rs can check
 //!   what a render leaves behind when the device is lost (docs/robustness.md);
 //! * `VKVCM_TEST_WITHOUT_INT64=1`: devices look as if they lacked 64-bit integers, so
-//!   that tests/render_atomics.rs can run the fallbacks of docs/devices.md on lavapipe.
+//!   that tests/render_atomics.rs can run the fallbacks of docs/devices.md on lavapipe;
+//! * `VKVCM_TEST_MAX_BINDING_BYTES=N`: the device binds at most N bytes per buffer, so
+//!   that tests/render_addresses.rs reaches the binding limits with tiny frames.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
@@ -44,4 +46,22 @@ pub const WITHOUT_INT64_VAR: &str = "VKVCM_TEST_WITHOUT_INT64";
 pub(crate) fn simulated_missing_int64() -> bool {
     static SET: OnceLock<bool> = OnceLock::new();
     *SET.get_or_init(|| std::env::var(WITHOUT_INT64_VAR).is_ok_and(|v| !v.is_empty() && v != "0"))
+}
+
+/// The environment variable that caps the device's binding limits (maxStorageBufferRange
+/// and maxTexelBufferElements x 16 bytes) at its value in bytes, so that tests can reach
+/// the limits of docs/robustness.md with tiny frames and scenes.
+pub const MAX_BINDING_BYTES_VAR: &str = "VKVCM_TEST_MAX_BINDING_BYTES";
+
+/// `limits` with [`MAX_BINDING_BYTES_VAR`]'s cap applied.
+pub(crate) fn capped_binding_limits(mut limits: vk::PhysicalDeviceLimits) -> vk::PhysicalDeviceLimits {
+    static CAP: OnceLock<Option<u64>> = OnceLock::new();
+    if let Some(cap) =
+        *CAP.get_or_init(|| std::env::var(MAX_BINDING_BYTES_VAR).ok().and_then(|v| v.trim().parse::<u64>().ok()))
+    {
+        let cap = cap.min(u32::MAX as u64) as u32;
+        limits.max_storage_buffer_range = limits.max_storage_buffer_range.min(cap);
+        limits.max_texel_buffer_elements = limits.max_texel_buffer_elements.min(cap / 16);
+    }
+    limits
 }

@@ -6,7 +6,8 @@ use std::sync::Arc;
 
 use anyhow::{bail, Result};
 
-use super::sizes::BufferSize;
+use super::addresses::FrameAddresses;
+use super::sizes::{Access, BufferSize};
 use crate::gpu::{Bind, Buffer, Gpu};
 
 /// Per-pixel RGB sums.
@@ -27,12 +28,13 @@ pub struct FilmPlan {
 }
 
 impl FilmPlan {
-    pub fn new(width: u32, height: u32) -> FilmPlan {
+    /// The film of a `width` x `height` frame, its sums reached as `access`.
+    pub fn new(width: u32, height: u32, access: Access) -> FilmPlan {
         let px = width as u64 * height as u64;
         FilmPlan {
             width,
             height,
-            sums: BufferSize::new("film", px.saturating_mul(16 * FILM_VEC4_PER_PIXEL as u64)),
+            sums: BufferSize::new("film", px.saturating_mul(16 * FILM_VEC4_PER_PIXEL as u64)).reached(access),
             stats: BufferSize::new("film_stats", 16),
         }
     }
@@ -50,21 +52,23 @@ pub struct Film {
     /// `[0]`: rejected samples; `[1]`: splats rejected for overflow; `[2..3]`: traced rays
     /// (low, high word) when profiling (`COUNT_RAYS`, glsl/scene.glsl).
     pub stats: Buffer,
+    /// The device addresses of the frame's large buffers: the film's own, and those the
+    /// passes register (src/render/addresses.rs).
+    pub addresses: FrameAddresses,
 }
 
 impl Film {
     pub fn new(gpu: &Arc<Gpu>, plan: &FilmPlan) -> Result<Film> {
-        Ok(Film {
-            width: plan.width,
-            height: plan.height,
-            accum: plan.sums.zeroed(gpu)?,
-            stats: plan.stats.zeroed(gpu)?,
-        })
+        let accum = plan.sums.zeroed(gpu)?;
+        let addresses = FrameAddresses::new(gpu)?;
+        addresses.set(|a| &mut a.film, &accum)?;
+        Ok(Film { width: plan.width, height: plan.height, accum, stats: plan.stats.zeroed(gpu)?, addresses })
     }
 
-    /// The bindings `film` and `film_stats` (glsl/film.glsl).
-    pub fn binds(&self) -> [Bind<'_>; 2] {
-        [Bind::own(&self.accum), Bind::own_u32(&self.stats)]
+    /// The bindings `film` (bound without device addresses), `film_stats` and
+    /// `frame_addresses` (glsl/film.glsl).
+    pub fn binds(&self) -> [Bind<'_>; 3] {
+        [Bind::own(&self.accum), Bind::own_u32(&self.stats), self.addresses.bind()]
     }
 
     /// Per-pixel sums of the iterations' values and of their squares (linear RGB, row 0

@@ -139,6 +139,17 @@ pub struct GpuParams {
     pub misc: [u32; 4],
 }
 
+/// The device addresses of the frame's large buffers (src/render/addresses.rs), each as
+/// (low, high) 32-bit words; 0 for a buffer the render does not have.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct GpuAddresses {
+    /// The film's sums (src/render/film.rs).
+    pub film: [u32; 2],
+    /// The splat sums (src/render/passes/light_subpaths.rs).
+    pub splat: [u32; 2],
+}
+
 /// Per-dispatch push constants.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

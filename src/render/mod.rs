@@ -12,6 +12,7 @@ pub mod converge;
 pub mod environment;
 pub mod estimators;
 pub mod features;
+pub mod addresses;
 pub mod film;
 pub mod gpu_types;
 pub mod output;
@@ -120,7 +121,9 @@ impl Renderer {
         let pixels = frame.width.saturating_mul(frame.height);
         let k = regen::resolve(gpu, info.regenerates_paths, settings.paths_per_invocation, pixels);
         let features = features::FeatureSet::new(scene, settings.generic);
-        let plan = plan::FramePlan::new(scene, settings, info.techniques, k, &features)?;
+        let reads = reads::Reads::resolve(gpu, settings.reads)?;
+        let device_addresses = gpu.has(crate::gpu::BUFFER_DEVICE_ADDRESS);
+        let plan = plan::FramePlan::new(scene, settings, info.techniques, k, &features, reads, device_addresses)?;
         plan.check(gpu, &format!("a {}x{} {} render", frame.width, frame.height, info.name))?;
         Ok(plan)
     }

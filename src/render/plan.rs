@@ -1,8 +1,10 @@
 //! The plan of sizes of a render: every buffer it allocates, by name and size in bytes,
 //! computed once from the scene, the settings and the estimator's techniques. The
 //! renderer checks the plan against the device before anything is allocated (each
-//! buffer against `maxStorageBufferRange`, the total against the largest device-local
-//! heap, system RAM on lavapipe), and the film and passes allocate what it says. Each
+//! buffer against the limit of how the kernels reach it: `maxStorageBufferRange`,
+//! `maxTexelBufferElements` or `maxMemoryAllocationSize`; the total against the largest
+//! device-local heap, system RAM on lavapipe), and the film and passes allocate what it
+//! says. Each
 //! part is defined next to the code that uses the buffers: [`ScenePlan`]
 //! (src/render/scene_gpu.rs), [`FilmPlan`] (film.rs), [`LightVertexPlan`],
 //! [`LightVertexCachePlan`], [`GridPlan`] (src/render/passes/).
@@ -16,7 +18,8 @@ use super::passes::light_subpaths::LightVertexPlan;
 use super::passes::light_vertex_cache::LightVertexCachePlan;
 use super::scene_gpu::ScenePlan;
 use super::settings::{Connect, RenderSettings};
-use super::sizes::{check_sizes, BufferSize};
+use super::reads::Reads;
+use super::sizes::{check_sizes, Access, BufferSize, SizeLimits};
 use super::techniques::Techniques;
 use crate::gpu::Gpu;
 use crate::scene::Scene;
@@ -45,13 +48,18 @@ impl FramePlan {
     /// as `Renderer::plan_for` does) by an estimator with `techniques`, tracing
     /// `paths_per_invocation` paths per invocation, with kernels compiled for `features`
     /// (with shading normals and vertex attributes light vertices carry more).
+    /// The frame's large buffers (film, splat sums) are reached by device address when
+    /// `device_addresses` (src/render/addresses.rs); the scene is read as `reads`.
     pub fn new(
         scene: &Scene,
         s: &RenderSettings,
         techniques: Techniques,
         paths_per_invocation: u32,
         features: &FeatureSet,
+        reads: Reads,
+        device_addresses: bool,
     ) -> Result<FramePlan> {
+        let frame_access = if device_addresses { Access::Address } else { Access::Storage };
         let prims = scene.triangles.len() + scene.spheres.len();
         if prims > crate::bvh::layout::MAX_PRIMS {
             bail!(
@@ -68,8 +76,8 @@ impl FramePlan {
                 light_paths,
                 s.frame.max_path_length,
                 techniques.store_vertices,
-                features.shading_normals,
-                features.vertex_attributes,
+                features,
+                frame_access,
             )
         });
         let cache = match (&light_vertices, s.connect) {
@@ -86,8 +94,8 @@ impl FramePlan {
             pixels,
             light_paths,
             paths_per_invocation,
-            scene: ScenePlan::new(scene),
-            film: FilmPlan::new(s.frame.width, s.frame.height),
+            scene: ScenePlan::new(scene, reads),
+            film: FilmPlan::new(s.frame.width, s.frame.height, frame_access),
             light_vertices,
             cache,
             grid,
@@ -106,6 +114,6 @@ impl FramePlan {
 
     /// Fails when the plan does not fit `gpu`; `what` describes the render in the message.
     pub fn check(&self, gpu: &Gpu, what: &str) -> Result<()> {
-        check_sizes(&self.buffers(), gpu.limits.max_storage_buffer_range as u64, gpu.device_local_heap_bytes(), what)
+        check_sizes(&self.buffers(), &SizeLimits::of(gpu), what)
     }
 }

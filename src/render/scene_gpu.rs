@@ -14,11 +14,11 @@ use super::features::FeatureSet;
 use super::gpu_types::*;
 use super::reads::Reads;
 use super::settings::FrameSettings;
-use super::sizes::BufferSize;
+use super::sizes::{Access, BufferSize};
 use super::variants::SceneVariant;
 use crate::bvh;
 use crate::bvh::layout::{GpuNode, GpuPrim};
-use crate::gpu::{Bind, Buffer, Gpu, SHADER_INT64};
+use crate::gpu::{Bind, Buffer, Gpu, BUFFER_DEVICE_ADDRESS, SHADER_INT64};
 use crate::scene::{AlphaMode, EnvironmentMap, Filter, Light, Scene, VertexAttributes, Wrap};
 
 /// Upper bounds of the scene's buffers, known before the BVH is built.
@@ -32,7 +32,10 @@ fn size<T>(n: u64) -> u64 {
 }
 
 impl ScenePlan {
-    pub fn new(scene: &Scene) -> ScenePlan {
+    /// The buffers of `scene`, read as `reads` (with texel reads the BVH and the geometry
+    /// are bound only as texel buffers, glsl/scene.glsl and glsl/bvh.glsl).
+    pub fn new(scene: &Scene, reads: Reads) -> ScenePlan {
+        let texel = |b: BufferSize| if reads == Reads::Texel { b.reached(Access::Texel) } else { b };
         let tris = scene.triangles.len() as u64;
         let prims = tris + scene.spheres.len() as u64;
         // Per-vertex arrays: three entries per triangle with normals or attributes.
@@ -48,13 +51,13 @@ impl ScenePlan {
             buffers: [
                 BufferSize::new("scene_params", size::<GpuParams>(1)),
                 // A BVH2 over n primitives has at most n internal nodes (the root is always one).
-                BufferSize::new("bvh_nodes", size::<GpuNode>(prims.max(1))),
-                BufferSize::new("bvh_prims", size::<GpuPrim>(prims)),
-                BufferSize::new("triangles", size::<GpuTriangle>(tris)),
-                BufferSize::new("spheres", size::<GpuSphere>(scene.spheres.len() as u64)),
-                BufferSize::new("materials", size::<GpuMaterial>(scene.materials.len() as u64)),
-                BufferSize::new("lights", size::<GpuLight>(scene.lights.len() as u64)),
-                BufferSize::new("shading_normals", size::<[f32; 4]>(vertices)),
+                texel(BufferSize::new("bvh_nodes", size::<GpuNode>(prims.max(1)))),
+                texel(BufferSize::new("bvh_prims", size::<GpuPrim>(prims))),
+                texel(BufferSize::new("triangles", size::<GpuTriangle>(tris))),
+                texel(BufferSize::new("spheres", size::<GpuSphere>(scene.spheres.len() as u64))),
+                texel(BufferSize::new("materials", size::<GpuMaterial>(scene.materials.len() as u64))),
+                texel(BufferSize::new("lights", size::<GpuLight>(scene.lights.len() as u64))),
+                texel(BufferSize::new("shading_normals", size::<[f32; 4]>(vertices))),
                 BufferSize::new("vertex_attributes", size::<GpuVertexAttributes>(vertices)),
                 BufferSize::new("texture_refs", size::<GpuTextureRef>(refs)),
                 // RGBA8 texels, four to a 16-byte element.
@@ -365,7 +368,13 @@ impl SceneGpu {
             gpu.buffer_from_slice("env_texels", &env.texels)?,
             gpu.buffer_from_slice("env_distribution", &env.distribution)?,
         ];
-        let variant = SceneVariant { features: features.clone(), reads, int64_loads: gpu.has(SHADER_INT64), atomics };
+        let variant = SceneVariant {
+            features: features.clone(),
+            reads,
+            int64_loads: gpu.has(SHADER_INT64),
+            atomics,
+            device_addresses: gpu.has(BUFFER_DEVICE_ADDRESS),
+        };
         Ok(SceneGpu { params, buffers, variant })
     }
 

@@ -7,16 +7,35 @@ use anyhow::{bail, Result};
 
 use crate::gpu::{Buffer, Gpu};
 
+/// How the kernels reach a buffer, which sets its size limit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Access {
+    /// Bound as a storage buffer: at most `maxStorageBufferRange`.
+    Storage,
+    /// Bound only as a uniform texel buffer of 16-byte texels (`--reads texel`): at most
+    /// `maxTexelBufferElements` texels.
+    Texel,
+    /// Reached by device address (src/render/addresses.rs): limited by the allocation size.
+    Address,
+}
+
 /// One buffer of the plan.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BufferSize {
     pub name: &'static str,
     pub bytes: u64,
+    pub access: Access,
 }
 
 impl BufferSize {
+    /// A buffer bound as a storage buffer.
     pub const fn new(name: &'static str, bytes: u64) -> BufferSize {
-        BufferSize { name, bytes }
+        BufferSize { name, bytes, access: Access::Storage }
+    }
+
+    /// This buffer reached as `access`.
+    pub const fn reached(self, access: Access) -> BufferSize {
+        BufferSize { access, ..self }
     }
 
     /// The buffer, zero-filled.
@@ -49,18 +68,52 @@ fn remedy(name: &str) -> &'static str {
     }
 }
 
-/// Checks `sizes` against a per-buffer binding limit `max_binding` and a memory heap of
-/// `heap` bytes; `what` describes the render in the message.
-pub fn check_sizes(sizes: &[BufferSize], max_binding: u64, heap: u64, what: &str) -> Result<()> {
-    if let Some(b) = sizes.iter().rev().filter(|b| b.bytes > max_binding).max_by_key(|b| b.bytes) {
-        bail!(
-            "{what} needs {} for buffer {}, but the device binds at most {} per buffer (maxStorageBufferRange); {}",
-            mib(b.bytes),
-            b.name,
-            mib(max_binding),
-            remedy(b.name)
-        );
+/// The device's limits on buffer sizes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SizeLimits {
+    /// `maxStorageBufferRange`.
+    pub storage_binding: u64,
+    /// `maxTexelBufferElements` x 16 bytes.
+    pub texel_binding: u64,
+    /// `maxMemoryAllocationSize`: every buffer lies in one allocation.
+    pub allocation: u64,
+    /// The largest device-local memory heap: all buffers together.
+    pub heap: u64,
+}
+
+impl SizeLimits {
+    pub fn of(gpu: &Gpu) -> SizeLimits {
+        SizeLimits {
+            storage_binding: gpu.limits.max_storage_buffer_range as u64,
+            texel_binding: gpu.limits.max_texel_buffer_elements as u64 * 16,
+            allocation: gpu.max_allocation_bytes,
+            heap: gpu.device_local_heap_bytes(),
+        }
     }
+
+    /// The largest `b` may be, and the limit's name for messages.
+    fn for_buffer(&self, b: &BufferSize) -> (u64, &'static str) {
+        let binding = match b.access {
+            Access::Storage => Some((self.storage_binding, "the device binds at most {} per storage buffer (maxStorageBufferRange)")),
+            Access::Texel => Some((self.texel_binding, "the device binds at most {} per texel buffer (maxTexelBufferElements)")),
+            Access::Address => None,
+        };
+        match binding {
+            Some((max, text)) if max <= self.allocation => (max, text),
+            _ => (self.allocation, "the device allocates at most {} per buffer (maxMemoryAllocationSize)"),
+        }
+    }
+}
+
+/// Checks `sizes` against each buffer's limit (by how it is reached) and all of them
+/// against the memory heap; `what` describes the render in the message.
+pub fn check_sizes(sizes: &[BufferSize], limits: &SizeLimits, what: &str) -> Result<()> {
+    let over = |b: &&BufferSize| b.bytes > limits.for_buffer(b).0;
+    if let Some(b) = sizes.iter().rev().filter(over).max_by_key(|b| b.bytes) {
+        let (max, text) = limits.for_buffer(b);
+        bail!("{what} needs {} for buffer {}, but {}; {}", mib(b.bytes), b.name, text.replace("{}", &mib(max)), remedy(b.name));
+    }
+    let heap = limits.heap;
     let total = sizes.iter().fold(0u64, |a, b| a.saturating_add(b.bytes));
     if total > heap {
         let mut big: Vec<&BufferSize> = sizes.iter().collect();
@@ -80,21 +133,44 @@ pub fn check_sizes(sizes: &[BufferSize], max_binding: u64, heap: u64, what: &str
 mod tests {
     use super::*;
 
+    fn limits(binding: u64, heap: u64) -> SizeLimits {
+        SizeLimits { storage_binding: binding, texel_binding: 4 * binding, allocation: 8 * binding, heap }
+    }
+
     #[test]
     fn binding_and_heap_limits() {
         let v = [BufferSize::new("film", 100), BufferSize::new("splat", 50)];
-        assert!(check_sizes(&v, 100, 150, "x").is_ok());
-        let e = check_sizes(&v, 99, 1000, "x").unwrap_err().to_string();
+        assert!(check_sizes(&v, &limits(100, 150), "x").is_ok());
+        let e = check_sizes(&v, &limits(99, 1000), "x").unwrap_err().to_string();
         assert!(e.contains("buffer film") && e.contains("maxStorageBufferRange"), "{e}");
         assert!(e.contains("lower the resolution"), "{e}");
         let env = [BufferSize::new("env_texels", 100)];
-        let e = check_sizes(&env, 99, 1000, "x").unwrap_err().to_string();
+        let e = check_sizes(&env, &limits(99, 1000), "x").unwrap_err().to_string();
         assert!(e.contains("smaller environment map") && !e.contains("resolution"), "{e}");
         let bvh = [BufferSize::new("bvh_prims", 100)];
-        let e = check_sizes(&bvh, 99, 1000, "x").unwrap_err().to_string();
+        let e = check_sizes(&bvh, &limits(99, 1000), "x").unwrap_err().to_string();
         assert!(e.contains("scene is too large") && !e.contains("resolution"), "{e}");
-        let e = check_sizes(&v, 100, 149, "x").unwrap_err().to_string();
+        let e = check_sizes(&v, &limits(100, 149), "x").unwrap_err().to_string();
         assert!(e.contains("heap"), "{e}");
         assert!(!e.contains('\n'));
+    }
+
+    #[test]
+    fn each_buffer_has_the_limit_of_how_it_is_reached() {
+        let l = limits(100, 10_000);
+        let texel = [BufferSize::new("bvh_prims", 400).reached(Access::Texel)];
+        assert!(check_sizes(&texel, &l, "x").is_ok());
+        let e = check_sizes(&[texel[0].reached(Access::Storage)], &l, "x").unwrap_err().to_string();
+        assert!(e.contains("maxStorageBufferRange"), "{e}");
+        let e = check_sizes(&[BufferSize::new("bvh_prims", 401).reached(Access::Texel)], &l, "x").unwrap_err();
+        assert!(e.to_string().contains("maxTexelBufferElements"), "{e}");
+        let film = BufferSize::new("film", 800).reached(Access::Address);
+        assert!(check_sizes(&[film], &l, "x").is_ok());
+        let e = check_sizes(&[BufferSize { bytes: 801, ..film }], &l, "x").unwrap_err().to_string();
+        assert!(e.contains("maxMemoryAllocationSize") && e.contains("lower the resolution"), "{e}");
+        // A binding limit above the allocation limit: the allocation limit applies.
+        let small_alloc = SizeLimits { allocation: 50, ..l };
+        let e = check_sizes(&[BufferSize::new("film", 60)], &small_alloc, "x").unwrap_err().to_string();
+        assert!(e.contains("maxMemoryAllocationSize"), "{e}");
     }
 }

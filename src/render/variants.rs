@@ -33,6 +33,9 @@ pub struct SceneVariant {
     pub int64_loads: bool,
     /// How splats are summed (SPLAT_ATOMICS_64).
     pub atomics: SplatAtomics,
+    /// DEVICE_ADDRESSES: the film and the frame's other large buffers are reached by
+    /// device address (src/render/addresses.rs).
+    pub device_addresses: bool,
 }
 
 impl SceneVariant {
@@ -41,14 +44,16 @@ impl SceneVariant {
             .defines()
             .flag("TEXEL_READS", self.reads == Reads::Texel)
             .flag("BVH_INT64", self.int64_loads)
-            .with(&splat_defines(self.atomics))
+            .with(&self.film_defines())
             .with(&workgroup_defines())
     }
-}
 
-/// SPLAT_ATOMICS_64 (glsl/film.glsl) for kernels that splat or take splats.
-pub fn splat_defines(atomics: SplatAtomics) -> Defines {
-    Defines::new().flag("SPLAT_ATOMICS_64", atomics == SplatAtomics::Bits64)
+    /// What glsl/film.glsl is compiled with: SPLAT_ATOMICS_64 and DEVICE_ADDRESSES.
+    pub fn film_defines(&self) -> Defines {
+        Defines::new()
+            .flag("SPLAT_ATOMICS_64", self.atomics == SplatAtomics::Bits64)
+            .flag("DEVICE_ADDRESSES", self.device_addresses)
+    }
 }
 
 /// glsl/light_subpath.comp.

@@ -62,7 +62,7 @@ impl LightSubpathEstimator {
     /// The passes of `techniques` for the render `b`; the buffers are the plan's.
     pub fn new(b: &Build, techniques: Techniques) -> Result<LightSubpathEstimator> {
         let lv = b.plan.light_vertices.as_ref().expect("a light-subpath estimator's plan has a light-vertex store");
-        let store = LightVertexStore::new(b.gpu, lv)?;
+        let store = LightVertexStore::new(b.gpu, lv, &b.film.addresses)?;
         let cache = match &b.plan.cache {
             Some(c) => Some(LightVertexCache::new(b.gpu, &store, c)?),
             None => None,

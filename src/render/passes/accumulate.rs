@@ -7,7 +7,7 @@ use super::light_subpaths::LightVertexStore;
 use super::{PassContext, PassInfo};
 use crate::gpu::{Batch, Bind, Kernel};
 use crate::render::gpu_types::GpuPush;
-use crate::render::variants::{splat_defines, workgroup_defines};
+use crate::render::variants::workgroup_defines;
 
 /// The name profiles report.
 pub const NAME: &str = "accumulate";
@@ -21,7 +21,7 @@ impl Accumulate {
     pub fn new(b: &PassContext, store: &LightVertexStore) -> Result<Accumulate> {
         let mut binds: Vec<Bind> = b.film.binds().to_vec();
         binds.push(Bind::own(&store.splat));
-        let defines = splat_defines(b.scene.variant.atomics).with(&workgroup_defines());
+        let defines = b.scene.variant.film_defines().with(&workgroup_defines());
         let kernel = b.gpu.kernel("accumulate.comp", &defines.pairs(), &binds)?;
         Ok(Accumulate { kernel, pixels: b.pixels })
     }

@@ -26,7 +26,7 @@ use super::exclusive_scan::{ExclusiveScan, ScanPlan};
 use super::light_subpaths::LIGHT_VERTEX_A_BYTES;
 use super::PassInfo;
 use crate::gpu::{Batch, Bind, Buffer, Gpu, Kernel};
-use crate::render::sizes::{check_sizes, BufferSize};
+use crate::render::sizes::{check_sizes, SizeLimits, BufferSize};
 use crate::render::variants::workgroup_defines;
 
 /// The name profiles report.
@@ -158,12 +158,7 @@ impl HashGrid {
                 lv_count.size()
             );
         }
-        check_sizes(
-            &plan.buffers(),
-            gpu.limits.max_storage_buffer_range as u64,
-            gpu.device_local_heap_bytes(),
-            "the hash grid",
-        )?;
+        check_sizes(&plan.buffers(), &SizeLimits::of(gpu), "the hash grid")?;
         let cell_start = plan.start.zeroed(gpu)?;
         let keys = plan.keys.zeroed(gpu)?;
         let cell_points = plan.points.zeroed(gpu)?;

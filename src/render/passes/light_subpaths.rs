@@ -12,9 +12,11 @@ use anyhow::Result;
 use super::PassContext;
 use super::PassInfo;
 use crate::gpu::{Batch, Bind, Buffer, Gpu, Kernel};
+use crate::render::addresses::FrameAddresses;
 use crate::render::gpu_types::GpuPush;
 use crate::render::regen;
-use crate::render::sizes::BufferSize;
+use crate::render::features::FeatureSet;
+use crate::render::sizes::{Access, BufferSize};
 use crate::render::variants::LightKernel;
 
 /// The name profiles report.
@@ -49,14 +51,18 @@ pub struct LightVertexPlan {
 }
 
 impl LightVertexPlan {
+    /// The store of `light_paths` subpaths of up to `max_path_length` segments (with the
+    /// vertex fields `features` asks for); the splat sums of `pixels` pixels are reached
+    /// as `splat_access`.
     pub fn new(
         pixels: u32,
         light_paths: u32,
         max_path_length: u32,
         store_vertices: bool,
-        shading_normals: bool,
-        vertex_attributes: bool,
+        features: &FeatureSet,
+        splat_access: Access,
     ) -> LightVertexPlan {
+        let (shading_normals, vertex_attributes) = (features.shading_normals, features.vertex_attributes);
         let slots_per_path = max_path_length.saturating_sub(1).max(1);
         let capacity = if store_vertices { light_paths as u64 * slots_per_path as u64 } else { 1 };
         let count_entries = if store_vertices { light_paths as u64 } else { 1 };
@@ -64,7 +70,7 @@ impl LightVertexPlan {
             light_paths,
             slots_per_path,
             capacity,
-            splat: BufferSize::new("splat", (pixels as u64).saturating_mul(24)),
+            splat: BufferSize::new("splat", (pixels as u64).saturating_mul(24)).reached(splat_access),
             vertices_a: BufferSize::new("light_vertices_a", capacity.saturating_mul(LIGHT_VERTEX_A_BYTES)),
             vertices_b: BufferSize::new(
                 "light_vertices_b",
@@ -91,9 +97,12 @@ pub struct LightVertexStore {
 }
 
 impl LightVertexStore {
-    pub fn new(gpu: &std::sync::Arc<Gpu>, plan: &LightVertexPlan) -> Result<LightVertexStore> {
+    /// The store of `plan`; the splat sums' address goes to `addresses`.
+    pub fn new(gpu: &std::sync::Arc<Gpu>, plan: &LightVertexPlan, addresses: &FrameAddresses) -> Result<LightVertexStore> {
+        let splat = plan.splat.zeroed(gpu)?;
+        addresses.set(|a| &mut a.splat, &splat)?;
         Ok(LightVertexStore {
-            splat: plan.splat.zeroed(gpu)?,
+            splat,
             vertices_a: plan.vertices_a.zeroed(gpu)?,
             vertices_b: plan.vertices_b.zeroed(gpu)?,
             counts: plan.counts.zeroed(gpu)?,
