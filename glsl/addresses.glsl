@@ -12,5 +12,10 @@
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference_uvec2 : require
 layout(std430) readonly buffer frame_addresses { GpuAddresses addresses; };
+// Arrays at an address: ARRAY_AT(Vec4s, addresses.film)[i] is the film's vec4 i.
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4s { vec4 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer Uvec4s { uvec4 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer Uvec2s { uvec2 v[]; };
+#define ARRAY_AT(type, address) type(address).v
 #endif
 #endif

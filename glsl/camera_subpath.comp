@@ -29,7 +29,11 @@ uint grid_start_at(uint b) { return texelFetch(grid_start, int(b)).x; }
 uvec4 grid_point_at(uint j) { return texelFetch(grid_points, int(j)); }
 #else
 layout(std430) readonly buffer grid_start { uint bucket_start[]; };
+#if DEVICE_ADDRESSES
+#define bucket_points ARRAY_AT(Uvec4s, addresses.grid_points)
+#else
 layout(std430) readonly buffer grid_points { uvec4 bucket_points[]; };
+#endif
 uint grid_start_at(uint b) { return bucket_start[b]; }
 uvec4 grid_point_at(uint j) { return bucket_points[j]; }
 #endif

@@ -13,8 +13,7 @@
 #include "addresses.glsl"
 
 #if DEVICE_ADDRESSES
-layout(buffer_reference, std430, buffer_reference_align = 16) buffer FilmSums { vec4 v[]; };
-#define FILM_SUMS FilmSums(addresses.film).v
+#define FILM_SUMS ARRAY_AT(Vec4s, addresses.film)
 #else
 layout(std430) buffer film { vec4 film_sums[]; };
 #define FILM_SUMS film_sums
@@ -74,14 +73,14 @@ void film_add(uint pixel, vec3 v) {
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #if DEVICE_ADDRESSES
 layout(buffer_reference, std430, buffer_reference_align = 8) buffer SplatSums { uint64_t v[]; };
-#define splat_sums SplatSums(addresses.splat).v
+#define splat_sums ARRAY_AT(SplatSums, addresses.splat)
 #else
 layout(std430) buffer splat { uint64_t splat_sums[]; };
 #endif
 #else
 #if DEVICE_ADDRESSES
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer SplatWords { uint v[]; };
-#define splat_words SplatWords(addresses.splat).v
+#define splat_words ARRAY_AT(SplatWords, addresses.splat)
 #else
 layout(std430) buffer splat { uint splat_words[]; };
 #endif

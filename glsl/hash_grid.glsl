@@ -82,6 +82,24 @@ uint hash_grid_query_cells(vec3 q, vec3 origin, float radius, uint num_buckets, 
 
 // ---- Build kernels only ----
 
+// The build's buffers besides grid_start: light_vertices_a (lv_a[], vec4) and the binding
+// light_vertex_counts (lv_count[]), grid_keys (vertex_keys[], uvec2 per slot) and
+// grid_points (bucket_points[], uvec4), by device address or as storage buffers.
+#define HASH_GRID_BUILD_BUFFERS                                                           \
+    HASH_GRID_ADDRESSED_BUFFERS                                                           \
+    layout(std430) readonly buffer light_vertex_counts { uint lv_count[]; }
+#if DEVICE_ADDRESSES
+#define lv_a ARRAY_AT(Vec4s, addresses.light_vertices_a)
+#define vertex_keys ARRAY_AT(Uvec2s, addresses.grid_keys)
+#define bucket_points ARRAY_AT(Uvec4s, addresses.grid_points)
+#define HASH_GRID_ADDRESSED_BUFFERS
+#else
+#define HASH_GRID_ADDRESSED_BUFFERS                                                       \
+    layout(std430) readonly buffer light_vertices_a { vec4 lv_a[]; };                     \
+    layout(std430) buffer grid_keys { uvec2 vertex_keys[]; };                             \
+    layout(std430) buffer grid_points { uvec4 bucket_points[]; };
+#endif
+
 // Push constants of the build passes (mirrored by BuildPush in src/render/passes/hash_grid.rs).
 #define HASH_GRID_BUILD_PUSH                                                              \
     layout(push_constant) uniform HashGridBuildPush {                                     \

@@ -9,13 +9,12 @@
 
 layout(local_size_x = WORKGROUP_SIZE) in;
 
-layout(std430) readonly buffer light_vertices_a { vec4 lv_a[]; };
-layout(std430) readonly buffer light_vertex_counts { uint lv_count[]; };
 layout(std430) buffer grid_start { uint bucket_start[]; };
-layout(std430) writeonly buffer grid_keys { uvec2 vertex_keys[]; };
 
 #include "common.glsl"
+#include "addresses.glsl"
 #include "hash_grid.glsl"
+HASH_GRID_BUILD_BUFFERS;
 HASH_GRID_BUILD_PUSH;
 
 void main() {

@@ -20,10 +20,11 @@
 layout(local_size_x = WORKGROUP_SIZE) in;
 
 layout(std430) readonly buffer grid_start { uint bucket_start[]; };
-layout(std430) buffer grid_points { uvec4 bucket_points[]; };
 
 #include "common.glsl"
+#include "addresses.glsl"
 #include "hash_grid.glsl"
+HASH_GRID_BUILD_BUFFERS;
 HASH_GRID_BUILD_PUSH;
 
 const uint SMALL = 32u;

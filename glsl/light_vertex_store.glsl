@@ -2,11 +2,12 @@
 // debug kernel tests/mis_weights.comp): the push constants, the film with its splat sums,
 // the light-vertex store and the transport state of vcm.glsl.
 //
-// The store: bindings light_vertices_a, light_vertices_b (vec4, two each per vertex) and
+// The store: light_vertices_a, light_vertices_b (vec4, two each per vertex) and the binding
 // light_vertex_counts (uint per light subpath), read through lv_a_at(i), lv_b_at(i),
 // lv_count_at(p). LV_TEXEL 1 (the camera kernel with texel reads, src/render/reads.rs):
-// as uniform texel buffers (uvec4 texels, uint texels for the counts); LV_TEXEL 0: as
-// storage buffers, which the light kernel writes (lv_store in vcm.glsl). LV_CACHE 1: the
+// as uniform texel buffers (uvec4 texels, uint texels for the counts); LV_TEXEL 0: the
+// vertices by device address (DEVICE_ADDRESSES, glsl/addresses.glsl) or as storage
+// buffers, which the light kernel writes (lv_store in vcm.glsl). LV_CACHE 1: the
 // kernel connects to (or fills) the light-vertex cache (src/render/passes/
 // light_vertex_cache.rs). The Rust side always sets both (src/render/variants.rs).
 #ifndef LIGHT_VERTEX_STORE_GLSL
@@ -26,8 +27,13 @@ vec4 lv_a_at(uint i) { return uintBitsToFloat(texelFetch(light_vertices_a, int(i
 vec4 lv_b_at(uint i) { return uintBitsToFloat(texelFetch(light_vertices_b, int(i))); }
 uint lv_count_at(uint p) { return texelFetch(light_vertex_counts, int(p)).x; }
 #else
+#if DEVICE_ADDRESSES
+#define lv_a ARRAY_AT(Vec4s, addresses.light_vertices_a)
+#define lv_b ARRAY_AT(Vec4s, addresses.light_vertices_b)
+#else
 layout(std430) buffer light_vertices_a { vec4 lv_a[]; };
 layout(std430) buffer light_vertices_b { vec4 lv_b[]; };
+#endif
 layout(std430) buffer light_vertex_counts { uint lv_count[]; };
 vec4 lv_a_at(uint i) { return lv_a[i]; }
 vec4 lv_b_at(uint i) { return lv_b[i]; }

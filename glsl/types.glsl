@@ -69,6 +69,10 @@ struct GpuParams {
 struct GpuAddresses {
     uvec2 film;   // (low, high) words of the film's device address
     uvec2 splat;  // of the splat sums
+    uvec2 light_vertices_a;
+    uvec2 light_vertices_b;
+    uvec2 grid_keys;
+    uvec2 grid_points;
 };
 
 struct GpuPush {

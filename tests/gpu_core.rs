@@ -162,10 +162,20 @@ fn device_listing_names_features() {
 
 #[test]
 fn unknown_device_is_a_clear_error() {
-    let opts = vkvcm::gpu::GpuOptions { device: Some("no-such-gpu-xyz".into()), validation: false, kernel_cache: None, device_addresses: true };
+    let opts = vkvcm::gpu::GpuOptions {
+        device: Some("no-such-gpu-xyz".into()),
+        validation: false,
+        kernel_cache: None,
+        device_addresses: true,
+    };
     let err = vkvcm::gpu::Gpu::new(&opts).err().expect("must fail");
     assert!(format!("{err}").contains("no-such-gpu-xyz"), "{err}");
-    let opts = vkvcm::gpu::GpuOptions { device: Some("99".into()), validation: false, kernel_cache: None, device_addresses: true };
+    let opts = vkvcm::gpu::GpuOptions {
+        device: Some("99".into()),
+        validation: false,
+        kernel_cache: None,
+        device_addresses: true,
+    };
     let err = vkvcm::gpu::Gpu::new(&opts).err().expect("must fail");
     assert!(format!("{err}").contains("99"), "{err}");
 }

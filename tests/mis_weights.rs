@@ -165,7 +165,15 @@ impl Bench {
         let sg = SceneGpu::new(gpu, scene, &frame, Reads::resolve(gpu, None).unwrap()).unwrap();
         // The film, splats and light-vertex store are declared by light_vertex_store.glsl
         // but not used by the debug kernel.
-        let names = ["film", "film_stats", "splat", "light_vertices_a", "light_vertices_b", "light_vertex_counts"];
+        let names = [
+            "film",
+            "film_stats",
+            "frame_addresses",
+            "splat",
+            "light_vertices_a",
+            "light_vertices_b",
+            "light_vertex_counts",
+        ];
         let dummy: Vec<_> = names.iter().map(|n| gpu.buffer_zeroed::<[u32; 4]>(n, 4).unwrap()).collect();
         let out = gpu.buffer_zeroed::<PathOut>("mis_results", PATHS as usize).unwrap();
         let mut binds = sg.binds();

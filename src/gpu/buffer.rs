@@ -33,10 +33,8 @@ impl Gpu {
         if self.has(super::BUFFER_DEVICE_ADDRESS) {
             usage |= vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
         }
-        let info = vk::BufferCreateInfo::default()
-            .size(alloc_size)
-            .usage(usage)
-            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let info =
+            vk::BufferCreateInfo::default().size(alloc_size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
         // SAFETY: valid device and create info.
         let raw = unsafe { self.device.create_buffer(&info, None) }
             .map_err(|e| anyhow!("cannot create buffer {name:?} ({size} bytes): {}", vk_error_text(e)))?;

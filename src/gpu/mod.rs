@@ -17,8 +17,8 @@ mod validation;
 pub use batch::Batch;
 pub use buffer::Buffer;
 pub use context::{
-    list_devices, DeviceInfo, FeatureStatus, Gpu, GpuOptions, BUFFER_DEVICE_ADDRESS, SHADER_INT64, SHADER_INT64_ATOMICS, TEXEL_BUFFER_FORMATS,
-    TIMESTAMPS,
+    list_devices, DeviceInfo, FeatureStatus, Gpu, GpuOptions, BUFFER_DEVICE_ADDRESS, SHADER_INT64,
+    SHADER_INT64_ATOMICS, TEXEL_BUFFER_FORMATS, TIMESTAMPS,
 };
 pub use kernel::{Bind, Defines, Kernel, Texels, PUSH_CONSTANT_BYTES};
 pub use profile::{KernelTime, Profile, ProfileReport, StageTime};

@@ -148,6 +148,12 @@ pub struct GpuAddresses {
     pub film: [u32; 2],
     /// The splat sums (src/render/passes/light_subpaths.rs).
     pub splat: [u32; 2],
+    /// The light-vertex store's two halves (src/render/passes/light_subpaths.rs).
+    pub light_vertices_a: [u32; 2],
+    pub light_vertices_b: [u32; 2],
+    /// The hash grid's per-vertex keys and its entries (src/render/passes/hash_grid.rs).
+    pub grid_keys: [u32; 2],
+    pub grid_points: [u32; 2],
 }
 
 /// Per-dispatch push constants.

@@ -7,12 +7,12 @@
 //!   [`scene_gpu`], [`film`]: the buffers every pass binds.
 //! * [`Renderer`] runs a render in batches of iterations and reads the film back.
 
+pub mod addresses;
 pub mod atomics;
 pub mod converge;
 pub mod environment;
 pub mod estimators;
 pub mod features;
-pub mod addresses;
 pub mod film;
 pub mod gpu_types;
 pub mod output;

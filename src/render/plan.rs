@@ -16,9 +16,9 @@ use super::film::FilmPlan;
 use super::passes::hash_grid::{grid_buckets, GridPlan};
 use super::passes::light_subpaths::LightVertexPlan;
 use super::passes::light_vertex_cache::LightVertexCachePlan;
+use super::reads::Reads;
 use super::scene_gpu::ScenePlan;
 use super::settings::{Connect, RenderSettings};
-use super::reads::Reads;
 use super::sizes::{check_sizes, Access, BufferSize, SizeLimits};
 use super::techniques::Techniques;
 use crate::gpu::Gpu;
@@ -48,8 +48,10 @@ impl FramePlan {
     /// as `Renderer::plan_for` does) by an estimator with `techniques`, tracing
     /// `paths_per_invocation` paths per invocation, with kernels compiled for `features`
     /// (with shading normals and vertex attributes light vertices carry more).
-    /// The frame's large buffers (film, splat sums) are reached by device address when
-    /// `device_addresses` (src/render/addresses.rs); the scene is read as `reads`.
+    /// The frame's large buffers (film, splat sums, light-vertex store, hash-grid keys and
+    /// entries) are written by device address when `device_addresses`
+    /// (src/render/addresses.rs); the scene, the store and the grid's entries are read
+    /// as `reads`.
     pub fn new(
         scene: &Scene,
         s: &RenderSettings,
@@ -60,6 +62,12 @@ impl FramePlan {
         device_addresses: bool,
     ) -> Result<FramePlan> {
         let frame_access = if device_addresses { Access::Address } else { Access::Storage };
+        // The camera kernel reads the store and the grid entries as texels with texel reads.
+        let read_access = match (device_addresses, reads) {
+            (false, _) => Access::Storage,
+            (true, Reads::Texel) => Access::Texel,
+            (true, Reads::Storage) => Access::Address,
+        };
         let prims = scene.triangles.len() + scene.spheres.len();
         if prims > crate::bvh::layout::MAX_PRIMS {
             bail!(
@@ -78,6 +86,7 @@ impl FramePlan {
                 techniques.store_vertices,
                 features,
                 frame_access,
+                read_access,
             )
         });
         let cache = match (&light_vertices, s.connect) {
@@ -86,7 +95,8 @@ impl FramePlan {
         };
         let grid = match &light_vertices {
             Some(lv) if techniques.vertex_merging => {
-                Some(GridPlan::new(light_paths, lv.slots_per_path, grid_buckets(light_paths as u64)))
+                let plan = GridPlan::new(light_paths, lv.slots_per_path, grid_buckets(light_paths as u64));
+                Some(plan.reached(read_access, frame_access))
             }
             _ => None,
         };

@@ -94,8 +94,12 @@ impl SizeLimits {
     /// The largest `b` may be, and the limit's name for messages.
     fn for_buffer(&self, b: &BufferSize) -> (u64, &'static str) {
         let binding = match b.access {
-            Access::Storage => Some((self.storage_binding, "the device binds at most {} per storage buffer (maxStorageBufferRange)")),
-            Access::Texel => Some((self.texel_binding, "the device binds at most {} per texel buffer (maxTexelBufferElements)")),
+            Access::Storage => {
+                Some((self.storage_binding, "the device binds at most {} per storage buffer (maxStorageBufferRange)"))
+            }
+            Access::Texel => {
+                Some((self.texel_binding, "the device binds at most {} per texel buffer (maxTexelBufferElements)"))
+            }
             Access::Address => None,
         };
         match binding {
@@ -111,7 +115,13 @@ pub fn check_sizes(sizes: &[BufferSize], limits: &SizeLimits, what: &str) -> Res
     let over = |b: &&BufferSize| b.bytes > limits.for_buffer(b).0;
     if let Some(b) = sizes.iter().rev().filter(over).max_by_key(|b| b.bytes) {
         let (max, text) = limits.for_buffer(b);
-        bail!("{what} needs {} for buffer {}, but {}; {}", mib(b.bytes), b.name, text.replace("{}", &mib(max)), remedy(b.name));
+        bail!(
+            "{what} needs {} for buffer {}, but {}; {}",
+            mib(b.bytes),
+            b.name,
+            text.replace("{}", &mib(max)),
+            remedy(b.name)
+        );
     }
     let heap = limits.heap;
     let total = sizes.iter().fold(0u64, |a, b| a.saturating_add(b.bytes));

@@ -68,7 +68,7 @@ impl LightSubpathEstimator {
             None => None,
         };
         let grid = match &b.plan.grid {
-            Some(g) => Some(HashGrid::with_plan(b.gpu, &store.vertices_a, &store.counts, g)?),
+            Some(g) => Some(HashGrid::with_plan(b.gpu, &store.vertices_a, &store.counts, g, &b.film.addresses)?),
             None => None,
         };
         let pass = b.passes();

@@ -26,7 +26,8 @@ use super::exclusive_scan::{ExclusiveScan, ScanPlan};
 use super::light_subpaths::LIGHT_VERTEX_A_BYTES;
 use super::PassInfo;
 use crate::gpu::{Batch, Bind, Buffer, Gpu, Kernel};
-use crate::render::sizes::{check_sizes, SizeLimits, BufferSize};
+use crate::render::addresses::FrameAddresses;
+use crate::render::sizes::{check_sizes, Access, BufferSize, SizeLimits};
 use crate::render::variants::workgroup_defines;
 
 /// The name profiles report.
@@ -78,6 +79,12 @@ impl GridPlan {
         }
     }
 
+    /// This plan with the entries reached as `points` and the keys as `keys` (how the
+    /// render reaches them: src/render/plan.rs).
+    pub fn reached(self, points: Access, keys: Access) -> GridPlan {
+        GridPlan { points: self.points.reached(points), keys: self.keys.reached(keys), ..self }
+    }
+
     pub fn buffers(&self) -> Vec<BufferSize> {
         vec![self.start, self.points, self.keys, self.scan.scratch]
     }
@@ -106,6 +113,9 @@ pub struct HashGrid {
     /// `grid_points`): what the camera kernel reads (docs/hash-grid.md).
     pub cell_points: Buffer,
     keys: Buffer,
+    /// The addresses the kernels read, when the grid was built on its own
+    /// ([`HashGrid::new`]); a render's are its film's.
+    own_addresses: Option<FrameAddresses>,
     count: Kernel,
     scatter: Kernel,
     sort: Kernel,
@@ -128,11 +138,23 @@ impl HashGrid {
         slots: u32,
         num_buckets: u32,
     ) -> Result<HashGrid> {
-        Self::with_plan(gpu, lv_a, lv_count, &GridPlan::new(light_paths, slots, num_buckets))
+        let addresses = FrameAddresses::new(gpu)?;
+        addresses.set(|a| &mut a.light_vertices_a, lv_a)?;
+        let mut grid =
+            Self::with_plan(gpu, lv_a, lv_count, &GridPlan::new(light_paths, slots, num_buckets), &addresses)?;
+        grid.own_addresses = Some(addresses);
+        Ok(grid)
     }
 
-    /// The grid that `plan` describes.
-    pub fn with_plan(gpu: &Arc<Gpu>, lv_a: &Buffer, lv_count: &Buffer, plan: &GridPlan) -> Result<HashGrid> {
+    /// The grid that `plan` describes, over the store whose address (with device
+    /// addresses) `addresses` holds; the grid's own buffers are registered there.
+    pub fn with_plan(
+        gpu: &Arc<Gpu>,
+        lv_a: &Buffer,
+        lv_count: &Buffer,
+        plan: &GridPlan,
+        addresses: &FrameAddresses,
+    ) -> Result<HashGrid> {
         let (light_paths, slots, buckets) = (plan.light_paths, plan.slots, plan.buckets);
         if light_paths == 0 || slots == 0 || buckets == 0 {
             bail!(
@@ -162,14 +184,17 @@ impl HashGrid {
         let cell_start = plan.start.zeroed(gpu)?;
         let keys = plan.keys.zeroed(gpu)?;
         let cell_points = plan.points.zeroed(gpu)?;
+        addresses.set(|a| &mut a.grid_keys, &keys)?;
+        addresses.set(|a| &mut a.grid_points, &cell_points)?;
         let binds = [
             Bind::vec4("light_vertices_a", lv_a),
             Bind::u32("light_vertex_counts", lv_count),
             Bind::u32("grid_start", &cell_start),
             Bind::vec4("grid_keys", &keys),
             Bind::vec4("grid_points", &cell_points),
+            addresses.bind(),
         ];
-        let defines = workgroup_defines();
+        let defines = workgroup_defines().flag("DEVICE_ADDRESSES", addresses.enabled());
         let count = gpu.kernel("hash_grid_count.comp", &defines.pairs(), &binds)?;
         let scatter = gpu.kernel("hash_grid_scatter.comp", &defines.pairs(), &binds)?;
         let sort = gpu.kernel("hash_grid_sort.comp", &defines.pairs(), &binds)?;
@@ -178,6 +203,7 @@ impl HashGrid {
             cell_start,
             cell_points,
             keys,
+            own_addresses: None,
             count,
             scatter,
             sort,

@@ -52,8 +52,8 @@ pub struct LightVertexPlan {
 
 impl LightVertexPlan {
     /// The store of `light_paths` subpaths of up to `max_path_length` segments (with the
-    /// vertex fields `features` asks for); the splat sums of `pixels` pixels are reached
-    /// as `splat_access`.
+    /// vertex fields `features` asks for), reached as `store_access`; the splat sums of
+    /// `pixels` pixels are reached as `splat_access`.
     pub fn new(
         pixels: u32,
         light_paths: u32,
@@ -61,6 +61,7 @@ impl LightVertexPlan {
         store_vertices: bool,
         features: &FeatureSet,
         splat_access: Access,
+        store_access: Access,
     ) -> LightVertexPlan {
         let (shading_normals, vertex_attributes) = (features.shading_normals, features.vertex_attributes);
         let slots_per_path = max_path_length.saturating_sub(1).max(1);
@@ -71,11 +72,13 @@ impl LightVertexPlan {
             slots_per_path,
             capacity,
             splat: BufferSize::new("splat", (pixels as u64).saturating_mul(24)).reached(splat_access),
-            vertices_a: BufferSize::new("light_vertices_a", capacity.saturating_mul(LIGHT_VERTEX_A_BYTES)),
+            vertices_a: BufferSize::new("light_vertices_a", capacity.saturating_mul(LIGHT_VERTEX_A_BYTES))
+                .reached(store_access),
             vertices_b: BufferSize::new(
                 "light_vertices_b",
                 capacity.saturating_mul(light_vertex_b_bytes(shading_normals, vertex_attributes)),
-            ),
+            )
+            .reached(store_access),
             counts: BufferSize::new("light_vertex_counts", count_entries * 4),
         }
     }
@@ -97,14 +100,19 @@ pub struct LightVertexStore {
 }
 
 impl LightVertexStore {
-    /// The store of `plan`; the splat sums' address goes to `addresses`.
+    /// The store of `plan`; the addresses of the splat sums and the vertices go to
+    /// `addresses`.
     pub fn new(gpu: &std::sync::Arc<Gpu>, plan: &LightVertexPlan, addresses: &FrameAddresses) -> Result<LightVertexStore> {
         let splat = plan.splat.zeroed(gpu)?;
+        let vertices_a = plan.vertices_a.zeroed(gpu)?;
+        let vertices_b = plan.vertices_b.zeroed(gpu)?;
         addresses.set(|a| &mut a.splat, &splat)?;
+        addresses.set(|a| &mut a.light_vertices_a, &vertices_a)?;
+        addresses.set(|a| &mut a.light_vertices_b, &vertices_b)?;
         Ok(LightVertexStore {
             splat,
-            vertices_a: plan.vertices_a.zeroed(gpu)?,
-            vertices_b: plan.vertices_b.zeroed(gpu)?,
+            vertices_a,
+            vertices_b,
             counts: plan.counts.zeroed(gpu)?,
             slots_per_path: plan.slots_per_path,
             light_paths: plan.light_paths,
