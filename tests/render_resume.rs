@@ -152,8 +152,8 @@ fn absurd_frames_fail_before_allocation() {
     let scene = load_named("gbs_s").unwrap();
     with_gpu(|gpu| {
         for (algo, w, h, needle) in [
-            (Algorithm::Pt, 60_000, 60_000, "maxStorageBufferRange"),
-            (Algorithm::Vcm, 60_000, 60_000, "maxStorageBufferRange"),
+            (Algorithm::Pt, 60_000, 60_000, "for buffer film"),
+            (Algorithm::Vcm, 60_000, 60_000, "for buffer light_vertices_a"),
             (Algorithm::Vcm, 4096, 4096, "light_vertices"),
             (Algorithm::Pt, 0, 16, "width and height"),
             (Algorithm::Vcm, 16, 0, "width and height"),

@@ -107,7 +107,12 @@ pub struct Report {
 /// Runs the comparison. `Ok(Err(reason))` when the device has no ray queries.
 pub fn run(opts: &Options) -> Result<std::result::Result<Report, String>> {
     // No kernel cache: it builds one kernel, and tests/rayquery_bench.rs runs this too.
-    let gpu = Gpu::new(&GpuOptions { device: opts.device.clone(), validation: opts.validation, kernel_cache: None })?;
+    let gpu = Gpu::new(&GpuOptions {
+        device: opts.device.clone(),
+        validation: opts.validation,
+        kernel_cache: None,
+        device_addresses: true,
+    })?;
     let rq = match RqDevice::new(&gpu.info.name, opts.validation)? {
         Ok(d) => d,
         Err(why) => return Ok(Err(why)),

@@ -296,6 +296,11 @@ fn feature_status(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Vec<Featu
             "the largest texel buffer (checked per render)",
         ),
         report(
+            "maxMemoryAllocationSize",
+            format!("{} MiB", max_allocation_bytes(instance, pd) >> 20),
+            "the largest buffer, and the largest one reached by device address (checked per render)",
+        ),
+        report(
             "largest device-local memory heap",
             format!("{} MiB", largest_heap_bytes(instance, pd) >> 20),
             "all of a render's buffers (checked per render)",
@@ -306,6 +311,15 @@ fn feature_status(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Vec<Featu
             "larger dispatches are folded into 2-D",
         ),
     ]
+}
+
+/// maxMemoryAllocationSize of `pd` (Vulkan 1.1).
+fn max_allocation_bytes(instance: &ash::Instance, pd: vk::PhysicalDevice) -> u64 {
+    let mut m3 = vk::PhysicalDeviceMaintenance3Properties::default();
+    let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut m3);
+    // SAFETY: valid handle, chain of stack structs.
+    unsafe { instance.get_physical_device_properties2(pd, &mut p2) };
+    m3.max_memory_allocation_size
 }
 
 /// Size in bytes of the largest device-local memory heap of `pd` (the largest heap if
@@ -488,8 +502,7 @@ impl Gpu {
                 }
             };
             let mut sub = vk::PhysicalDeviceSubgroupProperties::default();
-            let mut m3 = vk::PhysicalDeviceMaintenance3Properties::default();
-            let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut sub).push_next(&mut m3);
+            let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut sub);
             // SAFETY: valid handle.
             unsafe { instance.get_physical_device_properties2(physical, &mut p2) };
             let props = p2.properties;
@@ -504,7 +517,7 @@ impl Gpu {
                 timestamps,
                 info,
                 props,
-                max_allocation_bytes: m3.max_memory_allocation_size,
+                max_allocation_bytes: max_allocation_bytes(&instance, physical),
                 subgroup_size: sub.subgroup_size,
                 pipelines,
                 kernel_cache,

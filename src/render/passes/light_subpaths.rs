@@ -13,9 +13,9 @@ use super::PassContext;
 use super::PassInfo;
 use crate::gpu::{Batch, Bind, Buffer, Gpu, Kernel};
 use crate::render::addresses::FrameAddresses;
+use crate::render::features::FeatureSet;
 use crate::render::gpu_types::GpuPush;
 use crate::render::regen;
-use crate::render::features::FeatureSet;
 use crate::render::sizes::{Access, BufferSize};
 use crate::render::variants::LightKernel;
 
@@ -102,7 +102,11 @@ pub struct LightVertexStore {
 impl LightVertexStore {
     /// The store of `plan`; the addresses of the splat sums and the vertices go to
     /// `addresses`.
-    pub fn new(gpu: &std::sync::Arc<Gpu>, plan: &LightVertexPlan, addresses: &FrameAddresses) -> Result<LightVertexStore> {
+    pub fn new(
+        gpu: &std::sync::Arc<Gpu>,
+        plan: &LightVertexPlan,
+        addresses: &FrameAddresses,
+    ) -> Result<LightVertexStore> {
         let splat = plan.splat.zeroed(gpu)?;
         let vertices_a = plan.vertices_a.zeroed(gpu)?;
         let vertices_b = plan.vertices_b.zeroed(gpu)?;
