@@ -270,7 +270,7 @@ fn sort_pass_sorts_every_bucket() {
         let k = gpu
             .kernel(
                 "hash_grid_sort.comp",
-                &[("WORKGROUP_SIZE", "64")],
+                &[("WORKGROUP_SIZE", "64"), ("DEVICE_ADDRESSES", "0")],
                 &[Bind::u32("grid_start", &sb), Bind::vec4("grid_points", &pb)],
             )
             .unwrap();
