@@ -210,8 +210,11 @@ void main() {
 #if LV_CACHE
             L += st.thr * connect_cache(st, s, b, rng);
 #else
-            uint n = lv_count_at(pixel);
-            uint base = pixel * lv_slots();
+            // Light subpath p = this pixel (SmallVCM), modulo N_L when --light-paths
+            // asks for fewer light subpaths than pixels.
+            uint p = pixel % push.light_paths;
+            uint n = lv_count_at(p);
+            uint base = p * lv_slots();
             for (uint k = 0u; k < n; ++k) {
                 LightVertex v = lv_load(base + k);
                 uint total = v.len + 1u + st.len;

@@ -51,6 +51,11 @@ pub struct RenderArgs {
     /// path for vcm.
     #[arg(long, value_enum)]
     pub connect: Option<ConnectKind>,
+    /// Light subpaths per iteration, N_L, for lt, bpt, ppm, bpm and vcm (default: one per
+    /// pixel, SmallVCM's choice). Merging's normalisation and MIS follow it; fewer light
+    /// paths make an iteration cheaper and smaller in memory, and a large frame fit.
+    #[arg(long, value_name = "N")]
+    pub light_paths: Option<u32>,
     /// With --connect cache: light vertices connected to per camera vertex.
     #[arg(long, default_value_t = vkvcm::render::DEFAULT_CACHE_CONNECTIONS)]
     pub cache_connections: u32,
@@ -264,6 +269,7 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     settings.reads = a.reads;
     settings.atomics = a.atomics;
     settings.connect = connect_setting(a.algo, a.connect, a.cache_connections)?;
+    settings.light_paths = a.light_paths;
     settings.count_rays = a.profile || a.profile_json.is_some();
     if let Some(p) = &a.profile_json {
         check_writable(p).context("--profile-json")?;

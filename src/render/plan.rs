@@ -28,7 +28,8 @@ use crate::scene::Scene;
 #[derive(Clone, Debug)]
 pub struct FramePlan {
     pub pixels: u32,
-    /// Light subpaths per iteration, N_L (one per pixel, SmallVCM's choice).
+    /// Light subpaths per iteration, N_L (`--light-paths`; default one per pixel,
+    /// SmallVCM's choice).
     pub light_paths: u32,
     /// Paths per kernel invocation (path regeneration, src/render/regen.rs).
     pub paths_per_invocation: u32,
@@ -77,7 +78,7 @@ impl FramePlan {
             );
         }
         let pixels = s.frame.width * s.frame.height;
-        let light_paths = pixels;
+        let light_paths = s.light_paths();
         let light_vertices = techniques.light_subpaths.then(|| {
             LightVertexPlan::new(
                 pixels,

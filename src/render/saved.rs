@@ -65,6 +65,8 @@ pub struct SavedRender {
     pub alpha: f32,
     /// bpt, vcm: `Connect::name` (renders saved before the option: "path").
     pub connect: String,
+    /// Light subpaths per iteration (renders saved before the option: one per pixel).
+    pub light_paths: u32,
     pub iterations: u64,
     pub seconds: f64,
     pub rejected_samples: u64,
@@ -93,6 +95,7 @@ pub fn render_metadata(out: &RenderOutput, s: &RenderSettings, p: &Provenance) -
         kv("radius_factor", s.radius_factor.to_string()),
         kv("alpha", s.alpha.to_string()),
         kv("connect", s.connect.name()),
+        kv("light_paths", s.light_paths().to_string()),
         kv("device", p.device.clone()),
         kv("rejected_samples", out.rejected_samples.to_string()),
         kv("overflow_splats", out.overflow_splats.to_string()),
@@ -159,6 +162,11 @@ pub fn read_render_exr(path: &Path) -> Result<SavedRender> {
         alpha: parse(&shown, "alpha", get("alpha")?)?,
         // Renders saved before --connect existed connected to the matching light subpath.
         connect: get("connect").unwrap_or("path").to_string(),
+        // Renders saved before --light-paths existed traced one light subpath per pixel.
+        light_paths: match get("light_paths") {
+            Ok(v) => parse(&shown, "light_paths", v)?,
+            Err(_) => img.width.saturating_mul(img.height),
+        },
         iterations,
         seconds: if seconds.is_finite() && seconds >= 0.0 { seconds } else { 0.0 },
         rejected_samples: parse(&shown, "rejected_samples", get("rejected_samples")?)?,
@@ -200,6 +208,7 @@ impl SavedRender {
         diff("--radius-factor", self.radius_factor.to_string(), s.radius_factor.to_string())?;
         diff("--alpha", self.alpha.to_string(), s.alpha.to_string())?;
         diff("--connect", self.connect.clone(), s.connect.name())?;
+        diff("--light-paths", self.light_paths.to_string(), s.light_paths().to_string())?;
         Ok(())
     }
 

@@ -103,4 +103,7 @@ pub struct RenderSettings {
     /// How splats are summed (src/render/atomics.rs); `None` chooses by device. The image
     /// does not depend on it.
     pub atomics: Option<SplatAtomics>,
+    /// Light subpaths per iteration, N_L (the light-subpath estimators); `None`: one per
+    /// pixel, SmallVCM's choice ([`RenderSettings::light_paths`]).
+    pub light_paths: Option<u32>,
 }

@@ -63,7 +63,7 @@ fn remedy(name: &str) -> &'static str {
         | "vertex_attributes" => {
             "the scene is too large for this device (fewer triangles, or a device with a larger maxStorageBufferRange)"
         }
-        n if n.contains("vert") || n.starts_with("grid") => "lower the resolution or --max-path-length",
+        n if n.contains("vert") || n.starts_with("grid") => "lower --light-paths, the resolution or --max-path-length",
         _ => "lower the resolution",
     }
 }

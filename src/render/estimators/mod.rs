@@ -151,6 +151,13 @@ impl EstimatorInfo {
         if self.techniques.light_subpaths && s.frame.max_path_length > 256 {
             bail!("max path length {} is more than the light-vertex store's 256", s.frame.max_path_length);
         }
+        match s.light_paths {
+            Some(_) if !self.techniques.light_subpaths => {
+                bail!("--light-paths: {} traces no light subpaths (lt, bpt, ppm, bpm and vcm do)", self.name)
+            }
+            Some(0) => bail!("--light-paths must be at least 1"),
+            _ => {}
+        }
         Ok(())
     }
 }
@@ -194,7 +201,13 @@ impl RenderSettings {
             paths_per_invocation: None,
             reads: None,
             atomics: None,
+            light_paths: None,
         }
+    }
+
+    /// Light subpaths per iteration, N_L: as set (`--light-paths`), or one per pixel.
+    pub fn light_paths(&self) -> u32 {
+        self.light_paths.unwrap_or(self.frame.width.saturating_mul(self.frame.height))
     }
 
     /// Checks the settings every estimator shares, then the estimator's own
