@@ -87,7 +87,11 @@ uint lv_prefix_at(uint p) { return texelFetch(light_vertex_prefix, int(p)).x; }
 uint lv_dense_at(uint i) { return texelFetch(light_vertex_dense, int(i)).x; }
 #else
 layout(std430) readonly buffer light_vertex_prefix { uint lv_prefix[]; };
+#if DEVICE_ADDRESSES
+#define lv_dense ARRAY_AT(Uints, addresses.light_vertex_dense)
+#else
 layout(std430) readonly buffer light_vertex_dense { uint lv_dense[]; };
+#endif
 uint lv_prefix_at(uint p) { return lv_prefix[p]; }
 uint lv_dense_at(uint i) { return lv_dense[i]; }
 #endif

@@ -12,7 +12,12 @@ layout(local_size_x = WORKGROUP_SIZE) in;
 
 layout(std430) readonly buffer light_vertex_counts { uint lv_count[]; };
 layout(std430) readonly buffer light_vertex_prefix { uint lv_prefix[]; };
+#include "addresses.glsl"
+#if DEVICE_ADDRESSES
+#define lv_dense ARRAY_AT(Uints, addresses.light_vertex_dense)
+#else
 layout(std430) writeonly buffer light_vertex_dense { uint lv_dense[]; };
+#endif
 
 // Mirrored by CompactPush in src/render/passes/light_vertex_cache.rs.
 layout(push_constant) uniform CompactPush {

@@ -73,6 +73,7 @@ struct GpuAddresses {
     uvec2 light_vertices_b;
     uvec2 grid_keys;
     uvec2 grid_points;
+    uvec2 light_vertex_dense;
 };
 
 struct GpuPush {

@@ -78,7 +78,15 @@ fn rust_and_glsl_layouts_match() {
         rust_layout!(GpuSphere { center_radius, info }),
         rust_layout!(GpuLight { a, b, c, d, radiance }),
         rust_layout!(GpuParams { cam_pos, cam_forward, cam_right, cam_up, scene_sphere, dims, misc }),
-        rust_layout!(GpuAddresses { film, splat, light_vertices_a, light_vertices_b, grid_keys, grid_points }),
+        rust_layout!(GpuAddresses {
+            film,
+            splat,
+            light_vertices_a,
+            light_vertices_b,
+            grid_keys,
+            grid_points,
+            light_vertex_dense
+        }),
         rust_layout!(GpuPush {
             iteration,
             count,

@@ -1,6 +1,6 @@
 //! Buffer device addresses (src/render/addresses.rs): on a device with them the kernels
-//! reach the film, the splat sums, the light-vertex store and the hash grid's keys and
-//! entries by address, so those buffers are limited by maxMemoryAllocationSize instead of
+//! reach the film, the splat sums, the light-vertex store, the hash grid's keys and
+//! entries and the light-vertex cache's dense list by address, so those buffers are limited by maxMemoryAllocationSize instead of
 //! one binding (maxStorageBufferRange, 128 MiB on lavapipe). The kernels read and write
 //! the same bytes in the same order either way, so:
 //!
@@ -38,6 +38,7 @@ fn images_do_not_depend_on_device_addresses() {
     for (n, a, c) in [
         ("glm_c", Algorithm::Vcm, Algorithm::Vcm.default_connect()),
         ("gbs_s", Algorithm::Bpt, vkvcm::render::Connect::Path),
+        ("glm_c", Algorithm::Bpt, vkvcm::render::Connect::Cache(1)),
     ] {
         cases.push((n, a, c, Some(Reads::Storage)));
     }

@@ -154,6 +154,8 @@ pub struct GpuAddresses {
     /// The hash grid's per-vertex keys and its entries (src/render/passes/hash_grid.rs).
     pub grid_keys: [u32; 2],
     pub grid_points: [u32; 2],
+    /// The light-vertex cache's dense list (src/render/passes/light_vertex_cache.rs).
+    pub light_vertex_dense: [u32; 2],
 }
 
 /// Per-dispatch push constants.

@@ -90,8 +90,12 @@ impl FramePlan {
                 read_access,
             )
         });
+        // The cache's index is read by the camera kernel as uint texels with texel reads.
+        let index_access = if read_access == Access::Texel { Access::TexelU32 } else { read_access };
         let cache = match (&light_vertices, s.connect) {
-            (Some(lv), Connect::Cache(_)) if techniques.vertex_connection => Some(LightVertexCachePlan::new(lv)),
+            (Some(lv), Connect::Cache(_)) if techniques.vertex_connection => {
+                Some(LightVertexCachePlan::new(lv, index_access))
+            }
             _ => None,
         };
         let grid = match &light_vertices {

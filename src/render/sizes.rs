@@ -15,6 +15,8 @@ pub enum Access {
     /// Bound only as a uniform texel buffer of 16-byte texels (`--reads texel`): at most
     /// `maxTexelBufferElements` texels.
     Texel,
+    /// As [`Access::Texel`], of 4-byte (`uint`) texels.
+    TexelU32,
     /// Reached by device address (src/render/addresses.rs): limited by the allocation size.
     Address,
 }
@@ -73,8 +75,8 @@ fn remedy(name: &str) -> &'static str {
 pub struct SizeLimits {
     /// `maxStorageBufferRange`.
     pub storage_binding: u64,
-    /// `maxTexelBufferElements` x 16 bytes.
-    pub texel_binding: u64,
+    /// `maxTexelBufferElements`.
+    pub texel_elements: u64,
     /// `maxMemoryAllocationSize`: every buffer lies in one allocation.
     pub allocation: u64,
     /// The largest device-local memory heap: all buffers together.
@@ -85,7 +87,7 @@ impl SizeLimits {
     pub fn of(gpu: &Gpu) -> SizeLimits {
         SizeLimits {
             storage_binding: gpu.limits.max_storage_buffer_range as u64,
-            texel_binding: gpu.limits.max_texel_buffer_elements as u64 * 16,
+            texel_elements: gpu.limits.max_texel_buffer_elements as u64,
             allocation: gpu.max_allocation_bytes,
             heap: gpu.device_local_heap_bytes(),
         }
@@ -97,8 +99,10 @@ impl SizeLimits {
             Access::Storage => {
                 Some((self.storage_binding, "the device binds at most {} per storage buffer (maxStorageBufferRange)"))
             }
-            Access::Texel => {
-                Some((self.texel_binding, "the device binds at most {} per texel buffer (maxTexelBufferElements)"))
+            Access::Texel | Access::TexelU32 => {
+                let texel = if b.access == Access::Texel { 16 } else { 4 };
+                let max = self.texel_elements.saturating_mul(texel);
+                Some((max, "the device binds at most {} per texel buffer (maxTexelBufferElements)"))
             }
             Access::Address => None,
         };
@@ -144,7 +148,7 @@ mod tests {
     use super::*;
 
     fn limits(binding: u64, heap: u64) -> SizeLimits {
-        SizeLimits { storage_binding: binding, texel_binding: 4 * binding, allocation: 8 * binding, heap }
+        SizeLimits { storage_binding: binding, texel_elements: binding / 4, allocation: 8 * binding, heap }
     }
 
     #[test]
@@ -174,6 +178,9 @@ mod tests {
         assert!(e.contains("maxStorageBufferRange"), "{e}");
         let e = check_sizes(&[BufferSize::new("bvh_prims", 401).reached(Access::Texel)], &l, "x").unwrap_err();
         assert!(e.to_string().contains("maxTexelBufferElements"), "{e}");
+        let index = BufferSize::new("light_vertex_dense", 100).reached(Access::TexelU32);
+        assert!(check_sizes(&[index], &l, "x").is_ok());
+        assert!(check_sizes(&[BufferSize { bytes: 101, ..index }], &l, "x").is_err());
         let film = BufferSize::new("film", 800).reached(Access::Address);
         assert!(check_sizes(&[film], &l, "x").is_ok());
         let e = check_sizes(&[BufferSize { bytes: 801, ..film }], &l, "x").unwrap_err().to_string();

@@ -64,7 +64,7 @@ impl LightSubpathEstimator {
         let lv = b.plan.light_vertices.as_ref().expect("a light-subpath estimator's plan has a light-vertex store");
         let store = LightVertexStore::new(b.gpu, lv, &b.film.addresses)?;
         let cache = match &b.plan.cache {
-            Some(c) => Some(LightVertexCache::new(b.gpu, &store, c)?),
+            Some(c) => Some(LightVertexCache::new(b.gpu, &store, c, &b.film.addresses)?),
             None => None,
         };
         let grid = match &b.plan.grid {

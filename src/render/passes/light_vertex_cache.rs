@@ -16,7 +16,8 @@ use super::exclusive_scan::{ExclusiveScan, ScanPlan};
 use super::light_subpaths::{LightVertexPlan, LightVertexStore};
 use super::PassInfo;
 use crate::gpu::{Batch, Bind, Buffer, Gpu, Kernel};
-use crate::render::sizes::BufferSize;
+use crate::render::addresses::FrameAddresses;
+use crate::render::sizes::{Access, BufferSize};
 use crate::render::variants::workgroup_defines;
 
 /// The name profiles report.
@@ -33,11 +34,12 @@ pub struct LightVertexCachePlan {
 }
 
 impl LightVertexCachePlan {
-    pub fn new(store: &LightVertexPlan) -> LightVertexCachePlan {
+    /// The cache over `store`, its dense list reached as `dense_access`.
+    pub fn new(store: &LightVertexPlan, dense_access: Access) -> LightVertexCachePlan {
         let n = store.light_paths as u64 + 1;
         LightVertexCachePlan {
             prefix: BufferSize::new("light_vertex_prefix", n * 4),
-            dense: BufferSize::new("light_vertex_dense", store.capacity * 4),
+            dense: BufferSize::new("light_vertex_dense", store.capacity * 4).reached(dense_access),
             scan: ScanPlan::new(store.light_paths + 1, "light_vertex_prefix_scan_scratch"),
         }
     }
@@ -59,7 +61,7 @@ struct CompactPush {
 pub struct LightVertexCache {
     /// Binding `light_vertex_prefix`.
     pub prefix: Buffer,
-    /// Binding `light_vertex_dense`.
+    /// `light_vertex_dense`: by device address (src/render/addresses.rs) or as a binding.
     pub dense: Buffer,
     scan: ExclusiveScan,
     compact: Kernel,
@@ -68,14 +70,21 @@ pub struct LightVertexCache {
 }
 
 impl LightVertexCache {
-    pub fn new(gpu: &Arc<Gpu>, store: &LightVertexStore, plan: &LightVertexCachePlan) -> Result<LightVertexCache> {
+    /// The cache of `plan` over `store`; the dense list's address goes to `addresses`.
+    pub fn new(
+        gpu: &Arc<Gpu>,
+        store: &LightVertexStore,
+        plan: &LightVertexCachePlan,
+        addresses: &FrameAddresses,
+    ) -> Result<LightVertexCache> {
         let prefix = plan.prefix.zeroed(gpu)?;
         let dense = plan.dense.zeroed(gpu)?;
+        addresses.set(|a| &mut a.light_vertex_dense, &dense)?;
         let scan = ExclusiveScan::with_plan(gpu, &prefix, &plan.scan)?;
         let compact = gpu.kernel(
             "lv_cache_compact.comp",
-            &workgroup_defines().pairs(),
-            &[Bind::own_u32(&store.counts), Bind::own_u32(&prefix), Bind::own_u32(&dense)],
+            &workgroup_defines().flag("DEVICE_ADDRESSES", addresses.enabled()).pairs(),
+            &[Bind::own_u32(&store.counts), Bind::own_u32(&prefix), Bind::own_u32(&dense), addresses.bind()],
         )?;
         Ok(LightVertexCache {
             prefix,
