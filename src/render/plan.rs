@@ -4,8 +4,7 @@
 //! buffer against the limit of how the kernels reach it: `maxStorageBufferRange`,
 //! `maxTexelBufferElements` or `maxMemoryAllocationSize`; the total against the largest
 //! device-local heap, system RAM on lavapipe), and the film and passes allocate what it
-//! says. Each
-//! part is defined next to the code that uses the buffers: [`ScenePlan`]
+//! says. Each part is defined next to the code that uses the buffers: [`ScenePlan`]
 //! (src/render/scene_gpu.rs), [`FilmPlan`] (film.rs), [`LightVertexPlan`],
 //! [`LightVertexCachePlan`], [`GridPlan`] (src/render/passes/).
 
@@ -50,9 +49,9 @@ impl FramePlan {
     /// `paths_per_invocation` paths per invocation, with kernels compiled for `features`
     /// (with shading normals and vertex attributes light vertices carry more).
     /// The frame's large buffers (film, splat sums, light-vertex store, hash-grid keys and
-    /// entries) are written by device address when `device_addresses`
-    /// (src/render/addresses.rs); the scene, the store and the grid's entries are read
-    /// as `reads`.
+    /// entries, the cache's dense list) are written by device address when
+    /// `device_addresses` (src/render/addresses.rs); the scene, the store, the grid's
+    /// entries and the dense list are read as `reads`.
     pub fn new(
         scene: &Scene,
         s: &RenderSettings,

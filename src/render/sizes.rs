@@ -17,7 +17,8 @@ pub enum Access {
     Texel,
     /// As [`Access::Texel`], of 4-byte (`uint`) texels.
     TexelU32,
-    /// Reached by device address (src/render/addresses.rs): limited by the allocation size.
+    /// Reached by device address (src/render/addresses.rs): limited by the allocation size
+    /// and by [`MAX_ADDRESSED_BYTES`].
     Address,
 }
 
@@ -70,6 +71,11 @@ fn remedy(name: &str) -> &'static str {
     }
 }
 
+/// The largest buffer reached by device address: the kernels index its elements (4 bytes
+/// at the least) with 32-bit integers, which a compiler may sign-extend when it forms
+/// the address, so at most 2^31 of them.
+pub const MAX_ADDRESSED_BYTES: u64 = 4 << 31;
+
 /// The device's limits on buffer sizes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SizeLimits {
@@ -103,6 +109,9 @@ impl SizeLimits {
                 let texel = if b.access == Access::Texel { 16 } else { 4 };
                 let max = self.texel_elements.saturating_mul(texel);
                 Some((max, "the device binds at most {} per texel buffer (maxTexelBufferElements)"))
+            }
+            Access::Address if MAX_ADDRESSED_BYTES < self.allocation => {
+                Some((MAX_ADDRESSED_BYTES, "the kernels index at most {} of a buffer by address (2^31 elements)"))
             }
             Access::Address => None,
         };
@@ -185,6 +194,12 @@ mod tests {
         assert!(check_sizes(&[film], &l, "x").is_ok());
         let e = check_sizes(&[BufferSize { bytes: 801, ..film }], &l, "x").unwrap_err().to_string();
         assert!(e.contains("maxMemoryAllocationSize") && e.contains("lower the resolution"), "{e}");
+        // Past 2^31 elements of 4 bytes, whatever the allocation limit.
+        let huge = SizeLimits { allocation: u64::MAX, heap: u64::MAX, ..l };
+        let big = BufferSize::new("film", MAX_ADDRESSED_BYTES).reached(Access::Address);
+        assert!(check_sizes(&[big], &huge, "x").is_ok());
+        let e = check_sizes(&[BufferSize { bytes: MAX_ADDRESSED_BYTES + 1, ..big }], &huge, "x").unwrap_err();
+        assert!(e.to_string().contains("2^31 elements"), "{e}");
         // A binding limit above the allocation limit: the allocation limit applies.
         let small_alloc = SizeLimits { allocation: 50, ..l };
         let e = check_sizes(&[BufferSize::new("film", 60)], &small_alloc, "x").unwrap_err().to_string();
