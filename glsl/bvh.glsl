@@ -51,9 +51,10 @@
 #define BVH_ROBUST_SCALE 1.000002
 
 // Optional: `#define BVH_ALPHA_TEST` and define alpha_visible (glsl/textures.glsl): a
-// candidate hit it rejects is not a hit (cut-outs), for closest and any hits alike.
+// candidate hit at distance t it rejects is not a hit (cut-outs, stochastic
+// transparency), for closest and any hits alike.
 #ifdef BVH_ALPHA_TEST
-bool alpha_visible(uint id, uint material, float u, float v);
+bool alpha_visible(uint id, uint material, float u, float v, float t);
 #endif
 
 #ifndef BVH_TEXEL
@@ -233,7 +234,7 @@ int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hi
                                          v2, tmin, tmax, t, u, v);
             }
 #ifdef BVH_ALPHA_TEST
-            if (hit && !alpha_visible(pa.w, pb.w, u, v)) hit = false;
+            if (hit && !alpha_visible(pa.w, pb.w, u, v, t)) hit = false;
 #endif
             if (hit) {
                 tmax = t;

@@ -160,14 +160,28 @@ vec3 normal_mapped(uint tri, uint material, float u, float v, vec3 n) {
 #endif
 
 // Whether a candidate hit (primitive id `id` with the BVH's sphere flag, `material`, at
-// (u, v)) is there: false on the cut-away part of an alphaMode MASK material (alpha below
-// its cutoff, surface.z), for every ray (glTF: MASK is opaque where alpha >= cutoff).
+// (u, v), distance t along the ray) is there, for every ray:
+// * alphaMode MASK (surface.z = its cutoff >= 0): false on the cut-away part, where alpha
+//   is below the cutoff (glTF: MASK is opaque where alpha >= cutoff);
+// * BLEND (ALPHA_BLEND): true with probability alpha, stochastic transparency (Enderton
+//   et al. 2010): a ray that misses the surface passes straight through, so the expected
+//   light through it is (1 - alpha) times what is behind and alpha times the surface's,
+//   glTF's "over" compositing. Unbiased for every estimator: every technique meets the
+//   surface with the same probability, so their contributions keep their expectations
+//   and the MIS weights still sum to 1. The random number hashes the hit's barycentrics,
+//   distance, primitive and the render's seed (as hashed alpha testing hashes its
+//   coordinates, Wyman & McGuire 2017): the same ray decides alike whenever it is traced,
+//   and the image is deterministic per seed;
+// * else (OPAQUE) true.
 // Spheres have no attributes: their alpha is the material's factor.
-bool alpha_visible(uint id, uint material, float u, float v) {
+bool alpha_visible(uint id, uint material, float u, float v, float t) {
     vec4 srf = material_surface(material);
-    if (srf.z < 0.0) return true;
+    if (srf.z == ALPHA_OPAQUE) return true;
     float alpha = (id & BVH_SPHERE_FLAG) != 0u ? srf.y : surface_tint_alpha(id, material, u, v).a;
-    return alpha >= srf.z;
+    if (srf.z != ALPHA_BLEND) return alpha >= srf.z;
+    uint h = pcg_hash(id ^ pcg_hash(params.misc.x));
+    h = pcg_hash(floatBitsToUint(t) ^ pcg_hash(floatBitsToUint(u) ^ pcg_hash(floatBitsToUint(v) ^ h)));
+    return float(h >> 8) * (1.0 / 16777216.0) < alpha;
 }
 
 #endif

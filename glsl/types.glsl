@@ -13,6 +13,8 @@
 #define TEXTURE_NEAREST 16u
 #define TEXTURE_UV1 32u
 #define TEXTURE_LINEAR 64u
+#define ALPHA_OPAQUE (-1.0)
+#define ALPHA_BLEND (-2.0)
 
 struct GpuMaterial {
     vec4 diffuse;   // rgb, w: Phong exponent
@@ -21,7 +23,8 @@ struct GpuMaterial {
     vec4 emission;  // rgb radiance
     vec4 glossy;    // rgb: GGX lobe colour (Schlick F0), w: GGX alpha (>= 1e-3)
     vec4 surface;   // x: base-colour texture or NO_TEXTURE (bits), y: alpha factor,
-                    // z: alpha cutoff (< 0: opaque), w: untinted part of the GGX F0
+                    // z: alpha cutoff of MASK (>= 0), ALPHA_OPAQUE or ALPHA_BLEND,
+                    // w: untinted part of the GGX F0
     vec4 maps;      // x: normal map or NO_TEXTURE (bits), y: normal map scale
 };
 

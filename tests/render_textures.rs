@@ -357,6 +357,65 @@ fn alpha_cutouts_are_holes_for_every_ray() {
     });
 }
 
+/// alphaMode BLEND is stochastic transparency: a ray meets the surface with probability
+/// alpha and passes straight through otherwise (glsl/textures.glsl, `alpha_visible`).
+/// * A black quad of alpha 0.3 filling the view under the white sky: every pixel's
+///   expectation is exactly 0.7 (the sky through the quad), for pt, bpt and vcm
+///   (one-sample test per pixel).
+/// * A grey quad of alpha 0.4 over a grey floor 0.002 below it: the floor is lit through
+///   the quad and seen through it, the quad lit by the sky and by the floor through
+///   itself; pt (shadow rays: the any-hit traversal), bpt and lt (light subpaths through
+///   the quad, connections) agree per pixel.
+///
+/// Sabotaged, it fails: BLEND decided as MASK with cutoff 0.5; the random number hashing
+/// neither the barycentrics nor the distance (one decision per triangle). (Hashing the
+/// barycentrics without the distance still passes: on triangles they differ per ray; the
+/// distance is there for spheres, whose barycentrics are 0.)
+#[test]
+fn alpha_blend_is_stochastic_transparency() {
+    let black =
+        Material { name: "black, blended".into(), alpha: 0.3, alpha_mode: AlphaMode::Blend, ..Default::default() };
+    let uv = |u: f32, v: f32| Vec2::new(u, v);
+    let sky = Light::Background { radiance: Vec3::ONE };
+    let over_sky = scene("blended quad", quad(0, &uv, None), vec![black], vec![sky.clone()], top_camera());
+    let grey = Material {
+        name: "grey, blended".into(),
+        diffuse: Vec3::splat(0.8),
+        alpha: 0.4,
+        alpha_mode: AlphaMode::Blend,
+        ..Default::default()
+    };
+    let mut over_floor = scene("blended quad", quad(0, &uv, None), vec![grey], vec![sky], top_camera());
+    let f = 3.0 * half_size();
+    let y = -0.002;
+    over_floor.materials.push(Material { name: "floor".into(), diffuse: Vec3::splat(0.5), ..Default::default() });
+    let c = |x: f32, z: f32| Vec3::new(x, y, z);
+    for p in [[c(-f, -f), c(-f, f), c(f, f)], [c(-f, -f), c(f, f), c(f, -f)]] {
+        over_floor.triangles.push(Triangle { p, n: None, material: 1, attributes: None });
+    }
+    with_gpu(|gpu| {
+        let expected = Image::filled(W, H, [0.7; 3]);
+        for (algo, iterations) in [(Algorithm::Pt, 512), (Algorithm::Bpt, 256), (Algorithm::Vcm, 256)] {
+            let out = render_stats(&render_with(gpu, &over_sky, algo, iterations, false), None);
+            let r = one_sample_test(&out, &expected, ALPHA).unwrap();
+            assert!(r.passed(), "{algo:?}, black quad of alpha 0.3 over the sky: {r}");
+        }
+        let run = |algo: Algorithm, iterations: u64| {
+            let mut s = RenderSettings::new(algo, W, H, Budget::Iterations(iterations));
+            s.frame.max_path_length = 4;
+            s.frame.seed = 91 + algo as u32;
+            render_stats(&render::render(gpu, &over_floor, &s, None, &mut |_| {}).unwrap(), None)
+        };
+        let pt = run(Algorithm::Pt, 2048);
+        let bpt = run(Algorithm::Bpt, 1024);
+        let r = welch_test(&pt, &bpt, ALPHA).unwrap();
+        assert!(r.passed(), "blended quad over a floor: PT vs BPT: {r}");
+        let lt = run(Algorithm::Lt, 4096);
+        let r = welch_test(&lt, &bpt, ALPHA).unwrap();
+        assert!(r.passed(), "blended quad over a floor: LT vs BPT: {r}");
+    });
+}
+
 /// The generic kernels (every feature compiled in) render a textured scene as the
 /// specialised ones do (same random numbers: bit-identical), and a scene without
 /// attributes is untouched by the texture code (its generic render equals its

@@ -1353,12 +1353,8 @@ fn alpha_factor_and_modes() {
         json!({"alphaMode": "BLEND", "alphaCutoff": 0.75, "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 0.5]}}),
     )
     .unwrap();
-    assert_eq!((s.materials[0].alpha, s.materials[0].alpha_mode), (0.5, AlphaMode::Mask { cutoff: 0.5 }));
-    assert!(
-        s.report.warnings.iter().any(|w| w.contains("alphaMode BLEND is approximated as MASK")),
-        "{:?}",
-        s.report.warnings
-    );
+    assert_eq!((s.materials[0].alpha, s.materials[0].alpha_mode), (0.5, AlphaMode::Blend));
+    assert!(s.report.warnings.iter().all(|w| !w.contains("alpha")), "{:?}", s.report.warnings);
     let e = err_of(load_mode(json!({"alphaMode": "MASK", "alphaCutoff": -1})));
     assert!(e.contains("alphaCutoff -1 must be a finite number >= 0"), "{e}");
 }

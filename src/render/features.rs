@@ -50,8 +50,8 @@ pub struct FeatureSet {
     pub vertex_attributes: bool,
     /// Some material has a base-colour texture: the texture lookup is compiled in.
     pub textures: bool,
-    /// Some material is a cut-out (alphaMode MASK): traversal tests alpha at every
-    /// candidate hit.
+    /// Some material is a cut-out (alphaMode MASK) or blended (BLEND, stochastic
+    /// transparency): traversal tests alpha at every candidate hit.
     pub alpha_mask: bool,
     /// Some material has a normal map and some triangle tangents: the shading normal is
     /// bent by it (with the shading-normal code compiled in).
@@ -102,7 +102,7 @@ impl FeatureSet {
             scene_has_shading_normals,
             vertex_attributes: g || vertex_attributes,
             textures: g || (vertex_attributes && any_mat(&|m| m.base_color_texture.is_some())) || normal_maps,
-            alpha_mask: g || any_mat(&|m| matches!(m.alpha_mode, crate::scene::AlphaMode::Mask { .. })),
+            alpha_mask: g || any_mat(&|m| m.alpha_mode != crate::scene::AlphaMode::Opaque),
             normal_maps: g || normal_maps,
         }
     }
@@ -187,7 +187,7 @@ impl fmt::Display for FeatureSet {
         let surface = [
             ("vertex colours / texture coordinates", self.vertex_attributes),
             ("base-colour textures", self.textures),
-            ("alpha cut-outs", self.alpha_mask),
+            ("alpha cut-outs / blending", self.alpha_mask),
             ("normal maps", self.normal_maps),
         ];
         writeln!(f, "  surface detail: {}", list(&surface))?;

@@ -23,6 +23,10 @@ pub const TEXTURE_NEAREST: u32 = 1 << 4;
 pub const TEXTURE_UV1: u32 = 1 << 5;
 /// `GpuTextureRef::image` w bit 6: the texels are linear (a normal map), not sRGB.
 pub const TEXTURE_LINEAR: u32 = 1 << 6;
+/// `GpuMaterial::surface[2]` of a material whose alpha is ignored.
+pub const ALPHA_OPAQUE: f32 = -1.0;
+/// `GpuMaterial::surface[2]` of an alphaMode BLEND material (stochastic transparency).
+pub const ALPHA_BLEND: f32 = -2.0;
 
 /// A material (see `scene::Material`).
 #[repr(C)]
@@ -41,7 +45,8 @@ pub struct GpuMaterial {
     /// least `MIN_GGX_ALPHA`.
     pub glossy: [f32; 4],
     /// x: index of its base-colour texture in `texture_refs`, or `NO_TEXTURE` (bits);
-    /// y: alpha factor; z: alpha cutoff of a cut-out (alphaMode MASK), negative when opaque;
+    /// y: alpha factor; z: alpha cutoff of a cut-out (alphaMode MASK, >= 0), or
+    /// `ALPHA_OPAQUE`, or `ALPHA_BLEND` (stochastic transparency);
     /// w: the part of the GGX F0 that the base colour does not tint
     /// (`Material::glossy_untinted`).
     pub surface: [f32; 4],

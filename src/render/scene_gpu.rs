@@ -334,9 +334,11 @@ impl SceneGpu {
             .zip(&texture_indices)
             .map(|(m, &[texture, normal_map])| {
                 let normal_map = if features.normal_maps { normal_map } else { NO_TEXTURE };
+                // glsl/types.glsl, GpuMaterial.surface.z.
                 let cutoff = match m.alpha_mode {
                     AlphaMode::Mask { cutoff } if features.alpha_mask => cutoff,
-                    _ => -1.0,
+                    AlphaMode::Blend if features.alpha_mask => ALPHA_BLEND,
+                    _ => ALPHA_OPAQUE,
                 };
                 GpuMaterial {
                     diffuse: v4(m.diffuse, m.phong_exponent),

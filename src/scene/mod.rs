@@ -97,6 +97,9 @@ pub enum AlphaMode {
     Opaque,
     /// A cut-out: where alpha < cutoff the surface is not there, for every ray.
     Mask { cutoff: f32 },
+    /// Stochastic transparency: each ray meets the surface with probability alpha and
+    /// passes straight through it otherwise (glsl/textures.glsl, `alpha_visible`).
+    Blend,
 }
 
 /// An analytic sphere (glTF extension `VKVCM_spheres`).

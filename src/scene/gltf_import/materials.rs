@@ -118,8 +118,8 @@ impl Importer<'_> {
 
         // glTF 2.0 section 3.9.4 ("Alpha Coverage"): alpha = baseColorFactor alpha (times
         // the texture's and COLOR_0's); OPAQUE ignores it, MASK cuts out where it is below
-        // alphaCutoff (default 0.5), BLEND composites. Without partial transparency in the
-        // kernels BLEND becomes MASK with cutoff 0.5.
+        // alphaCutoff (default 0.5), BLEND composites: here stochastically, each ray
+        // meeting the surface with probability alpha (alphaCutoff is ignored, per spec).
         out.alpha = bc[3].clamp(0.0, 1.0);
         out.alpha_mode = match m.alpha_mode() {
             gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
@@ -130,13 +130,7 @@ impl Importer<'_> {
                 }
                 AlphaMode::Mask { cutoff }
             }
-            gltf::material::AlphaMode::Blend => {
-                self.warnings.warn(
-                    "alphaMode BLEND is approximated as MASK with alphaCutoff 0.5 (no partial transparency)",
-                    label.clone(),
-                );
-                AlphaMode::Mask { cutoff: 0.5 }
-            }
+            gltf::material::AlphaMode::Blend => AlphaMode::Blend,
         };
         let strength = m.emissive_strength().unwrap_or(1.0);
         let ef = m.emissive_factor();

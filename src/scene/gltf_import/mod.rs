@@ -9,7 +9,7 @@
 //! emission (one area light per emitting triangle), `KHR_lights_punctual`, the first
 //! perspective camera, base-colour textures (PNG/JPEG images, samplers,
 //! `KHR_texture_transform`) with TEXCOORD_0/1, vertex colours (COLOR_0), alpha modes (BLEND
-//! as MASK), and the vkvcm extensions `VKVCM_spheres`, `VKVCM_materials_phong` and
+//! as stochastic transparency), and the vkvcm extensions `VKVCM_spheres`, `VKVCM_materials_phong` and
 //! `VKVCM_background`.
 //!
 //! Everything that is not represented produces one warning per kind in
