@@ -18,6 +18,13 @@ rotation are the same functions in both.
         # unbiased per-pixel variance over SEEDS independent renders of SPP samples each,
         # and tests/env/mitsuba.json (what made them). Needs `pip install mitsuba numpy`.
 
+With `--glass` (both commands) the mirror sphere is a smooth glass sphere of IOR 1.5
+instead (tests/env/glass_scene.gltf, tests/env/mitsuba_glass_{mean,var}.exr,
+mitsuba_glass.json): vkvcm's dielectric (VKVCM_materials_phong mirror 1, ior 1.5) against
+Mitsuba's `dielectric` (int_ior 1.5, ext_ior 1). Both use the exact Fresnel equations;
+Mitsuba scales radiance by the squared IOR ratio at each refraction, which cancels over
+the entry and the exit of a closed sphere lit from outside.
+
 With `--smooth` (both commands) the diffuse sphere is a coarse smooth-shaded mesh instead
 (a UV sphere of 6 x 10 quads with the sphere's normals at its vertices, tests/env/
 smooth_scene.gltf, tests/env/mitsuba_smooth_{mean,var}.exr, mitsuba_smooth.json): the
@@ -110,8 +117,16 @@ def smooth_sphere_triangles(center, radius):
     return out
 
 
-def write_gltf(path, smooth):
-    s = SCENE
+GLASS_IOR = 1.5
+
+
+def glass_spheres(spheres):
+    """`spheres` with the mirror sphere made of glass (`--glass`)."""
+    return [{k: v for k, v in sp.items() if k != "mirror"} | {"glass": GLASS_IOR} if "mirror" in sp else sp for sp in spheres]
+
+
+def write_gltf(path, smooth, glass=False):
+    s = dict(SCENE, spheres=glass_spheres(SCENE["spheres"])) if glass else SCENE
     h = s["ground"]["half_size"]
     quad = [(-h, 0, -h), (-h, 0, h), (h, 0, h), (-h, 0, -h), (h, 0, h), (h, 0, -h)]
     blob = b"".join(struct.pack("<3f", *p) for p in quad)
@@ -122,7 +137,10 @@ def write_gltf(path, smooth):
     views = [{"buffer": 0, "byteLength": len(blob)}]
     spheres = []
     for i, sp in enumerate(s["spheres"]):
-        materials.append({"name": f"sphere{i}", "extensions": phong(d=sp.get("diffuse", (0, 0, 0)), m=sp.get("mirror", (0, 0, 0)))})
+        ext = phong(d=sp.get("diffuse", (0, 0, 0)), m=sp.get("mirror", (0, 0, 0)))
+        if "glass" in sp:
+            ext = {"VKVCM_materials_phong": {"diffuse": [0, 0, 0], "mirror": [1, 1, 1], "ior": sp["glass"]}}
+        materials.append({"name": f"sphere{i}", "extensions": ext})
         if smooth and "diffuse" in sp:
             tris = smooth_sphere_triangles(sp["center"], sp["radius"])
             pos = [p for t in tris for p in t[0]]
@@ -147,7 +165,7 @@ def write_gltf(path, smooth):
         "extensionsUsed": ["VKVCM_spheres", "VKVCM_materials_phong", "VKVCM_environment"],
         "extensions": {"VKVCM_environment": {"uri": env["file"], "strength": env["strength"], "rotation": env["rotation_deg"]}},
         "scene": 0,
-        "scenes": [{"name": "smooth_scene" if smooth else "env_scene", "nodes": list(range(3 + len(meshes) - 1))}],
+        "scenes": [{"name": scene_stem(smooth, glass), "nodes": list(range(3 + len(meshes) - 1))}],
         "nodes": [
             {"name": "ground", "mesh": 0},
             {"name": "spheres", "extensions": {"VKVCM_spheres": {"spheres": spheres}}},
@@ -176,8 +194,12 @@ def write_obj(path, tris):
             f.write(f"f {a}//{a} {a + 1}//{a + 1} {a + 2}//{a + 2}\n")
 
 
-def mitsuba_scene(mi, seed, spp, smooth, tmp):
-    s = SCENE
+def scene_stem(smooth, glass):
+    return "smooth_scene" if smooth else "glass_scene" if glass else "env_scene"
+
+
+def mitsuba_scene(mi, seed, spp, smooth, tmp, glass=False):
+    s = dict(SCENE, spheres=glass_spheres(SCENE["spheres"])) if glass else SCENE
     T = mi.ScalarTransform4f
     cam = s["camera"]
     env = s["environment"]
@@ -204,6 +226,8 @@ def mitsuba_scene(mi, seed, spp, smooth, tmp):
     for i, sp in enumerate(s["spheres"]):
         if "mirror" in sp:
             bsdf = {"type": "conductor", "material": "none", "specular_reflectance": {"type": "rgb", "value": sp["mirror"]}}
+        elif "glass" in sp:
+            bsdf = {"type": "dielectric", "int_ior": sp["glass"], "ext_ior": 1.0}
         elif smooth:
             obj = os.path.join(tmp, f"sphere{i}.obj")
             write_obj(obj, smooth_sphere_triangles(sp["center"], sp["radius"]))
@@ -216,7 +240,7 @@ def mitsuba_scene(mi, seed, spp, smooth, tmp):
     return d
 
 
-def render_mitsuba(seeds, spp, variant, smooth):
+def render_mitsuba(seeds, spp, variant, smooth, glass=False):
     try:
         import mitsuba as mi
         import numpy as np
@@ -225,11 +249,11 @@ def render_mitsuba(seeds, spp, variant, smooth):
     mi.set_variant(variant)
     import tempfile
     tmp = tempfile.mkdtemp()
-    stem = "mitsuba_smooth" if smooth else "mitsuba"
+    stem = "mitsuba_smooth" if smooth else "mitsuba_glass" if glass else "mitsuba"
     images = []
     t0 = time.time()
     for seed in range(seeds):
-        scene = mi.load_dict(mitsuba_scene(mi, seed, spp, smooth, tmp))
+        scene = mi.load_dict(mitsuba_scene(mi, seed, spp, smooth, tmp, glass))
         images.append(np.array(mi.render(scene, seed=seed, spp=spp), dtype=np.float64))
         print(f"seed {seed}: {time.time() - t0:.0f} s", flush=True)
     stack = np.stack(images)
@@ -238,7 +262,8 @@ def render_mitsuba(seeds, spp, variant, smooth):
     mi.Bitmap(mean).write(os.path.join(OUT, f"{stem}_mean.exr"))
     mi.Bitmap(var).write(os.path.join(OUT, f"{stem}_var.exr"))
     meta = {"renderer": f"Mitsuba {mi.__version__} {variant}, integrator path", "seeds": seeds, "spp_per_seed": spp,
-            "scene": SCENE, "smooth_sphere": [SMOOTH_RINGS, SMOOTH_SEGMENTS] if smooth else None,
+            "scene": dict(SCENE, spheres=glass_spheres(SCENE["spheres"])) if glass else SCENE,
+            "smooth_sphere": [SMOOTH_RINGS, SMOOTH_SEGMENTS] if smooth else None,
             "command": " ".join(sys.argv)}
     write_json(os.path.join(OUT, f"{stem}.json"), meta)
     print(f"wrote tests/env/{stem}_mean.exr, {stem}_var.exr ({seeds} seeds x {spp} spp, {time.time() - t0:.0f} s)")
@@ -251,11 +276,14 @@ def main():
     ap.add_argument("--spp", type=int, default=256)
     ap.add_argument("--variant", default="scalar_rgb")
     ap.add_argument("--smooth", action="store_true", help="the diffuse sphere as a smooth-shaded mesh")
+    ap.add_argument("--glass", action="store_true", help="the mirror sphere made of glass (IOR 1.5)")
     a = ap.parse_args()
+    if a.smooth and a.glass:
+        sys.exit("--smooth and --glass are separate scenes")
     if a.what == "gltf":
-        write_gltf(os.path.join(OUT, "smooth_scene.gltf" if a.smooth else "env_scene.gltf"), a.smooth)
+        write_gltf(os.path.join(OUT, scene_stem(a.smooth, a.glass) + ".gltf"), a.smooth, a.glass)
     else:
-        render_mitsuba(a.seeds, a.spp, a.variant, a.smooth)
+        render_mitsuba(a.seeds, a.spp, a.variant, a.smooth, a.glass)
 
 
 if __name__ == "__main__":

@@ -324,11 +324,33 @@ fn smooth_shaded_mesh_matches_mitsuba() {
     matches_mitsuba("smooth_scene.gltf", "mitsuba_smooth");
 }
 
+/// The same scene with the mirror sphere made of smooth glass of IOR 1.5
+/// (`env_reference.py --glass`, tests/env/glass_scene.gltf and
+/// mitsuba_glass_{mean,var}.exr, Mitsuba's `dielectric`): vkvcm's dielectric (exact
+/// Fresnel, refraction both ways, and in vcm light subpaths through the glass and
+/// merging of the caustic it throws on the ground) against Mitsuba's, per pixel. vcm
+/// takes 1024 iterations here, not 256: the pixels that see the sun spot of sky.hdr
+/// through the glass are rare events for every estimator (a camera ray refracts
+/// deterministically; only its position in the pixel decides whether it reaches the 3°
+/// sun), and at 256 iterations vcm's own variance estimate there was too small: one such
+/// pixel at z = -6.8 (0.148 +- 0.0006 against Mitsuba's 0.161), where 1024 iterations
+/// give 0.166 with either merge radius (0.003 and 0.0005 of the scene), so no merging
+/// bias.
+///
+/// Sabotage (done by hand, not kept): the glTF's IOR 1.5 changed to 1.4 fails it.
+#[test]
+fn glass_sphere_matches_mitsuba() {
+    matches_mitsuba_with("glass_scene.gltf", "mitsuba_glass", &[(Algorithm::Pt, 2048), (Algorithm::Vcm, 1024)]);
+}
+
 /// Renders tests/env/`gltf` and compares it with the reference `reference_stem`_{mean,var}.exr.
 fn matches_mitsuba(gltf: &str, reference_stem: &str) {
+    matches_mitsuba_with(gltf, reference_stem, &[(Algorithm::Pt, 2048), (Algorithm::Vcm, 256)]);
+}
+
+/// [`matches_mitsuba`] with these estimators and iterations.
+fn matches_mitsuba_with(gltf: &str, reference_stem: &str, estimators: &[(Algorithm, u64)]) {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/env");
     let scene = vkvcm::scene::load_with(&dir.join(gltf), &Default::default()).unwrap();
-    with_gpu(|gpu| {
-        common::assert_matches_mitsuba(gpu, &scene, reference_stem, 8, &[(Algorithm::Pt, 2048), (Algorithm::Vcm, 256)])
-    });
+    with_gpu(|gpu| common::assert_matches_mitsuba(gpu, &scene, reference_stem, 8, estimators));
 }
