@@ -156,19 +156,30 @@ pub fn table(rows: &[BenchRow]) -> String {
     s
 }
 
-/// An estimator with its connection strategy, named `algo` (its default strategy) or
-/// `algo:path` / `algo:cache:N` (bpt, vcm), e.g. `bpt:cache:2`.
+/// An estimator with its connection strategy and its light subpaths per iteration, named
+/// `algo` (its default strategy) or `algo:path` / `algo:cache:N` (bpt, vcm), followed by
+/// `@N` for N light subpaths per iteration (`render --light-paths`; the light-subpath
+/// estimators), e.g. `bpt:cache:2` or `vcm@65536`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Variant {
     pub algorithm: Algorithm,
     pub connect: Connect,
+    /// `None`: one per pixel.
+    pub light_paths: Option<u32>,
 }
 
 impl Variant {
     pub fn parse(s: &str) -> Result<Variant> {
-        let (a, c) = match s.split_once(':') {
-            Some((a, c)) => (a, Some(c)),
+        let (name, light_paths) = match s.rsplit_once('@') {
+            Some((name, n)) => {
+                let n: u32 = n.parse().map_err(|_| anyhow::anyhow!("{s:?}: {n:?} is not a light-path count"))?;
+                (name, Some(n))
+            }
             None => (s, None),
+        };
+        let (a, c) = match name.split_once(':') {
+            Some((a, c)) => (a, Some(c)),
+            None => (name, None),
         };
         let algorithm = Algorithm::from_name(&a.to_ascii_lowercase())
             .ok_or_else(|| anyhow::anyhow!("{s:?}: unknown estimator {a:?}"))?;
@@ -179,21 +190,30 @@ impl Variant {
             }
         };
         let connect = algorithm.info().connect(requested).map_err(|e| anyhow::anyhow!("{s:?}: {e}"))?;
-        Ok(Variant { algorithm, connect })
+        let v = Variant { algorithm, connect, light_paths };
+        // The estimator's own check of the light-path count (a 1x1 frame: sizes do not matter).
+        algorithm.info().check(&v.settings(1, 1, Budget::Iterations(1))).map_err(|e| anyhow::anyhow!("{s:?}: {e}"))?;
+        Ok(v)
     }
 
-    /// `algo` for its default strategy, else `algo:path` / `algo:cache:N`.
+    /// `algo` for its default strategy, else `algo:path` / `algo:cache:N`; then `@N` with
+    /// a light-path count.
     pub fn name(&self) -> String {
-        if self.connect == self.algorithm.default_connect() {
+        let mut name = if self.connect == self.algorithm.default_connect() {
             self.algorithm.name().to_string()
         } else {
             format!("{}:{}", self.algorithm.name(), self.connect.name())
+        };
+        if let Some(n) = self.light_paths {
+            name += &format!("@{n}");
         }
+        name
     }
 
     fn settings(&self, width: u32, height: u32, budget: Budget) -> RenderSettings {
         let mut s = RenderSettings::new(self.algorithm, width, height, budget);
         s.connect = self.connect;
+        s.light_paths = self.light_paths;
         s
     }
 }
@@ -601,13 +621,16 @@ mod tests {
 
     #[test]
     fn variant_names_parse_back() {
-        for s in ["pt", "vcm", "bpt:path", "bpt:cache:1", "vcm:cache:4"] {
+        for s in ["pt", "vcm", "bpt:path", "bpt:cache:1", "vcm:cache:4", "vcm@65536", "bpt:cache:2@100"] {
             let v = Variant::parse(s).unwrap();
             assert_eq!(Variant::parse(&v.name()).unwrap(), v, "{s}");
         }
         assert_eq!(Variant::parse("bpt:cache:3").unwrap().connect, Connect::Cache(3));
         assert_eq!(Variant::parse("bpt").unwrap().connect, Algorithm::Bpt.default_connect());
-        for bad in ["xyz", "pt:cache:1", "bpt:cache:0", "bpt:cache", "bpt:cache:x", "bpt:other"] {
+        assert_eq!(Variant::parse("lt@1000").unwrap().light_paths, Some(1000));
+        for bad in
+            ["xyz", "pt:cache:1", "bpt:cache:0", "bpt:cache", "bpt:cache:x", "bpt:other", "pt@100", "vcm@0", "vcm@x"]
+        {
             assert!(Variant::parse(bad).is_err(), "{bad} accepted");
         }
     }
