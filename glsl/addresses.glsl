@@ -18,5 +18,13 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer Uvec4s { uv
 layout(buffer_reference, std430, buffer_reference_align = 8) buffer Uvec2s { uvec2 v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer Uints { uint v[]; };
 #define ARRAY_AT(type, address) type(address).v
+// Each frame buffer as an array of its element type (the splat sums' type depends on
+// SPLAT_ATOMICS_64: glsl/film.glsl).
+#define FRAME_FILM ARRAY_AT(Vec4s, addresses.film)
+#define FRAME_LIGHT_VERTICES_A ARRAY_AT(Vec4s, addresses.light_vertices_a)
+#define FRAME_LIGHT_VERTICES_B ARRAY_AT(Vec4s, addresses.light_vertices_b)
+#define FRAME_GRID_KEYS ARRAY_AT(Uvec2s, addresses.grid_keys)
+#define FRAME_GRID_POINTS ARRAY_AT(Uvec4s, addresses.grid_points)
+#define FRAME_LIGHT_VERTEX_DENSE ARRAY_AT(Uints, addresses.light_vertex_dense)
 #endif
 #endif

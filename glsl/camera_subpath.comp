@@ -30,7 +30,7 @@ uvec4 grid_point_at(uint j) { return texelFetch(grid_points, int(j)); }
 #else
 layout(std430) readonly buffer grid_start { uint bucket_start[]; };
 #if DEVICE_ADDRESSES
-#define bucket_points ARRAY_AT(Uvec4s, addresses.grid_points)
+#define bucket_points FRAME_GRID_POINTS
 #else
 layout(std430) readonly buffer grid_points { uvec4 bucket_points[]; };
 #endif
@@ -88,7 +88,7 @@ uint lv_dense_at(uint i) { return texelFetch(light_vertex_dense, int(i)).x; }
 #else
 layout(std430) readonly buffer light_vertex_prefix { uint lv_prefix[]; };
 #if DEVICE_ADDRESSES
-#define lv_dense ARRAY_AT(Uints, addresses.light_vertex_dense)
+#define lv_dense FRAME_LIGHT_VERTEX_DENSE
 #else
 layout(std430) readonly buffer light_vertex_dense { uint lv_dense[]; };
 #endif

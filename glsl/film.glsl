@@ -13,7 +13,7 @@
 #include "addresses.glsl"
 
 #if DEVICE_ADDRESSES
-#define FILM_SUMS ARRAY_AT(Vec4s, addresses.film)
+#define FILM_SUMS FRAME_FILM
 #else
 layout(std430) buffer film { vec4 film_sums[]; };
 #define FILM_SUMS film_sums

@@ -89,9 +89,9 @@ uint hash_grid_query_cells(vec3 q, vec3 origin, float radius, uint num_buckets, 
     HASH_GRID_ADDRESSED_BUFFERS                                                           \
     layout(std430) readonly buffer light_vertex_counts { uint lv_count[]; }
 #if DEVICE_ADDRESSES
-#define lv_a ARRAY_AT(Vec4s, addresses.light_vertices_a)
-#define vertex_keys ARRAY_AT(Uvec2s, addresses.grid_keys)
-#define bucket_points ARRAY_AT(Uvec4s, addresses.grid_points)
+#define lv_a FRAME_LIGHT_VERTICES_A
+#define vertex_keys FRAME_GRID_KEYS
+#define bucket_points FRAME_GRID_POINTS
 #define HASH_GRID_ADDRESSED_BUFFERS
 #else
 #define HASH_GRID_ADDRESSED_BUFFERS                                                       \

@@ -28,8 +28,8 @@ vec4 lv_b_at(uint i) { return uintBitsToFloat(texelFetch(light_vertices_b, int(i
 uint lv_count_at(uint p) { return texelFetch(light_vertex_counts, int(p)).x; }
 #else
 #if DEVICE_ADDRESSES
-#define lv_a ARRAY_AT(Vec4s, addresses.light_vertices_a)
-#define lv_b ARRAY_AT(Vec4s, addresses.light_vertices_b)
+#define lv_a FRAME_LIGHT_VERTICES_A
+#define lv_b FRAME_LIGHT_VERTICES_B
 #else
 layout(std430) buffer light_vertices_a { vec4 lv_a[]; };
 layout(std430) buffer light_vertices_b { vec4 lv_b[]; };

@@ -14,7 +14,7 @@ layout(std430) readonly buffer light_vertex_counts { uint lv_count[]; };
 layout(std430) readonly buffer light_vertex_prefix { uint lv_prefix[]; };
 #include "addresses.glsl"
 #if DEVICE_ADDRESSES
-#define lv_dense ARRAY_AT(Uints, addresses.light_vertex_dense)
+#define lv_dense FRAME_LIGHT_VERTEX_DENSE
 #else
 layout(std430) writeonly buffer light_vertex_dense { uint lv_dense[]; };
 #endif
