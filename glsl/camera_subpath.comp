@@ -202,7 +202,7 @@ void main() {
         mis_on_hit(st, h.t, abs(dot(s.ng, st.d)), false);
         if (s.light != NO_LIGHT && st.len >= min_len) {
             float dpdf_a, epdf;
-            vec3 le = area_light_radiance(s.light, st.d, dpdf_a, epdf);
+            vec3 le = area_light_radiance(s.light, h.u, h.v, st.d, dpdf_a, epdf);
             if (max3(le) > 0.0) L += st.thr * le * mis_weight_hit(st, dpdf_a, epdf, pick, USE_VC != 0);
         }
         if (st.len >= max_len) continue;

@@ -66,6 +66,10 @@
 #ifndef HAS_NORMAL_MAPS
 #define HAS_NORMAL_MAPS 1
 #endif
+// Area lights whose radiance an emissive texture modulates (glsl/lights.glsl).
+#ifndef HAS_EMISSIVE_TEXTURES
+#define HAS_EMISSIVE_TEXTURES 1
+#endif
 // Profiling: count traced rays into stats[2..3] (glsl/scene.glsl, COUNT_RAYS_FLUSH).
 #ifndef COUNT_RAYS
 #define COUNT_RAYS 0

@@ -80,6 +80,9 @@ LightSample light_illuminate(uint index, vec3 x, vec2 u) {
         s.emission_pdf_w = s.cos_light * INV_PI / area;
         s.light_point = p;
         s.light_normal = nl;
+#if HAS_EMISSIVE_TEXTURES
+        s.radiance *= emission_tint(floatBitsToUint(l.a.w), bc.x, bc.y);
+#endif
     }
 #endif
 #if HAS_POINT_LIGHTS || HAS_SPOT_LIGHTS
@@ -130,10 +133,11 @@ LightSample light_illuminate(uint index, vec3 x, vec2 u) {
     return s;
 }
 
-// Radiance leaving an area light at a point towards `-dir` (the ray direction that hit
-// it), with the pdfs of producing that point by direct sampling (area measure, no pick
-// probability) and by emission sampling (solid angle).
-vec3 area_light_radiance(uint index, vec3 dir, out float direct_pdf_a, out float emission_pdf_w) {
+// Radiance leaving an area light at the point of barycentric weights (u, v) of its
+// triangle (a hit's) towards `-dir` (the ray direction that hit it), with the pdfs of
+// producing that point by direct sampling (area measure, no pick probability) and by
+// emission sampling (solid angle).
+vec3 area_light_radiance(uint index, float u, float v, vec3 dir, out float direct_pdf_a, out float emission_pdf_w) {
     GpuLight l = light_at(index);
     vec3 nl = area_light_normal(l);
     float c = dot(nl, -dir);
@@ -142,7 +146,11 @@ vec3 area_light_radiance(uint index, vec3 dir, out float direct_pdf_a, out float
     if (c <= EPS_COSINE_LIGHT) return vec3(0.0);
     direct_pdf_a = 1.0 / l.d.w;
     emission_pdf_w = c * INV_PI / l.d.w;
+#if HAS_EMISSIVE_TEXTURES
+    return l.radiance.rgb * emission_tint(floatBitsToUint(l.a.w), u, v);
+#else
     return l.radiance.rgb;
+#endif
 }
 
 // The background seen along `dir` (a ray direction that left the scene), with its direct
@@ -202,6 +210,9 @@ LightEmission light_emit(uint index, vec2 u_pos, vec2 u_dir) {
         e.emission_pdf_w = pdf_a * e.cos_light * INV_PI;
         e.direct_pdf = pdf_a;
         e.energy *= e.cos_light;
+#if HAS_EMISSIVE_TEXTURES
+        e.energy *= emission_tint(floatBitsToUint(l.a.w), bc.x, bc.y);
+#endif
     }
 #endif
 #if HAS_POINT_LIGHTS

@@ -63,7 +63,7 @@ void main() {
         Surface s = surface_at(h, o, d);
         if (s.light != NO_LIGHT && len >= min_len) {
             float dpdf_a, epdf;
-            vec3 Le = area_light_radiance(s.light, d, dpdf_a, epdf);
+            vec3 Le = area_light_radiance(s.light, h.u, h.v, d, dpdf_a, epdf);
             if (max3(Le) > 0.0) {
                 float cos_l = abs(dot(s.ng, d));
                 float dpdf_w = dpdf_a * h.t * h.t / cos_l;

@@ -1,5 +1,5 @@
-// Surface detail: per-vertex attributes (texture coordinates, colours) and base-colour
-// textures, and what they make of a point on a triangle: its tint (the texel's linear
+// Surface detail: per-vertex attributes (texture coordinates, colours), base-colour,
+// normal and emissive textures, and what they make of a point on a triangle: its tint (the texel's linear
 // colour times the vertex colour, multiplying the material's base colour, glsl/bsdf.glsl)
 // and its alpha (the material's alpha factor times the texel's and the vertex colour's:
 // cut-outs, alpha_visible, which the traversal calls at every candidate hit).
@@ -126,6 +126,28 @@ vec4 surface_tint_alpha(uint tri, uint material, float u, float v) {
 #endif
     return r;
 }
+
+#if HAS_EMISSIVE_TEXTURES
+// What multiplies the emitted radiance of triangle `tri` at barycentric weights (u, v):
+// its material's emissive texture (glTF emissiveTexture, sRGB-decoded linear RGB) at the
+// point's texture coordinates; 1 where the material has none or the triangle lacks the
+// texture's coordinates. The area-light code (glsl/lights.glsl) applies it wherever
+// radiance leaves a light: when a path hits it, when next-event estimation samples a
+// point on it, and when a light subpath starts there. Light points are still chosen
+// uniformly by area, so every pdf is unchanged and MIS stays exact.
+vec3 emission_tint(uint tri, float u, float v) {
+    uint ref = floatBitsToUint(material_maps(floatBitsToUint(triangle_at(tri).p0.w)).z);
+    if (ref == NO_TEXTURE) return vec3(1.0);
+    uint first = floatBitsToUint(triangle_at(tri).p2.w);
+    if (first == 0xffffffffu) return vec3(1.0);
+    vec2 uv;
+    if (!texture_uv(ref, vertex_attribute_data[first], vertex_attribute_data[first + 1u],
+                    vertex_attribute_data[first + 2u], 1.0 - u - v, u, v, uv)) {
+        return vec3(1.0);
+    }
+    return texture_sample(ref, uv).rgb;
+}
+#endif
 
 #if HAS_NORMAL_MAPS
 // The unit shading normal `n` of triangle `tri` (with per-vertex attributes) at (u, v),

@@ -25,7 +25,8 @@ struct GpuMaterial {
     vec4 surface;   // x: base-colour texture or NO_TEXTURE (bits), y: alpha factor,
                     // z: alpha cutoff of MASK (>= 0), ALPHA_OPAQUE or ALPHA_BLEND,
                     // w: untinted part of the GGX F0
-    vec4 maps;      // x: normal map or NO_TEXTURE (bits), y: normal map scale
+    vec4 maps;      // x: normal map or NO_TEXTURE (bits), y: normal map scale,
+                    // z: emissive texture or NO_TEXTURE (bits)
 };
 
 struct GpuTextureRef {

@@ -401,8 +401,8 @@ fn unsupported_features_warn_once_per_kind() {
     d.json["images"] = json!([{"uri": "never_loaded.png"}]);
     d.json["textures"] = json!([{"source": 0}]);
     d.json["materials"] = json!([
-        {"name": "a", "emissiveTexture": {"index": 0}},
-        {"name": "b", "emissiveTexture": {"index": 0}},
+        {"name": "a", "pbrMetallicRoughness": {"metallicRoughnessTexture": {"index": 0}}},
+        {"name": "b", "pbrMetallicRoughness": {"metallicRoughnessTexture": {"index": 0}}},
     ]);
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
     let mut lines = d.json["meshes"][0]["primitives"][0].clone();
@@ -1590,4 +1590,30 @@ fn tangents_are_read_and_follow_mirroring() {
     let s = d.load().unwrap();
     let t = s.triangles[0].attributes.as_ref().unwrap().tangent.unwrap();
     assert_eq!(t, [glam::Vec4::new(0.0, 1.0, 0.0, 1.0); 3]);
+}
+
+/// emissiveTexture is read (sRGB, as the base colour) when the material emits:
+/// emission = emissiveFactor x texture; without a factor (glTF's default 0) nothing emits
+/// and the texture is not kept. occlusionTexture is named in its own warning.
+#[test]
+fn emissive_textures_are_read_and_occlusion_is_named() {
+    let mut d = Doc::textured();
+    d.json["materials"] = json!([{
+        "name": "glow",
+        "emissiveFactor": [1.0, 0.5, 0.25],
+        "emissiveTexture": {"index": 0},
+        "occlusionTexture": {"index": 0}
+    }]);
+    let s = d.load().unwrap();
+    let m = &s.materials[0];
+    assert_eq!(m.emission, Vec3::new(1.0, 0.5, 0.25));
+    assert_eq!(m.emissive_texture.as_ref().map(|t| (t.image, t.tex_coord)), Some((0, 0)));
+    assert!(s.report.warnings.iter().all(|w| !w.contains("emissiveTexture")), "{:?}", s.report.warnings);
+    assert!(s.report.warnings.iter().any(|w| w.contains("occlusionTexture is ignored")), "{:?}", s.report.warnings);
+    assert!(matches!(s.lights[0], vkvcm::scene::Light::Area { .. }));
+
+    d.json["materials"][0].as_object_mut().unwrap().remove("emissiveFactor");
+    let s = d.load().unwrap();
+    assert_eq!(s.materials[0].emission, Vec3::ZERO);
+    assert!(s.materials[0].emissive_texture.is_none());
 }

@@ -150,7 +150,7 @@ void main() {
                     Surface s = surface_at(h, st.o, st.d);
                     if (s.light == NO_LIGHT) return;
                     float dp, ep;
-                    if (max3(area_light_radiance(s.light, st.d, dp, ep)) <= 0.0) return;
+                    if (max3(area_light_radiance(s.light, h.u, h.v, st.d, dp, ep)) <= 0.0) return;
                     li = s.light;
                     vp[0] = s.p;
                     vn[0] = s.ng;
@@ -255,7 +255,7 @@ void main() {
     // s = 0: the camera subpath hits the emitter (area lights and the background).
     if (kind == LIGHT_AREA || kind == LIGHT_BACKGROUND) {
         float dp, ep;
-        vec3 le = kind == LIGHT_AREA ? area_light_radiance(li, dir_to(1u, 0u), dp, ep) : background_radiance(li, dir_to(1u, 0u), dp, ep);
+        vec3 le = kind == LIGHT_AREA ? area_light_radiance(li, 0.0, 0.0, dir_to(1u, 0u), dp, ep) : background_radiance(li, dir_to(1u, 0u), dp, ep);
         // Without connections only purely specular camera paths count an emitter hit.
         if (max3(le) > 0.0 && (use_vc || C[0].specular || k == 1u)) {
             w = mis_weight_hit(C[0], dp, ep, pick, use_vc);

@@ -56,6 +56,9 @@ pub struct FeatureSet {
     /// Some material has a normal map and some triangle tangents: the shading normal is
     /// bent by it (with the shading-normal code compiled in).
     pub normal_maps: bool,
+    /// Some emitting material has an emissive texture and some triangle texture
+    /// coordinates: area lights' radiance is textured (glsl/textures.glsl, `emission_tint`).
+    pub emissive_textures: bool,
 }
 
 fn nonzero(v: Vec3) -> bool {
@@ -81,6 +84,7 @@ impl FeatureSet {
         let vertex_attributes = scene.triangles.iter().any(|t| t.attributes.is_some());
         let tangents = scene.triangles.iter().any(|t| t.attributes.as_ref().is_some_and(|a| a.tangent.is_some()));
         let normal_maps = tangents && any_mat(&|m| m.normal_texture.is_some());
+        let emissive_textures = vertex_attributes && any_mat(&|m| m.emissive_texture.is_some() && nonzero(m.emission));
         let g = generic;
         FeatureSet {
             generic,
@@ -101,9 +105,13 @@ impl FeatureSet {
             shading_normals: g || scene_has_shading_normals || normal_maps,
             scene_has_shading_normals,
             vertex_attributes: g || vertex_attributes,
-            textures: g || (vertex_attributes && any_mat(&|m| m.base_color_texture.is_some())) || normal_maps,
+            textures: g
+                || (vertex_attributes && any_mat(&|m| m.base_color_texture.is_some()))
+                || normal_maps
+                || emissive_textures,
             alpha_mask: g || any_mat(&|m| m.alpha_mode != crate::scene::AlphaMode::Opaque),
             normal_maps: g || normal_maps,
+            emissive_textures: g || emissive_textures,
         }
     }
 
@@ -135,6 +143,7 @@ impl FeatureSet {
             ("HAS_TEXTURES", self.textures),
             ("HAS_ALPHA_MASK", self.alpha_mask),
             ("HAS_NORMAL_MAPS", self.normal_maps),
+            ("HAS_EMISSIVE_TEXTURES", self.emissive_textures),
             ("COUNT_RAYS", self.count_rays),
         ] {
             d = d.flag(name, on);
@@ -189,6 +198,7 @@ impl fmt::Display for FeatureSet {
             ("base-colour textures", self.textures),
             ("alpha cut-outs / blending", self.alpha_mask),
             ("normal maps", self.normal_maps),
+            ("emissive textures", self.emissive_textures),
         ];
         writeln!(f, "  surface detail: {}", list(&surface))?;
         write!(f, "  ray counter: {}", if self.count_rays { "on (--profile)" } else { "off" })

@@ -51,7 +51,7 @@ pub struct GpuMaterial {
     /// (`Material::glossy_untinted`).
     pub surface: [f32; 4],
     /// x: index of its normal map in `texture_refs`, or `NO_TEXTURE` (bits); y: the normal
-    /// map's scale; zw unused.
+    /// map's scale; z: index of its emissive texture, or `NO_TEXTURE` (bits); w unused.
     pub maps: [f32; 4],
 }
 

@@ -43,7 +43,11 @@ impl ScenePlan {
         let refs = scene
             .materials
             .iter()
-            .map(|m| m.base_color_texture.is_some() as u64 + m.normal_texture.is_some() as u64)
+            .map(|m| {
+                m.base_color_texture.is_some() as u64
+                    + m.normal_texture.is_some() as u64
+                    + m.emissive_texture.is_some() as u64
+            })
             .sum::<u64>();
         let texels: u64 = scene.images.iter().map(|i| i.texels.len() as u64).sum();
         let (env_w, env_h) = environment_map(scene).map_or((0, 0), |m| (m.width as u64, m.height as u64));
@@ -111,10 +115,10 @@ fn vertex_attributes(a: Option<&VertexAttributes>, k: usize) -> GpuVertexAttribu
 }
 
 /// The scene's textures on the GPU: the texture references of the materials (each
-/// material's base-colour texture, then its normal map, in material order), per material
-/// the indices of its two (or `NO_TEXTURE`), and the texels of the scene's images (RGBA8
+/// material's base-colour texture, normal map and emissive texture, in material order),
+/// per material the indices of its three (or `NO_TEXTURE`), and the texels of the scene's images (RGBA8
 /// packed little-endian, R lowest; four to a 16-byte element).
-type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 2]>, Vec<[u32; 4]>);
+type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 3]>, Vec<[u32; 4]>);
 
 fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     let mut first = Vec::with_capacity(scene.images.len());
@@ -136,8 +140,9 @@ fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     let mut refs = Vec::new();
     let mut indices = Vec::with_capacity(scene.materials.len());
     for (i, m) in scene.materials.iter().enumerate() {
-        let mut index = [NO_TEXTURE; 2];
-        for (slot, (t, linear)) in [(&m.base_color_texture, false), (&m.normal_texture, true)].into_iter().enumerate() {
+        let mut index = [NO_TEXTURE; 3];
+        let slots = [(&m.base_color_texture, false), (&m.normal_texture, true), (&m.emissive_texture, false)];
+        for (slot, (t, linear)) in slots.into_iter().enumerate() {
             let Some(t) = t else { continue };
             let img = scene
                 .images
@@ -326,14 +331,15 @@ impl SceneGpu {
         let (texture_refs, texture_indices, texels) = if features.textures {
             gpu_textures(scene)?
         } else {
-            (Vec::new(), vec![[NO_TEXTURE; 2]; scene.materials.len()], Vec::new())
+            (Vec::new(), vec![[NO_TEXTURE; 3]; scene.materials.len()], Vec::new())
         };
         let materials: Vec<GpuMaterial> = scene
             .materials
             .iter()
             .zip(&texture_indices)
-            .map(|(m, &[texture, normal_map])| {
+            .map(|(m, &[texture, normal_map, emissive])| {
                 let normal_map = if features.normal_maps { normal_map } else { NO_TEXTURE };
+                let emissive = if features.emissive_textures { emissive } else { NO_TEXTURE };
                 // glsl/types.glsl, GpuMaterial.surface.z.
                 let cutoff = match m.alpha_mode {
                     AlphaMode::Mask { cutoff } if features.alpha_mask => cutoff,
@@ -347,7 +353,7 @@ impl SceneGpu {
                     emission: v4(m.emission, 0.0),
                     glossy: v4(m.glossy, (m.roughness * m.roughness).max(MIN_GGX_ALPHA)),
                     surface: [bits(texture), m.alpha, cutoff, m.glossy_untinted],
-                    maps: [bits(normal_map), m.normal_scale, 0.0, 0.0],
+                    maps: [bits(normal_map), m.normal_scale, bits(emissive), 0.0],
                 }
             })
             .collect();

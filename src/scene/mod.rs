@@ -153,6 +153,10 @@ pub struct Material {
     /// 0.04), which then reflects only what the interface transmits: it is weighted by
     /// (1 - F(cos_o)) (1 - F(cos_i)) / (1 - E_avg), glsl/bsdf.glsl. 0: plain Lambert.
     pub diffuse_fresnel_f0: f32,
+    /// glTF's emissiveTexture (sRGB): where a triangle has its texture coordinates, the
+    /// emitted radiance is `emission` times the texel's linear colour (glsl/textures.glsl,
+    /// `emission_tint`), for every way an estimator meets the light.
+    pub emissive_texture: Option<TextureRef>,
 }
 
 impl Default for Material {
@@ -174,6 +178,7 @@ impl Default for Material {
             alpha_mode: AlphaMode::Opaque,
             normal_texture: None,
             normal_scale: 1.0,
+            emissive_texture: None,
         }
     }
 }

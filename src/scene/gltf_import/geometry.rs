@@ -95,6 +95,13 @@ impl Importer<'_> {
                 );
                 uvs = [None, None];
             }
+            let emissive = self.scene.materials[material as usize].emissive_texture.as_ref().map(|t| t.tex_coord);
+            if let Some(k) = emissive.filter(|&k| uvs[k as usize].is_none()) {
+                self.warnings.warn(
+                    format!("emissiveTexture on TEXCOORD_{k}, which the primitive does not have (the emissive factor alone applies)"),
+                    where_.clone(),
+                );
+            }
             // A normal map needs its texture coordinates, and tangents: the primitive's
             // TANGENT, or MikkTSpace's (glTF 2.0 section 3.7.2.1) generated below.
             let normal_map =

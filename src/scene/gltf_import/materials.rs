@@ -26,8 +26,9 @@ impl Importer<'_> {
 
     /// The vkvcm material of `m`: `VKVCM_materials_phong` if present, else clear glass for
     /// a transmissive material, else the metallic/roughness mapping, whose base colour
-    /// may come from `baseColorTexture`; plus emission, alpha and the alpha mode. The
-    /// other textures are reported as warnings (the constant factors are used).
+    /// may come from `baseColorTexture`; plus emission (with `emissiveTexture`), alpha and
+    /// the alpha mode. The other textures are reported as warnings (the constant factors
+    /// are used).
     pub(super) fn convert_material(&mut self, m: &gltf::Material) -> Result<Material> {
         let index = m.index().unwrap_or(0);
         let name = m.name().map(str::to_string).unwrap_or_else(|| format!("material{index}"));
@@ -95,10 +96,12 @@ impl Importer<'_> {
             textures.push("normalTexture");
         }
         if m.occlusion_texture().is_some() {
-            textures.push("occlusionTexture");
-        }
-        if m.emissive_texture().is_some() {
-            textures.push("emissiveTexture");
+            // Ambient occlusion is what the estimators compute from the geometry; a baked
+            // occlusion map would darken it twice.
+            self.warnings.warn(
+                "occlusionTexture is ignored (light transport computes occlusion from the geometry)",
+                label.clone(),
+            );
         }
         if m.transmission().and_then(|t| t.transmission_texture()).is_some() {
             textures.push("transmissionTexture");
@@ -137,6 +140,13 @@ impl Importer<'_> {
         out.emission = non_negative(Vec3::from_array(ef) * strength, &format!("{label} emission"))?;
         if !out.emission.is_finite() {
             bail!("{label}: emission is not finite");
+        }
+        // glTF: emitted radiance = emissiveFactor x emissiveTexture (x strength); the
+        // factor defaults to 0, so a texture without a factor emits nothing.
+        if let Some(info) = m.emissive_texture() {
+            if out.emission != Vec3::ZERO {
+                out.emissive_texture = self.emissive_texture(&info, &label)?;
+            }
         }
         out.name = name;
         Ok(out)

@@ -41,6 +41,12 @@ impl Importer<'_> {
         self.texture_ref(info.texture(), info.tex_coord(), transform, label, "baseColorTexture")
     }
 
+    /// The material's `emissiveTexture`, as `base_color_texture` reads a base-colour texture.
+    pub(super) fn emissive_texture(&mut self, info: &gltf::texture::Info, label: &str) -> Result<Option<TextureRef>> {
+        let transform = info.extension_value(KHR_TEXTURE_TRANSFORM);
+        self.texture_ref(info.texture(), info.tex_coord(), transform, label, "emissiveTexture")
+    }
+
     /// The material's `normalTexture` (with its `scale`, glTF 2.0 section 5.19.4), as
     /// `base_color_texture` reads a base-colour texture.
     pub(super) fn normal_texture(
