@@ -117,7 +117,7 @@ fn reference_then_converge() {
             "--reference",
             s(&r),
             "--algos",
-            "pt,bpt",
+            "pt,bpt@144",
             "--time",
             "0.8",
             "--checkpoints",
@@ -131,7 +131,8 @@ fn reference_then_converge() {
     );
     let rows = read_csv(&csv);
     assert_eq!(rows.len(), 2 * k);
-    for (e, est) in ["pt", "bpt"].iter().enumerate() {
+    // bpt@144: a quarter of the default light subpaths per iteration (render --light-paths).
+    for (e, est) in ["pt", "bpt@144"].iter().enumerate() {
         let rs = &rows[e * k..(e + 1) * k];
         for (i, r) in rs.iter().enumerate() {
             assert_eq!((r.estimator.as_str(), r.checkpoint), (*est, i + 1));
@@ -155,6 +156,9 @@ fn reference_then_converge() {
     // A reference of another size is refused before anything renders.
     let err = fails(&["converge", "glm_c", "--reference", s(&r), "--width", "16", "--time", "0.1"]);
     assert!(err.contains("is 24x24 but the render would be 16x24"), "{err}");
+    // So is a light-path count the estimator cannot take.
+    let err = fails(&["converge", "glm_c", "--reference", s(&r), "--algos", "pt@100", "--time", "0.1"]);
+    assert!(err.contains("pt@100"), "{err}");
 }
 
 #[test]

@@ -210,7 +210,9 @@ impl Variant {
         name
     }
 
-    fn settings(&self, width: u32, height: u32, budget: Budget) -> RenderSettings {
+    /// Render settings of this variant (its strategy and light-path count; the rest
+    /// defaults).
+    pub fn settings(&self, width: u32, height: u32, budget: Budget) -> RenderSettings {
         let mut s = RenderSettings::new(self.algorithm, width, height, budget);
         s.connect = self.connect;
         s.light_paths = self.light_paths;

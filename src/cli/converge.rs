@@ -7,6 +7,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 
 use super::render::{check_writable, install_interrupt};
+use vkvcm::bench::render::Variant;
 use vkvcm::gpu::Gpu;
 use vkvcm::image::{self, plot};
 use vkvcm::render::converge::{self as conv, ReferenceError};
@@ -58,9 +59,12 @@ pub struct ConvergeArgs {
     /// noise floor unless it carries vkvcm:reference_rmse).
     #[arg(long, short = 'r')]
     pub reference: PathBuf,
-    /// Estimators, comma-separated.
-    #[arg(long, value_delimiter = ',', default_value = "pt,bpt,vcm")]
-    pub algos: Vec<Algorithm>,
+    /// Estimators, comma-separated, each `algo` or, for bpt and vcm, `algo:path` /
+    /// `algo:cache:N` (the connection strategy, `render --connect`); `@N` after a
+    /// light-subpath estimator sets N light subpaths per iteration (`render
+    /// --light-paths`), e.g. vcm,vcm@65536. Rows and plot series carry these names.
+    #[arg(long, value_delimiter = ',', default_value = "pt,bpt,vcm", value_parser = Variant::parse)]
+    pub algos: Vec<Variant>,
     /// Render seconds per estimator (read-backs and error measurement not counted).
     #[arg(long, short = 't', default_value_t = 10.0)]
     pub time: f64,
@@ -221,7 +225,7 @@ pub fn converge_cmd(a: ConvergeArgs) -> Result<()> {
     if a.algos.is_empty() {
         bail!("--algos: name at least one estimator");
     }
-    if let Some(p) = a.algos.iter().find(|algo| !algo.info().radiance) {
+    if let Some(p) = a.algos.iter().find(|v| !v.algorithm.info().radiance) {
         bail!("--algos: {} is a preview, not radiance; it has no error to measure", p.name());
     }
     let (reference, meta) = image::read_exr(&a.reference)?;
@@ -269,19 +273,20 @@ pub fn converge_cmd(a: ConvergeArgs) -> Result<()> {
     let gpu = open_gpu(&a.gpu)?;
     let cancel = install_interrupt();
     let mut rows = Vec::new();
-    for &algo in &a.algos {
-        let mut s = RenderSettings::new(algo, w, h, Budget::Seconds(a.time));
+    for variant in &a.algos {
+        let name = variant.name();
+        let mut s = variant.settings(w, h, Budget::Seconds(a.time));
         s.frame.seed = a.seed;
         s.frame.max_path_length = max_path_length;
         let r = conv::converge_one(&gpu, &scene, &s, &target, &times, Some(&cancel), &mut |c| {
             let r = c.row;
             eprintln!(
-                "{:>4} {}/{}: {:6} it {:8.2} s  RMSE {:.4e}  relMSE {:.4e}  |bias| {:.3e}",
-                r.estimator, r.checkpoint, c.of, r.iterations, r.seconds, r.rmse, r.rel_mse, r.mean_abs_bias
+                "{name:>4} {}/{}: {:6} it {:8.2} s  RMSE {:.4e}  relMSE {:.4e}  |bias| {:.3e}",
+                r.checkpoint, c.of, r.iterations, r.seconds, r.rmse, r.rel_mse, r.mean_abs_bias
             );
         })
-        .with_context(|| format!("rendering {} with {}", scene.name, algo.name()))?;
-        rows.extend(r);
+        .with_context(|| format!("rendering {} with {name}", scene.name))?;
+        rows.extend(r.into_iter().map(|row| conv::ConvergeRow { estimator: name.clone(), ..row }));
         if cancel.load(std::sync::atomic::Ordering::Relaxed) {
             eprintln!("interrupted: writing the rows so far");
             break;
@@ -300,9 +305,9 @@ pub fn converge_cmd(a: ConvergeArgs) -> Result<()> {
         let series = a
             .algos
             .iter()
-            .map(|algo| plot::Series {
-                name: algo.name().to_string(),
-                points: rows.iter().filter(|r| r.estimator == algo.name()).map(|r| (r.seconds, r.rmse)).collect(),
+            .map(|v| plot::Series {
+                name: v.name(),
+                points: rows.iter().filter(|r| r.estimator == v.name()).map(|r| (r.seconds, r.rmse)).collect(),
             })
             .filter(|s| !s.points.is_empty())
             .collect();
