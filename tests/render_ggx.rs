@@ -198,14 +198,29 @@ fn ggx_furnace_conserves_energy() {
 /// 1 (two-sided per-pixel test). BPT must agree with PT per pixel (the layered lobe's
 /// pdfs in both directions). Sabotage: with glTF's `fresnel_mix` weighting (1 - F(wo.h))
 /// a roughness-0.3 dielectric pixel reflects 1.126 +- 0.026, without any weighting (a
-/// plain sum of the lobes) a smooth one 1.102 +- 0.021: both fail the bound.
+/// plain sum of the lobes) a smooth one 1.102 +- 0.021: both fail the bound. The two
+/// coloured-F0 cases (KHR_materials_specular, _ior) fail it when the diffuse interface
+/// takes F0's smallest component instead of its largest (1.30 +- 0.06 in red).
 #[test]
 fn gltf_material_never_reflects_more_than_it_receives() {
     let (w, h) = (24u32, 24u32);
     with_gpu(|gpu| {
-        for (metallic, roughness) in [(0.0f32, 0.0f32), (0.0, 0.3), (0.0, 1.0), (0.5, 0.5), (1.0, 0.3), (1.0, 1.0)] {
-            let mut mat = Material::metallic_roughness(Vec3::ONE, metallic, roughness);
-            mat.name = format!("white m {metallic} r {roughness}");
+        let gltf_f0 = Vec3::splat(0.04);
+        // The last two: a coloured dielectric F0 (KHR_materials_specular / _ior), whose
+        // diffuse interface takes its largest component.
+        let coloured = Vec3::new(0.16, 0.04, 0.0);
+        for (metallic, roughness, f0) in [
+            (0.0f32, 0.0f32, gltf_f0),
+            (0.0, 0.3, gltf_f0),
+            (0.0, 1.0, gltf_f0),
+            (0.5, 0.5, gltf_f0),
+            (1.0, 0.3, gltf_f0),
+            (1.0, 1.0, gltf_f0),
+            (0.0, 0.0, coloured),
+            (0.0, 0.3, coloured),
+        ] {
+            let mut mat = Material::metallic_roughness_with_f0(Vec3::ONE, metallic, roughness, f0);
+            mat.name = format!("white m {metallic} r {roughness} f0 {f0}");
             let cam = camera(Vec3::new(0.0, 0.0, 3.2), Vec3::new(0.0, 0.0, -1.0), Vec3::Y, 45.0);
             let mut sc = scene("gltf furnace", vec![], vec![mat], vec![Light::Background { radiance: Vec3::ONE }], cam);
             sc.spheres = vec![Sphere { center: Vec3::ZERO, radius: 1.0, material: 0 }];
@@ -218,7 +233,7 @@ fn gltf_material_never_reflects_more_than_it_receives() {
             let run = |algo: Algorithm, iterations: u64| render_stats(&render(algo, iterations), None);
             let pt_out = render(Algorithm::Pt, 512);
             let pt = render_stats(&pt_out, None);
-            let label = format!("metallic {metallic}, roughness {roughness}");
+            let label = format!("metallic {metallic}, roughness {roughness}, F0 {f0}");
             let z = vkvcm::image::stats::inverse_normal_cdf(1.0 - vkvcm::image::stats::sidak(ALPHA, 3 * pt.mean.len()));
             let mut worst = 0.0f64;
             for (m, v) in pt.mean.iter().zip(&pt.variance) {
@@ -229,7 +244,7 @@ fn gltf_material_never_reflects_more_than_it_receives() {
                 }
             }
             eprintln!("{label}: brightest pixel {worst:.4}, image mean {:.4}", image_mean(&pt));
-            if metallic == 0.0 && roughness == 0.0 {
+            if metallic == 0.0 && roughness == 0.0 && f0 == gltf_f0 {
                 // Pixels that see the sphere at grazing angles (cos < 0.2) are left out:
                 // there the GGX lobe's alpha floor of 1e-3 makes its shadowing lose energy.
                 let mask = not_grazing_mask(&sc.camera, w, h, 0.2);

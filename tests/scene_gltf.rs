@@ -1617,3 +1617,37 @@ fn emissive_textures_are_read_and_occlusion_is_named() {
     assert_eq!(s.materials[0].emission, Vec3::ZERO);
     assert!(s.materials[0].emissive_texture.is_none());
 }
+
+/// KHR_materials_ior and KHR_materials_specular set the dielectric's F0 of a
+/// metallic/roughness material: ((ior - 1) / (ior + 1))^2, times specularColorFactor
+/// (clamped to 1) and specularFactor; specularFactor 0 leaves a plain Lambertian.
+#[test]
+fn specular_and_ior_set_the_dielectric_f0() {
+    let mut d = Doc::triangle();
+    d.json["extensionsUsed"] = json!(["KHR_materials_specular", "KHR_materials_ior"]);
+    d.json["materials"] = json!([{"name": "m", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1.0], "metallicFactor": 0.0}}]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let m = d.load().unwrap().materials[0].clone();
+    assert_eq!((m.glossy, m.diffuse_fresnel_f0), (Vec3::splat(0.04), 0.04));
+
+    d.json["materials"][0]["extensions"] = json!({"KHR_materials_ior": {"ior": 2.0}});
+    let m = d.load().unwrap().materials[0].clone();
+    assert!((m.glossy - Vec3::splat(1.0 / 9.0)).abs().max_element() < 1e-6, "{:?}", m.glossy);
+
+    d.json["materials"][0]["extensions"] =
+        json!({"KHR_materials_specular": {"specularColorFactor": [2.0, 1.0, 0.0], "specularFactor": 1.0}});
+    let s = d.load().unwrap();
+    let m = &s.materials[0];
+    assert!((m.glossy - Vec3::new(0.08, 0.04, 0.0)).abs().max_element() < 1e-6, "{:?}", m.glossy);
+    assert_eq!(m.diffuse_fresnel_f0, 0.08);
+    assert!(s.report.warnings.iter().all(|w| !w.contains("KHR_materials_specular")), "{:?}", s.report.warnings);
+
+    d.json["materials"][0]["extensions"] = json!({"KHR_materials_specular": {"specularFactor": 0.0}});
+    let m = d.load().unwrap().materials[0].clone();
+    assert_eq!((m.glossy, m.diffuse_fresnel_f0, m.diffuse), (Vec3::ZERO, 0.0, Vec3::splat(0.5)));
+
+    d.json["materials"][0]["extensions"] = json!({"KHR_materials_specular": {"specularFactor": 0.5}});
+    let s = d.load().unwrap();
+    assert!((s.materials[0].glossy - Vec3::splat(0.02)).abs().max_element() < 1e-6);
+    assert!(s.report.warnings.iter().any(|w| w.contains("specularFactor between 0 and 1")), "{:?}", s.report.warnings);
+}

@@ -195,13 +195,23 @@ impl Material {
     /// roughness 0 is a perfect mirror of colour `base`. docs/scene-format.md says what
     /// differs from the specification's `fresnel_mix` and why.
     pub fn metallic_roughness(base: Vec3, metallic: f32, roughness: f32) -> Material {
+        Material::metallic_roughness_with_f0(base, metallic, roughness, Vec3::splat(GLTF_DIELECTRIC_F0))
+    }
+
+    /// [`Material::metallic_roughness`] with the dielectric's F0 `dielectric_f0` instead of
+    /// 0.04 (KHR_materials_ior: ((ior - 1) / (ior + 1))^2; KHR_materials_specular: times
+    /// specularColorFactor, clamped to 1, times specularFactor). The diffuse lobe's
+    /// interface takes the largest component of it, so that a coloured F0 never makes the
+    /// layering reflect more than it receives; the part of the GGX F0 that the base colour
+    /// does not tint is its mean.
+    pub fn metallic_roughness_with_f0(base: Vec3, metallic: f32, roughness: f32, dielectric_f0: Vec3) -> Material {
         if metallic >= 1.0 && roughness <= 0.0 {
             return Material { mirror: base, ..Material::default() };
         }
         let diffuse = base * (1.0 - metallic);
-        let glossy = Vec3::splat(GLTF_DIELECTRIC_F0).lerp(base, metallic);
-        let diffuse_fresnel_f0 = if diffuse == Vec3::ZERO { 0.0 } else { GLTF_DIELECTRIC_F0 };
-        let glossy_untinted = GLTF_DIELECTRIC_F0 * (1.0 - metallic);
+        let glossy = dielectric_f0.lerp(base, metallic);
+        let diffuse_fresnel_f0 = if diffuse == Vec3::ZERO { 0.0 } else { dielectric_f0.max_element() };
+        let glossy_untinted = dielectric_f0.element_sum() / 3.0 * (1.0 - metallic);
         Material { diffuse, glossy, roughness, diffuse_fresnel_f0, glossy_untinted, ..Material::default() }
     }
 }

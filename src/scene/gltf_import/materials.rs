@@ -4,7 +4,7 @@
 
 use super::extensions::{ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG};
 use super::Importer;
-use crate::scene::{AlphaMode, Material};
+use crate::scene::{AlphaMode, Material, GLTF_DIELECTRIC_F0};
 use anyhow::{bail, Result};
 use glam::Vec3;
 
@@ -75,7 +75,8 @@ impl Importer<'_> {
             }
             Material { mirror: Vec3::ONE, ior, ..Material::default() }
         } else {
-            let mut mr = Material::metallic_roughness(base, metallic, roughness);
+            let dielectric_f0 = self.dielectric_f0(m, &label)?;
+            let mut mr = Material::metallic_roughness_with_f0(base, metallic, roughness, dielectric_f0);
             if let Some(info) = pbr.base_color_texture() {
                 mr.base_color_texture = self.base_color_texture(&info, &label)?;
                 base_texture_read = true;
@@ -151,6 +152,41 @@ impl Importer<'_> {
         out.name = name;
         Ok(out)
     }
+
+    /// The F0 of the dielectric part of a metallic/roughness material: 0.04, or
+    /// ((ior - 1) / (ior + 1))^2 with KHR_materials_ior, times KHR_materials_specular's
+    /// specularColorFactor (the product clamped to 1) and specularFactor (the extension's
+    /// `dielectric_f0`). Its f90 = specularFactor is taken as 1 (vkvcm's Schlick terms
+    /// reach 1 at grazing angles), which is exact for specularFactor 0 and 1 and
+    /// approximated, with a warning, in between; its textures are not read (warning).
+    fn dielectric_f0(&mut self, m: &gltf::Material, label: &str) -> Result<Vec3> {
+        let f0 = match m.ior() {
+            // 0.04 exactly (((1.5 - 1) / (1.5 + 1))^2 rounds to another f32).
+            None => GLTF_DIELECTRIC_F0,
+            Some(ior) if ior >= 1.0 && ior.is_finite() => ((ior - 1.0) / (ior + 1.0)).powi(2),
+            Some(ior) => bail!("{label}: KHR_materials_ior ior = {ior} is not supported (need >= 1)"),
+        };
+        let Some(sp) = m.specular() else { return Ok(Vec3::splat(f0)) };
+        let factor = sp.specular_factor();
+        let color = Vec3::from_array(sp.specular_color_factor());
+        if !(factor.is_finite() && factor >= 0.0 && color.is_finite() && color.min_element() >= 0.0) {
+            bail!("{label}: KHR_materials_specular factors must be finite and >= 0");
+        }
+        let factor = factor.min(1.0);
+        if factor > 0.0 && factor < 1.0 {
+            self.warnings.warn(
+                "KHR_materials_specular specularFactor between 0 and 1 scales F0 but not f90 (approximated)",
+                label.to_string(),
+            );
+        }
+        if sp.specular_texture().is_some() || sp.specular_color_texture().is_some() {
+            self.warnings.warn(
+                "KHR_materials_specular textures are not read (the constant factors are used)",
+                label.to_string(),
+            );
+        }
+        Ok((Vec3::splat(f0) * color).min(Vec3::ONE) * factor)
+    }
 }
 
 #[cfg(test)]
@@ -178,5 +214,16 @@ mod tests {
         assert!(close(m.diffuse, Vec3::splat(0.5)));
         assert!(close(m.glossy, Vec3::splat(0.52)));
         assert_eq!(m.mirror, Vec3::ZERO);
+        // The 0.04 default is KHR_materials_ior's default ior 1.5.
+        assert_eq!(Material::metallic_roughness_with_f0(Vec3::splat(0.5), 0.25, 0.5, Vec3::splat(0.04)), {
+            Material::metallic_roughness(Vec3::splat(0.5), 0.25, 0.5)
+        });
+        // No specular reflection (specularFactor 0): plain Lambert, no interface.
+        let m = Material::metallic_roughness_with_f0(Vec3::splat(0.5), 0.0, 0.5, Vec3::ZERO);
+        assert_eq!((m.glossy, m.diffuse_fresnel_f0, m.glossy_untinted), (Vec3::ZERO, 0.0, 0.0));
+        // A coloured F0: the diffuse interface takes its largest component.
+        let m = Material::metallic_roughness_with_f0(Vec3::splat(0.5), 0.0, 0.5, Vec3::new(0.08, 0.04, 0.0));
+        assert_eq!(m.diffuse_fresnel_f0, 0.08);
+        assert!(close(m.glossy, Vec3::new(0.08, 0.04, 0.0)));
     }
 }
