@@ -124,6 +124,18 @@ fn quad(material: u32, uv_of: &dyn Fn(f32, f32) -> Vec2, color_of: Option<&dyn F
     vec![tri([(0.0, 0.0), (0.0, 1.0), (1.0, 1.0)]), tri([(0.0, 0.0), (1.0, 1.0), (1.0, 0.0)])]
 }
 
+/// Image 0 with repeat wrapping on TEXCOORD_0, untransformed, filtered by `filter`.
+fn repeat_texture(filter: Filter) -> TextureRef {
+    TextureRef {
+        image: 0,
+        wrap_s: Wrap::Repeat,
+        wrap_t: Wrap::Repeat,
+        filter,
+        tex_coord: 0,
+        transform: TextureRef::IDENTITY,
+    }
+}
+
 fn top_camera() -> vkvcm::scene::Camera {
     camera(Vec3::new(0.0, CAM_H, 0.0), Vec3::NEG_Y, Vec3::NEG_Z, 45.0)
 }
@@ -226,14 +238,7 @@ fn textured_quad_matches_the_cpu_sampler() {
 /// coordinates.
 #[test]
 fn second_texture_coordinate_set() {
-    let t = |tex_coord| TextureRef {
-        image: 0,
-        wrap_s: Wrap::Repeat,
-        wrap_t: Wrap::Repeat,
-        filter: Filter::Nearest,
-        tex_coord,
-        transform: TextureRef::IDENTITY,
-    };
+    let t = |tex_coord| TextureRef { tex_coord, ..repeat_texture(Filter::Nearest) };
     let identity = |u: f32, v: f32| Vec2::new(u, v);
     let reference = textured_scene(t(0), &identity, None);
     let mut sc = textured_scene(t(1), &identity, None);
@@ -273,14 +278,7 @@ fn expected_image_for_uvs(scene: &Scene) -> Image {
 /// alpha test at all) it fails.
 #[test]
 fn alpha_cutouts_are_holes_for_every_ray() {
-    let t = TextureRef {
-        image: 0,
-        wrap_s: Wrap::Repeat,
-        wrap_t: Wrap::Repeat,
-        filter: Filter::Nearest,
-        tex_coord: 0,
-        transform: TextureRef::IDENTITY,
-    };
+    let t = repeat_texture(Filter::Nearest);
     let mut sc = textured_scene(t, &|u, v| Vec2::new(u, v), None);
     sc.materials[0].alpha_mode = AlphaMode::Mask { cutoff: 0.5 };
     // The floor: larger than the view, 0.002 below, grey, flat.
@@ -422,14 +420,7 @@ fn alpha_blend_is_stochastic_transparency() {
 /// specialised render).
 #[test]
 fn generic_kernels_render_textures_identically() {
-    let t = TextureRef {
-        image: 0,
-        wrap_s: Wrap::MirroredRepeat,
-        wrap_t: Wrap::ClampToEdge,
-        filter: Filter::Linear,
-        tex_coord: 0,
-        transform: TextureRef::IDENTITY,
-    };
+    let t = TextureRef { wrap_s: Wrap::MirroredRepeat, wrap_t: Wrap::ClampToEdge, ..repeat_texture(Filter::Linear) };
     let mut sc = textured_scene(t, &t_uv, None);
     sc.materials[0].alpha_mode = AlphaMode::Mask { cutoff: 0.5 };
     with_gpu(|gpu| {
@@ -485,14 +476,7 @@ fn normal_map_bends_the_shading_normal_in_every_estimator() {
     // B = cross(N, T) = -z.
     let d = texel.map(|b| b as f32 / 255.0 * 2.0 - 1.0);
     let bent = (Vec3::X * d[0] + Vec3::NEG_Z * d[1] + Vec3::Y * d[2]).normalize();
-    let map = TextureRef {
-        image: 0,
-        wrap_s: Wrap::Repeat,
-        wrap_t: Wrap::Repeat,
-        filter: Filter::Linear,
-        tex_coord: 0,
-        transform: TextureRef::IDENTITY,
-    };
+    let map = repeat_texture(Filter::Linear);
     let lights = vec![
         Light::Directional { direction: Vec3::new(1.0, -0.6, 0.2).normalize(), irradiance: Vec3::splat(2.0) },
         Light::Background { radiance: Vec3::splat(0.2) },
@@ -577,14 +561,7 @@ fn emissive_texture_modulates_area_lights_in_every_estimator() {
         let emitter = Material {
             name: "emitter".into(),
             emission: Vec3::splat(strength),
-            emissive_texture: with_texture.then_some(TextureRef {
-                image: 0,
-                wrap_s: Wrap::Repeat,
-                wrap_t: Wrap::Repeat,
-                filter: Filter::Nearest,
-                tex_coord: 0,
-                transform: TextureRef::IDENTITY,
-            }),
+            emissive_texture: with_texture.then_some(repeat_texture(Filter::Nearest)),
             ..Default::default()
         };
         let mut tris = floor.clone();
