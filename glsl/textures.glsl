@@ -1,7 +1,7 @@
 // Surface detail: per-vertex attributes (texture coordinates, colours), base-colour,
-// normal and emissive textures, and what they make of a point on a triangle: its tint (the texel's linear
-// colour times the vertex colour, multiplying the material's base colour, glsl/bsdf.glsl)
-// and its alpha (the material's alpha factor times the texel's and the vertex colour's:
+// normal and emissive textures, and what they make of a point on a triangle: its tint
+// (the texel's linear colour times the vertex colour, multiplying the material's base
+// colour, glsl/bsdf.glsl), its shading normal, its emission and its alpha (the material's alpha factor times the texel's and the vertex colour's:
 // cut-outs, alpha_visible, which the traversal calls at every candidate hit).
 //
 // Bindings (src/render/scene_gpu.rs): vertex_attributes (GpuVertexAttributes, three per
@@ -101,17 +101,28 @@ bool texture_uv(uint ref, GpuVertexAttributes a0, GpuVertexAttributes a1, GpuVer
 }
 #endif
 
+#if HAS_VERTEX_ATTRIBUTES
+// The per-vertex attributes of triangle `tri` (at its first-vertex index p2.w); false,
+// with a0..a2 unset, where it has none.
+bool triangle_attributes(uint tri, out GpuVertexAttributes a0, out GpuVertexAttributes a1,
+                         out GpuVertexAttributes a2) {
+    uint first = floatBitsToUint(triangle_at(tri).p2.w);
+    if (first == 0xffffffffu) return false;
+    a0 = vertex_attribute_data[first];
+    a1 = vertex_attribute_data[first + 1u];
+    a2 = vertex_attribute_data[first + 2u];
+    return true;
+}
+#endif
+
 // The tint (rgb) and alpha (times the material's alpha factor) of triangle `tri` with
 // material `material` at barycentric weights (u, v): (1, 1, 1, factor) where it has no
 // attributes.
 vec4 surface_tint_alpha(uint tri, uint material, float u, float v) {
     vec4 r = vec4(1.0, 1.0, 1.0, material_surface(material).y);
 #if HAS_VERTEX_ATTRIBUTES
-    uint first = floatBitsToUint(triangle_at(tri).p2.w);
-    if (first == 0xffffffffu) return r;
-    GpuVertexAttributes a0 = vertex_attribute_data[first];
-    GpuVertexAttributes a1 = vertex_attribute_data[first + 1u];
-    GpuVertexAttributes a2 = vertex_attribute_data[first + 2u];
+    GpuVertexAttributes a0, a1, a2;
+    if (!triangle_attributes(tri, a0, a1, a2)) return r;
     float w0 = 1.0 - u - v;
     // A constant colour (white where there is none) is taken as it is, not interpolated.
     vec4 color = (a0.color == a1.color && a0.color == a2.color) ? a0.color
@@ -138,11 +149,9 @@ vec4 surface_tint_alpha(uint tri, uint material, float u, float v) {
 vec3 emission_tint(uint tri, float u, float v) {
     uint ref = floatBitsToUint(material_maps(floatBitsToUint(triangle_at(tri).p0.w)).z);
     if (ref == NO_TEXTURE) return vec3(1.0);
-    uint first = floatBitsToUint(triangle_at(tri).p2.w);
-    if (first == 0xffffffffu) return vec3(1.0);
+    GpuVertexAttributes a0, a1, a2;
     vec2 uv;
-    if (!texture_uv(ref, vertex_attribute_data[first], vertex_attribute_data[first + 1u],
-                    vertex_attribute_data[first + 2u], 1.0 - u - v, u, v, uv)) {
+    if (!triangle_attributes(tri, a0, a1, a2) || !texture_uv(ref, a0, a1, a2, 1.0 - u - v, u, v, uv)) {
         return vec3(1.0);
     }
     return texture_sample(ref, uv).rgb;
@@ -160,10 +169,8 @@ vec3 normal_mapped(uint tri, uint material, float u, float v, vec3 n) {
     vec4 maps = material_maps(material);
     uint ref = floatBitsToUint(maps.x);
     if (ref == NO_TEXTURE) return n;
-    uint first = floatBitsToUint(triangle_at(tri).p2.w);
-    GpuVertexAttributes a0 = vertex_attribute_data[first];
-    GpuVertexAttributes a1 = vertex_attribute_data[first + 1u];
-    GpuVertexAttributes a2 = vertex_attribute_data[first + 2u];
+    GpuVertexAttributes a0, a1, a2;
+    if (!triangle_attributes(tri, a0, a1, a2)) return n;
     float w0 = 1.0 - u - v;
     vec4 t = w0 * a0.tangent + u * a1.tangent + v * a2.tangent;
     vec2 uv;

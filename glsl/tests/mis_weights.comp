@@ -255,6 +255,7 @@ void main() {
     // s = 0: the camera subpath hits the emitter (area lights and the background).
     if (kind == LIGHT_AREA || kind == LIGHT_BACKGROUND) {
         float dp, ep;
+        // (Any point of the light: these scenes' lights are untextured, only the side matters.)
         vec3 le = kind == LIGHT_AREA ? area_light_radiance(li, 0.0, 0.0, dir_to(1u, 0u), dp, ep) : background_radiance(li, dir_to(1u, 0u), dp, ep);
         // Without connections only purely specular camera paths count an emitter hit.
         if (max3(le) > 0.0 && (use_vc || C[0].specular || k == 1u)) {

@@ -7,8 +7,8 @@
 //! removed code draws no random numbers, so both variants follow the same random sequence
 //! (tests/render_features.rs compares them).
 //!
-//! Textures: vkvcm has none (materials are constant per primitive), so there is nothing
-//! to specialise; the feature set says so.
+//! Surface detail (vertex attributes, base-colour, normal and emissive textures, alpha)
+//! is specialised the same way: its code is compiled in only for scenes that have it.
 
 use std::fmt;
 

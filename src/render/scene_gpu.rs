@@ -116,8 +116,8 @@ fn vertex_attributes(a: Option<&VertexAttributes>, k: usize) -> GpuVertexAttribu
 
 /// The scene's textures on the GPU: the texture references of the materials (each
 /// material's base-colour texture, normal map and emissive texture, in material order),
-/// per material the indices of its three (or `NO_TEXTURE`), and the texels of the scene's images (RGBA8
-/// packed little-endian, R lowest; four to a 16-byte element).
+/// per material the indices of its three (or `NO_TEXTURE`), and the texels of the
+/// scene's images (RGBA8 packed little-endian, R lowest; four to a 16-byte element).
 type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 3]>, Vec<[u32; 4]>);
 
 fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {

@@ -69,10 +69,7 @@ impl Importer<'_> {
                 self.warnings
                     .warn("partial, rough or tinted transmission is approximated by clear smooth glass", label.clone());
             }
-            let ior = m.ior().unwrap_or(1.5);
-            if !(ior >= 1.0 && ior.is_finite()) {
-                bail!("{label}: KHR_materials_ior ior = {ior} is not supported (need >= 1)");
-            }
+            let ior = ior(m, &label)?.unwrap_or(1.5);
             Material { mirror: Vec3::ONE, ior, ..Material::default() }
         } else {
             let dielectric_f0 = self.dielectric_f0(m, &label)?;
@@ -160,11 +157,10 @@ impl Importer<'_> {
     /// reach 1 at grazing angles), which is exact for specularFactor 0 and 1 and
     /// approximated, with a warning, in between; its textures are not read (warning).
     fn dielectric_f0(&mut self, m: &gltf::Material, label: &str) -> Result<Vec3> {
-        let f0 = match m.ior() {
+        let f0 = match ior(m, label)? {
             // 0.04 exactly (((1.5 - 1) / (1.5 + 1))^2 rounds to another f32).
             None => GLTF_DIELECTRIC_F0,
-            Some(ior) if ior >= 1.0 && ior.is_finite() => ((ior - 1.0) / (ior + 1.0)).powi(2),
-            Some(ior) => bail!("{label}: KHR_materials_ior ior = {ior} is not supported (need >= 1)"),
+            Some(ior) => ((ior - 1.0) / (ior + 1.0)).powi(2),
         };
         let Some(sp) = m.specular() else { return Ok(Vec3::splat(f0)) };
         let factor = sp.specular_factor();
@@ -186,6 +182,17 @@ impl Importer<'_> {
             );
         }
         Ok((Vec3::splat(f0) * color).min(Vec3::ONE) * factor)
+    }
+}
+
+/// The material's KHR_materials_ior ior, if it has one; an error unless it is finite and
+/// at least 1.
+fn ior(m: &gltf::Material, label: &str) -> Result<Option<f32>> {
+    match m.ior() {
+        Some(ior) if !(ior >= 1.0 && ior.is_finite()) => {
+            bail!("{label}: KHR_materials_ior ior = {ior} is not supported (need >= 1)")
+        }
+        other => Ok(other),
     }
 }
 
