@@ -19,7 +19,8 @@
 //      layout(std430) readonly buffer bvh_prims { vec4 bvh_prim_data[]; };
 //
 // Optional: `#define BVH_NO_SPHERES` when the scene has no spheres (GpuBvh::glsl_defines
-// says so): the sphere test is compiled out.
+// says so): the sphere test is compiled out. `#define BVH_INSTANCES` when it has instances
+// (the two-level BVH below).
 //
 // Provides: struct Hit, trace_closest(o, d, tmin, tmax, out Hit), trace_any(o, d, tmin,
 // tmax), and the ray/primitive tests of intersect.glsl.
@@ -33,10 +34,20 @@
 // Prim i = elements 3i .. 3i+2 (48 bytes), in leaf order:
 //   triangle: (v0, id) (v1, material) (v2, 0)
 //   sphere:   (center, id | BVH_SPHERE_FLAG) (radius, 0, 0, material) (0)
+//   instance: (root node, record slot, 0, instance | BVH_INSTANCE_FLAG) (0) (0)
 // id = original index in the scene's triangle list, or sphere list for spheres.
 //
+// Instances (src/bvh/layout.rs, "Instancing"): each shared mesh has its own tree in object
+// space, after the top-level tree in both arrays, with absolute indices. An instance's
+// record, two prim slots, holds the rows (m0, m1, m2, translation) of its world-to-object
+// then its object-to-world matrix. Meeting an instance in a leaf, the traversal pushes
+// the rest of the leaf and a BVH_RETURN marker (entry distance -inf: never culled), moves
+// the ray into object space (the direction is not normalised, so t means the same in
+// both spaces) and descends from the mesh's root; popping the marker moves the ray back.
+//
 // Stack: BVH_STACK_SIZE entries; the traversal pushes at most one per internal level and
-// the builder guarantees at most MAX_DEPTH = 32 levels (src/bvh/layout.rs).
+// the builder guarantees at most MAX_DEPTH = 32 levels (src/bvh/layout.rs); with instances
+// a top-level path and a mesh path plus the two entries above (MAX_STACK_INSTANCED).
 // Ray/box test: Ize, "Robust BVH Ray Traversal", JCGT 2013 (exit distance widened), on
 // boxes the builder padded and quantised outwards.
 #ifndef VKVCM_BVH_GLSL
@@ -44,7 +55,14 @@
 
 #include "intersect.glsl"
 
+#ifdef BVH_INSTANCES
+#define BVH_STACK_SIZE 66
+#else
 #define BVH_STACK_SIZE 32
+#endif
+#define BVH_INSTANCE_FLAG 0x40000000u
+#define BVH_RETURN 0xfffffffeu
+#define BVH_NO_INSTANCE 0xffffffffu
 #define BVH_LEAF_FLAG 0x80000000u
 #define BVH_SPHERE_FLAG 0x80000000u
 #define BVH_DONE 0xffffffffu
@@ -119,7 +137,19 @@ struct Hit {
     float v;          // barycentric weight of v2
     bool is_sphere;
     uint material;
+    uint instance_record;  // the instance's record slot (BVH_INSTANCES), else BVH_NO_INSTANCE
 };
+
+// An instance record's rows applied to p: a point with w = 1, a direction with w = 0
+// (the CPU mirror's apply_rows, same operation order).
+vec3 bvh_apply_rows(uint record, vec3 p, float w) {
+    vec4 r0 = uintBitsToFloat(bvh_prim_elem(record));
+    vec4 r1 = uintBitsToFloat(bvh_prim_elem(record + 1u));
+    vec4 r2 = uintBitsToFloat(bvh_prim_elem(record + 2u));
+    return vec3(r0.x * p.x + r0.y * p.y + r0.z * p.z + r0.w * w,
+                r1.x * p.x + r1.y * p.y + r1.z * p.z + r1.w * w,
+                r2.x * p.x + r2.y * p.y + r2.z * p.z + r2.w * w);
+}
 
 // 1/d with components below 1e-30 in magnitude clamped to +-1e-30 (no 0 * inf NaNs; the
 // builder pads node boxes so a ray on a box plane and parallel to it still enters).
@@ -161,7 +191,29 @@ void bvh_load_node(uint n, out vec3 lo0, out vec3 hi0, out vec3 lo1, out vec3 hi
     c1 = b.w;
 }
 
-// Pops the next entry whose entry distance is not beyond tmax (or BVH_DONE).
+// Pops the next entry whose entry distance is not beyond tmax (or BVH_DONE); with
+// instances, a BVH_RETURN marker moves the ray back to world space.
+#ifdef BVH_INSTANCES
+#define BVH_POP()                                \
+    {                                            \
+        cur = BVH_DONE;                          \
+        while (sp > 0u) {                        \
+            sp--;                                \
+            if (stack_t[sp] <= tmax) {           \
+                if (stack[sp] == BVH_RETURN) {   \
+                    o = world_o;                 \
+                    d = world_d;                 \
+                    inv_d = bvh_safe_inv(d);     \
+                    sh = ray_shear(d);           \
+                    record = BVH_NO_INSTANCE;    \
+                    continue;                    \
+                }                                \
+                cur = stack[sp];                 \
+                break;                           \
+            }                                    \
+        }                                        \
+    }
+#else
 #define BVH_POP()                                \
     {                                            \
         cur = BVH_DONE;                          \
@@ -173,16 +225,24 @@ void bvh_load_node(uint n, out vec3 lo0, out vec3 hi0, out vec3 lo1, out vec3 hi
             }                                    \
         }                                        \
     }
+#endif
 
 // Shared traversal. Returns the primitive slot of the closest hit (or of the first hit
-// found when `any_hit`), -1 for none; tmax becomes the hit distance. Descends through
+// found when `any_hit`), -1 for none; tmax becomes the hit distance, hrecord the record
+// slot of the instance hit (BVH_NO_INSTANCE for world-space primitives). Descends through
 // internal nodes (nearer child first, the farther one pushed with its entry distance)
 // until a leaf, tests the leaf, and pops. The inner node loop runs until every lane of
 // a SIMD group has reached a leaf, so the leaf tests of the group run together.
 int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hit,
-                 out float hu, out float hv) {
+                 out float hu, out float hv, out uint hrecord) {
     vec3 inv_d = bvh_safe_inv(d);
     RayShear sh = ray_shear(d);
+    hrecord = BVH_NO_INSTANCE;
+#ifdef BVH_INSTANCES
+    vec3 world_o = o;
+    vec3 world_d = d;
+    uint record = BVH_NO_INSTANCE;
+#endif
     uint stack[BVH_STACK_SIZE];
     float stack_t[BVH_STACK_SIZE];
     uint sp = 0u;
@@ -215,8 +275,29 @@ int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hi
         }
         uint first = (cur & ~BVH_LEAF_FLAG) >> 3;
         uint end = first + (cur & 7u);
+        bool entered = false;
         for (uint i = first; i < end; i++) {
             uvec4 pa = bvh_prim_elem(3u * i);
+#ifdef BVH_INSTANCES
+            if ((pa.w & (BVH_SPHERE_FLAG | BVH_INSTANCE_FLAG)) == BVH_INSTANCE_FLAG) {
+                if (i + 1u < end) {
+                    stack[sp] = BVH_LEAF_FLAG | ((i + 1u) << 3) | (end - i - 1u);
+                    stack_t[sp] = uintBitsToFloat(0xff800000u);  // -inf
+                    sp++;
+                }
+                stack[sp] = BVH_RETURN;
+                stack_t[sp] = uintBitsToFloat(0xff800000u);
+                sp++;
+                record = pa.y;
+                o = bvh_apply_rows(3u * record, world_o, 1.0);
+                d = bvh_apply_rows(3u * record, world_d, 0.0);
+                inv_d = bvh_safe_inv(d);
+                sh = ray_shear(d);
+                cur = pa.x;
+                entered = true;
+                break;
+            }
+#endif
             uvec4 pb = bvh_prim_elem(3u * i + 1u);
             float t, u, v;
             bool hit;
@@ -241,10 +322,16 @@ int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hi
                 best = int(i);
                 hu = u;
                 hv = v;
+#ifdef BVH_INSTANCES
+                hrecord = record;
+#endif
                 if (any_hit) {
                     return best;
                 }
             }
+        }
+        if (entered) {
+            continue;
         }
         BVH_POP();
         if (cur == BVH_DONE) {
@@ -259,10 +346,12 @@ int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hi
 bool trace_closest(vec3 o, vec3 d, float tmin, float tmax, out Hit h) {
     float t = tmax;
     float u, v;
-    int slot = bvh_traverse(o, d, tmin, t, false, u, v);
+    uint record;
+    int slot = bvh_traverse(o, d, tmin, t, false, u, v, record);
     h.t = t;
     h.u = u;
     h.v = v;
+    h.instance_record = record;
     if (slot < 0) {
         h.prim = 0xffffffffu;
         h.is_sphere = false;
@@ -280,7 +369,8 @@ bool trace_closest(vec3 o, vec3 d, float tmin, float tmax, out Hit h) {
 bool trace_any(vec3 o, vec3 d, float tmin, float tmax) {
     float t = tmax;
     float u, v;
-    return bvh_traverse(o, d, tmin, t, true, u, v) >= 0;
+    uint record;
+    return bvh_traverse(o, d, tmin, t, true, u, v, record) >= 0;
 }
 
 #endif

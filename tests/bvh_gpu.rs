@@ -29,12 +29,15 @@ struct TestHit {
     v: f32,
     flags: u32,
     material: u32,
-    pad: [u32; 2],
+    instance_record: u32,
+    pad: u32,
 }
 
 struct GpuResult {
     closest: Option<Hit>,
     any: bool,
+    /// The record slot of the instance hit (0xffffffff: none).
+    instance_record: u32,
 }
 
 /// Runs glsl/tests/test_bvh_trace.comp over `rays`.
@@ -78,8 +81,12 @@ fn trace_on_gpu_with(gpu: &Arc<Gpu>, bvh: &GpuBvh, rays: &[(Ray, f32, f32)], vec
                 v: h.v,
                 is_sphere: h.flags & 2 != 0,
                 material: h.material,
+                // The kernel reports the instance's record slot, not its index (see
+                // tests/bvh_instances.rs); these scenes have no instances.
+                instance: None,
             }),
             any: h.flags & 4 != 0,
+            instance_record: h.instance_record,
         })
         .collect()
 }
@@ -183,4 +190,45 @@ fn gpu_matches_cpu_traversal_on_large_scene() {
         }
     }
     assert!(errors.is_empty(), "{} of {} rays: {:#?}", errors.len(), rays.len(), &errors[..errors.len().min(10)]);
+}
+
+/// The two-level BVH on the GPU against its CPU mirror (itself checked against the brute
+/// force over the flattened scene, tests/bvh_build.rs): the same primitive and instance
+/// for every ray, distances within float rounding (the GPU may contract the transform's
+/// multiply-adds), and any-hit agreeing.
+#[test]
+fn gpu_matches_cpu_traversal_with_instances() {
+    let s = instanced_scene(43, 24);
+    let bvh = vkvcm::bvh::build_scene(&s, &vkvcm::bvh::BuildOptions::default()).into_gpu();
+    assert!(bvh.glsl_defines().iter().any(|(k, _)| *k == "BVH_INSTANCES"));
+    let record_base = (bvh.prims.len() - 2 * s.instances.len()) as u32;
+    let rays = instanced_rays(&s, 44, 20_000);
+    let results = common::with_gpu(|gpu| trace_on_gpu(gpu, &bvh, &rays));
+    let mut errors = Vec::new();
+    let mut instanced_hits = 0;
+    for (k, ((ray, tmin, tmax), r)) in rays.iter().zip(&results).enumerate() {
+        let want = bvh.closest_hit(ray, *tmin, *tmax);
+        let got = r.closest.map(|h| {
+            let instance = (r.instance_record != u32::MAX).then(|| (r.instance_record - record_base) / 2);
+            Hit { instance, ..h }
+        });
+        match (got, want) {
+            (None, None) => {}
+            (Some(g), Some(w)) => {
+                instanced_hits += g.instance.is_some() as usize;
+                let distance = (g.t - w.t).abs() * ray.d.length();
+                let same = (g.prim, g.instance, g.is_sphere) == (w.prim, w.instance, w.is_sphere);
+                if distance > 1e-4 || (!same && distance > 1e-6) {
+                    errors.push(format!("ray {k}: gpu {g:?}, cpu {w:?}"));
+                }
+            }
+            (g, w) => errors.push(format!("ray {k}: gpu {g:?}, cpu {w:?}")),
+        }
+        if r.any != want.is_some() {
+            errors.push(format!("ray {k}: gpu any-hit {} but the cpu's closest {want:?}", r.any));
+        }
+    }
+    println!("{} rays, {instanced_hits} hits on instances", rays.len());
+    assert!(errors.is_empty(), "{} of {} rays: {:#?}", errors.len(), rays.len(), &errors[..errors.len().min(10)]);
+    assert!(instanced_hits > 2000);
 }

@@ -61,6 +61,8 @@ fn furnace_scene(albedo: f32, light: Light) -> Scene {
     Scene {
         name: "environment_furnace".into(),
         triangles: vec![],
+        meshes: vec![],
+        instances: vec![],
         spheres: vec![Sphere { center: Vec3::ZERO, radius: 1.0, material: 0 }],
         materials: vec![Material { name: "furnace".into(), diffuse: Vec3::splat(albedo), ..Default::default() }],
         lights: vec![light],

@@ -24,7 +24,7 @@ struct TestHit {
     float v;
     uint flags;  // bit 0: closest hit found, bit 1: sphere, bit 2: any hit found
     uint material;
-    uint pad0;
+    uint instance_record;  // BVH_NO_INSTANCE for world-space primitives
     uint pad1;
 };
 layout(std430) writeonly buffer test_hits { TestHit hits[]; };
@@ -49,7 +49,7 @@ void main() {
     o.v = h.v;
     o.flags = (found ? 1u : 0u) | (h.is_sphere ? 2u : 0u) | (any_found ? 4u : 0u);
     o.material = h.material;
-    o.pad0 = 0u;
+    o.instance_record = h.instance_record;
     o.pad1 = 0u;
     hits[i] = o;
 }

@@ -36,9 +36,9 @@ use rayon::prelude::*;
 
 use super::aabb::Aabb;
 use super::intersect::{sphere_is_finite, triangle_is_finite};
-use super::layout::{decode_ref, leaf_ref, GpuBvh, GpuNode, GpuPrim, MAX_DEPTH, MAX_LEAF_PRIMS, MAX_PRIMS};
+use super::layout::{decode_ref, leaf_ref, GpuBvh, GpuNode, GpuPrim, MAX_DEPTH, MAX_IDS, MAX_LEAF_PRIMS, MAX_PRIMS};
 use crate::activity::Activity;
-use crate::scene::{Sphere, Triangle};
+use crate::scene::{Scene, Sphere, Triangle};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SplitMethod {
@@ -83,14 +83,18 @@ impl Default for BuildOptions {
 pub struct BuildStats {
     pub triangles: usize,
     pub spheres: usize,
+    /// Instances in the top-level tree (their meshes' triangles count in `triangles`).
+    pub instances: usize,
     /// Primitives left out because of non-finite bounds.
     pub skipped_non_finite: usize,
-    /// Internal nodes (= the length of the node array).
+    /// Internal nodes (= the length of the node array; with instances, of every tree).
     pub nodes: usize,
     pub leaves: usize,
-    /// Most internal-node levels on a root-to-leaf path (root = 1), `<= MAX_DEPTH`.
+    /// Most internal-node levels on a root-to-leaf path (root = 1), `<= MAX_DEPTH`; with
+    /// instances, of the top-level tree (each mesh tree has its own, also bounded).
     pub max_depth: u32,
-    /// SAH cost of the tree with the build's cost constants, relative to the root box.
+    /// SAH cost of the (top-level) tree with the build's cost constants, relative to the
+    /// root box; an instance counts as one primitive.
     pub sah_cost: f64,
     pub build_seconds: f64,
 }
@@ -112,6 +116,7 @@ impl Bvh {
             prims: self.prims.clone(),
             num_triangles: self.stats.triangles as u32,
             num_spheres: self.stats.spheres as u32,
+            num_instances: self.stats.instances as u32,
         }
     }
 
@@ -121,6 +126,7 @@ impl Bvh {
             prims: self.prims,
             num_triangles: self.stats.triangles as u32,
             num_spheres: self.stats.spheres as u32,
+            num_instances: self.stats.instances as u32,
         }
     }
 
@@ -173,6 +179,14 @@ impl PrimRef {
         }
         let r = Vec3::splat(s.radius.abs());
         PrimRef::new(s.center - r, s.center + r, id)
+    }
+
+    /// `None` for a box with a non-finite coordinate (an instance of an empty mesh).
+    fn of_box(b: &Aabb, id: usize) -> Option<PrimRef> {
+        if !(b.min.is_finite() && b.max.is_finite()) {
+            return None;
+        }
+        PrimRef::new(b.min, b.max, id)
     }
 
     /// Twice the centroid (the factor 2 is irrelevant to binning and saves a multiply).
@@ -246,19 +260,107 @@ const PARALLEL_BIN_CHUNK: usize = 32 * 1024;
 ///
 /// Panics if there are more than 2^28 primitives or options are out of range.
 pub fn build_with(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOptions) -> Bvh {
+    let total = triangles.len() + spheres.len();
+    assert!(total <= MAX_PRIMS, "too many primitives for the BVH ({total})");
+    in_pool(opts, || build_in_pool(triangles, spheres, &[], opts))
+}
+
+/// The BVH of a scene: over its world-space triangles and spheres, and with instances the
+/// two-level BVH (one tree per shared mesh in object space, instances as primitives of
+/// the top-level tree; src/bvh/layout.rs, "Instancing"). Without instances it is
+/// [`build_with`] over [`Scene::world_triangles`].
+///
+/// Panics if the joined arrays exceed 2^28 primitives or options are out of range.
+pub fn build_scene(scene: &Scene, opts: &BuildOptions) -> Bvh {
+    if scene.instances.is_empty() {
+        return build_with(scene.world_triangles(), &scene.spheres, opts);
+    }
+    let start = Instant::now();
+    assert!(scene.instances.len() < MAX_IDS, "too many instances ({})", scene.instances.len());
+    let mut bvh = in_pool(opts, || {
+        let meshes: Vec<Bvh> =
+            scene.meshes.iter().map(|m| build_in_pool(&scene.triangles[m.range()], &[], &[], opts)).collect();
+        // Each instance's world box: the corners of its mesh tree's root box, transformed.
+        let boxes: Vec<Aabb> = scene
+            .instances
+            .iter()
+            .map(|inst| {
+                let b = meshes[inst.mesh as usize].bounds();
+                let mut world = Aabb::EMPTY;
+                for k in 0..8 {
+                    let c = Vec3::new(
+                        if k & 1 == 0 { b.min.x } else { b.max.x },
+                        if k & 2 == 0 { b.min.y } else { b.max.y },
+                        if k & 4 == 0 { b.min.z } else { b.max.z },
+                    );
+                    world.grow_point(inst.object_to_world.transform_point3(c));
+                }
+                world
+            })
+            .collect();
+        let world = scene.world_triangles();
+        let mut top = build_in_pool(world, &scene.spheres, &boxes, opts);
+        join_instanced(&mut top, scene, meshes);
+        top
+    });
+    bvh.stats.triangles = scene.triangles.len();
+    bvh.stats.build_seconds = start.elapsed().as_secs_f64();
+    bvh
+}
+
+/// Appends the mesh trees to the top-level tree `top` (node and primitive indices offset,
+/// triangle ids made indices into `Scene::triangles`), then the instance records, and
+/// points each instance primitive at its mesh's root and its record.
+fn join_instanced(top: &mut Bvh, scene: &Scene, meshes: Vec<Bvh>) {
+    let mut roots = Vec::with_capacity(meshes.len());
+    for (tree, mesh) in meshes.into_iter().zip(&scene.meshes) {
+        let node_base = top.nodes.len() as u32;
+        let prim_base = top.prims.len() as u32;
+        assert!(
+            top.prims.len() + tree.prims.len() + 2 * scene.instances.len() <= MAX_PRIMS,
+            "too many primitives for the BVH"
+        );
+        roots.push(node_base);
+        let offset = |r: u32| match decode_ref(r) {
+            Ok(node) => node + node_base,
+            Err((first, count)) => leaf_ref(first + prim_base, count),
+        };
+        top.nodes.extend(tree.nodes.into_iter().map(|mut n| {
+            n.set_children([0, 1].map(|i| offset(n.child(i))));
+            n
+        }));
+        top.prims
+            .extend(tree.prims.into_iter().map(|p| GpuPrim::triangle(p.vertices(), p.id() + mesh.first, p.material())));
+        top.stats.leaves += tree.stats.leaves;
+        top.stats.skipped_non_finite += tree.stats.skipped_non_finite;
+    }
+    let record_base = top.prims.len() as u32;
+    for inst in &scene.instances {
+        top.prims.extend(GpuPrim::instance_record(inst.object_to_world));
+    }
+    let n_top = top.prims.len() - 2 * scene.instances.len();
+    for p in top.prims[..n_top].iter_mut().filter(|p| p.is_instance()) {
+        let k = p.id();
+        *p = GpuPrim::instance(k, roots[scene.instances[k as usize].mesh as usize], record_base + 2 * k);
+    }
+    top.stats.nodes = top.nodes.len();
+    top.stats.instances = scene.instances.len();
+}
+
+/// Runs `f` on [`BuildOptions::threads`] threads (0: the current pool) and sets the build
+/// time.
+fn in_pool(opts: &BuildOptions, f: impl FnOnce() -> Bvh + Send) -> Bvh {
     let start = Instant::now();
     assert!((2..=MAX_BINS).contains(&opts.bins), "bins out of range");
     assert!((1..=MAX_LEAF_PRIMS).contains(&opts.max_leaf), "max_leaf out of range");
-    let total = triangles.len() + spheres.len();
-    assert!(total <= MAX_PRIMS, "too many primitives for the BVH ({total})");
     let mut bvh = if opts.threads == 0 {
-        build_in_pool(triangles, spheres, opts)
+        f()
     } else {
         match rayon::ThreadPoolBuilder::new().num_threads(opts.threads).build() {
-            Ok(pool) => pool.install(|| build_in_pool(triangles, spheres, opts)),
+            Ok(pool) => pool.install(f),
             Err(e) => {
                 log::warn!("BVH build: no pool of {} threads ({e}); building on the global pool", opts.threads);
-                build_in_pool(triangles, spheres, opts)
+                f()
             }
         }
     };
@@ -266,11 +368,14 @@ pub fn build_with(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOption
     bvh
 }
 
-/// [`build_with`] on the current rayon pool (options already checked).
-fn build_in_pool(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOptions) -> Bvh {
+/// [`build_with`] on the current rayon pool (options already checked), with `instances`
+/// (world boxes) as further primitives after the spheres: their primitives name the
+/// instance, [`join_instanced`] sets the rest.
+fn build_in_pool(triangles: &[Triangle], spheres: &[Sphere], instances: &[Aabb], opts: &BuildOptions) -> Bvh {
     let nt = triangles.len();
+    let ns = spheres.len();
     // Progress: primitives placed in subtrees (see Builder::build_node).
-    let total = triangles.len() + spheres.len();
+    let total = nt + ns + instances.len();
     let activity = Activity::begin(|| format!("building the BVH ({total} primitives)"), Some(total as u64));
     // Primitive references in input order (rayon's collect keeps the order).
     let mut refs: Vec<PrimRef> = triangles
@@ -278,6 +383,7 @@ fn build_in_pool(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOptions
         .enumerate()
         .filter_map(|(i, t)| PrimRef::of_triangle(t, i))
         .chain(spheres.par_iter().enumerate().filter_map(|(i, s)| PrimRef::of_sphere(s, nt + i)))
+        .chain(instances.par_iter().enumerate().filter_map(|(i, b)| PrimRef::of_box(b, nt + ns + i)))
         .collect();
     let skipped = total - refs.len();
     let (bounds, cbounds) = refs
@@ -305,9 +411,11 @@ fn build_in_pool(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOptions
             if id < nt {
                 let t = &triangles[id];
                 GpuPrim::triangle(t.p, id as u32, t.material)
-            } else {
+            } else if id < nt + ns {
                 let s = &spheres[id - nt];
                 GpuPrim::sphere(s.center, s.radius.abs(), (id - nt) as u32, s.material)
+            } else {
+                GpuPrim::instance((id - nt - ns) as u32, 0, 0)
             }
         })
         .collect();
@@ -319,6 +427,7 @@ fn build_in_pool(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOptions
         stats: BuildStats {
             triangles: triangles.len(),
             spheres: spheres.len(),
+            instances: instances.len(),
             skipped_non_finite: skipped,
             ..Default::default()
         },

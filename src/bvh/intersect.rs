@@ -39,6 +39,9 @@ pub struct Hit {
     pub v: f32,
     pub is_sphere: bool,
     pub material: u32,
+    /// The instance (index in `Scene::instances`) whose mesh the triangle belongs to;
+    /// `None` for world-space primitives.
+    pub instance: Option<u32>,
 }
 
 /// Per-ray set-up of the watertight triangle test: the axis permutation and shear that
@@ -160,7 +163,7 @@ pub fn brute_force_closest(
         }
         if let Some((t, u, v)) = intersect_triangle(ray.o, &sh, &tri.p, tmin, tmax) {
             tmax = t;
-            best = Some(Hit { t, prim: i as u32, u, v, is_sphere: false, material: tri.material });
+            best = Some(Hit { t, prim: i as u32, u, v, is_sphere: false, material: tri.material, instance: None });
         }
     }
     for (i, s) in spheres.iter().enumerate() {
@@ -169,7 +172,8 @@ pub fn brute_force_closest(
         }
         if let Some(t) = intersect_sphere(ray.o, ray.d, s.center, s.radius.abs(), tmin, tmax) {
             tmax = t;
-            best = Some(Hit { t, prim: i as u32, u: 0.0, v: 0.0, is_sphere: true, material: s.material });
+            best =
+                Some(Hit { t, prim: i as u32, u: 0.0, v: 0.0, is_sphere: true, material: s.material, instance: None });
         }
     }
     best

@@ -15,6 +15,16 @@
 //!   second child of a root over fewer than two primitives).
 //!
 //! Node 0 is the root. It is always an internal node.
+//!
+//! Instancing (two levels): a scene's shared meshes each have their own tree, in object
+//! space, appended after the top-level tree's nodes and primitives with absolute indices
+//! (so a mesh's tree is traversed with the same code). The top-level tree's primitives
+//! are world-space triangles, spheres and *instances*; an instance primitive names the
+//! root node of its mesh's tree and its *record*: two primitive slots after all
+//! primitives holding the instance's world-to-object and object-to-world transforms
+//! ([`GpuPrim::instance_record`]). The traversal moves the ray into object space to
+//! descend into the mesh's tree (unnormalised direction, so distances `t` are the same in
+//! both spaces) and back when that tree is done (glsl/bvh.glsl, docs/bvh.md).
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -33,6 +43,16 @@ pub const MAX_PRIMS: usize = 1 << 28;
 pub const MAX_DEPTH: u32 = 32;
 /// Bit 31 of a primitive's id word (`GpuPrim::a[3]` bits): the primitive is a sphere.
 pub const SPHERE_FLAG: u32 = 0x8000_0000;
+
+/// Bit 30 of a primitive's id word: the primitive is an instance (bits 0..29 its index in
+/// `Scene::instances`).
+pub const INSTANCE_FLAG: u32 = 0x4000_0000;
+/// Largest number of instances (the id bits below [`INSTANCE_FLAG`]), and of triangles.
+pub const MAX_IDS: usize = INSTANCE_FLAG as usize;
+/// Traversal stack entries with instances: a top-level path and a mesh tree's path of
+/// [`MAX_DEPTH`] levels each, plus the rest of the instance's leaf and the marker that
+/// moves the ray back to world space (`BVH_STACK_SIZE` with `BVH_INSTANCES`).
+pub const MAX_STACK_INSTANCED: usize = 2 * MAX_DEPTH as usize + 2;
 
 /// Encodes a leaf child reference.
 pub fn leaf_ref(first: u32, count: u32) -> u32 {
@@ -194,6 +214,9 @@ pub fn dequantize_boxes(w: [u32; 6]) -> [Aabb; 2] {
 ///
 /// * Triangle: `a = (v0, id)`, `b = (v1, material)`, `c = (v2, 0)`.
 /// * Sphere: `a = (center, id | SPHERE_FLAG)`, `b = (radius, 0, 0, material)`, `c = 0`.
+/// * Instance: `a = (root node, record slot, 0, instance | INSTANCE_FLAG)`, `b = c = 0`.
+/// * Instance record (two slots): the rows of the world-to-object then the
+///   object-to-world affine matrix, each row `(m0, m1, m2, translation)`.
 ///
 /// `id` is the primitive's original index in `Scene::triangles` (triangles) or in
 /// `Scene::spheres` (spheres); `id` and `material` are `u32`s stored bit-cast.
@@ -207,7 +230,7 @@ pub struct GpuPrim {
 
 impl GpuPrim {
     pub fn triangle(p: [Vec3; 3], id: u32, material: u32) -> GpuPrim {
-        assert!(id & SPHERE_FLAG == 0, "triangle index too large");
+        assert!((id as usize) < MAX_IDS, "triangle index too large");
         GpuPrim {
             a: [p[0].x, p[0].y, p[0].z, f32::from_bits(id)],
             b: [p[1].x, p[1].y, p[1].z, f32::from_bits(material)],
@@ -224,13 +247,50 @@ impl GpuPrim {
         }
     }
 
+    /// An instance primitive of the top-level tree (see [`GpuPrim`]); `root` and `record`
+    /// may be placeholders that the builder sets once the arrays are joined.
+    pub fn instance(instance: u32, root: u32, record: u32) -> GpuPrim {
+        assert!((instance as usize) < MAX_IDS, "instance index too large");
+        GpuPrim {
+            a: [f32::from_bits(root), f32::from_bits(record), 0.0, f32::from_bits(instance | INSTANCE_FLAG)],
+            b: [0.0; 4],
+            c: [0.0; 4],
+        }
+    }
+
+    /// The two record slots of an instance placed by `object_to_world`.
+    pub fn instance_record(object_to_world: glam::Affine3A) -> [GpuPrim; 2] {
+        let rows = |m: glam::Affine3A| {
+            let l = glam::Mat3::from(m.matrix3);
+            let t = m.translation;
+            [0, 1, 2].map(|r| {
+                let row = l.row(r);
+                [row.x, row.y, row.z, t[r]]
+            })
+        };
+        let [w0, w1, w2] = rows(object_to_world.inverse());
+        let [o0, o1, o2] = rows(object_to_world);
+        [GpuPrim { a: w0, b: w1, c: w2 }, GpuPrim { a: o0, b: o1, c: o2 }]
+    }
+
+    /// Whether this is an instance primitive.
+    pub fn is_instance(&self) -> bool {
+        self.a[3].to_bits() & (SPHERE_FLAG | INSTANCE_FLAG) == INSTANCE_FLAG
+    }
+
+    /// An instance primitive's mesh root node and record slot.
+    pub fn instance_target(&self) -> (u32, u32) {
+        (self.a[0].to_bits(), self.a[1].to_bits())
+    }
+
     pub fn is_sphere(&self) -> bool {
         self.a[3].to_bits() & SPHERE_FLAG != 0
     }
 
-    /// Original index in `Scene::triangles` or `Scene::spheres` (see [`Self::is_sphere`]).
+    /// Original index in `Scene::triangles`, `Scene::spheres` or `Scene::instances` (see
+    /// [`Self::is_sphere`], [`Self::is_instance`]).
     pub fn id(&self) -> u32 {
-        self.a[3].to_bits() & !SPHERE_FLAG
+        self.a[3].to_bits() & !(SPHERE_FLAG | INSTANCE_FLAG)
     }
 
     pub fn material(&self) -> u32 {
@@ -255,17 +315,28 @@ pub struct GpuBvh {
     /// Triangles and spheres of the input (including skipped ones).
     pub num_triangles: u32,
     pub num_spheres: u32,
+    /// Instances in the top-level tree (their records follow the primitives).
+    pub num_instances: u32,
 }
 
 impl GpuBvh {
     /// Optional defines for kernels including glsl/bvh.glsl: `BVH_NO_SPHERES` when the
-    /// BVH holds no sphere (the sphere test is then compiled out).
+    /// BVH holds no sphere (the sphere test is then compiled out), `BVH_INSTANCES` when it
+    /// holds instances.
     pub fn glsl_defines(&self) -> Vec<(&'static str, String)> {
-        if self.prims.iter().any(|p| p.is_sphere()) {
-            Vec::new()
-        } else {
-            vec![("BVH_NO_SPHERES", "1".to_string())]
+        let mut d = Vec::new();
+        if !self.primitives().iter().any(|p| p.is_sphere()) {
+            d.push(("BVH_NO_SPHERES", "1".to_string()));
         }
+        if self.num_instances > 0 {
+            d.push(("BVH_INSTANCES", "1".to_string()));
+        }
+        d
+    }
+
+    /// The primitive slots without the instance records that follow them.
+    pub fn primitives(&self) -> &[GpuPrim] {
+        &self.prims[..self.prims.len() - 2 * self.num_instances as usize]
     }
 
     /// Bytes of the two buffers.

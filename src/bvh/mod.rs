@@ -7,7 +7,8 @@
 //!
 //! * [`build`](fn@build) / [`build_with`]: binned SAH build over one unified primitive list
 //!   (all triangles, then all spheres), parallel (rayon) with the same tree for any number
-//!   of threads, see [`build`](mod@build).
+//!   of threads, see [`build`](mod@build); [`build_scene`]: a scene's BVH, two levels when
+//!   it has instances of shared meshes (see [`layout`]).
 //! * [`Bvh::to_gpu`]: the flattened BVH2 in the GPU layout ([`GpuNode`], [`GpuPrim`]),
 //!   read by `glsl/bvh.glsl` (`trace_closest`, `trace_any`).
 //! * [`GpuBvh::closest_hit`] / [`GpuBvh::any_hit`]: the CPU mirror of the GLSL
@@ -23,6 +24,6 @@ pub mod layout;
 pub mod traverse;
 
 pub use aabb::Aabb;
-pub use build::{build, build_with, BuildOptions, BuildStats, Bvh, SplitMethod};
+pub use build::{build, build_scene, build_with, BuildOptions, BuildStats, Bvh, SplitMethod};
 pub use intersect::{brute_force_any, brute_force_closest, intersect_sphere, intersect_triangle, Hit, Ray};
-pub use layout::{GpuBvh, GpuNode, GpuPrim, MAX_DEPTH, MAX_LEAF_PRIMS, SPHERE_FLAG};
+pub use layout::{GpuBvh, GpuNode, GpuPrim, INSTANCE_FLAG, MAX_DEPTH, MAX_LEAF_PRIMS, SPHERE_FLAG};

@@ -40,6 +40,8 @@ pub struct FeatureSet {
     /// The background is an environment map (glsl/environment.glsl).
     pub environment_map: bool,
     pub spheres: bool,
+    /// The BVH has two levels: instances of shared meshes (glsl/bvh.glsl, BVH_INSTANCES).
+    pub instances: bool,
     /// Shading normals are uploaded and every estimator shades with them (glsl/bsdf.glsl).
     pub shading_normals: bool,
     /// The scene has shading normals (whether or not the kernels read them).
@@ -102,6 +104,7 @@ impl FeatureSet {
             background: g || any_light(&Light::is_environment),
             environment_map: g || any_light(&|l| matches!(l, Light::Environment(_))),
             spheres: g || !scene.spheres.is_empty(),
+            instances: g || !scene.instances.is_empty(),
             shading_normals: g || scene_has_shading_normals || normal_maps,
             scene_has_shading_normals,
             vertex_attributes: g || vertex_attributes,
@@ -121,8 +124,8 @@ impl FeatureSet {
         self
     }
 
-    /// The `#define`s of every render kernel (glsl/features.glsl; BVH_NO_SPHERES for
-    /// glsl/bvh.glsl).
+    /// The `#define`s of every render kernel (glsl/features.glsl; BVH_NO_SPHERES and
+    /// BVH_INSTANCES for glsl/bvh.glsl).
     pub fn defines(&self) -> Defines {
         let mut d = Defines::new();
         for (name, on) in [
@@ -150,6 +153,9 @@ impl FeatureSet {
         }
         if !self.spheres {
             d = d.value("BVH_NO_SPHERES", 1);
+        }
+        if self.instances {
+            d = d.value("BVH_INSTANCES", 1);
         }
         d
     }
@@ -186,7 +192,11 @@ impl fmt::Display for FeatureSet {
             ("environment map", self.environment_map),
         ];
         writeln!(f, "  lights: {}", list(&lights))?;
-        writeln!(f, "  geometry: {}", list(&[("triangles", true), ("spheres", self.spheres)]))?;
+        writeln!(
+            f,
+            "  geometry: {}",
+            list(&[("triangles", true), ("spheres", self.spheres), ("instances", self.instances)])
+        )?;
         let normals = match (self.scene_has_shading_normals, self.shading_normals) {
             (true, _) => "interpolated (smooth shading)",
             (false, true) => "compiled in, none in the scene (flat shading)",

@@ -278,11 +278,13 @@ impl SceneGpu {
         if scene.triangles.is_empty() && scene.spheres.is_empty() {
             bail!("scene {:?} has no geometry", scene.name);
         }
-        let tree = bvh::build(&scene.triangles, &scene.spheres);
+        let tree = bvh::build_scene(scene, &bvh::BuildOptions::default());
         let gb = tree.into_gpu();
-        // The feature set's BVH_NO_SPHERES is the BVH layout's (sphere code compiled in for a
-        // sphere-free layout is fine: that is the generic variant).
-        debug_assert_eq!(gb.glsl_defines().is_empty(), !scene.spheres.is_empty());
+        // The layout needs the instance traversal exactly when the scene has instances
+        // (compiled in for an instance-free layout is fine: that is the generic variant).
+        if gb.num_instances > 0 && !features.instances {
+            bail!("internal error: the kernels of scene {:?} are compiled without instances", scene.name);
+        }
         let (lights, background) = gpu_lights(scene)?;
         let params = gpu_params(scene, frame, background);
 

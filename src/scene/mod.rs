@@ -3,7 +3,7 @@
 //! Units and conventions: right-handed, y-up (glTF). Radiometric quantities are linear
 //! RGB. Every light's meaning is stated on its variant.
 
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Affine3A, Vec2, Vec3, Vec4};
 
 pub use environment::{EnvironmentLight, EnvironmentMap};
 
@@ -100,6 +100,32 @@ pub enum AlphaMode {
     /// Stochastic transparency: each ray meets the surface with probability alpha and
     /// passes straight through it otherwise (glsl/textures.glsl, `alpha_visible`).
     Blend,
+}
+
+/// A mesh stored once and placed in the world by [`Instance`]s (a two-level BVH: instances
+/// over per-mesh trees, docs/bvh.md "Instancing"): `Scene::triangles[first..first + count]`,
+/// in the mesh's object space. Shared meshes' triangles follow every world-space triangle
+/// ([`Scene::world_triangles`]) and are never area lights.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SharedMesh {
+    pub name: String,
+    pub first: u32,
+    pub count: u32,
+}
+
+impl SharedMesh {
+    pub fn range(&self) -> std::ops::Range<usize> {
+        self.first as usize..(self.first + self.count) as usize
+    }
+}
+
+/// One placement of a [`SharedMesh`]: its object space mapped to the world by an affine,
+/// invertible transform.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Instance {
+    /// Index into `Scene::meshes`.
+    pub mesh: u32,
+    pub object_to_world: Affine3A,
 }
 
 /// An analytic sphere (glTF extension `VKVCM_spheres`).
@@ -277,7 +303,11 @@ pub struct LoadReport {
 #[derive(Clone, Debug)]
 pub struct Scene {
     pub name: String,
+    /// World-space triangles, then the object-space triangles of the shared meshes.
     pub triangles: Vec<Triangle>,
+    /// Meshes placed by `instances` (empty when everything is flattened into world space).
+    pub meshes: Vec<SharedMesh>,
+    pub instances: Vec<Instance>,
     pub spheres: Vec<Sphere>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
@@ -337,7 +367,10 @@ impl Scene {
             h.update(bytemuck::cast_slice(&img.texels));
         }
         // Few and small: their Debug text (floats print as the shortest round-trip string).
-        let rest = format!("{:?}{:?}{:?}{:?}", self.spheres, self.materials, self.lights, self.camera);
+        let rest = format!(
+            "{:?}{:?}{:?}{:?}{:?}{:?}",
+            self.meshes, self.instances, self.spheres, self.materials, self.lights, self.camera
+        );
         h.update(rest.as_bytes());
         format!("{:08x}", h.finalize())
     }
@@ -434,10 +467,70 @@ pub fn builtin_path(name: &str) -> Option<PathBuf> {
 }
 
 impl Scene {
+    /// The world-space triangles: all but the shared meshes' (which follow them).
+    pub fn world_triangles(&self) -> &[Triangle] {
+        let end = self.meshes.iter().map(|m| m.first as usize).min().unwrap_or(self.triangles.len());
+        &self.triangles[..end]
+    }
+
+    /// Triangles in the world, counting each instance's mesh once per instance.
+    pub fn placed_triangles(&self) -> u64 {
+        let instanced: u64 = self.instances.iter().map(|i| self.meshes[i.mesh as usize].count as u64).sum();
+        self.world_triangles().len() as u64 + instanced
+    }
+
+    /// Every triangle in world space, instances expanded (for tests and small scenes: it
+    /// allocates the flattened scene).
+    pub fn flattened_triangles(&self) -> Vec<Triangle> {
+        let mut out = self.world_triangles().to_vec();
+        for inst in &self.instances {
+            let m = inst.object_to_world;
+            let lin = glam::Mat3::from(m.matrix3);
+            let normal_matrix = lin.inverse().transpose();
+            let flip = lin.determinant() < 0.0;
+            for t in &self.triangles[self.meshes[inst.mesh as usize].range()] {
+                let mut w = t.clone();
+                w.p = t.p.map(|p| m.transform_point3(p));
+                w.n = t.n.map(|n| n.map(|v| (normal_matrix * v).normalize_or_zero()));
+                if let Some(a) = &mut w.attributes {
+                    let sign = if flip { -1.0 } else { 1.0 };
+                    a.tangent =
+                        a.tangent.map(|ts| ts.map(|t| (lin * t.truncate()).normalize_or_zero().extend(t.w * sign)));
+                }
+                // A mirroring transform reverses the winding: swap vertices 1 and 2 (with
+                // their attributes) so the geometric normal stays on the authored side, as
+                // the importer does.
+                if flip {
+                    w.p.swap(1, 2);
+                    if let Some(n) = &mut w.n {
+                        n.swap(1, 2);
+                    }
+                    if let Some(a) = &mut w.attributes {
+                        for uv in a.uv.iter_mut().flatten() {
+                            uv.swap(1, 2);
+                        }
+                        if let Some(c) = &mut a.color {
+                            c.swap(1, 2);
+                        }
+                        if let Some(t) = &mut a.tangent {
+                            t.swap(1, 2);
+                        }
+                    }
+                }
+                out.push(w);
+            }
+        }
+        out
+    }
+
     /// Moves everything by `by` (geometry, punctual lights, camera; directions unchanged).
     pub fn translate(&mut self, by: Vec3) {
-        for t in &mut self.triangles {
+        let world = self.world_triangles().len();
+        for t in &mut self.triangles[..world] {
             t.p = t.p.map(|p| p + by);
+        }
+        for inst in &mut self.instances {
+            inst.object_to_world.translation += glam::Vec3A::from(by);
         }
         for s in &mut self.spheres {
             s.center += by;
@@ -451,13 +544,43 @@ impl Scene {
         self.camera.position += by;
     }
 
-    /// Axis-aligned bounds (min, max) of all triangles and spheres; `(0, 0)` when the
+    /// Axis-aligned bounds (min, max) of all triangles (instances: their mesh's box
+    /// transformed) and spheres; `(0, 0)` when the
     /// scene has no geometry.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        for t in &self.triangles {
+        for t in self.world_triangles() {
             for p in t.p {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+        // Instances: the corners of their mesh's object-space box, transformed.
+        let mesh_bounds: Vec<(Vec3, Vec3)> = self
+            .meshes
+            .iter()
+            .map(|m| {
+                self.triangles[m.range()]
+                    .iter()
+                    .flat_map(|t| t.p)
+                    .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(l, h), p| {
+                        (l.min(p), h.max(p))
+                    })
+            })
+            .collect();
+        for inst in &self.instances {
+            let (ml, mh) = mesh_bounds[inst.mesh as usize];
+            if ml.x > mh.x {
+                continue;
+            }
+            for k in 0..8 {
+                let c = Vec3::new(
+                    if k & 1 == 0 { ml.x } else { mh.x },
+                    if k & 2 == 0 { ml.y } else { mh.y },
+                    if k & 4 == 0 { ml.z } else { mh.z },
+                );
+                let p = inst.object_to_world.transform_point3(c);
                 lo = lo.min(p);
                 hi = hi.max(p);
             }

@@ -196,3 +196,83 @@ pub fn check_hit(s: &TestScene, what: &str, ray: &Ray, got: Option<Hit>, want: O
         (g, w) => Err(format!("{what}: hit existence differs {ray:?}: got {g:?}, want {w:?}")),
     }
 }
+
+/// A scene with instances: a world-space triangle soup and spheres, and two shared meshes
+/// (a closed icosphere of radius 1 at the origin, and a triangle soup) placed by random
+/// affine transforms: rotations, non-uniform scales (every third instance mirrored) and
+/// translations in [-6, 6]^3. Each instance's position is its placement's translation.
+pub fn instanced_scene(seed: u64, instances: usize) -> vkvcm::scene::Scene {
+    use glam::{Affine3A, Quat};
+    use vkvcm::scene::{Camera, Instance, LoadReport, Scene, SharedMesh};
+    let mut r = rng(seed);
+    let mut triangles = triangle_soup(&mut r, 400);
+    let world = triangles.len() as u32;
+    let ico = icosphere(Vec3::ZERO, 1.0, 3, 50);
+    let ico_count = ico.len() as u32;
+    triangles.extend(ico);
+    let soup = triangle_soup(&mut r, 300);
+    let soup_count = soup.len() as u32;
+    triangles.extend(soup);
+    let meshes = vec![
+        SharedMesh { name: "icosphere".into(), first: world, count: ico_count },
+        SharedMesh { name: "soup".into(), first: world + ico_count, count: soup_count },
+    ];
+    let instances = (0..instances)
+        .map(|k| {
+            let axis = rand_dir(&mut r);
+            let rot = Quat::from_axis_angle(axis, r.random_range(0.0f32..std::f32::consts::TAU));
+            let mut scale = rand_vec(&mut r, 0.3, 1.2);
+            if k % 3 == 2 {
+                scale.x = -scale.x;
+            }
+            let t = rand_vec(&mut r, -6.0, 6.0);
+            Instance { mesh: (k % 2) as u32, object_to_world: Affine3A::from_scale_rotation_translation(scale, rot, t) }
+        })
+        .collect();
+    Scene {
+        name: "instanced".into(),
+        triangles,
+        meshes,
+        instances,
+        spheres: random_spheres(&mut r, 40),
+        materials: vec![],
+        lights: vec![],
+        camera: Camera { position: Vec3::ZERO, forward: Vec3::NEG_Z, up: Vec3::Y, yfov: 1.0 },
+        report: LoadReport::default(),
+        images: vec![],
+    }
+}
+
+/// For each triangle of `Scene::flattened_triangles`, its instance (`None`: world space)
+/// and its index in `Scene::triangles`.
+pub fn flattened_origin(s: &vkvcm::scene::Scene) -> Vec<(Option<u32>, u32)> {
+    let mut out: Vec<(Option<u32>, u32)> = (0..s.world_triangles().len() as u32).map(|i| (None, i)).collect();
+    for (k, inst) in s.instances.iter().enumerate() {
+        let m = &s.meshes[inst.mesh as usize];
+        out.extend((m.first..m.first + m.count).map(|i| (Some(k as u32), i)));
+    }
+    out
+}
+
+/// Random rays through [-7, 7]^3, and rays from the centre of every icosphere instance
+/// (mesh 0 of [`instanced_scene`]) in random directions: each must hit something, since
+/// the icosphere is closed.
+pub fn instanced_rays(s: &vkvcm::scene::Scene, seed: u64, n_random: usize) -> Vec<(Ray, f32, f32)> {
+    let mut r = rng(seed);
+    let mut rays: Vec<(Ray, f32, f32)> = (0..n_random)
+        .map(|_| {
+            (
+                Ray { o: rand_vec(&mut r, -7.0, 7.0), d: rand_dir(&mut r) * r.random_range(0.5f32..2.0) },
+                0.0,
+                f32::INFINITY,
+            )
+        })
+        .collect();
+    for inst in s.instances.iter().filter(|i| i.mesh == 0) {
+        let o = Vec3::from(inst.object_to_world.translation);
+        for _ in 0..200 {
+            rays.push((Ray { o, d: rand_dir(&mut r) }, 0.0, f32::INFINITY));
+        }
+    }
+    rays
+}

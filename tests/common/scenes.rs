@@ -37,6 +37,8 @@ pub fn scene(name: &str, triangles: Vec<Triangle>, materials: Vec<Material>, lig
     Scene {
         name: name.into(),
         triangles,
+        meshes: vec![],
+        instances: vec![],
         spheres: vec![],
         materials,
         lights,

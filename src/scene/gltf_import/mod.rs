@@ -114,6 +114,8 @@ fn import_bytes(bytes: &[u8], base_dir: &Path, name: String, options: &LoadOptio
         scene: Scene {
             name,
             triangles: Vec::new(),
+            meshes: Vec::new(),
+            instances: Vec::new(),
             spheres: Vec::new(),
             materials: Vec::new(),
             lights: Vec::new(),
