@@ -182,40 +182,53 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
         vec3 e1 = tri.p1.xyz - tri.p0.xyz;
         vec3 e2 = tri.p2.xyz - tri.p0.xyz;
         s.p = tri.p0.xyz + h.u * e1 + h.v * e2;
-        vec3 ng_object = normalize(cross(e1, e2));
-        s.ng = ng_object;
+        s.ng = normalize(cross(e1, e2));
         s.ns = s.ng;
         s.material = floatBitsToUint(tri.p0.w);
 #ifdef BVH_INSTANCES
         // A shared mesh's triangle is in object space: the point goes to the world by the
-        // object-to-world rows, normals by the inverse transpose, i.e. the transpose of the
+        // object-to-world rows; normals by the inverse transpose, i.e. the transpose of the
         // world-to-object rows' linear part (that keeps the authored side for mirroring
-        // instances too, as the importer's vertex swap does for flattened meshes).
-        uint w2o = 3u * h.instance_record;
+        // instances too, as the importer's vertex swap does for flattened meshes). Vertex
+        // normals are mapped and normalised before they are interpolated, tangents
+        // likewise (normal_mapped): what the flattened mesh stores.
+        uint record = h.instance_record;
+        uint w2o = 3u * record;
         vec3 w0 = uintBitsToFloat(bvh_prim_elem(w2o).xyz);
         vec3 w1 = uintBitsToFloat(bvh_prim_elem(w2o + 1u).xyz);
         vec3 w2 = uintBitsToFloat(bvh_prim_elem(w2o + 2u).xyz);
-        bool instanced = h.instance_record != BVH_NO_INSTANCE;
+        bool instanced = record != BVH_NO_INSTANCE;
         if (instanced) {
             s.p = bvh_apply_rows(w2o + 3u, s.p, 1.0);
             vec3 n = cross(e1, e2);
             s.ng = normalize(n.x * w0 + n.y * w1 + n.z * w2);
             s.ns = s.ng;
         }
+#else
+        uint record = BVH_NO_INSTANCE;
 #endif
 #if HAS_SHADING_NORMALS
         uint first_normal = floatBitsToUint(tri.p2.w);
         if (first_normal != 0xffffffffu) {
-            vec3 n = (1.0 - h.u - h.v) * shading_normal_at(first_normal).xyz
-                   + h.u * shading_normal_at(first_normal + 1u).xyz
-                   + h.v * shading_normal_at(first_normal + 2u).xyz;
-            float len = length(n);
-            vec3 ns = len > 0.0 ? n / len : ng_object;
-#if HAS_NORMAL_MAPS
-            ns = normal_mapped(h.prim, s.material, h.u, h.v, ns);
-#endif
+            vec3 n0 = shading_normal_at(first_normal).xyz;
+            vec3 n1 = shading_normal_at(first_normal + 1u).xyz;
+            vec3 n2 = shading_normal_at(first_normal + 2u).xyz;
 #ifdef BVH_INSTANCES
-            if (instanced) ns = normalize(ns.x * w0 + ns.y * w1 + ns.z * w2);
+            if (instanced) {
+                n0 = n0.x * w0 + n0.y * w1 + n0.z * w2;
+                n1 = n1.x * w0 + n1.y * w1 + n1.z * w2;
+                n2 = n2.x * w0 + n2.y * w1 + n2.z * w2;
+                // Zero normals (a triangle without them, flat) stay zero.
+                n0 = dot(n0, n0) > 0.0 ? normalize(n0) : n0;
+                n1 = dot(n1, n1) > 0.0 ? normalize(n1) : n1;
+                n2 = dot(n2, n2) > 0.0 ? normalize(n2) : n2;
+            }
+#endif
+            vec3 n = (1.0 - h.u - h.v) * n0 + h.u * n1 + h.v * n2;
+            float len = length(n);
+            vec3 ns = len > 0.0 ? n / len : s.ng;
+#if HAS_NORMAL_MAPS
+            ns = normal_mapped(h.prim, record, s.material, h.u, h.v, ns);
 #endif
             // On the geometric normal's side (glsl/bsdf.glsl decides sides by ng).
             s.ns = dot(ns, s.ng) < 0.0 ? -ns : ns;

@@ -164,13 +164,32 @@ vec3 emission_tint(uint tri, float u, float v) {
 // texel's RGB as (x, y, z) * 2 - 1, x and y times the map's scale, in the frame of the
 // interpolated tangent T (made orthogonal to n), B = w cross(n, T) (w: the tangent's
 // bitangent sign) and n. Unchanged where the material has no normal map or the triangle
-// no texture coordinates for it or no tangent.
-vec3 normal_mapped(uint tri, uint material, float u, float v, vec3 n) {
+// no texture coordinates for it or no tangent. `record`: the instance record of a shared
+// mesh's triangle (glsl/bvh.glsl), whose object-to-world rows map each vertex's tangent
+// to world space as the importer does for flattened meshes (direction normalised, the
+// bitangent sign flipped by a mirroring transform); BVH_NO_INSTANCE for world space.
+vec3 normal_mapped(uint tri, uint record, uint material, float u, float v, vec3 n) {
     vec4 maps = material_maps(material);
     uint ref = floatBitsToUint(maps.x);
     if (ref == NO_TEXTURE) return n;
     GpuVertexAttributes a0, a1, a2;
     if (!triangle_attributes(tri, a0, a1, a2)) return n;
+#ifdef BVH_INSTANCES
+    if (record != BVH_NO_INSTANCE) {
+        vec3 r0 = uintBitsToFloat(bvh_prim_elem(3u * record + 3u).xyz);
+        vec3 r1 = uintBitsToFloat(bvh_prim_elem(3u * record + 4u).xyz);
+        vec3 r2 = uintBitsToFloat(bvh_prim_elem(3u * record + 5u).xyz);
+        float sign_det = dot(r0, cross(r1, r2)) < 0.0 ? -1.0 : 1.0;
+        vec4 ts[3] = vec4[3](a0.tangent, a1.tangent, a2.tangent);
+        for (int k = 0; k < 3; k++) {
+            vec3 tw = vec3(dot(r0, ts[k].xyz), dot(r1, ts[k].xyz), dot(r2, ts[k].xyz));
+            ts[k] = vec4(dot(tw, tw) > 0.0 ? normalize(tw) : tw, ts[k].w * sign_det);
+        }
+        a0.tangent = ts[0];
+        a1.tangent = ts[1];
+        a2.tangent = ts[2];
+    }
+#endif
     float w0 = 1.0 - u - v;
     vec4 t = w0 * a0.tangent + u * a1.tangent + v * a2.tangent;
     vec2 uv;

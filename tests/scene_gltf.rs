@@ -1,5 +1,7 @@
 //! glTF importer tests on small hand-written files.
 
+mod common;
+
 use glam::Vec3;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -1650,4 +1652,41 @@ fn specular_and_ior_set_the_dielectric_f0() {
     let s = d.load().unwrap();
     assert!((s.materials[0].glossy - Vec3::splat(0.02)).abs().max_element() < 1e-6);
     assert!(s.report.warnings.iter().any(|w| w.contains("specularFactor between 0 and 1")), "{:?}", s.report.warnings);
+}
+
+/// A mesh placed by several rigid nodes and by EXT_mesh_gpu_instancing is stored once
+/// and instanced; the emitting panel placed twice stays world-space triangles (area
+/// lights); expanding the instances gives the triangles of the flattened load
+/// (`flatten_instances`), mirrored and non-uniformly scaled placements included.
+#[test]
+fn shared_meshes_are_instanced_and_expand_to_the_flattened_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = common::instanced_gltf::write_instanced_gltf(dir.path());
+    let inst = load(&path).unwrap();
+    let flat = load_with(&path, &LoadOptions { flatten_instances: true, ..Default::default() }).unwrap();
+    assert!(inst.report.warnings.is_empty(), "{:?}", inst.report.warnings);
+    assert_eq!(inst.meshes.len(), 1, "only the sphere is shared");
+    // 320 triangles, of which the 32 that meet a pole have zero area (dropped).
+    assert_eq!(inst.meshes[0].count, 288);
+    assert_eq!(inst.instances.len(), 7, "four nodes and three EXT_mesh_gpu_instancing transforms");
+    assert_eq!(inst.world_triangles().len(), 6, "the floor and the two panels");
+    assert!(flat.meshes.is_empty() && flat.instances.is_empty());
+    assert_eq!(inst.placed_triangles(), flat.triangles.len() as u64);
+    let area = |s: &Scene| s.lights.iter().filter(|l| matches!(l, Light::Area { .. })).count();
+    assert_eq!((area(&inst), area(&flat)), (4, 4));
+    let expanded = inst.flattened_triangles();
+    assert_eq!(expanded.len(), flat.triangles.len());
+    for (k, (a, b)) in expanded.iter().zip(&flat.triangles).enumerate() {
+        for v in 0..3 {
+            assert!(a.p[v].abs_diff_eq(b.p[v], 1e-5), "triangle {k} vertex {v}: {} vs {}", a.p[v], b.p[v]);
+            assert_eq!(a.n.is_some(), b.n.is_some(), "triangle {k}");
+            if let (Some(na), Some(nb)) = (a.n, b.n) {
+                assert!(na[v].abs_diff_eq(nb[v], 1e-5), "triangle {k} normal {v}: {} vs {}", na[v], nb[v]);
+            }
+        }
+    }
+    let (lo_a, hi_a) = inst.bounds();
+    let (lo_b, hi_b) = flat.bounds();
+    assert!(lo_a.abs_diff_eq(lo_b, 1e-5) && hi_a.abs_diff_eq(hi_b, 1e-5), "bounds {lo_a} {hi_a} vs {lo_b} {hi_b}");
+    assert_ne!(inst.fingerprint(), flat.fingerprint());
 }

@@ -50,7 +50,7 @@ impl EnvArgs {
             }),
             None => None,
         };
-        Ok(vkvcm::scene::LoadOptions { camera, scene: None, environment })
+        Ok(vkvcm::scene::LoadOptions { camera, environment, ..Default::default() })
     }
 }
 

@@ -67,6 +67,11 @@ pub struct RenderArgs {
     /// index (default: the file's default scene, else the first).
     #[arg(long, value_name = "NAME|INDEX")]
     pub gltf_scene: Option<String>,
+    /// Store every mesh as world-space triangles, also those that several nodes (or
+    /// EXT_mesh_gpu_instancing) place, which are otherwise stored once and instanced:
+    /// the same image, more memory (for A/B comparisons).
+    #[arg(long)]
+    pub flatten_instances: bool,
     /// Put the camera at X,Y,Z (the file's world coordinates); it then looks at the
     /// centre of the scene unless --look-at says otherwise.
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3)]
@@ -240,7 +245,11 @@ fn check_args(a: &RenderArgs) -> Result<()> {
 pub fn render_cmd(a: RenderArgs) -> Result<()> {
     check_args(&a)?;
     let scene_name = a.scene.clone().unwrap_or_else(|| "default".into());
-    let options = vkvcm::scene::LoadOptions { scene: a.gltf_scene.clone(), ..a.env.load_options(a.camera.clone())? };
+    let options = vkvcm::scene::LoadOptions {
+        scene: a.gltf_scene.clone(),
+        flatten_instances: a.flatten_instances,
+        ..a.env.load_options(a.camera.clone())?
+    };
     let mut scene = scene::load_named_with(&scene_name, &options)?;
     scene.set_view(a.look_from, a.look_at, a.fov.map(f32::to_radians)).context("--look-from / --look-at / --fov")?;
     for w in &scene.report.warnings {

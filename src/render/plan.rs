@@ -68,7 +68,7 @@ impl FramePlan {
             (true, Reads::Texel) => Access::Texel,
             (true, Reads::Storage) => Access::Address,
         };
-        let prims = scene.triangles.len() + scene.spheres.len();
+        let prims = scene.triangles.len() + scene.spheres.len() + 3 * scene.instances.len();
         if prims > crate::bvh::layout::MAX_PRIMS {
             bail!(
                 "scene {:?} has {prims} primitives; the BVH holds at most {}",

@@ -37,7 +37,8 @@ impl ScenePlan {
     pub fn new(scene: &Scene, reads: Reads) -> ScenePlan {
         let texel = |b: BufferSize| if reads == Reads::Texel { b.reached(Access::Texel) } else { b };
         let tris = scene.triangles.len() as u64;
-        let prims = tris + scene.spheres.len() as u64;
+        // Instances: one primitive in the top-level tree and a two-slot record each.
+        let prims = tris + scene.spheres.len() as u64 + 3 * scene.instances.len() as u64;
         // Per-vertex arrays: three entries per triangle with normals or attributes.
         let vertices = scene.triangles.iter().filter(|t| t.n.is_some() || t.attributes.is_some()).count() as u64 * 3;
         let refs = scene

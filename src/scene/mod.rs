@@ -544,8 +544,8 @@ impl Scene {
         self.camera.position += by;
     }
 
-    /// Axis-aligned bounds (min, max) of all triangles (instances: their mesh's box
-    /// transformed) and spheres; `(0, 0)` when the
+    /// Axis-aligned bounds (min, max) of all triangles (instances' included) and spheres;
+    /// `(0, 0)` when the
     /// scene has no geometry.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         let mut lo = Vec3::splat(f32::INFINITY);
@@ -556,35 +556,28 @@ impl Scene {
                 hi = hi.max(p);
             }
         }
-        // Instances: the corners of their mesh's object-space box, transformed.
-        let mesh_bounds: Vec<(Vec3, Vec3)> = self
-            .meshes
-            .iter()
-            .map(|m| {
-                self.triangles[m.range()]
-                    .iter()
-                    .flat_map(|t| t.p)
-                    .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(l, h), p| {
-                        (l.min(p), h.max(p))
-                    })
+        // Instances: their mesh's vertices, transformed (exact, as the flattened scene's
+        // bounds: the scene radius sets ray offsets and photon radii).
+        use rayon::prelude::*;
+        let (ilo, ihi) = self
+            .instances
+            .par_iter()
+            .map(|inst| {
+                let m = inst.object_to_world;
+                self.triangles[self.meshes[inst.mesh as usize].range()].iter().flat_map(|t| t.p).fold(
+                    (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                    |(l, h), p| {
+                        let q = m.transform_point3(p);
+                        (l.min(q), h.max(q))
+                    },
+                )
             })
-            .collect();
-        for inst in &self.instances {
-            let (ml, mh) = mesh_bounds[inst.mesh as usize];
-            if ml.x > mh.x {
-                continue;
-            }
-            for k in 0..8 {
-                let c = Vec3::new(
-                    if k & 1 == 0 { ml.x } else { mh.x },
-                    if k & 2 == 0 { ml.y } else { mh.y },
-                    if k & 4 == 0 { ml.z } else { mh.z },
-                );
-                let p = inst.object_to_world.transform_point3(c);
-                lo = lo.min(p);
-                hi = hi.max(p);
-            }
-        }
+            .reduce(
+                || (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                |(l0, h0), (l1, h1)| (l0.min(l1), h0.max(h1)),
+            );
+        lo = lo.min(ilo);
+        hi = hi.max(ihi);
         for s in &self.spheres {
             lo = lo.min(s.center - Vec3::splat(s.radius));
             hi = hi.max(s.center + Vec3::splat(s.radius));

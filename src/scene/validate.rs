@@ -92,12 +92,13 @@ pub fn camera_warnings(scene: &Scene) -> Vec<(String, String)> {
 }
 
 /// Whether the nearest surface along `o + t d` (t > 0) is hit from behind; `None`: no hit.
+/// Instanced meshes are not tested (the check is a hint, and instanced scenes are large).
 /// Triangles by Moller-Trumbore ("Fast, Minimum Storage Ray/Triangle Intersection", 1997),
 /// brute force (a one-off of 25 rays at load time).
 fn first_hit_is_back(scene: &Scene, o: Vec3, d: Vec3) -> Option<bool> {
     let mut best = f32::INFINITY;
     let mut back = None;
-    for t in &scene.triangles {
+    for t in scene.world_triangles() {
         let [p0, p1, p2] = t.p;
         let (e1, e2) = (p1 - p0, p2 - p0);
         let pv = d.cross(e2);

@@ -368,6 +368,19 @@ pub(super) fn read_tangents(
     Ok(c.chunks_exact(4).map(|v| Vec4::new(v[0] as f32, v[1] as f32, v[2] as f32, v[3] as f32)).collect())
 }
 
+/// The elements of a rotation accessor (VEC4 quaternions x, y, z, w in one of `formats`),
+/// decoded to floats (normalized integers by glTF's equations).
+pub(super) fn read_rotations(
+    buffers: &[Vec<u8>],
+    acc: &gltf::Accessor,
+    formats: &Formats,
+    quantized: bool,
+) -> Result<Vec<[f32; 4]>> {
+    check_format(acc, "ROTATION", Dimensions::Vec4, formats, quantized)?;
+    let c = read_components(buffers, acc)?;
+    Ok(c.chunks_exact(4).map(|v| [v[0] as f32, v[1] as f32, v[2] as f32, v[3] as f32]).collect())
+}
+
 /// The elements of a colour accessor (COLOR_n: VEC3 or VEC4 in one of `formats`) as RGBA,
 /// alpha 1 for a VEC3 accessor.
 pub(super) fn read_color(

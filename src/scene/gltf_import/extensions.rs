@@ -27,6 +27,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_specular",
     KHR_MESH_QUANTIZATION,
     KHR_TEXTURE_TRANSFORM,
+    super::instancing::EXT_MESH_GPU_INSTANCING,
     EXT_SPHERES,
     EXT_MATERIALS_PHONG,
     EXT_BACKGROUND,

@@ -27,6 +27,8 @@
 //!   attributes, indices, skin matrices);
 //! - `geometry.rs`: meshes (morph targets, skinning, triangulation, transforms) and
 //!   `VKVCM_spheres`;
+//! - `instancing.rs`: meshes stored once and placed by instances (several nodes,
+//!   `EXT_mesh_gpu_instancing`);
 //! - `materials.rs`: the glTF material -> vkvcm material mapping;
 //! - `lights.rs`: punctual lights, area lights from emission and the background;
 //! - `cameras.rs`: camera candidates and the choice of the rendered camera;
@@ -37,6 +39,7 @@ mod cameras;
 mod document;
 mod extensions;
 mod geometry;
+mod instancing;
 mod lights;
 mod materials;
 mod skins;
@@ -69,6 +72,11 @@ pub struct LoadOptions {
     /// (`VKVCM_background` / `VKVCM_environment`, which are then not read) or the default
     /// white sky (`vkvcm render --env`).
     pub environment: Option<EnvironmentLight>,
+    /// Store every mesh placement as world-space triangles, even of meshes that several
+    /// nodes (or `EXT_mesh_gpu_instancing`) place, which are otherwise stored once and
+    /// instanced (`vkvcm render --flatten-instances`; the image is the same up to float
+    /// rounding, the memory is not).
+    pub flatten_instances: bool,
 }
 
 /// Loads a `.gltf` or `.glb` file. Errors name the file and the offending object.
@@ -135,6 +143,7 @@ fn import_bytes(bytes: &[u8], base_dir: &Path, name: String, options: &LoadOptio
         punctual: Vec::new(),
         node_world: Vec::new(),
         rebase: DMat4::IDENTITY,
+        instancing: Default::default(),
     };
     importer.run(options)?;
     let Importer { mut scene, mut warnings, .. } = importer;
@@ -175,6 +184,8 @@ struct Importer<'d> {
     /// The re-centring applied to every world transform (translation by minus the chosen
     /// camera's position, docs/numerics.md).
     rebase: DMat4,
+    /// Which meshes are stored once, and their placements met so far.
+    instancing: instancing::Instancing,
 }
 
 impl<'d> Importer<'d> {
@@ -205,9 +216,12 @@ impl<'d> Importer<'d> {
         for (node, world) in &order {
             self.node_world[node.index()] = Some(*world);
         }
+        let nodes: Vec<gltf::Node> = order.iter().map(|(n, _)| n.clone()).collect();
+        self.choose_shared_meshes(&nodes, options.flatten_instances)?;
         for (node, world) in &order {
             self.visit_node(node, (rebase * *world).as_mat4())?;
         }
+        self.add_shared_meshes()?;
 
         self.scene.camera = self.choose_camera(options)?;
         self.collect_lights(options)
@@ -268,12 +282,20 @@ impl<'d> Importer<'d> {
             self.add_light(&light, world, &label)?;
         }
         if let Some(mesh) = node.mesh() {
-            // glTF 2.0 section 3.7.3.2: a skinned mesh is placed by its joints alone.
-            let placement = match node.skin() {
-                Some(skin) => geometry::Placement::Skinned(self.joint_matrices(&skin, &label)?),
-                None => geometry::Placement::Rigid(world),
-            };
-            self.add_mesh(&mesh, &placement, node.weights(), &label)?;
+            if !self.place_instanced(node, world, &label)? {
+                // glTF 2.0 section 3.7.3.2: a skinned mesh is placed by its joints alone.
+                match node.skin() {
+                    Some(skin) => {
+                        let placement = geometry::Placement::Skinned(self.joint_matrices(&skin, &label)?);
+                        self.add_mesh(&mesh, &placement, node.weights(), &label)?;
+                    }
+                    None => {
+                        for m in self.node_placements(node, world)? {
+                            self.add_mesh(&mesh, &geometry::Placement::Rigid(m), node.weights(), &label)?;
+                        }
+                    }
+                }
+            }
         }
         if let Some(v) = node.extensions().and_then(|e| e.get(EXT_SPHERES)) {
             self.add_spheres(v, world, ni)?;
