@@ -3,6 +3,11 @@
 scene-size benchmarks (docs/performance.md, "Scene size"). Standard library only.
 
     python3 scripts/make_grid_scene.py 10000000 /tmp/grid_10m.glb
+    python3 scripts/make_grid_scene.py 1000000 /tmp/grid_100x1m.glb 100
+
+With a third argument K, the mesh is placed by K nodes (an instanced scene of K x N
+triangles that stores N): K tiles side by side, each the grid scaled down by the number of
+tiles per row, covering the same square.
 
 The grid spans [-1, 1]^2 in x/z with a gentle height y = 0.05 sin(7x) cos(5z), so the BVH
 is not trivially flat; positions are float32, indices uint32, one mesh, one node. The
@@ -15,10 +20,17 @@ import sys
 
 
 def main():
-    if len(sys.argv) != 3:
+    if len(sys.argv) not in (3, 4):
         sys.exit(__doc__)
     target = int(sys.argv[1])
     out = sys.argv[2]
+    instances = int(sys.argv[3]) if len(sys.argv) == 4 else 1
+    per_row = math.ceil(math.sqrt(instances))
+    tiles = [
+        {"mesh": 0, "scale": [1 / per_row] * 3,
+         "translation": [-1 + (2 * (k % per_row) + 1) / per_row, 0, -1 + (2 * (k // per_row) + 1) / per_row]}
+        for k in range(instances)
+    ] if instances > 1 else [{"mesh": 0}]
     n = max(1, int(math.sqrt(target / 2)))  # n x n quads, 2 triangles each
     verts = bytearray()
     for j in range(n + 1):
@@ -36,12 +48,11 @@ def main():
     gltf = {
         "asset": {"version": "2.0", "generator": "vkvcm scripts/make_grid_scene.py"},
         "scene": 0,
-        "scenes": [{"nodes": [0, 1, 2]}],
+        "scenes": [{"nodes": list(range(len(tiles) + 2))}],
         "nodes": [
-            {"mesh": 0},
             {"camera": 0, "translation": [0, 1.2, 2.2], "rotation": rotation_x(-0.5)},
             {"extensions": {"KHR_lights_punctual": {"light": 0}}, "rotation": rotation_x(-1.2)},
-        ],
+        ] + tiles,
         "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.01}}],
         "extensionsUsed": ["KHR_lights_punctual"],
         "extensions": {"KHR_lights_punctual": {"lights": [{"type": "directional", "intensity": 3.0}]}},
@@ -66,7 +77,7 @@ def main():
         f.write(struct.pack("<4sII", b"glTF", 2, total))
         f.write(struct.pack("<I4s", len(js), b"JSON") + js)
         f.write(struct.pack("<I4s", len(binary), b"BIN\0") + binary)
-    print(f"{out}: {2 * n * n} triangles, {len(binary) / 2**20:.0f} MiB of buffers")
+    print(f"{out}: {2 * n * n} triangles x {instances} placements, {len(binary) / 2**20:.0f} MiB of buffers")
 
 
 def rotation_x(angle):

@@ -15,8 +15,8 @@ use anyhow::{bail, Context, Result};
 use serde::Serialize;
 
 use super::traverse::{bench_scene, displaced_sphere, process_cpu_seconds, sphere_grid};
-use crate::bvh::{build_with, BuildOptions, Bvh};
-use crate::scene::{self, Sphere, Triangle};
+use crate::bvh::{build_instanced, BuildOptions, Bvh};
+use crate::scene::{self, Instance, SharedMesh, Sphere, Triangle};
 
 /// The generated meshes [`build_scene`] knows.
 pub const BUILD_SCENES: &[&str] = &["spheres", "displaced", "spheres-4m", "displaced-4m"];
@@ -24,23 +24,40 @@ pub const BUILD_SCENES: &[&str] = &["spheres", "displaced", "spheres-4m", "displ
 /// The primitives of one benchmark scene.
 pub struct BuildScene {
     pub name: String,
+    /// World-space triangles, then the shared meshes' (see [`crate::scene::Scene`]).
     pub triangles: Vec<Triangle>,
     pub spheres: Vec<Sphere>,
+    pub meshes: Vec<SharedMesh>,
+    pub instances: Vec<Instance>,
 }
 
 /// A generated mesh of [`BUILD_SCENES`], else a scene loaded by name or path.
 pub fn build_scene(name: &str) -> Result<BuildScene> {
-    let generated = |triangles| Ok(BuildScene { name: name.to_string(), triangles, spheres: Vec::new() });
+    let generated = |triangles| {
+        Ok(BuildScene { name: name.to_string(), triangles, spheres: Vec::new(), meshes: vec![], instances: vec![] })
+    };
     match name {
         "spheres-4m" => generated(sphere_grid([32, 16, 32])),
         "displaced-4m" => generated(displaced_sphere(578)),
         _ => match bench_scene(name) {
-            Some(s) => Ok(BuildScene { name: s.name, triangles: s.triangles, spheres: s.spheres }),
+            Some(s) => Ok(BuildScene {
+                name: s.name,
+                triangles: s.triangles,
+                spheres: s.spheres,
+                meshes: vec![],
+                instances: vec![],
+            }),
             None => {
                 let s = scene::load_named(name).with_context(|| {
                     format!("{name:?} is neither a generated mesh ({}) nor a loadable scene", BUILD_SCENES.join(", "))
                 })?;
-                Ok(BuildScene { name: name.to_string(), triangles: s.triangles, spheres: s.spheres })
+                Ok(BuildScene {
+                    name: name.to_string(),
+                    triangles: s.triangles,
+                    spheres: s.spheres,
+                    meshes: s.meshes,
+                    instances: s.instances,
+                })
             }
         },
     }
@@ -108,7 +125,7 @@ pub fn bench_build(scene: &BuildScene, threads: &[usize], rounds: u32) -> Result
         for _ in 0..rounds {
             let cpu_start = process_cpu_seconds();
             let start = Instant::now();
-            let bvh = build_with(&scene.triangles, &scene.spheres, &opts);
+            let bvh = build_instanced(&scene.triangles, &scene.spheres, &scene.meshes, &scene.instances, &opts);
             seconds.push(start.elapsed().as_secs_f64());
             if let (Some(a), Some(b)) = (cpu_start, process_cpu_seconds()) {
                 cpu_seconds.push(b - a);

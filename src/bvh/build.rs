@@ -38,7 +38,7 @@ use super::aabb::Aabb;
 use super::intersect::{sphere_is_finite, triangle_is_finite};
 use super::layout::{decode_ref, leaf_ref, GpuBvh, GpuNode, GpuPrim, MAX_DEPTH, MAX_IDS, MAX_LEAF_PRIMS, MAX_PRIMS};
 use crate::activity::Activity;
-use crate::scene::{Scene, Sphere, Triangle};
+use crate::scene::{Instance, Scene, SharedMesh, Sphere, Triangle};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SplitMethod {
@@ -272,20 +272,31 @@ pub fn build_with(triangles: &[Triangle], spheres: &[Sphere], opts: &BuildOption
 ///
 /// Panics if the joined arrays exceed 2^28 primitives or options are out of range.
 pub fn build_scene(scene: &Scene, opts: &BuildOptions) -> Bvh {
-    if scene.instances.is_empty() {
-        return build_with(scene.world_triangles(), &scene.spheres, opts);
+    build_instanced(&scene.triangles, &scene.spheres, &scene.meshes, &scene.instances, opts)
+}
+
+/// [`build_scene`] over a scene's parts: `triangles` holds the world-space triangles,
+/// then the shared meshes' (`meshes`), which `instances` place.
+pub fn build_instanced(
+    triangles: &[Triangle],
+    spheres: &[Sphere],
+    meshes: &[SharedMesh],
+    instances: &[Instance],
+    opts: &BuildOptions,
+) -> Bvh {
+    let world = &triangles[..meshes.iter().map(|m| m.first as usize).min().unwrap_or(triangles.len())];
+    if instances.is_empty() {
+        return build_with(world, spheres, opts);
     }
     let start = Instant::now();
-    assert!(scene.instances.len() < MAX_IDS, "too many instances ({})", scene.instances.len());
+    assert!(instances.len() < MAX_IDS, "too many instances ({})", instances.len());
     let mut bvh = in_pool(opts, || {
-        let meshes: Vec<Bvh> =
-            scene.meshes.iter().map(|m| build_in_pool(&scene.triangles[m.range()], &[], &[], opts)).collect();
+        let trees: Vec<Bvh> = meshes.iter().map(|m| build_in_pool(&triangles[m.range()], &[], &[], opts)).collect();
         // Each instance's world box: the corners of its mesh tree's root box, transformed.
-        let boxes: Vec<Aabb> = scene
-            .instances
+        let boxes: Vec<Aabb> = instances
             .iter()
             .map(|inst| {
-                let b = meshes[inst.mesh as usize].bounds();
+                let b = trees[inst.mesh as usize].bounds();
                 let mut world = Aabb::EMPTY;
                 for k in 0..8 {
                     let c = Vec3::new(
@@ -298,26 +309,25 @@ pub fn build_scene(scene: &Scene, opts: &BuildOptions) -> Bvh {
                 world
             })
             .collect();
-        let world = scene.world_triangles();
-        let mut top = build_in_pool(world, &scene.spheres, &boxes, opts);
-        join_instanced(&mut top, scene, meshes);
+        let mut top = build_in_pool(world, spheres, &boxes, opts);
+        join_instanced(&mut top, meshes, instances, trees);
         top
     });
-    bvh.stats.triangles = scene.triangles.len();
+    bvh.stats.triangles = triangles.len();
     bvh.stats.build_seconds = start.elapsed().as_secs_f64();
     bvh
 }
 
 /// Appends the mesh trees to the top-level tree `top` (node and primitive indices offset,
-/// triangle ids made indices into `Scene::triangles`), then the instance records, and
+/// triangle ids made indices into the scene's triangles), then the instance records, and
 /// points each instance primitive at its mesh's root and its record.
-fn join_instanced(top: &mut Bvh, scene: &Scene, meshes: Vec<Bvh>) {
-    let mut roots = Vec::with_capacity(meshes.len());
-    for (tree, mesh) in meshes.into_iter().zip(&scene.meshes) {
+fn join_instanced(top: &mut Bvh, meshes: &[SharedMesh], instances: &[Instance], trees: Vec<Bvh>) {
+    let mut roots = Vec::with_capacity(trees.len());
+    for (tree, mesh) in trees.into_iter().zip(meshes) {
         let node_base = top.nodes.len() as u32;
         let prim_base = top.prims.len() as u32;
         assert!(
-            top.prims.len() + tree.prims.len() + 2 * scene.instances.len() <= MAX_PRIMS,
+            top.prims.len() + tree.prims.len() + 2 * instances.len() <= MAX_PRIMS,
             "too many primitives for the BVH"
         );
         roots.push(node_base);
@@ -335,16 +345,16 @@ fn join_instanced(top: &mut Bvh, scene: &Scene, meshes: Vec<Bvh>) {
         top.stats.skipped_non_finite += tree.stats.skipped_non_finite;
     }
     let record_base = top.prims.len() as u32;
-    for inst in &scene.instances {
+    for inst in instances {
         top.prims.extend(GpuPrim::instance_record(inst.object_to_world));
     }
-    let n_top = top.prims.len() - 2 * scene.instances.len();
+    let n_top = top.prims.len() - 2 * instances.len();
     for p in top.prims[..n_top].iter_mut().filter(|p| p.is_instance()) {
         let k = p.id();
-        *p = GpuPrim::instance(k, roots[scene.instances[k as usize].mesh as usize], record_base + 2 * k);
+        *p = GpuPrim::instance(k, roots[instances[k as usize].mesh as usize], record_base + 2 * k);
     }
     top.stats.nodes = top.nodes.len();
-    top.stats.instances = scene.instances.len();
+    top.stats.instances = instances.len();
 }
 
 /// Runs `f` on [`BuildOptions::threads`] threads (0: the current pool) and sets the build
