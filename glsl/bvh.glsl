@@ -137,6 +137,7 @@ struct Hit {
     float v;          // barycentric weight of v2
     bool is_sphere;
     uint material;
+    uint slot;             // the primitive's slot in bvh_prims (its vertices, in leaf order)
     uint instance_record;  // the instance's record slot (BVH_INSTANCES), else BVH_NO_INSTANCE
 };
 
@@ -351,6 +352,7 @@ bool trace_closest(vec3 o, vec3 d, float tmin, float tmax, out Hit h) {
     h.t = t;
     h.u = u;
     h.v = v;
+    h.slot = uint(slot);
     h.instance_record = record;
     if (slot < 0) {
         h.prim = 0xffffffffu;

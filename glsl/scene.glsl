@@ -34,10 +34,12 @@ uniform utextureBuffer lights;
 uniform utextureBuffer shading_normals;
 vec4 texel_vec4(utextureBuffer b, uint i) { return uintBitsToFloat(texelFetch(b, int(i))); }
 GpuTriangle triangle_at(uint i) {
+    uvec4 v = texelFetch(triangles, int(i));
     GpuTriangle t;
-    t.p0 = texel_vec4(triangles, 3u * i);
-    t.p1 = texel_vec4(triangles, 3u * i + 1u);
-    t.p2 = texel_vec4(triangles, 3u * i + 2u);
+    t.material = v.x;
+    t.light = v.y;
+    t.first_vertex = v.z;
+    t._pad = v.w;
     return t;
 }
 GpuSphere sphere_at(uint i) {
@@ -178,13 +180,16 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
     } else
 #endif
     {
+        // The vertices are the hit BVH primitive's (stored once, in leaf order); the rest
+        // is the triangle's, in scene order.
         GpuTriangle tri = triangle_at(h.prim);
-        vec3 e1 = tri.p1.xyz - tri.p0.xyz;
-        vec3 e2 = tri.p2.xyz - tri.p0.xyz;
-        s.p = tri.p0.xyz + h.u * e1 + h.v * e2;
+        vec3 p0 = uintBitsToFloat(bvh_prim_elem(3u * h.slot).xyz);
+        vec3 e1 = uintBitsToFloat(bvh_prim_elem(3u * h.slot + 1u).xyz) - p0;
+        vec3 e2 = uintBitsToFloat(bvh_prim_elem(3u * h.slot + 2u).xyz) - p0;
+        s.p = p0 + h.u * e1 + h.v * e2;
         s.ng = normalize(cross(e1, e2));
         s.ns = s.ng;
-        s.material = floatBitsToUint(tri.p0.w);
+        s.material = tri.material;
 #ifdef BVH_INSTANCES
         // A shared mesh's triangle is in object space: the point goes to the world by the
         // object-to-world rows; normals by the inverse transpose, i.e. the transpose of the
@@ -208,7 +213,7 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
         uint record = BVH_NO_INSTANCE;
 #endif
 #if HAS_SHADING_NORMALS
-        uint first_normal = floatBitsToUint(tri.p2.w);
+        uint first_normal = tri.first_vertex;
         if (first_normal != 0xffffffffu) {
             vec3 n0 = shading_normal_at(first_normal).xyz;
             vec3 n1 = shading_normal_at(first_normal + 1u).xyz;
@@ -239,7 +244,7 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
         s.tint = surface_tint_alpha(h.prim, s.material, h.u, h.v).rgb;
 #endif
 #if HAS_AREA_LIGHTS
-        s.light = floatBitsToUint(tri.p1.w);
+        s.light = tri.light;
 #else
         s.light = NO_LIGHT;  // only area lights make surfaces emitters
 #endif

@@ -106,7 +106,7 @@ bool texture_uv(uint ref, GpuVertexAttributes a0, GpuVertexAttributes a1, GpuVer
 // with a0..a2 unset, where it has none.
 bool triangle_attributes(uint tri, out GpuVertexAttributes a0, out GpuVertexAttributes a1,
                          out GpuVertexAttributes a2) {
-    uint first = floatBitsToUint(triangle_at(tri).p2.w);
+    uint first = triangle_at(tri).first_vertex;
     if (first == 0xffffffffu) return false;
     a0 = vertex_attribute_data[first];
     a1 = vertex_attribute_data[first + 1u];
@@ -147,7 +147,7 @@ vec4 surface_tint_alpha(uint tri, uint material, float u, float v) {
 // point on it, and when a light subpath starts there. Light points are still chosen
 // uniformly by area, so every pdf is unchanged and MIS stays exact.
 vec3 emission_tint(uint tri, float u, float v) {
-    uint ref = floatBitsToUint(material_maps(floatBitsToUint(triangle_at(tri).p0.w)).z);
+    uint ref = floatBitsToUint(material_maps(triangle_at(tri).material).z);
     if (ref == NO_TEXTURE) return vec3(1.0);
     GpuVertexAttributes a0, a1, a2;
     vec2 uv;

@@ -41,10 +41,12 @@ struct GpuVertexAttributes {
     vec4 tangent;  // xyz tangent, w bitangent sign (NaN: none)
 };
 
+// A triangle's shading data; its vertices are the BVH primitive's (glsl/scene.glsl).
 struct GpuTriangle {
-    vec4 p0;  // w: material (bits)
-    vec4 p1;  // w: light index (bits)
-    vec4 p2;  // w: first vertex in the per-vertex arrays, or 0xffffffff (bits)
+    uint material;
+    uint light;         // light index or NO_LIGHT
+    uint first_vertex;  // first vertex in the per-vertex arrays, or 0xffffffff
+    uint _pad;
 };
 
 struct GpuSphere {

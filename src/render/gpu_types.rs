@@ -85,17 +85,19 @@ pub struct GpuVertexAttributes {
 /// lobe a mirror in all but name).
 pub const MIN_GGX_ALPHA: f32 = 1e-3;
 
-/// A triangle in original scene order, for shading a hit.
+/// What shading needs of a triangle beyond its vertices, in original scene order (the
+/// vertices are read from the BVH's primitive of the hit, glsl/scene.glsl `surface_at`,
+/// so they are stored once).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuTriangle {
-    /// xyz: vertex 0; w: material index (bits).
-    pub p0: [f32; 4],
-    /// xyz: vertex 1; w: light index or `NO_LIGHT` (bits).
-    pub p1: [f32; 4],
-    /// xyz: vertex 2; w: index of its first vertex in the per-vertex arrays
-    /// (`shading_normals`, `vertex_attributes`), or `u32::MAX` when it has neither (bits).
-    pub p2: [f32; 4],
+    pub material: u32,
+    /// Light index, or `NO_LIGHT`.
+    pub light: u32,
+    /// Index of its first vertex in the per-vertex arrays (`shading_normals`,
+    /// `vertex_attributes`), or `u32::MAX` when it has neither.
+    pub first_vertex: u32,
+    pub _pad: u32,
 }
 
 /// An analytic sphere in original scene order.

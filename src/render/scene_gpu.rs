@@ -319,11 +319,7 @@ impl SceneGpu {
                 } else {
                     u32::MAX
                 };
-                GpuTriangle {
-                    p0: v4(t.p[0], bits(t.material)),
-                    p1: v4(t.p[1], bits(light_of_triangle[i])),
-                    p2: v4(t.p[2], bits(first)),
-                }
+                GpuTriangle { material: t.material, light: light_of_triangle[i], first_vertex: first, _pad: 0 }
             })
             .collect();
         let spheres: Vec<GpuSphere> = scene
