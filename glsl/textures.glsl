@@ -102,7 +102,7 @@ bool texture_uv(uint ref, GpuVertexAttributes a0, GpuVertexAttributes a1, GpuVer
 #endif
 
 #if HAS_VERTEX_ATTRIBUTES
-// The per-vertex attributes of triangle `tri` (at its first-vertex index p2.w); false,
+// The per-vertex attributes of triangle `tri` (from its first_vertex index); false,
 // with a0..a2 unset, where it has none.
 bool triangle_attributes(uint tri, out GpuVertexAttributes a0, out GpuVertexAttributes a1,
                          out GpuVertexAttributes a2) {

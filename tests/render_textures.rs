@@ -254,6 +254,32 @@ fn second_texture_coordinate_set() {
     });
 }
 
+/// A texture on a coordinate set the triangles lack is not applied: the image is the
+/// untextured quad's, pixel for pixel (same seed; the kernels differ only in compiled-in
+/// texture code, bit-identical on lavapipe, 1e-5 allowed for rounding). Reading the other
+/// set instead would show the texture.
+#[test]
+fn texture_on_a_missing_coordinate_set_is_not_applied() {
+    let t = TextureRef { tex_coord: 1, ..repeat_texture(Filter::Nearest) };
+    let identity = |u: f32, v: f32| Vec2::new(u, v);
+    let sc = textured_scene(t, &identity, None);
+    assert!(sc.triangles.iter().all(|t| t.attributes.as_ref().unwrap().uv[1].is_none()));
+    let mut plain = sc.clone();
+    plain.materials[0].base_color_texture = None;
+    with_gpu(|gpu| {
+        let a = render_with(gpu, &sc, Algorithm::Pt, 16, false);
+        let b = render_with(gpu, &plain, Algorithm::Pt, 16, false);
+        let worst = a
+            .pixels
+            .iter()
+            .flatten()
+            .zip(b.pixels.iter().flatten())
+            .map(|(x, y)| (x - y).abs() / x.abs().max(y.abs()).max(1e-6))
+            .fold(0.0f32, f32::max);
+        assert!(worst <= 1e-5, "differs from the untextured quad by {worst}");
+    });
+}
+
 /// The expected image of a quad whose TEXCOORD_0 at the image corners is the quad's own
 /// (bilinear in the image, as the quad's two triangles interpolate it).
 fn expected_image_for_uvs(scene: &Scene) -> Image {

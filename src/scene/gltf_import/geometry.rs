@@ -84,16 +84,16 @@ impl Importer<'_> {
                 Some(i) => i as u32,
                 None => self.default_material(),
             };
-            let (mut uvs, colors) = self.vertex_attributes(&prim, positions.len(), &where_)?;
+            let (uvs, colors) = self.vertex_attributes(&prim, positions.len(), &where_)?;
             // A base-colour texture on texture coordinates the primitive lacks cannot apply:
-            // its triangles get no texture coordinates (the kernels use the factor alone).
+            // the kernels find that set missing (NaN) and use the factor alone, while the
+            // material's other textures on the set it has still apply.
             let tex_coord = self.scene.materials[material as usize].base_color_texture.as_ref().map(|t| t.tex_coord);
             if let Some(k) = tex_coord.filter(|&k| uvs[k as usize].is_none()) {
                 self.warnings.warn(
                     format!("baseColorTexture on TEXCOORD_{k}, which the primitive does not have (the texture is not applied)"),
                     where_.clone(),
                 );
-                uvs = [None, None];
             }
             let emissive = self.scene.materials[material as usize].emissive_texture.as_ref().map(|t| t.tex_coord);
             if let Some(k) = emissive.filter(|&k| uvs[k as usize].is_none()) {
