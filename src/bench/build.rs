@@ -65,7 +65,8 @@ pub fn build_scene(name: &str) -> Result<BuildScene> {
 
 /// Writes `scene`'s triangles to `dir/NAME.f32`, the name's characters other than ASCII
 /// letters, digits, `-` and `_` replaced by `_`: 9 little-endian `f32` per triangle (the
-/// three vertices; spheres are left out). Returns the path.
+/// three vertices; spheres are left out; an instanced scene's stored triangles, its
+/// shared meshes in object space). Returns the path.
 pub fn export_triangles(scene: &BuildScene, dir: &Path) -> Result<PathBuf> {
     let stem: String =
         scene.name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect();

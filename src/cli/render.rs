@@ -190,6 +190,22 @@ pub fn install_interrupt() -> Arc<AtomicBool> {
 const SNAPSHOT_COST_FACTOR: f64 = 25.0;
 const MAX_SNAPSHOT_SECONDS: f64 = 5.0;
 
+/// What --verbose says of the scene's size: triangles placed, stored and instanced.
+fn scene_summary(scene: &vkvcm::scene::Scene) -> String {
+    let placed = scene.placed_triangles();
+    let mut s = format!("scene {}: {placed} triangles", scene.name);
+    if !scene.instances.is_empty() {
+        s += &format!(
+            " ({} stored: {} world-space, {} shared mesh(es) placed by {} instances; --flatten-instances stores each placement)",
+            scene.triangles.len(),
+            scene.world_triangles().len(),
+            scene.meshes.len(),
+            scene.instances.len()
+        );
+    }
+    s + &format!(", {} sphere(s), {} light(s)", scene.spheres.len(), scene.lights.len())
+}
+
 /// What --verbose says of the kernel cache: where it is, and how the kernels were built.
 fn kernel_cache_line(gpu: &Gpu) -> String {
     let c = gpu.shader_counts();
@@ -326,6 +342,7 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     let mut r = Renderer::new(&gpu, &scene, &settings)
         .with_context(|| format!("preparing {} with {}", scene.name, a.algo.name()))?;
     if a.verbose {
+        eprintln!("{}", scene_summary(&scene));
         eprintln!("{}", r.describe());
         let how = if a.paths_per_invocation.is_some() { "--paths-per-invocation" } else { "chosen for the device" };
         eprintln!("paths per invocation: {} ({how})", r.paths_per_invocation());
