@@ -195,38 +195,30 @@ void bvh_load_node(uint n, out vec3 lo0, out vec3 hi0, out vec3 lo1, out vec3 hi
 // Pops the next entry whose entry distance is not beyond tmax (or BVH_DONE); with
 // instances, a BVH_RETURN marker moves the ray back to world space.
 #ifdef BVH_INSTANCES
-#define BVH_POP()                                \
-    {                                            \
-        cur = BVH_DONE;                          \
-        while (sp > 0u) {                        \
-            sp--;                                \
-            if (stack_t[sp] <= tmax) {           \
-                if (stack[sp] == BVH_RETURN) {   \
-                    o = world_o;                 \
-                    d = world_d;                 \
-                    inv_d = bvh_safe_inv(d);     \
-                    sh = ray_shear(d);           \
-                    record = BVH_NO_INSTANCE;    \
-                    continue;                    \
-                }                                \
-                cur = stack[sp];                 \
-                break;                           \
-            }                                    \
-        }                                        \
+#define BVH_POP_RETURN_MARKER()            \
+    if (stack[sp] == BVH_RETURN) {         \
+        o = world_o;                       \
+        d = world_d;                       \
+        inv_d = bvh_safe_inv(d);           \
+        sh = ray_shear(d);                 \
+        record = BVH_NO_INSTANCE;          \
+        continue;                          \
     }
 #else
+#define BVH_POP_RETURN_MARKER()
+#endif
 #define BVH_POP()                                \
     {                                            \
         cur = BVH_DONE;                          \
         while (sp > 0u) {                        \
             sp--;                                \
             if (stack_t[sp] <= tmax) {           \
+                BVH_POP_RETURN_MARKER()          \
                 cur = stack[sp];                 \
                 break;                           \
             }                                    \
         }                                        \
     }
-#endif
 
 // Shared traversal. Returns the primitive slot of the closest hit (or of the first hit
 // found when `any_hit`), -1 for none; tmax becomes the hit distance, hrecord the record

@@ -14,6 +14,8 @@ pub const EXT_BACKGROUND: &str = "VKVCM_background";
 pub const EXT_ENVIRONMENT: &str = "VKVCM_environment";
 /// Integer vertex attributes (positions, normals, morph-target displacements).
 pub const KHR_MESH_QUANTIZATION: &str = "KHR_mesh_quantization";
+/// Per-node instance transforms (src/scene/gltf_import/instancing.rs).
+pub const EXT_MESH_GPU_INSTANCING: &str = "EXT_mesh_gpu_instancing";
 /// Offset, rotation and scale of texture coordinates (read on `baseColorTexture`).
 pub const KHR_TEXTURE_TRANSFORM: &str = "KHR_texture_transform";
 
@@ -27,7 +29,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_specular",
     KHR_MESH_QUANTIZATION,
     KHR_TEXTURE_TRANSFORM,
-    super::instancing::EXT_MESH_GPU_INSTANCING,
+    EXT_MESH_GPU_INSTANCING,
     EXT_SPHERES,
     EXT_MATERIALS_PHONG,
     EXT_BACKGROUND,

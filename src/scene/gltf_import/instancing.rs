@@ -9,14 +9,13 @@
 //! [`super::LoadOptions::flatten_instances`] every mesh is flattened.
 
 use super::accessors::{read_vec3, Formats, BYTE_N, FLOAT, SHORT_N, UBYTE_N, USHORT_N};
+use super::extensions::EXT_MESH_GPU_INSTANCING;
 use super::geometry::Placement;
 use super::Importer;
 use crate::scene::{Instance, SharedMesh};
 use anyhow::{bail, Context, Result};
 use glam::{Affine3A, DMat4, DQuat, DVec3, Mat4, Vec3};
 use serde_json::Value;
-
-pub const EXT_MESH_GPU_INSTANCING: &str = "EXT_mesh_gpu_instancing";
 
 /// EXT_mesh_gpu_instancing's TRANSLATION and SCALE (FLOAT VEC3).
 const VEC3_FORMATS: Formats = Formats { core: &[FLOAT], quantized: &[FLOAT] };
