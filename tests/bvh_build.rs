@@ -382,6 +382,9 @@ fn instanced_bvh_matches_the_flattened_brute_force() {
     let s = instanced_scene(41, 24);
     let bvh = vkvcm::bvh::build_scene(&s, &BuildOptions::default());
     assert_eq!(bvh.stats.instances, 24);
+    // The mesh trees build in parallel: the arrays must not depend on the thread count.
+    let serial = vkvcm::bvh::build_scene(&s, &BuildOptions { threads: 1, ..Default::default() });
+    assert!(serial.nodes == bvh.nodes && serial.prims == bvh.prims, "the thread count changed the BVH");
     let flat = s.flattened_triangles();
     let origin = flattened_origin(&s);
     let rays = instanced_rays(&s, 42, 20_000);

@@ -291,7 +291,8 @@ pub fn build_instanced(
     let start = Instant::now();
     assert!(instances.len() < MAX_IDS, "too many instances ({})", instances.len());
     let mut bvh = in_pool(opts, || {
-        let trees: Vec<Bvh> = meshes.iter().map(|m| build_in_pool(&triangles[m.range()], &[], &[], opts)).collect();
+        // Mesh trees in parallel (each is the same tree for any number of threads).
+        let trees: Vec<Bvh> = meshes.par_iter().map(|m| build_in_pool(&triangles[m.range()], &[], &[], opts)).collect();
         // Each instance's world box: the corners of its mesh tree's root box, transformed.
         let boxes: Vec<Aabb> = instances
             .iter()
