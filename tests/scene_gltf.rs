@@ -1693,3 +1693,25 @@ fn shared_meshes_are_instanced_and_expand_to_the_flattened_load() {
     assert!(lo_a.abs_diff_eq(lo_b, 1e-5) && hi_a.abs_diff_eq(hi_b, 1e-5), "bounds {lo_a} {hi_a} vs {lo_b} {hi_b}");
     assert_ne!(inst.fingerprint(), flat.fingerprint());
 }
+
+/// A placement of a shared mesh whose matrix is singular is skipped with a warning (its
+/// flattened triangles would all be degenerate); EXT_mesh_gpu_instancing attributes of
+/// different counts are an error naming the node.
+#[test]
+fn singular_placements_and_mismatched_instancing_attributes() {
+    let mut j = common::instanced_gltf::instanced_gltf();
+    j["nodes"][6]["scale"] = json!([0.0, 1.2, 0.9]);
+    let s = load_json(&j, &LoadOptions::default()).unwrap();
+    assert_eq!(s.instances.len(), 6);
+    assert!(
+        s.report.warnings.iter().any(|w| w.contains("singular") && w.contains("stretched")),
+        "{:?}",
+        s.report.warnings
+    );
+
+    let mut j = common::instanced_gltf::instanced_gltf();
+    // TRANSLATION with the sphere's normals: a VEC3 FLOAT accessor of another count.
+    j["nodes"][9]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["TRANSLATION"] = json!(1);
+    let e = err_of(load_json(&j, &LoadOptions::default()));
+    assert!(e.contains("node 9 EXT_mesh_gpu_instancing") && e.contains("different counts"), "{e}");
+}
