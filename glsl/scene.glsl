@@ -163,6 +163,15 @@ struct Surface {
     uint light;     // light index or NO_LIGHT
 };
 
+#ifdef BVH_INSTANCES
+// An object-space normal n of an instance in world space, unnormalised: the transpose of
+// the linear part of its world-to-object rows w0..w2, i.e. the inverse transpose of the
+// placement.
+vec3 instance_normal(vec3 w0, vec3 w1, vec3 w2, vec3 n) {
+    return n.x * w0 + n.y * w1 + n.z * w2;
+}
+#endif
+
 Surface surface_at(Hit h, vec3 o, vec3 d) {
     Surface s;
 #if HAS_SPHERES
@@ -192,9 +201,9 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
         s.material = tri.material;
 #ifdef BVH_INSTANCES
         // A shared mesh's triangle is in object space: the point goes to the world by the
-        // object-to-world rows; normals by the inverse transpose, i.e. the transpose of the
-        // world-to-object rows' linear part (that keeps the authored side for mirroring
-        // instances too, as the importer's vertex swap does for flattened meshes). Vertex
+        // object-to-world rows; normals by instance_normal (which keeps the authored side
+        // for mirroring instances too, as the importer's vertex swap does for flattened
+        // meshes). Vertex
         // normals are mapped and normalised before they are interpolated, tangents
         // likewise (normal_mapped): what the flattened mesh stores.
         uint record = h.instance_record;
@@ -205,8 +214,7 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
         bool instanced = record != BVH_NO_INSTANCE;
         if (instanced) {
             s.p = bvh_apply_rows(w2o + 3u, s.p, 1.0);
-            vec3 n = cross(e1, e2);
-            s.ng = normalize(n.x * w0 + n.y * w1 + n.z * w2);
+            s.ng = normalize(instance_normal(w0, w1, w2, cross(e1, e2)));
             s.ns = s.ng;
         }
 #else
@@ -220,9 +228,9 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
             vec3 n2 = shading_normal_at(first_normal + 2u).xyz;
 #ifdef BVH_INSTANCES
             if (instanced) {
-                n0 = n0.x * w0 + n0.y * w1 + n0.z * w2;
-                n1 = n1.x * w0 + n1.y * w1 + n1.z * w2;
-                n2 = n2.x * w0 + n2.y * w1 + n2.z * w2;
+                n0 = instance_normal(w0, w1, w2, n0);
+                n1 = instance_normal(w0, w1, w2, n1);
+                n2 = instance_normal(w0, w1, w2, n2);
                 // Zero normals (a triangle without them, flat) stay zero.
                 n0 = dot(n0, n0) > 0.0 ? normalize(n0) : n0;
                 n1 = dot(n1, n1) > 0.0 ? normalize(n1) : n1;

@@ -284,11 +284,10 @@ pub fn build_instanced(
     instances: &[Instance],
     opts: &BuildOptions,
 ) -> Bvh {
-    let world = &triangles[..meshes.iter().map(|m| m.first as usize).min().unwrap_or(triangles.len())];
+    let world = &triangles[..SharedMesh::world_triangle_count(meshes, triangles.len())];
     if instances.is_empty() {
         return build_with(world, spheres, opts);
     }
-    let start = Instant::now();
     assert!(instances.len() < MAX_IDS, "too many instances ({})", instances.len());
     let mut bvh = in_pool(opts, || {
         // Mesh trees in parallel (each is the same tree for any number of threads).
@@ -315,7 +314,6 @@ pub fn build_instanced(
         top
     });
     bvh.stats.triangles = triangles.len();
-    bvh.stats.build_seconds = start.elapsed().as_secs_f64();
     bvh
 }
 

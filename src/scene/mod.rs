@@ -117,6 +117,21 @@ impl SharedMesh {
     pub fn range(&self) -> std::ops::Range<usize> {
         self.first as usize..(self.first + self.count) as usize
     }
+
+    /// How many of `triangles` triangles are world-space: those before the first shared
+    /// mesh of `meshes`.
+    pub fn world_triangle_count(meshes: &[SharedMesh], triangles: usize) -> usize {
+        meshes.iter().map(|m| m.first as usize).min().unwrap_or(triangles)
+    }
+}
+
+/// A tangent (xyz the direction, w the bitangent's sign) placed by a transform whose
+/// linear part is `lin`: the direction transformed (it lies in the surface, unlike a
+/// normal) and normalised, the sign flipped by a mirroring transform so that
+/// w cross(normal, tangent) stays the transformed bitangent.
+pub fn transform_tangent(lin: glam::Mat3, t: Vec4) -> Vec4 {
+    let sign = if lin.determinant() < 0.0 { -1.0 } else { 1.0 };
+    (lin * t.truncate()).normalize_or_zero().extend(t.w * sign)
 }
 
 /// One placement of a [`SharedMesh`]: its object space mapped to the world by an affine,
@@ -469,8 +484,7 @@ pub fn builtin_path(name: &str) -> Option<PathBuf> {
 impl Scene {
     /// The world-space triangles: all but the shared meshes' (which follow them).
     pub fn world_triangles(&self) -> &[Triangle] {
-        let end = self.meshes.iter().map(|m| m.first as usize).min().unwrap_or(self.triangles.len());
-        &self.triangles[..end]
+        &self.triangles[..SharedMesh::world_triangle_count(&self.meshes, self.triangles.len())]
     }
 
     /// Triangles in the world, counting each instance's mesh once per instance.
@@ -493,9 +507,7 @@ impl Scene {
                 w.p = t.p.map(|p| m.transform_point3(p));
                 w.n = t.n.map(|n| n.map(|v| (normal_matrix * v).normalize_or_zero()));
                 if let Some(a) = &mut w.attributes {
-                    let sign = if flip { -1.0 } else { 1.0 };
-                    a.tangent =
-                        a.tangent.map(|ts| ts.map(|t| (lin * t.truncate()).normalize_or_zero().extend(t.w * sign)));
+                    a.tangent = a.tangent.map(|ts| ts.map(|t| transform_tangent(lin, t)));
                 }
                 // A mirroring transform reverses the winding: swap vertices 1 and 2 (with
                 // their attributes) so the geometric normal stays on the authored side, as

@@ -7,7 +7,7 @@ use super::accessors::{
 };
 use super::extensions::{ext_vec3, EXT_SPHERES};
 use super::Importer;
-use crate::scene::{Sphere, Triangle, VertexAttributes};
+use crate::scene::{transform_tangent, Sphere, Triangle, VertexAttributes};
 use anyhow::{anyhow, bail, Context, Result};
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use gltf::mesh::{Mode, Semantic};
@@ -166,7 +166,9 @@ impl Importer<'_> {
                     let flip = Mat3::from_mat4(world).determinant() < 0.0;
                     let p: Vec<Vec3> = positions.iter().map(|v| world.transform_point3(*v)).collect();
                     let n = normals.map(|ns| ns.iter().map(|v| (normal_matrix * *v).normalize_or_zero()).collect());
-                    let t = tangents.as_ref().map(|ts| ts.iter().map(|t| world_tangent(world, *t)).collect());
+                    let t = tangents
+                        .as_ref()
+                        .map(|ts| ts.iter().map(|t| transform_tangent(Mat3::from_mat4(world), *t)).collect());
                     (p, n, t, vec![flip; positions.len()])
                 }
                 Some(ms) => {
@@ -177,8 +179,9 @@ impl Importer<'_> {
                             .map(|(v, m)| (Mat3::from_mat4(*m).inverse().transpose() * *v).normalize_or_zero())
                             .collect()
                     });
-                    let t =
-                        tangents.as_ref().map(|ts| ts.iter().zip(&ms).map(|(t, m)| world_tangent(*m, *t)).collect());
+                    let t = tangents.as_ref().map(|ts| {
+                        ts.iter().zip(&ms).map(|(t, m)| transform_tangent(Mat3::from_mat4(*m), *t)).collect()
+                    });
                     let flips = ms.iter().map(|m| Mat3::from_mat4(*m).determinant() < 0.0).collect();
                     (p, n, t, flips)
                 }
@@ -421,13 +424,3 @@ impl Importer<'_> {
 /// A primitive's vertices in world space: positions, normals, tangents, and whether the
 /// transform of each mirrors.
 type WorldVertices = (Vec<Vec3>, Option<Vec<Vec3>>, Option<Vec<Vec4>>, Vec<bool>);
-
-/// A TANGENT in world space under the node matrix `m`: the tangent direction transformed
-/// by m (it lies in the surface, unlike a normal) and normalised; the bitangent's sign
-/// flips with a mirroring m, so that w cross(normal, tangent) stays the transformed
-/// bitangent.
-fn world_tangent(m: Mat4, t: Vec4) -> Vec4 {
-    let m3 = Mat3::from_mat4(m);
-    let sign = if m3.determinant() < 0.0 { -1.0 } else { 1.0 };
-    (m3 * t.truncate()).normalize_or_zero().extend(t.w * sign)
-}

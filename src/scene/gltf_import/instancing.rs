@@ -31,6 +31,9 @@ pub(super) struct Instancing {
     /// Placements of shared meshes met in node order: glTF mesh index, object-to-world
     /// matrix (re-centred, f32) and the node's label.
     pub placements: Vec<(usize, Mat4, String)>,
+    /// The local EXT_mesh_gpu_instancing transforms of each node with a mesh that has
+    /// them, by node index (read once, in [`Importer::choose_shared_meshes`]).
+    pub gpu_transforms: std::collections::HashMap<usize, Vec<DMat4>>,
 }
 
 impl Importer<'_> {
@@ -42,13 +45,18 @@ impl Importer<'_> {
         let mut placements = vec![0usize; doc.meshes().len()];
         for node in nodes {
             let Some(mesh) = node.mesh() else { continue };
-            if node.skin().is_some() || node.weights().is_some() {
-                continue;
-            }
-            placements[mesh.index()] += match gpu_instancing(node) {
-                Some(_) => self.gpu_instance_count(node)?,
+            let count = match gpu_instancing(node) {
+                Some(v) => {
+                    let transforms = self.gpu_instance_transforms(node, v)?;
+                    let n = transforms.len();
+                    self.instancing.gpu_transforms.insert(node.index(), transforms);
+                    n
+                }
                 None => 1,
             };
+            if node.skin().is_none() && node.weights().is_none() {
+                placements[mesh.index()] += count;
+            }
         }
         let emissive = |mesh: gltf::Mesh| {
             mesh.primitives()
@@ -59,24 +67,23 @@ impl Importer<'_> {
     }
 
     /// Whether `node`'s mesh is placed by instances (recorded here) rather than added.
-    pub(super) fn place_instanced(&mut self, node: &gltf::Node, world: Mat4, label: &str) -> Result<bool> {
-        let Some(mesh) = node.mesh() else { return Ok(false) };
+    pub(super) fn place_instanced(&mut self, node: &gltf::Node, world: Mat4, label: &str) -> bool {
+        let Some(mesh) = node.mesh() else { return false };
         if !self.instancing.shared[mesh.index()] || node.skin().is_some() || node.weights().is_some() {
-            return Ok(false);
+            return false;
         }
-        for m in self.node_placements(node, world)? {
+        for m in self.node_placements(node, world) {
             self.instancing.placements.push((mesh.index(), m, label.to_string()));
         }
-        Ok(true)
+        true
     }
 
     /// `world`, or with EXT_mesh_gpu_instancing the node's world transform times each of
     /// its instance transforms (composed in f64 and re-centred, as node transforms are).
-    pub(super) fn node_placements(&self, node: &gltf::Node, world: Mat4) -> Result<Vec<Mat4>> {
-        let Some(v) = gpu_instancing(node) else { return Ok(vec![world]) };
+    pub(super) fn node_placements(&self, node: &gltf::Node, world: Mat4) -> Vec<Mat4> {
+        let Some(local) = self.instancing.gpu_transforms.get(&node.index()) else { return vec![world] };
         let node_world = self.node_world[node.index()].unwrap_or(DMat4::IDENTITY);
-        let local = self.gpu_instance_transforms(node, v)?;
-        Ok(local.into_iter().map(|t| (self.rebase * node_world * t).as_mat4()).collect())
+        local.iter().map(|t| (self.rebase * node_world * *t).as_mat4()).collect()
     }
 
     /// Adds the shared meshes (object space, after every world-space triangle) and their
@@ -111,13 +118,6 @@ impl Importer<'_> {
             }
         }
         Ok(())
-    }
-
-    /// The number of EXT_mesh_gpu_instancing transforms of `node` (the attribute
-    /// accessors' common count).
-    fn gpu_instance_count(&self, node: &gltf::Node) -> Result<usize> {
-        let v = gpu_instancing(node).expect("a node with EXT_mesh_gpu_instancing");
-        Ok(self.gpu_instance_transforms(node, v)?.len())
     }
 
     /// The local TRS matrices of a node's EXT_mesh_gpu_instancing payload `v`: accessors

@@ -282,7 +282,7 @@ impl<'d> Importer<'d> {
             self.add_light(&light, world, &label)?;
         }
         if let Some(mesh) = node.mesh() {
-            if !self.place_instanced(node, world, &label)? {
+            if !self.place_instanced(node, world, &label) {
                 // glTF 2.0 section 3.7.3.2: a skinned mesh is placed by its joints alone.
                 match node.skin() {
                     Some(skin) => {
@@ -290,7 +290,7 @@ impl<'d> Importer<'d> {
                         self.add_mesh(&mesh, &placement, node.weights(), &label)?;
                     }
                     None => {
-                        for m in self.node_placements(node, world)? {
+                        for m in self.node_placements(node, world) {
                             self.add_mesh(&mesh, &geometry::Placement::Rigid(m), node.weights(), &label)?;
                         }
                     }
