@@ -25,6 +25,8 @@ layout(buffer_reference, std430, buffer_reference_align = 4) buffer Uints { uint
 #define FRAME_LIGHT_VERTICES_B ARRAY_AT(Vec4s, addresses.light_vertices_b)
 #define FRAME_GRID_KEYS ARRAY_AT(Uvec2s, addresses.grid_keys)
 #define FRAME_GRID_POINTS ARRAY_AT(Uvec4s, addresses.grid_points)
-#define FRAME_LIGHT_VERTEX_DENSE ARRAY_AT(Uints, addresses.light_vertex_dense)
+#define FRAME_LIGHT_VERTEX_OFFSETS ARRAY_AT(Uints, addresses.light_vertex_offsets)
+#define FRAME_LIGHT_SCRATCH_A ARRAY_AT(Vec4s, addresses.light_scratch_a)
+#define FRAME_LIGHT_SCRATCH_B ARRAY_AT(Vec4s, addresses.light_scratch_b)
 #endif
 #endif

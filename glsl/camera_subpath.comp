@@ -19,7 +19,12 @@
 
 layout(local_size_x = WORKGROUP_SIZE) in;
 #include "scene.glsl"
+#define LV_SCRATCH 0
 #include "light_vertex_store.glsl"
+
+// Set by light_vertex_compact.comp (layout there): the earliest iteration of the batch
+// whose light vertices did not fit the store.
+layout(std430) readonly buffer light_vertex_status { uint lv_first_overflow; uint lv_most_vertices; };
 
 #if USE_VM
 #if LV_TEXEL
@@ -76,25 +81,7 @@ vec3 connect_vertices(SubpathState st, Surface s, Bsdf b, LightVertex v) {
 // no longer matched to the cache's connection count (Davidovic et al. adjust them; we do
 // not, docs/estimators.md). Drawing uniformly over vertices (not a path, then one of its
 // vertices) keeps the weight M / (N_L n_c) the same for every vertex. Deterministic: the
-// prefix sum is a fixed-order scan, the dense list is in path order and the draws use
-// this pixel's random sequence.
-// lv_dense_at(i): the store slot of the i-th of all stored vertices, in path order
-// (glsl/lv_cache_compact.comp).
-#if LV_TEXEL
-uniform utextureBuffer light_vertex_prefix;
-uniform utextureBuffer light_vertex_dense;
-uint lv_prefix_at(uint p) { return texelFetch(light_vertex_prefix, int(p)).x; }
-uint lv_dense_at(uint i) { return texelFetch(light_vertex_dense, int(i)).x; }
-#else
-layout(std430) readonly buffer light_vertex_prefix { uint lv_prefix[]; };
-#if DEVICE_ADDRESSES
-#define lv_dense FRAME_LIGHT_VERTEX_DENSE
-#else
-layout(std430) readonly buffer light_vertex_dense { uint lv_dense[]; };
-#endif
-uint lv_prefix_at(uint p) { return lv_prefix[p]; }
-uint lv_dense_at(uint i) { return lv_dense[i]; }
-#endif
+// store holds the vertices in path order and the draws use this pixel's random sequence.
 
 // The connections of camera vertex `s` to the cache, times light throughput and weight
 // (the caller multiplies by the camera throughput).
@@ -103,11 +90,11 @@ vec3 connect_cache(SubpathState st, Surface s, Bsdf b, inout uint rng) {
     uint min_len = min_path_length();
     // Light vertices have len >= 1: no path of this camera vertex fits (no draws).
     if (st.len + 2u > max_len) return vec3(0.0);
-    uint total = lv_prefix_at(push.light_paths);
+    uint total = lv_offset_at(push.light_paths);
     if (total == 0u) return vec3(0.0);
     vec3 sum = vec3(0.0);
     for (uint k = 0u; k < uint(LV_CACHE_CONNECTIONS); ++k) {
-        LightVertex v = lv_load(lv_dense_at(rnd_below(total, rng)));
+        LightVertex v = lv_load(rnd_below(total, rng));
         uint len = v.len + 1u + st.len;
         if (len < min_len || len > max_len) continue;  // a draw that contributes 0
         sum += v.thr * connect_vertices(st, s, b, v);
@@ -168,6 +155,12 @@ void main() {
     uint stride = regen_stride(push.count, push.paths_per_invocation);
     uint pixel = invocation_index();
     if (pixel >= stride) return;
+    if (lv_first_overflow <= push.iteration) {
+        // This iteration's light vertices did not all fit the store: it is rendered again
+        // once the store has grown, so nothing of it may reach the film, splats included.
+        for (; pixel < push.count; pixel += stride) splat_take(pixel);
+        return;
+    }
     float pick = 1.0 / float(light_count());
     uint max_len = max_path_length();
     uint min_len = min_path_length();
@@ -217,10 +210,9 @@ void main() {
             // Light subpath p = this pixel (SmallVCM), modulo N_L when --light-paths
             // asks for fewer light subpaths than pixels.
             uint p = pixel % push.light_paths;
-            uint n = lv_count_at(p);
-            uint base = p * lv_slots();
-            for (uint k = 0u; k < n; ++k) {
-                LightVertex v = lv_load(base + k);
+            uint end = lv_offset_at(p + 1u);
+            for (uint i = lv_offset_at(p); i < end; ++i) {
+                LightVertex v = lv_load(i);
                 uint total = v.len + 1u + st.len;
                 if (total < min_len) continue;
                 if (total > max_len) break;

@@ -82,20 +82,21 @@ uint hash_grid_query_cells(vec3 q, vec3 origin, float radius, uint num_buckets, 
 
 // ---- Build kernels only ----
 
-// The build's buffers besides grid_start: light_vertices_a (lv_a[], vec4) and the binding
-// light_vertex_counts (lv_count[]), grid_keys (vertex_keys[], uvec2 per slot) and
-// grid_points (bucket_points[], uvec4), by device address or as storage buffers.
-#define HASH_GRID_BUILD_BUFFERS                                                           \
-    HASH_GRID_ADDRESSED_BUFFERS                                                           \
-    layout(std430) readonly buffer light_vertex_counts { uint lv_count[]; }
+// The build's buffers besides grid_start, by device address or as storage buffers: the
+// light-vertex store's light_vertices_a (lv_a[], two vec4 per vertex, position in the
+// first) and light_vertex_offsets (lv_offsets[], light path p's vertices are
+// lv_offsets[p] .. lv_offsets[p + 1] - 1), grid_keys (vertex_keys[], uvec2 per vertex)
+// and grid_points (bucket_points[], uvec4).
 #if DEVICE_ADDRESSES
 #define lv_a FRAME_LIGHT_VERTICES_A
+#define lv_offsets FRAME_LIGHT_VERTEX_OFFSETS
 #define vertex_keys FRAME_GRID_KEYS
 #define bucket_points FRAME_GRID_POINTS
-#define HASH_GRID_ADDRESSED_BUFFERS
+#define HASH_GRID_BUILD_BUFFERS
 #else
-#define HASH_GRID_ADDRESSED_BUFFERS                                                       \
+#define HASH_GRID_BUILD_BUFFERS                                                           \
     layout(std430) readonly buffer light_vertices_a { vec4 lv_a[]; };                     \
+    layout(std430) readonly buffer light_vertex_offsets { uint lv_offsets[]; };           \
     layout(std430) buffer grid_keys { uvec2 vertex_keys[]; };                             \
     layout(std430) buffer grid_points { uvec4 bucket_points[]; };
 #endif
@@ -106,7 +107,7 @@ uint hash_grid_query_cells(vec3 q, vec3 origin, float radius, uint num_buckets, 
         vec3 origin;                                                                      \
         float radius;                                                                     \
         uint light_paths;                                                                 \
-        uint slots;                                                                       \
+        uint capacity;  /* vertices the store holds */                                    \
         uint num_buckets;                                                                 \
     } push
 

@@ -24,7 +24,7 @@ layout(std430) readonly buffer grid_start { uint bucket_start[]; };
 #include "common.glsl"
 #include "addresses.glsl"
 #include "hash_grid.glsl"
-HASH_GRID_BUILD_BUFFERS;
+HASH_GRID_BUILD_BUFFERS
 HASH_GRID_BUILD_PUSH;
 
 const uint SMALL = 32u;

@@ -1,9 +1,12 @@
 #version 460
-// The light-subpaths pass (docs/design.md; src/render/passes/light_subpaths.rs):
-// push.paths_per_invocation light subpaths per invocation (path regeneration,
-// common.glsl regen_stride). Samples an emitter, traces, stores every non-delta vertex in
-// the light-vertex store (STORE_VERTICES) and connects it to the camera
-// (CONNECT_CAMERA), as SmallVCM's VertexCM light pass. LIGHT_TRACE_ONLY: pure light
+// The light-subpaths pass (docs/design.md; src/render/passes/light_subpaths.rs), one
+// dispatch per chunk of push.count light subpaths from push.first_path on,
+// push.paths_per_invocation per invocation (path regeneration, common.glsl
+// regen_stride). Samples an emitter, traces, stores every non-delta vertex in the chunk's
+// scratch slots (STORE_VERTICES; light_vertex_compact.comp then moves them into the
+// light-vertex store) and connects it to the camera (CONNECT_CAMERA), as SmallVCM's
+// VertexCM light pass. A light subpath's random numbers depend on its index only, so the
+// image does not depend on the chunks. LIGHT_TRACE_ONLY: pure light
 // tracing (weight 1), which also connects the emitting point of area lights to the
 // camera so that directly visible emitters are rendered. The variant is always set by
 // the Rust side (src/render/variants.rs, LightKernel).
@@ -15,10 +18,8 @@
 
 layout(local_size_x = WORKGROUP_SIZE) in;
 #include "scene.glsl"
+#define LV_SCRATCH STORE_VERTICES
 #include "light_vertex_store.glsl"
-#if LV_CACHE && STORE_VERTICES
-layout(std430) writeonly buffer light_vertex_prefix { uint lv_prefix[]; };
-#endif
 
 // Starts light subpath `path`: samples its emitter (and with LIGHT_TRACE_ONLY connects
 // the emitting point to the camera); false when it has nothing to trace.
@@ -64,34 +65,31 @@ bool start_path(uint path, out SubpathState st, out uint rng) {
     return true;
 }
 
-// Ends light subpath `path` with `stored` vertices in the store.
-void finish_path(uint path, uint stored) {
+// Ends the chunk's light subpath `q` with `stored` vertices in its scratch slots.
+void finish_path(uint q, uint stored) {
 #if STORE_VERTICES
-    lv_count[path] = stored;
-#if LV_CACHE
-    lv_prefix[path] = stored;  // scanned into prefix sums before the camera pass
-#endif
+    lv_chunk_count[q] = stored;  // scanned before light_vertex_compact.comp
 #endif
 }
 
 void main() {
     uint stride = regen_stride(push.count, push.paths_per_invocation);
-    uint path = invocation_index();
-    if (path >= stride) return;
+    uint q = invocation_index();  // the light subpath's index in the chunk
+    if (q >= stride) return;
     uint max_len = max_path_length();
     SubpathState st;
     uint rng;
     uint stored = 0u;
-    bool alive = start_path(path, st, rng);
+    bool alive = start_path(push.first_path + q, st, rng);
     // One loop iteration = one segment of the current subpath; a subpath that ends is
     // finished and the next one started in the same iteration.
     while (true) {
         if (!alive) {
-            finish_path(path, stored);
-            path += stride;
-            if (path >= push.count) break;
+            finish_path(q, stored);
+            q += stride;
+            if (q >= push.count) break;
             stored = 0u;
-            alive = start_path(path, st, rng);
+            alive = start_path(push.first_path + q, st, rng);
             if (!alive) continue;
         }
         alive = false;
@@ -111,7 +109,7 @@ void main() {
             v.p = s.p; v.thr = st.thr; v.wo = -st.d; v.n = s.ng; v.ns = s.ns; v.tint = s.tint;
             v.material = s.material; v.len = st.len;
             v.dvcm = st.dvcm; v.dvc = st.dvc; v.dvm = st.dvm;
-            lv_store(path * lv_slots() + stored, v);
+            lv_store(q * lv_slots() + stored, v);
             stored += 1u;
 #endif
 #if CONNECT_CAMERA

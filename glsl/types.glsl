@@ -79,7 +79,9 @@ struct GpuAddresses {
     uvec2 light_vertices_b;
     uvec2 grid_keys;
     uvec2 grid_points;
-    uvec2 light_vertex_dense;
+    uvec2 light_vertex_offsets;
+    uvec2 light_scratch_a;
+    uvec2 light_scratch_b;
 };
 
 struct GpuPush {
@@ -91,6 +93,7 @@ struct GpuPush {
     uint light_paths;  // N_L, light subpaths per iteration
     uint grid_buckets; // buckets of the light-vertex hash grid (merging estimators)
     uint paths_per_invocation; // path regeneration (common.glsl regen_stride); 0 = 1
+    uint first_path;   // light-subpaths pass: the chunk's first light subpath
 };
 
 #endif

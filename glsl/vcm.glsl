@@ -4,9 +4,8 @@
 // vertex store. Technique weights follow docs/smallvcm.md 4.4 (balance heuristic).
 //
 // Included by light_vertex_store.glsl, which provides what it requires: scene.glsl,
-// film.glsl with HAS_SPLAT, `push` (GpuPush), and the store lv_a[] / lv_b[] (vec4, two
-// per vertex), lv_count[] (uint per light path), read through lv_a_at / lv_b_at /
-// lv_count_at.
+// film.glsl with HAS_SPLAT, `push` (GpuPush), the store read through lv_a_at / lv_b_at
+// and, in the light kernel (LV_SCRATCH), the scratch slots lv_scratch_a[] / lv_scratch_b[].
 #ifndef VCM_GLSL
 #define VCM_GLSL
 
@@ -20,15 +19,14 @@ struct SubpathState {
     bool finite_light; // light subpaths: started on a finite light
 };
 
-// Light vertex storage: path p owns slots [p * S, p * S + S) with S = max path length - 1
-// (a light subpath stores at most that many vertices), so a camera subpath finds the
-// vertices of "its" light subpath p = pixel index without search, as in SmallVCM.
-//   lv_a[2i] = (position, dVCM)      lv_a[2i+1] = (throughput, dVC)
-//   lv_b[Bi] = (wo, dVM)             lv_b[Bi+1] = (normal, material | length << 24)
-//   with HAS_SHADING_NORMALS:        lv_b[Bi+2] = (shading normal, 0)
-//   with HAS_VERTEX_ATTRIBUTES:      lv_b[Bi+LV_TINT] = (tint, 0)
+// A light vertex's layout (the same in the scratch slots the light kernel writes and in
+// the compacted store, glsl/light_vertex_store.glsl), vertex i:
+//   a[2i] = (position, dVCM)      a[2i+1] = (throughput, dVC)
+//   b[Bi] = (wo, dVM)             b[Bi+1] = (normal, material | length << 24)
+//   with HAS_SHADING_NORMALS:     b[Bi+2] = (shading normal, 0)
+//   with HAS_VERTEX_ATTRIBUTES:   b[Bi+LV_TINT] = (tint, 0)
 // B = 2 + the two (src/render/passes/light_subpaths.rs, LightVertexPlan, sizes the store
-// the same way).
+// the same way; light_vertex_compact.comp copies B vec4 per vertex).
 #define LV_NORMAL_SLOTS (HAS_SHADING_NORMALS != 0 ? 1u : 0u)
 #define LV_TINT (2u + LV_NORMAL_SLOTS)
 #define LV_B_STRIDE (LV_TINT + (HAS_VERTEX_ATTRIBUTES != 0 ? 1u : 0u))
@@ -44,23 +42,27 @@ struct LightVertex {
     float dvcm, dvc, dvm;
 };
 
+// Scratch slots per light subpath: a light subpath stores at most max path length - 1
+// vertices.
 uint lv_slots() { return max_path_length() - 1u; }
 
-#if !LV_TEXEL
+#if LV_SCRATCH
+// Writes `v` to scratch slot `slot` (the light kernel).
 void lv_store(uint slot, LightVertex v) {
-    lv_a[2u * slot] = vec4(v.p, v.dvcm);
-    lv_a[2u * slot + 1u] = vec4(v.thr, v.dvc);
-    lv_b[LV_B_STRIDE * slot] = vec4(v.wo, v.dvm);
-    lv_b[LV_B_STRIDE * slot + 1u] = vec4(v.n, uintBitsToFloat(v.material | (v.len << 24)));
+    lv_scratch_a[2u * slot] = vec4(v.p, v.dvcm);
+    lv_scratch_a[2u * slot + 1u] = vec4(v.thr, v.dvc);
+    lv_scratch_b[LV_B_STRIDE * slot] = vec4(v.wo, v.dvm);
+    lv_scratch_b[LV_B_STRIDE * slot + 1u] = vec4(v.n, uintBitsToFloat(v.material | (v.len << 24)));
 #if HAS_SHADING_NORMALS
-    lv_b[LV_B_STRIDE * slot + 2u] = vec4(v.ns, 0.0);
+    lv_scratch_b[LV_B_STRIDE * slot + 2u] = vec4(v.ns, 0.0);
 #endif
 #if HAS_VERTEX_ATTRIBUTES
-    lv_b[LV_B_STRIDE * slot + LV_TINT] = vec4(v.tint, 0.0);
+    lv_scratch_b[LV_B_STRIDE * slot + LV_TINT] = vec4(v.tint, 0.0);
 #endif
 }
 #endif
 
+// Vertex `slot` of the compacted store.
 LightVertex lv_load(uint slot) {
     LightVertex v;
     vec4 a0 = lv_a_at(2u * slot), a1 = lv_a_at(2u * slot + 1u);

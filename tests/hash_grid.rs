@@ -37,73 +37,101 @@ fn dist2(p: [f32; 3], q: [f32; 3]) -> f32 {
     d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
 }
 
-/// A light-vertex store as light_subpath.comp leaves it: `slots` fixed slots per path,
-/// the first `lv_count[p]` of path p valid, position in lv_a[2 i].xyz.
+/// A light-vertex store as the light pass leaves it (src/render/passes/light_subpaths.rs):
+/// light path p's vertices are `offsets[p] .. offsets[p + 1]`, position in lv_a[2 i].xyz;
+/// past the total, up to the store's capacity, entries hold NaN or plausible garbage
+/// (what an earlier iteration left: must be skipped).
 struct Store {
     light_paths: u32,
-    slots: u32,
+    capacity: u64,
     lv_a: Vec<[f32; 4]>,
-    lv_count: Vec<u32>,
+    offsets: Vec<u32>,
 }
 
 impl Store {
-    fn pos(&self, slot: u32) -> [f32; 3] {
-        let a = self.lv_a[2 * slot as usize];
+    /// The store of light paths with `counts[p]` vertices each, at `position(p, k)`, and
+    /// `tail` garbage entries after them from `garbage(i)`.
+    fn new(
+        counts: &[u32],
+        mut position: impl FnMut(u32, u32) -> [f32; 3],
+        tail: u32,
+        mut garbage: impl FnMut(u32) -> [f32; 3],
+    ) -> Store {
+        let mut offsets = vec![0u32];
+        let mut lv_a = Vec::new();
+        for (p, &n) in counts.iter().enumerate() {
+            for k in 0..n {
+                let q = position(p as u32, k);
+                lv_a.extend([[q[0], q[1], q[2], 0.5], [0.25, 0.5, 0.75, f32::NAN]]);
+            }
+            offsets.push(offsets.last().unwrap() + n);
+        }
+        for i in 0..tail {
+            let q = garbage(i);
+            lv_a.extend([[q[0], q[1], q[2], 0.5], [f32::NAN; 4]]);
+        }
+        let capacity = (lv_a.len() / 2).max(1) as u64;
+        lv_a.resize(2 * capacity as usize, [f32::NAN; 4]);
+        Store { light_paths: counts.len() as u32, capacity, lv_a, offsets }
+    }
+
+    fn pos(&self, i: u32) -> [f32; 3] {
+        let a = self.lv_a[2 * i as usize];
         [a[0], a[1], a[2]]
     }
 
+    /// The stored vertices' indices.
     fn valid_slots(&self) -> Vec<u32> {
-        (0..self.light_paths).flat_map(|p| (0..self.lv_count[p as usize]).map(move |k| p * self.slots + k)).collect()
+        (0..self.offsets[self.light_paths as usize]).collect()
     }
 
     fn upload(&self, gpu: &Arc<Gpu>) -> (Buffer, Buffer) {
-        (gpu.buffer_from_slice("lv_a", &self.lv_a).unwrap(), gpu.buffer_from_slice("lv_count", &self.lv_count).unwrap())
+        (gpu.buffer_from_slice("lv_a", &self.lv_a).unwrap(), gpu.buffer_from_slice("offsets", &self.offsets).unwrap())
+    }
+
+    fn grid(&self, gpu: &Arc<Gpu>, lv_a: &Buffer, offsets: &Buffer, num_buckets: u32) -> HashGrid {
+        HashGrid::new(gpu, lv_a, offsets, self.light_paths, self.capacity, num_buckets).unwrap()
     }
 }
 
-/// Random store: path counts include zeros and full paths; valid positions are uniform
-/// in a box, exactly on cell boundaries (multiples of 2r from the origin on some axes),
-/// or in one dense cell; invalid slots hold NaN or plausible garbage (must be skipped).
+/// Random store: path counts (0 to `slots`) include zeros and full paths; positions are
+/// uniform in a box, exactly on cell boundaries (multiples of 2r from the origin on some
+/// axes), or in one dense cell; the garbage after the stored vertices is NaN or a
+/// plausible position.
 fn random_store(rng: &mut Rng32, origin: [f32; 3], radius: f32, light_paths: u32, slots: u32) -> Store {
     let cell = 2.0 * radius;
     let cluster_cell = [rng.random_range(0..20), rng.random_range(0..20), rng.random_range(0..20)];
-    let mut lv_count = Vec::with_capacity(light_paths as usize);
-    let mut lv_a = vec![[0f32; 4]; 2 * (light_paths * slots) as usize];
-    for p in 0..light_paths {
-        let n = if rng.random_bool(0.2) { 0 } else { rng.random_range(0..=slots) };
-        lv_count.push(n);
-        for k in 0..slots {
-            let slot = (p * slots + k) as usize;
-            let pos: [f32; 3] = if k >= n {
-                if rng.random_bool(0.5) {
-                    [f32::NAN; 3]
+    let counts: Vec<u32> =
+        (0..light_paths).map(|_| if rng.random_bool(0.2) { 0 } else { rng.random_range(0..=slots) }).collect();
+    let mut positions = Vec::new();
+    for _ in counts.iter().flat_map(|&n| 0..n) {
+        positions.push(match rng.random_range(0..10) {
+            0..6 => std::array::from_fn(|i| origin[i] + rng.random_range(-0.1..1.2f32)),
+            6..8 => std::array::from_fn(|i| {
+                if rng.random_bool(0.6) {
+                    origin[i] + cell * rng.random_range(-2..40) as f32
                 } else {
-                    std::array::from_fn(|i| origin[i] + rng.random_range(0.0..1.0f32))
+                    origin[i] + rng.random_range(0.0..1.0f32)
                 }
-            } else {
-                match rng.random_range(0..10) {
-                    0..6 => std::array::from_fn(|i| origin[i] + rng.random_range(-0.1..1.2f32)),
-                    6..8 => std::array::from_fn(|i| {
-                        if rng.random_bool(0.6) {
-                            origin[i] + cell * rng.random_range(-2..40) as f32
-                        } else {
-                            origin[i] + rng.random_range(0.0..1.0f32)
-                        }
-                    }),
-                    _ => std::array::from_fn(|i| {
-                        origin[i] + cell * (cluster_cell[i] as f32 + rng.random_range(0.0..1.0f32))
-                    }),
-                }
-            };
-            lv_a[2 * slot] = [pos[0], pos[1], pos[2], rng.random()];
-            lv_a[2 * slot + 1] = [rng.random(), rng.random(), rng.random(), f32::NAN];
-        }
+            }),
+            _ => std::array::from_fn(|i| origin[i] + cell * (cluster_cell[i] as f32 + rng.random_range(0.0..1.0f32))),
+        });
     }
-    Store { light_paths, slots, lv_a, lv_count }
+    let garbage: Vec<[f32; 3]> = (0..light_paths)
+        .map(|_| {
+            if rng.random_bool(0.5) {
+                [f32::NAN; 3]
+            } else {
+                std::array::from_fn(|i| origin[i] + rng.random_range(0.0..1.0f32))
+            }
+        })
+        .collect();
+    let mut next = positions.into_iter();
+    Store::new(&counts, |_, _| next.next().unwrap(), light_paths, |i| garbage[i as usize])
 }
 
-/// The grid after a build: cell_start, the slots of cell_points (cell_points[i].w), and
-/// cell_points.
+/// The grid after a build: cell_start, the vertex indices of cell_points
+/// (cell_points[i].w), and cell_points.
 type Built = (Vec<u32>, Vec<u32>, Vec<[u32; 4]>);
 
 fn build(gpu: &Arc<Gpu>, grid: &HashGrid, radius: f32, origin: [f32; 3]) -> Built {
@@ -167,10 +195,10 @@ fn build_matches_cpu_counting_sort_and_is_deterministic() {
             let light_paths = rng.random_range(500..3000);
             let slots = rng.random_range(1..=9);
             let store = random_store(&mut rng, origin, radius, light_paths, slots);
-            let (lv_a, lv_count) = store.upload(gpu);
+            let (lv_a, offsets) = store.upload(gpu);
             // Default table size, a small prime (many collisions), one bucket, and many.
             for num_buckets in [light_paths, 97, 1, 1 << 20] {
-                let grid = HashGrid::new(gpu, &lv_a, &lv_count, light_paths, slots, num_buckets).unwrap();
+                let grid = store.grid(gpu, &lv_a, &offsets, num_buckets);
                 assert_eq!(grid.num_buckets(), num_buckets);
                 let built = build(gpu, &grid, radius, origin);
                 check_structure(&store, num_buckets, radius, origin, &built);
@@ -198,14 +226,11 @@ fn build_handles_empty_and_full_stores() {
         let mut rng = Rng32::seed_from_u64(3);
         let (radius, origin) = (0.05f32, [0.0f32; 3]);
         for fill in [0u32, 4] {
-            let mut store = random_store(&mut rng, origin, radius, 300, 4);
-            store.lv_count.iter_mut().for_each(|c| *c = fill);
-            for s in store.valid_slots() {
-                let p: [f32; 3] = std::array::from_fn(|_| rng.random_range(0.0..1.0f32));
-                store.lv_a[2 * s as usize] = [p[0], p[1], p[2], 0.0];
-            }
-            let (lv_a, lv_count) = store.upload(gpu);
-            let grid = HashGrid::new(gpu, &lv_a, &lv_count, 300, 4, 300).unwrap();
+            let counts = vec![fill; 300];
+            let uniform = |_, _| std::array::from_fn(|_| rng.random_range(0.0..1.0f32));
+            let store = Store::new(&counts, uniform, 0, |_| [f32::NAN; 3]);
+            let (lv_a, offsets) = store.upload(gpu);
+            let grid = store.grid(gpu, &lv_a, &offsets, 300);
             let built = build(gpu, &grid, radius, origin);
             check_structure(&store, 300, radius, origin, &built);
             assert_eq!(built.0[300], 300 * fill);
@@ -217,14 +242,17 @@ fn build_handles_empty_and_full_stores() {
 fn new_and_build_reject_bad_arguments() {
     with_gpu(|gpu| {
         let lv_a = gpu.buffer_zeroed::<[f32; 4]>("lv_a", 2 * 40).unwrap();
-        let lv_count = gpu.buffer_zeroed::<u32>("lv_count", 10).unwrap();
-        assert!(HashGrid::new(gpu, &lv_a, &lv_count, 0, 4, 10).is_err());
-        assert!(HashGrid::new(gpu, &lv_a, &lv_count, 10, 4, 0).is_err());
-        let e = HashGrid::new(gpu, &lv_a, &lv_count, 10, 5, 10).err().unwrap().to_string();
+        let offsets = gpu.buffer_zeroed::<u32>("offsets", 11).unwrap();
+        assert!(HashGrid::new(gpu, &lv_a, &offsets, 0, 40, 10).is_err());
+        assert!(HashGrid::new(gpu, &lv_a, &offsets, 10, 40, 0).is_err());
+        assert!(HashGrid::new(gpu, &lv_a, &offsets, 10, 0, 10).is_err());
+        let e = HashGrid::new(gpu, &lv_a, &offsets, 10, 41, 10).err().unwrap().to_string();
         assert!(e.contains("lv_a"), "{e}");
-        let e = HashGrid::new(gpu, &lv_a, &lv_count, 10, 4, u32::MAX - 1).err().unwrap().to_string();
+        let e = HashGrid::new(gpu, &lv_a, &offsets, 11, 40, 10).err().unwrap().to_string();
+        assert!(e.contains("offsets"), "{e}");
+        let e = HashGrid::new(gpu, &lv_a, &offsets, 10, 40, u32::MAX - 1).err().unwrap().to_string();
         assert!(e.contains("maxStorageBufferRange"), "{e}");
-        let grid = HashGrid::new(gpu, &lv_a, &lv_count, 10, 4, 10).unwrap();
+        let grid = HashGrid::new(gpu, &lv_a, &offsets, 10, 40, 10).unwrap();
         let mut batch = gpu.batch().unwrap();
         assert!(grid.record_build(&mut batch, 0.0, [0.0; 3]).is_err());
         assert!(grid.record_build(&mut batch, f32::NAN, [0.0; 3]).is_err());
@@ -274,7 +302,7 @@ fn sort_pass_sorts_every_bucket() {
                 &[Bind::u32("grid_start", &sb), Bind::vec4("grid_points", &pb)],
             )
             .unwrap();
-        // BuildPush: origin, radius, light paths, slots, buckets, pad.
+        // BuildPush: origin, radius, light paths, capacity, buckets, pad.
         let push: [u32; 8] = [0, 0, 0, 0, 1, 1, nb, 0];
         let mut batch = gpu.batch().unwrap();
         batch.dispatch(&k, [groups_for(nb, 64), 1, 1], bytemuck::cast_slice(&push)).unwrap();
@@ -336,7 +364,7 @@ fn queries_find_exactly_the_vertices_within_radius() {
             let light_paths = rng.random_range(1000..3000);
             let slots = rng.random_range(2..=9);
             let store = random_store(&mut rng, origin, radius, light_paths, slots);
-            let (lv_a, lv_count) = store.upload(gpu);
+            let (lv_a, offsets) = store.upload(gpu);
             let queries = query_points(&mut rng, &store, origin, radius);
             let nq = queries.len() as u32;
             // CPU brute force first, to size the output.
@@ -355,7 +383,7 @@ fn queries_find_exactly_the_vertices_within_radius() {
             let slots_out = gpu.buffer_zeroed::<u32>("slots", (nq * max_out) as usize).unwrap();
             let stats = gpu.buffer_zeroed::<[u32; 2]>("stats", nq as usize).unwrap();
             for num_buckets in [light_paths, 7, 1] {
-                let grid = HashGrid::new(gpu, &lv_a, &lv_count, light_paths, slots, num_buckets).unwrap();
+                let grid = store.grid(gpu, &lv_a, &offsets, num_buckets);
                 let k = gpu
                     .kernel(
                         "tests/hash_grid_query.comp",
@@ -499,22 +527,17 @@ fn build_speed_one_million_vertices() {
         let (light_paths, slots) = (1u32 << 18, 9u32);
         let radius = 0.003 * 3f32.sqrt();
         let origin = [-1.0f32; 3];
-        let mut lv_count = Vec::new();
-        let mut lv_a = vec![[0f32; 4]; 2 * (light_paths * slots) as usize];
-        for p in 0..light_paths {
-            let n = rng.random_range(1..=7);
-            lv_count.push(n);
-            for k in 0..n {
-                let axis = rng.random_range(0..3);
-                let mut pos: [f32; 3] = std::array::from_fn(|_| rng.random_range(-1.0..1.0f32));
-                pos[axis] = if rng.random_bool(0.5) { -1.0 } else { 1.0 };
-                lv_a[2 * (p * slots + k) as usize] = [pos[0], pos[1], pos[2], 1.0];
-            }
-        }
-        let vertices: u64 = lv_count.iter().map(|&c| c as u64).sum();
-        let lv_a = gpu.buffer_from_slice("lv_a", &lv_a).unwrap();
-        let lv_count = gpu.buffer_from_slice("lv_count", &lv_count).unwrap();
-        let grid = HashGrid::new(gpu, &lv_a, &lv_count, light_paths, slots, light_paths).unwrap();
+        let counts: Vec<u32> = (0..light_paths).map(|_| rng.random_range(1..=7)).collect();
+        let on_box_face = |_, _| {
+            let axis = rng.random_range(0..3);
+            let mut pos: [f32; 3] = std::array::from_fn(|_| rng.random_range(-1.0..1.0f32));
+            pos[axis] = if rng.random_bool(0.5) { -1.0 } else { 1.0 };
+            pos
+        };
+        let store = Store::new(&counts, on_box_face, 0, |_| [f32::NAN; 3]);
+        let vertices = store.capacity;
+        let (lv_a, offsets) = store.upload(gpu);
+        let grid = store.grid(gpu, &lv_a, &offsets, light_paths);
         let mut batch = gpu.batch().unwrap();
         grid.record_build(&mut batch, radius, origin).unwrap(); // warm-up (pipeline compiles)
         batch.submit_wait(None).unwrap();

@@ -85,7 +85,9 @@ fn rust_and_glsl_layouts_match() {
             light_vertices_b,
             grid_keys,
             grid_points,
-            light_vertex_dense
+            light_vertex_offsets,
+            light_scratch_a,
+            light_scratch_b
         }),
         rust_layout!(GpuPush {
             iteration,
@@ -95,7 +97,8 @@ fn rust_and_glsl_layouts_match() {
             radius,
             light_paths,
             grid_buckets,
-            paths_per_invocation
+            paths_per_invocation,
+            first_path
         }),
     ];
     for (name, size, fields) in rust {

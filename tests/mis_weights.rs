@@ -172,7 +172,7 @@ impl Bench {
             "splat",
             "light_vertices_a",
             "light_vertices_b",
-            "light_vertex_counts",
+            "light_vertex_offsets",
         ];
         let dummy: Vec<_> = names.iter().map(|n| gpu.buffer_zeroed::<[u32; 4]>(n, 4).unwrap()).collect();
         let out = gpu.buffer_zeroed::<PathOut>("mis_results", PATHS as usize).unwrap();

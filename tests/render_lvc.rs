@@ -1,5 +1,5 @@
 //! Bidirectional path tracing with connections to a light-vertex cache (`--connect cache`,
-//! src/render/passes/light_vertex_cache.rs, `Connect::Cache`; Davidovic et al. 2014) against independent
+//! src/render/passes/light_subpaths.rs and glsl/camera_subpath.comp, `Connect::Cache`; Davidovic et al. 2014) against independent
 //! estimators, and its determinism. Lavapipe, validation on.
 //!
 //! What is compared (the reasons are those of tests/render_bidir.rs):

@@ -24,6 +24,7 @@ layout(local_size_x = 64) in;
 #include "scene.glsl"
 #define LV_TEXEL 0
 #define LV_CACHE 0
+#define LV_SCRATCH 0
 #include "light_vertex_store.glsl"
 
 // Per path: [0] 1 if a path was built, else 0; [1] k (segments); [2] generating s;

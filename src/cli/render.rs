@@ -206,6 +206,19 @@ fn scene_summary(scene: &vkvcm::scene::Scene) -> String {
     s + &format!(", {} sphere(s), {} light(s)", scene.spheres.len(), scene.lights.len())
 }
 
+/// What --verbose says of the light-vertex store after a render: how full it got.
+fn store_use_line(u: &render::StoreUse) -> String {
+    let per_path = u.most_vertices as f64 / u.light_paths.max(1) as f64;
+    let mut s = format!(
+        "light-vertex store: at most {} vertices in an iteration ({per_path:.2} per light subpath, of {} slots), capacity {}",
+        u.most_vertices, u.slots_per_path, u.capacity
+    );
+    if u.grown > 0 {
+        s += &format!("; grown {} time(s), {} iteration(s) rendered again", u.grown, u.iterations_redone);
+    }
+    s
+}
+
 /// What --verbose says of the kernel cache: where it is, and how the kernels were built.
 fn kernel_cache_line(gpu: &Gpu) -> String {
     let c = gpu.shader_counts();
@@ -446,6 +459,9 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     );
     if out.rejected_samples > 0 {
         eprintln!("warning: {} sample(s) were NaN, infinite or negative and were rejected", out.rejected_samples);
+    }
+    if let (true, Some(u)) = (a.verbose, r.light_vertex_store_use()) {
+        eprintln!("{}", store_use_line(&u));
     }
     if let Some(p) = &a.png {
         let img = Image { width: out.width, height: out.height, data: out.pixels.clone() };

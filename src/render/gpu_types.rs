@@ -161,8 +161,11 @@ pub struct GpuAddresses {
     /// The hash grid's per-vertex keys and its entries (src/render/passes/hash_grid.rs).
     pub grid_keys: [u32; 2],
     pub grid_points: [u32; 2],
-    /// The light-vertex cache's dense list (src/render/passes/light_vertex_cache.rs).
-    pub light_vertex_dense: [u32; 2],
+    /// Where each light subpath's vertices start in the store, and the light kernel's
+    /// scratch slots (src/render/passes/light_subpaths.rs).
+    pub light_vertex_offsets: [u32; 2],
+    pub light_scratch_a: [u32; 2],
+    pub light_scratch_b: [u32; 2],
 }
 
 /// Per-dispatch push constants.
@@ -185,6 +188,9 @@ pub struct GpuPush {
     pub grid_buckets: u32,
     /// Paths per invocation (path regeneration, src/render/regen.rs); 0 means 1.
     pub paths_per_invocation: u32,
+    /// The light-subpaths pass: the index of the dispatch's first light subpath (an
+    /// iteration's light subpaths are traced in chunks).
+    pub first_path: u32,
 }
 
 impl GpuPush {

@@ -39,6 +39,7 @@ use crate::scene::Scene;
 pub use estimators::Estimator;
 pub use film::Film;
 pub use output::{Progress, RenderOutput};
+use passes::light_subpaths::{grown_capacity, LightVertexSizing, StoreStatus};
 pub use scene_gpu::SceneGpu;
 pub use settings::{Algorithm, Budget, Connect, FrameSettings, RenderSettings, DEFAULT_CACHE_CONNECTIONS};
 
@@ -56,18 +57,38 @@ pub fn render(
     r.output()
 }
 
+/// How a render used its light-vertex store (`vkvcm render --verbose`,
+/// docs/performance.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StoreUse {
+    pub light_paths: u32,
+    /// The scratch slots per light subpath (the most it can store).
+    pub slots_per_path: u32,
+    /// Vertices the store holds now.
+    pub capacity: u64,
+    /// The most vertices one iteration stored.
+    pub most_vertices: u64,
+    /// How often the store grew, and the iterations rendered again because of it.
+    pub grown: u32,
+    pub iterations_redone: u64,
+}
+
 /// A render in progress: the pipelines, scene buffers and film of one scene and setting,
 /// kept between calls to [`Renderer::run`] so that a render can be continued, sampled at
 /// checkpoints (`vkvcm converge`) or resumed from saved sums.
 pub struct Renderer {
     settings: RenderSettings,
     // Field order is drop order: the estimator's kernels before the buffers they bind.
-    est: Box<dyn Estimator>,
+    /// None only while the light-vertex store is being grown (`grow_light_vertex_store`).
+    est: Option<Box<dyn Estimator>>,
     film: Film,
     scene_gpu: SceneGpu,
     plan: plan::FramePlan,
     batch: Batch,
+    gpu: Arc<Gpu>,
     profile: Profile,
+    /// How the light-vertex store was used so far (estimators that store light vertices).
+    store_use: Option<StoreUse>,
     /// Iterations accumulated in the film (including resumed ones).
     done: u64,
     /// Iterations per submit, adapted to about a quarter second and kept between runs.
@@ -96,14 +117,24 @@ impl Renderer {
         // Every kernel of the render exists now: keep their pipelines for later processes
         // even if this one does not end normally.
         gpu.save_pipeline_cache();
+        let store_use = plan.light_vertices.as_ref().filter(|lv| lv.store_vertices).map(|lv| StoreUse {
+            light_paths: lv.light_paths,
+            slots_per_path: lv.slots_per_path,
+            capacity: lv.capacity,
+            most_vertices: 0,
+            grown: 0,
+            iterations_redone: 0,
+        });
         Ok(Renderer {
             settings: settings.clone(),
-            est,
+            est: Some(est),
             film,
             scene_gpu,
             plan,
             batch: gpu.batch()?,
+            gpu: gpu.clone(),
             profile: Profile::default(),
+            store_use,
             done: 0,
             per_batch: 1,
             prior_rejected: (0, 0),
@@ -123,7 +154,25 @@ impl Renderer {
         let features = features::FeatureSet::new(scene, settings.generic);
         let reads = reads::Reads::resolve(gpu, settings.reads)?;
         let device_addresses = gpu.has(crate::gpu::BUFFER_DEVICE_ADDRESS);
-        let plan = plan::FramePlan::new(scene, settings, info.techniques, k, &features, reads, device_addresses)?;
+        // A scratch half is bound (at most one binding) where the device has no addresses.
+        let scratch_limit = if device_addresses { u64::MAX } else { gpu.limits.max_storage_buffer_range as u64 };
+        let light_sizing = LightVertexSizing {
+            scratch_limit,
+            chunk_paths: settings.light_chunk_paths,
+            capacity: settings.light_vertex_capacity,
+        };
+        let light_k = |chunk: u32| regen::resolve(gpu, info.regenerates_paths, settings.paths_per_invocation, chunk);
+        let plan = plan::FramePlan::new(
+            scene,
+            settings,
+            info.techniques,
+            k,
+            &features,
+            reads,
+            device_addresses,
+            light_sizing,
+            light_k,
+        )?;
         plan.check(gpu, &format!("a {}x{} {} render", frame.width, frame.height, info.name))?;
         Ok(plan)
     }
@@ -158,9 +207,20 @@ impl Renderer {
         &self.scene_gpu.variant.features
     }
 
+    /// The estimator (always there between calls).
+    fn est(&self) -> &dyn Estimator {
+        self.est.as_deref().expect("the estimator is rebuilt before the renderer is used again")
+    }
+
     /// The passes of an iteration.
     pub fn passes(&self) -> Vec<passes::PassInfo> {
-        self.est.passes()
+        self.est().passes()
+    }
+
+    /// How the light-vertex store was used so far (None: the estimator stores no light
+    /// vertices).
+    pub fn light_vertex_store_use(&self) -> Option<StoreUse> {
+        self.store_use
     }
 
     /// What the kernels were compiled with and the passes of an iteration
@@ -190,7 +250,7 @@ impl Renderer {
     pub fn buffers(&self) -> Vec<(String, u64)> {
         let mut b: Vec<&crate::gpu::Buffer> = self.scene_gpu.buffers.iter().collect();
         b.extend([&self.film.accum, &self.film.stats]);
-        b.extend(self.est.buffers());
+        b.extend(self.est().buffers());
         b.iter().map(|b| (b.name().to_string(), b.size())).collect()
     }
 
@@ -272,17 +332,22 @@ impl Renderer {
                 bail!("more than {} iterations: the iteration index would wrap", u32::MAX);
             }
             let t0 = Instant::now();
+            let name = self.settings.algorithm.name();
             let what = || {
                 let last = first + n - 1;
                 let range = if n == 1 { format!("iteration {first}") } else { format!("iterations {first}-{last}") };
-                format!("{range} of {}", self.settings.algorithm.name())
+                format!("{range} of {name}")
             };
+            let est = self.est.as_deref().expect("the estimator is there between batches");
             for i in 0..n {
-                self.est.record(&mut self.batch, (first + i) as u32).with_context(what)?;
+                est.record(&mut self.batch, (first + i) as u32).with_context(what)?;
             }
             self.batch.submit_wait(Some(&mut self.profile)).with_context(what)?;
-            done += n;
-            self.done += n;
+            // Iterations whose light vertices did not fit the store are not in the film
+            // (the camera kernel skips them): grow the store and render them again.
+            let accepted = self.check_light_vertex_store(first, n).with_context(what)?;
+            done += accepted;
+            self.done += accepted;
             let dt = t0.elapsed().as_secs_f64().max(1e-6);
             self.seconds += dt;
             self.profile.add_iterations(n, dt);
@@ -299,6 +364,61 @@ impl Renderer {
             };
             progress(&Progress { iterations: self.done, seconds: self.seconds, fraction });
         }
+        Ok(())
+    }
+
+    /// After the batch of iterations `first .. first + n`: reads the light-vertex store's
+    /// status back and, when an iteration's vertices did not fit, grows the store. Returns
+    /// how many of the batch's iterations are in the film.
+    fn check_light_vertex_store(&mut self, first: u64, n: u64) -> Result<u64> {
+        let Some((status, _)) = self.est().light_vertex_store()? else {
+            return Ok(n);
+        };
+        let Some(store_use) = &mut self.store_use else {
+            return Ok(n);
+        };
+        store_use.most_vertices = store_use.most_vertices.max(status.most_vertices as u64);
+        if status.first_overflow == StoreStatus::NONE {
+            return Ok(n);
+        }
+        let accepted = (status.first_overflow as u64).saturating_sub(first).min(n);
+        store_use.grown += 1;
+        store_use.iterations_redone += n - accepted;
+        self.grow_light_vertex_store(status.most_vertices as u64)?;
+        Ok(accepted)
+    }
+
+    /// Rebuilds the estimator with a light-vertex store for iterations that store `needed`
+    /// vertices (and a margin), after checking the grown plan against the device. The old
+    /// store is freed first.
+    fn grow_light_vertex_store(&mut self, needed: u64) -> Result<()> {
+        let lv = self.plan.light_vertices.as_ref().expect("an estimator that stores light vertices has a store");
+        let capacity = grown_capacity(needed, lv);
+        let mut plan = self.plan.clone();
+        plan.set_light_vertex_capacity(capacity);
+        let f = &self.settings.frame;
+        let what = format!(
+            "a {}x{} {} render whose iterations store up to {needed} light vertices ({} light subpaths)",
+            f.width,
+            f.height,
+            self.settings.algorithm.name(),
+            lv.light_paths
+        );
+        plan.check(&self.gpu, &what)?;
+        self.est = None;
+        let info = self.settings.algorithm.info();
+        let b = estimators::Build {
+            gpu: &self.gpu,
+            scene: &self.scene_gpu,
+            film: &self.film,
+            settings: &self.settings,
+            plan: &plan,
+        };
+        self.est = Some((info.build)(&b).context("growing the light-vertex store")?);
+        if let Some(u) = &mut self.store_use {
+            u.capacity = capacity;
+        }
+        self.plan = plan;
         Ok(())
     }
 

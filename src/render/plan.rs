@@ -5,19 +5,20 @@
 //! `maxTexelBufferElements` or `maxMemoryAllocationSize`; the total against the largest
 //! device-local heap, system RAM on lavapipe), and the film and passes allocate what it
 //! says. Each part is defined next to the code that uses the buffers: [`ScenePlan`]
-//! (src/render/scene_gpu.rs), [`FilmPlan`] (film.rs), [`LightVertexPlan`],
-//! [`LightVertexCachePlan`], [`GridPlan`] (src/render/passes/).
+//! (src/render/scene_gpu.rs), [`FilmPlan`] (film.rs), [`LightVertexPlan`], [`GridPlan`]
+//! (src/render/passes/). The light-vertex store's capacity is an estimate; when an
+//! iteration needs more, the renderer grows it ([`FramePlan::set_light_vertex_capacity`])
+//! and checks the plan again.
 
 use anyhow::{bail, Result};
 
 use super::features::FeatureSet;
 use super::film::FilmPlan;
 use super::passes::hash_grid::{grid_buckets, GridPlan};
-use super::passes::light_subpaths::LightVertexPlan;
-use super::passes::light_vertex_cache::LightVertexCachePlan;
+use super::passes::light_subpaths::{light_vertex_b_bytes, LightVertexAccess, LightVertexPlan, LightVertexSizing};
 use super::reads::Reads;
 use super::scene_gpu::ScenePlan;
-use super::settings::{Connect, RenderSettings};
+use super::settings::RenderSettings;
 use super::sizes::{check_sizes, Access, BufferSize, SizeLimits};
 use super::techniques::Techniques;
 use crate::gpu::Gpu;
@@ -37,8 +38,6 @@ pub struct FramePlan {
     pub film: FilmPlan,
     /// The light-vertex store and splat sums (light-subpath estimators).
     pub light_vertices: Option<LightVertexPlan>,
-    /// The light-vertex cache (`--connect cache`).
-    pub cache: Option<LightVertexCachePlan>,
     /// The hash grid (merging).
     pub grid: Option<GridPlan>,
 }
@@ -48,10 +47,13 @@ impl FramePlan {
     /// as `Renderer::plan_for` does) by an estimator with `techniques`, tracing
     /// `paths_per_invocation` paths per invocation, with kernels compiled for `features`
     /// (with shading normals and vertex attributes light vertices carry more).
-    /// The frame's large buffers (film, splat sums, light-vertex store, hash-grid keys and
-    /// entries, the cache's dense list) are written by device address when
-    /// `device_addresses` (src/render/addresses.rs); the scene, the store, the grid's
-    /// entries and the dense list are read as `reads`.
+    /// The frame's large buffers (film, splat sums, light-vertex store and its offsets and
+    /// scratch slots, hash-grid keys and entries) are written by device address when
+    /// `device_addresses` (src/render/addresses.rs); the scene, the store, its offsets and
+    /// the grid's entries are read as `reads`. `light_sizing` bounds the light pass's
+    /// chunks and sets the store's first capacity; the light kernel traces
+    /// `light_paths_per_invocation(chunk)` paths per invocation.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         scene: &Scene,
         s: &RenderSettings,
@@ -60,6 +62,8 @@ impl FramePlan {
         features: &FeatureSet,
         reads: Reads,
         device_addresses: bool,
+        light_sizing: LightVertexSizing,
+        light_paths_per_invocation: impl Fn(u32) -> u32,
     ) -> Result<FramePlan> {
         let frame_access = if device_addresses { Access::Address } else { Access::Storage };
         // The camera kernel reads the store and the grid entries as texels with texel reads.
@@ -78,28 +82,24 @@ impl FramePlan {
         }
         let pixels = s.frame.width * s.frame.height;
         let light_paths = s.light_paths();
+        // The offsets are read by the camera kernel as uint texels with texel reads.
+        let offsets_access = if read_access == Access::Texel { Access::TexelU32 } else { read_access };
+        let access = LightVertexAccess { frame: frame_access, vertices: read_access, offsets: offsets_access };
         let light_vertices = techniques.light_subpaths.then(|| {
             LightVertexPlan::new(
                 pixels,
                 light_paths,
                 s.frame.max_path_length,
                 techniques.store_vertices,
-                features,
-                frame_access,
-                read_access,
+                light_vertex_b_bytes(features.shading_normals, features.vertex_attributes),
+                access,
+                light_sizing,
+                light_paths_per_invocation,
             )
         });
-        // The cache's index is read by the camera kernel as uint texels with texel reads.
-        let index_access = if read_access == Access::Texel { Access::TexelU32 } else { read_access };
-        let cache = match (&light_vertices, s.connect) {
-            (Some(lv), Connect::Cache(_)) if techniques.vertex_connection => {
-                Some(LightVertexCachePlan::new(lv, index_access))
-            }
-            _ => None,
-        };
         let grid = match &light_vertices {
             Some(lv) if techniques.vertex_merging => {
-                let plan = GridPlan::new(light_paths, lv.slots_per_path, grid_buckets(light_paths as u64));
+                let plan = GridPlan::new(light_paths, lv.capacity, grid_buckets(light_paths as u64));
                 Some(plan.reached(read_access, frame_access))
             }
             _ => None,
@@ -111,9 +111,18 @@ impl FramePlan {
             scene: ScenePlan::new(scene, reads),
             film: FilmPlan::new(s.frame.width, s.frame.height, frame_access),
             light_vertices,
-            cache,
             grid,
         })
+    }
+
+    /// Resizes the light-vertex store, and the hash grid over it, for `capacity` vertices.
+    pub fn set_light_vertex_capacity(&mut self, capacity: u64) {
+        if let Some(lv) = &mut self.light_vertices {
+            lv.set_capacity(capacity);
+            if let Some(g) = &mut self.grid {
+                g.set_capacity(capacity);
+            }
+        }
     }
 
     /// Every buffer.
@@ -122,7 +131,6 @@ impl FramePlan {
         v.extend(self.film.buffers());
         v.extend(self.light_vertices.iter().flat_map(|p| p.buffers()));
         v.extend(self.grid.iter().flat_map(|p| p.buffers()));
-        v.extend(self.cache.iter().flat_map(|p| p.buffers()));
         v
     }
 

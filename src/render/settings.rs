@@ -106,4 +106,11 @@ pub struct RenderSettings {
     /// Light subpaths per iteration, N_L (the light-subpath estimators); `None`: one per
     /// pixel, SmallVCM's choice ([`RenderSettings::light_paths`]).
     pub light_paths: Option<u32>,
+    /// The most light subpaths the light pass traces in one chunk
+    /// (src/render/passes/light_subpaths.rs); `None`: as many as the scratch budget holds.
+    /// The image does not depend on it.
+    pub light_chunk_paths: Option<u32>,
+    /// The light-vertex store's first capacity in vertices; `None`: an estimate from N_L.
+    /// The store grows when an iteration needs more; the image does not depend on it.
+    pub light_vertex_capacity: Option<u64>,
 }

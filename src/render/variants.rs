@@ -65,17 +65,14 @@ pub struct LightKernel {
     pub connect_camera: bool,
     /// LIGHT_TRACE_ONLY: weight 1, emitters seen directly are splatted too (lt).
     pub light_trace_only: bool,
-    /// LV_CACHE: the per-path vertex counts are copied for the cache's prefix sum.
-    pub fills_cache: bool,
 }
 
 impl LightKernel {
-    pub fn new(t: Techniques, connect: Connect) -> LightKernel {
+    pub fn new(t: Techniques) -> LightKernel {
         LightKernel {
             store_vertices: t.store_vertices,
             connect_camera: t.connect_to_camera,
             light_trace_only: t.light_trace_only,
-            fills_cache: t.store_vertices && connect != Connect::Path,
         }
     }
 
@@ -85,7 +82,7 @@ impl LightKernel {
             .flag("LIGHT_TRACE_ONLY", self.light_trace_only)
             .flag("CONNECT_CAMERA", self.connect_camera)
             .flag("LV_TEXEL", false)
-            .flag("LV_CACHE", self.fills_cache)
+            .flag("LV_CACHE", false)
     }
 }
 

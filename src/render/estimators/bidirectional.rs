@@ -1,16 +1,16 @@
 //! The pass sequence of the light-subpath estimators (lt, bpt, ppm, bpm, vcm), with the
 //! passes each [`Techniques`] turns on. Per iteration:
 //!
-//! 1. light subpaths (src/render/passes/light_subpaths.rs): one per pixel (N_L = W x H,
-//!    SmallVCM's choice), stored into the light-vertex store and/or connected to the
-//!    camera;
+//! 1. light subpaths (src/render/passes/light_subpaths.rs): N_L of them (one per pixel,
+//!    SmallVCM's choice, unless `--light-paths`), traced in chunks, their vertices
+//!    compacted into the light-vertex store and/or connected to the camera;
 //! 2. grid build (passes/hash_grid.rs), when merging: the hash grid over the stored
 //!    vertices for this iteration's radius;
-//! 3. light-vertex prefix (passes/light_vertex_cache.rs), with `--connect cache`: the
-//!    index of all stored vertices that camera vertices draw from;
-//! 4. camera subpaths (passes/camera_subpaths.rs), one per pixel, with the connections and
-//!    merges the techniques ask for; it adds each pixel's value and splats to the film;
-//!    or, for lt (no camera pass), accumulate (passes/accumulate.rs): splats to the film.
+//! 3. camera subpaths (passes/camera_subpaths.rs), one per pixel, with the connections
+//!    (to light subpath p = this pixel, or with `--connect cache` to vertices drawn from
+//!    the whole store) and merges the techniques ask for; it adds each pixel's value and
+//!    splats to the film; or, for lt (no camera pass), accumulate (passes/accumulate.rs):
+//!    splats to the film.
 //!
 //! The MIS factors of an iteration (docs/smallvcm.md, eta = pi r^2 N_L) follow from the
 //! techniques: connections weigh against merges only when both are on.
@@ -23,8 +23,7 @@ use crate::render::gpu_types::GpuPush;
 use crate::render::passes::accumulate::Accumulate;
 use crate::render::passes::camera_subpaths::CameraSubpaths;
 use crate::render::passes::hash_grid::HashGrid;
-use crate::render::passes::light_subpaths::{LightSubpaths, LightVertexStore};
-use crate::render::passes::light_vertex_cache::LightVertexCache;
+use crate::render::passes::light_subpaths::{LightSubpaths, LightVertexStore, StoreStatus};
 use crate::render::passes::PassInfo;
 use crate::render::radius::RadiusSchedule;
 use crate::render::variants::{CameraKernel, LightKernel};
@@ -53,7 +52,6 @@ pub struct LightSubpathEstimator {
     // Field order is drop order: each pass's kernels before the buffers they bind.
     film_pass: FilmPass,
     light: LightSubpaths,
-    cache: Option<LightVertexCache>,
     grid: Option<HashGrid>,
     store: LightVertexStore,
 }
@@ -63,29 +61,18 @@ impl LightSubpathEstimator {
     pub fn new(b: &Build, techniques: Techniques) -> Result<LightSubpathEstimator> {
         let lv = b.plan.light_vertices.as_ref().expect("a light-subpath estimator's plan has a light-vertex store");
         let store = LightVertexStore::new(b.gpu, lv, &b.film.addresses)?;
-        let cache = match &b.plan.cache {
-            Some(c) => Some(LightVertexCache::new(b.gpu, &store, c, &b.film.addresses)?),
-            None => None,
-        };
         let grid = match &b.plan.grid {
-            Some(g) => Some(HashGrid::with_plan(b.gpu, &store.vertices_a, &store.counts, g, &b.film.addresses)?),
+            Some(g) => Some(HashGrid::with_plan(b.gpu, &store.vertices_a, &store.offsets, g, &b.film.addresses)?),
             None => None,
         };
         let pass = b.passes();
         let connect = b.settings.connect;
-        let light_kernel = LightKernel::new(techniques, connect);
-        let light = LightSubpaths::new(&pass, &store, cache.as_ref().map(|c| &c.prefix), light_kernel)?;
+        let light = LightSubpaths::new(&pass, &store, lv, LightKernel::new(techniques))?;
         let film_pass = if techniques.light_trace_only {
             FilmPass::Accumulate(Accumulate::new(&pass, &store)?)
         } else {
             let camera_kernel = CameraKernel::new(techniques, connect, b.scene.reads());
-            FilmPass::Camera(CameraSubpaths::bidirectional(
-                &pass,
-                &store,
-                grid.as_ref(),
-                cache.as_ref(),
-                camera_kernel,
-            )?)
+            FilmPass::Camera(CameraSubpaths::bidirectional(&pass, &store, grid.as_ref(), camera_kernel)?)
         };
         let s = b.scene.params.scene_sphere;
         Ok(LightSubpathEstimator {
@@ -97,7 +84,6 @@ impl LightSubpathEstimator {
             paths_per_invocation: b.plan.paths_per_invocation,
             film_pass,
             light,
-            cache,
             grid,
             store,
         })
@@ -119,13 +105,11 @@ impl Estimator for LightSubpathEstimator {
             light_paths: self.light_paths,
             grid_buckets: self.grid.as_ref().map_or(0, |g| g.num_buckets()),
             paths_per_invocation: self.paths_per_invocation,
+            first_path: 0,
         };
         self.light.record(batch, &push)?;
         if let Some(g) = &self.grid {
             g.record_build(batch, radius, self.grid_origin)?;
-        }
-        if let Some(c) = &self.cache {
-            c.record(batch)?;
         }
         push.count = self.pixels;
         match &self.film_pass {
@@ -139,9 +123,6 @@ impl Estimator for LightSubpathEstimator {
         if let Some(g) = &self.grid {
             v.push(g.info());
         }
-        if let Some(c) = &self.cache {
-            v.push(c.info());
-        }
         v.push(match &self.film_pass {
             FilmPass::Camera(c) => c.info(),
             FilmPass::Accumulate(a) => a.info(),
@@ -154,9 +135,14 @@ impl Estimator for LightSubpathEstimator {
         if let Some(g) = &self.grid {
             b.extend(g.buffers());
         }
-        if let Some(c) = &self.cache {
-            b.extend(c.buffers());
-        }
+        b.extend(self.light.buffers());
         b
+    }
+
+    fn light_vertex_store(&self) -> Result<Option<(StoreStatus, u64)>> {
+        if !self.techniques.store_vertices {
+            return Ok(None);
+        }
+        Ok(Some((self.store.status()?, self.store.capacity)))
     }
 }

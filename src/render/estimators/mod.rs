@@ -21,6 +21,7 @@ use std::sync::Arc;
 use anyhow::{bail, Result};
 
 use super::film::Film;
+use super::passes::light_subpaths::StoreStatus;
 use super::passes::{PassContext, PassInfo};
 use super::plan::FramePlan;
 use super::radius;
@@ -158,6 +159,12 @@ impl EstimatorInfo {
             Some(0) => bail!("--light-paths must be at least 1"),
             _ => {}
         }
+        if s.light_chunk_paths == Some(0) {
+            bail!("light subpaths per chunk must be at least 1");
+        }
+        if s.light_vertex_capacity == Some(0) {
+            bail!("the light-vertex store's capacity must be at least 1");
+        }
         Ok(())
     }
 }
@@ -202,6 +209,8 @@ impl RenderSettings {
             reads: None,
             atomics: None,
             light_paths: None,
+            light_chunk_paths: None,
+            light_vertex_capacity: None,
         }
     }
 
@@ -241,6 +250,12 @@ pub trait Estimator {
     fn passes(&self) -> Vec<PassInfo>;
     /// The buffers it allocated (beyond the scene's and the film's).
     fn buffers(&self) -> Vec<&Buffer>;
+    /// For an estimator that stores light vertices: what the light pass recorded of the
+    /// iterations submitted so far (read back; the device must be idle) and the store's
+    /// capacity in vertices.
+    fn light_vertex_store(&self) -> Result<Option<(StoreStatus, u64)>> {
+        Ok(None)
+    }
 }
 
 #[cfg(test)]

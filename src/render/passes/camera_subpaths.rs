@@ -10,7 +10,6 @@ use anyhow::Result;
 
 use super::hash_grid::HashGrid;
 use super::light_subpaths::LightVertexStore;
-use super::light_vertex_cache::LightVertexCache;
 use super::{PassContext, PassInfo};
 use crate::gpu::{Batch, Bind, Defines, Kernel};
 use crate::render::gpu_types::GpuPush;
@@ -59,13 +58,12 @@ impl CameraSubpaths {
         })
     }
 
-    /// camera_subpath.comp in `variant`, reading the light-vertex `store`, the hash
-    /// `grid` (merging) and the `cache` (`--connect cache`).
+    /// camera_subpath.comp in `variant`, reading the light-vertex `store` and the hash
+    /// `grid` (merging).
     pub fn bidirectional(
         b: &PassContext,
         store: &LightVertexStore,
         grid: Option<&HashGrid>,
-        cache: Option<&LightVertexCache>,
         variant: CameraKernel,
     ) -> Result<CameraSubpaths> {
         let defines: Defines = b.scene.variant.defines().with(&variant.defines());
@@ -74,9 +72,6 @@ impl CameraSubpaths {
         binds.extend(store.binds());
         if let Some(g) = grid {
             binds.extend([Bind::u32("grid_start", &g.cell_start), Bind::vec4("grid_points", &g.cell_points)]);
-        }
-        if let Some(c) = cache {
-            binds.extend([Bind::own_u32(&c.prefix), Bind::own_u32(&c.dense)]);
         }
         let kernel = b.gpu.kernel("camera_subpath.comp", &defines.pairs(), &binds)?;
         Ok(CameraSubpaths {

@@ -3,17 +3,17 @@
 //! SmallVCM's counting sort (docs/smallvcm.md, the hash grid) in four steps:
 //!
 //! 1. count (`hash_grid_count.comp`): one invocation per light path, over its stored
-//!    vertices; each does `rank = atomicAdd(bucket_start[b], 1)` on its bucket b and keeps
-//!    (b, rank);
+//!    vertices (`light_vertex_offsets[p] .. light_vertex_offsets[p + 1]`); each does
+//!    `rank = atomicAdd(bucket_start[b], 1)` on its bucket b and keeps (b, rank);
 //! 2. exclusive prefix sum of `grid_start[0..=num_buckets]` in place
 //!    ([`super::exclusive_scan`]), so `grid_start[num_buckets]` is the vertex total;
 //! 3. scatter (`hash_grid_scatter.comp`): one invocation per light path; each stored
-//!    vertex writes (position bits, slot) to `grid_points[grid_start[b] + rank]`, no
+//!    vertex i writes (position bits, i) to `grid_points[grid_start[b] + rank]`, no
 //!    atomics; a query's radius test reads one contiguous `uvec4` per candidate instead
 //!    of an index and then the scattered store;
 //! 4. sort (`hash_grid_sort.comp`): one invocation per bucket sorts its entries ascending
-//!    by slot, so the result does not depend on the order the atomics happened in: builds
-//!    are bit-identical.
+//!    by vertex index, so the result does not depend on the order the atomics happened in:
+//!    builds are bit-identical.
 //!
 //! Queries are in `glsl/hash_grid.glsl`.
 
@@ -49,34 +49,42 @@ pub fn grid_buckets(light_paths: u64) -> u32 {
     (light_paths.max(1) * GRID_BUCKETS_PER_LIGHT_PATH).next_power_of_two().min(MAX_GRID_BUCKETS) as u32
 }
 
-/// The sizes of a hash grid over `light_paths` x `slots` light-vertex slots.
+/// The sizes of a hash grid over a light-vertex store of `capacity` vertices.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct GridPlan {
     pub light_paths: u32,
-    pub slots: u32,
+    pub capacity: u64,
     pub buckets: u32,
     /// `buckets + 1` u32: the exclusive prefix sum of the bucket sizes.
     pub start: BufferSize,
-    /// One uvec4 per slot (the most vertices there can be), by bucket.
+    /// One uvec4 per vertex the store holds, by bucket.
     pub points: BufferSize,
-    /// Per slot: (bucket, arrival rank in the bucket) from the count step.
+    /// Per vertex: (bucket, arrival rank in the bucket) from the count step.
     pub keys: BufferSize,
     pub scan: ScanPlan,
 }
 
 impl GridPlan {
     /// The sizes (what [`HashGrid::with_plan`] accepts it checks there).
-    pub fn new(light_paths: u32, slots: u32, buckets: u32) -> GridPlan {
-        let total_slots = light_paths as u64 * slots as u64;
-        GridPlan {
+    pub fn new(light_paths: u32, capacity: u64, buckets: u32) -> GridPlan {
+        let mut plan = GridPlan {
             light_paths,
-            slots,
+            capacity,
             buckets,
             start: BufferSize::new("grid_start", (buckets as u64 + 1) * 4),
-            points: BufferSize::new("grid_points", total_slots * 16),
-            keys: BufferSize::new("grid_keys", total_slots * 8),
+            points: BufferSize::new("grid_points", 0),
+            keys: BufferSize::new("grid_keys", 0),
             scan: ScanPlan::new(buckets.saturating_add(1), "grid_start_scan_scratch"),
-        }
+        };
+        plan.set_capacity(capacity);
+        plan
+    }
+
+    /// Resizes the grid for a store of `capacity` vertices.
+    pub fn set_capacity(&mut self, capacity: u64) {
+        self.capacity = capacity;
+        self.points.bytes = capacity.saturating_mul(16);
+        self.keys.bytes = capacity.saturating_mul(8);
     }
 
     /// This plan with the entries reached as `points` and the keys as `keys` (how the
@@ -97,19 +105,19 @@ struct BuildPush {
     origin: [f32; 3],
     radius: f32,
     light_paths: u32,
-    slots: u32,
+    capacity: u32,
     num_buckets: u32,
     _pad: u32,
 }
 
 /// The GPU hash grid over the light-vertex store. After [`HashGrid::record_build`] has
-/// run, bucket `b` holds the valid light vertices
-/// `cell_points[cell_start[b] .. cell_start[b + 1]]`, ascending by slot, and
-/// `cell_start[num_buckets]` is the number of valid vertices.
+/// run, bucket `b` holds the stored light vertices
+/// `cell_points[cell_start[b] .. cell_start[b + 1]]`, ascending by index, and
+/// `cell_start[num_buckets]` is the number of stored vertices.
 pub struct HashGrid {
     /// `num_buckets + 1` `u32` (binding `grid_start`).
     pub cell_start: Buffer,
-    /// (`floatBitsToUint` of a vertex's position, its slot) by bucket (binding
+    /// (`floatBitsToUint` of a vertex's position, its index) by bucket (binding
     /// `grid_points`): what the camera kernel reads (docs/hash-grid.md).
     pub cell_points: Buffer,
     keys: Buffer,
@@ -121,27 +129,29 @@ pub struct HashGrid {
     sort: Kernel,
     scan: ExclusiveScan,
     light_paths: u32,
-    slots: u32,
+    capacity: u32,
     num_buckets: u32,
 }
 
 impl HashGrid {
-    /// A grid over the light-vertex store `lv_a` (`vec4[]`, two per slot, position in
-    /// the first) / `lv_count` (`uint` per light path) of `light_paths` paths with `slots`
-    /// slots each, hashing into `num_buckets` buckets (SmallVCM: one per light path; the
-    /// renderer: [`grid_buckets`]).
+    /// A grid over the light-vertex store `lv_a` (`vec4[]`, two per vertex, position in
+    /// the first) of `capacity` vertices, where light path p's vertices are `offsets[p]
+    /// .. offsets[p + 1]` (`uint[]`, `light_paths` + 1 of them), hashing into
+    /// `num_buckets` buckets (SmallVCM: one per light path; the renderer:
+    /// [`grid_buckets`]).
     pub fn new(
         gpu: &Arc<Gpu>,
         lv_a: &Buffer,
-        lv_count: &Buffer,
+        offsets: &Buffer,
         light_paths: u32,
-        slots: u32,
+        capacity: u64,
         num_buckets: u32,
     ) -> Result<HashGrid> {
         let addresses = FrameAddresses::new(gpu)?;
         addresses.set(|a| &mut a.light_vertices_a, lv_a)?;
+        addresses.set(|a| &mut a.light_vertex_offsets, offsets)?;
         let mut grid =
-            Self::with_plan(gpu, lv_a, lv_count, &GridPlan::new(light_paths, slots, num_buckets), &addresses)?;
+            Self::with_plan(gpu, lv_a, offsets, &GridPlan::new(light_paths, capacity, num_buckets), &addresses)?;
         grid.own_addresses = Some(addresses);
         Ok(grid)
     }
@@ -151,33 +161,32 @@ impl HashGrid {
     pub fn with_plan(
         gpu: &Arc<Gpu>,
         lv_a: &Buffer,
-        lv_count: &Buffer,
+        offsets: &Buffer,
         plan: &GridPlan,
         addresses: &FrameAddresses,
     ) -> Result<HashGrid> {
-        let (light_paths, slots, buckets) = (plan.light_paths, plan.slots, plan.buckets);
-        if light_paths == 0 || slots == 0 || buckets == 0 {
+        let (light_paths, capacity, buckets) = (plan.light_paths, plan.capacity, plan.buckets);
+        if light_paths == 0 || capacity == 0 || buckets == 0 {
             bail!(
-                "hash grid: light paths ({light_paths}), slots per path ({slots}) and buckets ({buckets}) must be at least 1"
+                "hash grid: light paths ({light_paths}), store capacity ({capacity}) and buckets ({buckets}) must be at least 1"
             );
         }
-        let total_slots = light_paths as u64 * slots as u64;
-        if total_slots > u32::MAX as u64 || buckets == u32::MAX {
-            bail!("hash grid: {light_paths} light paths x {slots} slots or {buckets} buckets exceed 32-bit indices");
+        if capacity > u32::MAX as u64 || light_paths == u32::MAX || buckets == u32::MAX {
+            bail!("hash grid: {capacity} light vertices, {light_paths} light paths or {buckets} buckets exceed 32-bit indices");
         }
-        if lv_a.size() < total_slots * LIGHT_VERTEX_A_BYTES {
+        if lv_a.size() < capacity * LIGHT_VERTEX_A_BYTES {
             bail!(
-                "hash grid: buffer {:?} has {} bytes, {light_paths} x {slots} light vertices need {}",
+                "hash grid: buffer {:?} has {} bytes, {capacity} light vertices need {}",
                 lv_a.name(),
                 lv_a.size(),
-                total_slots * LIGHT_VERTEX_A_BYTES
+                capacity * LIGHT_VERTEX_A_BYTES
             );
         }
-        if lv_count.size() < 4 * light_paths as u64 {
+        if offsets.size() < 4 * (light_paths as u64 + 1) {
             bail!(
-                "hash grid: buffer {:?} has {} bytes, {light_paths} path counts need more",
-                lv_count.name(),
-                lv_count.size()
+                "hash grid: buffer {:?} has {} bytes, the offsets of {light_paths} light paths need more",
+                offsets.name(),
+                offsets.size()
             );
         }
         check_sizes(&plan.buffers(), &SizeLimits::of(gpu), "the hash grid")?;
@@ -188,7 +197,7 @@ impl HashGrid {
         addresses.set(|a| &mut a.grid_points, &cell_points)?;
         let binds = [
             Bind::vec4("light_vertices_a", lv_a),
-            Bind::u32("light_vertex_counts", lv_count),
+            Bind::u32("light_vertex_offsets", offsets),
             Bind::u32("grid_start", &cell_start),
             Bind::vec4("grid_keys", &keys),
             Bind::vec4("grid_points", &cell_points),
@@ -209,7 +218,7 @@ impl HashGrid {
             sort,
             scan,
             light_paths,
-            slots,
+            capacity: capacity as u32,
             num_buckets: plan.buckets,
         })
     }
@@ -228,7 +237,7 @@ impl HashGrid {
             origin,
             radius,
             light_paths: self.light_paths,
-            slots: self.slots,
+            capacity: self.capacity,
             num_buckets: self.num_buckets,
             _pad: 0,
         };
@@ -256,8 +265,9 @@ impl HashGrid {
         self.light_paths
     }
 
-    pub fn slots(&self) -> u32 {
-        self.slots
+    /// Vertices of the store it is built over.
+    pub fn capacity(&self) -> u32 {
+        self.capacity
     }
 
     pub fn info(&self) -> PassInfo {

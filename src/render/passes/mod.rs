@@ -5,9 +5,8 @@
 //!
 //! | pass | module | kernels |
 //! |---|---|---|
-//! | light subpaths | [`light_subpaths`] | light_subpath.comp |
+//! | light subpaths | [`light_subpaths`] | light_subpath.comp, exclusive_scan.comp, light_vertex_compact.comp |
 //! | grid build | [`hash_grid`] | hash_grid_count.comp, exclusive_scan.comp, hash_grid_scatter.comp, hash_grid_sort.comp |
-//! | light-vertex prefix | [`light_vertex_cache`] | exclusive_scan.comp, lv_cache_compact.comp |
 //! | camera subpaths | [`camera_subpaths`] | camera_subpath.comp, pt.comp or el.comp |
 //! | accumulate | [`accumulate`] | accumulate.comp |
 //!
@@ -18,7 +17,6 @@ pub mod camera_subpaths;
 pub mod exclusive_scan;
 pub mod hash_grid;
 pub mod light_subpaths;
-pub mod light_vertex_cache;
 
 use std::sync::Arc;
 
