@@ -1,7 +1,7 @@
 //! Buffer device addresses (src/render/addresses.rs): on a device with them the kernels
-//! reach the film, the splat sums, the light-vertex store, the hash grid's keys and
-//! entries and the light-vertex cache's dense list by address, so those buffers are limited by maxMemoryAllocationSize instead of
-//! one binding (maxStorageBufferRange, 128 MiB on lavapipe). The kernels read and write
+//! reach the film, the splat sums, the light-vertex store with its offsets and scratch
+//! slots, and the hash grid's keys and entries by address, so those buffers are limited
+//! by maxMemoryAllocationSize instead of one binding (maxStorageBufferRange, 128 MiB on lavapipe). The kernels read and write
 //! the same bytes in the same order either way, so:
 //!
 //! * every estimator gives bit-identical per-pixel sums, sums of squares and ray counts

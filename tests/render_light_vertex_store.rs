@@ -11,7 +11,12 @@
 //!   the sums are bit-identical too, and the store reports that it grew;
 //! * with a store that holds exactly what the first iteration stored, a later iteration
 //!   of a batch overflows: it and the rest of its batch are left out and rendered again,
-//!   with the same image.
+//!   with the same image;
+//! * where the device cannot hold the store an iteration needs (a binding limit capped to
+//!   150,000 bytes, no device addresses: the store starts at what fits, 4687 vertices, and
+//!   glm_c's bpt stores about 4900 per iteration at 48 x 48), the render stops with a
+//!   message that names the buffer, the numbers and what to lower; at 200,000 bytes it
+//!   renders.
 //!
 //! lavapipe, validation on, tiny frames (23 x 17: light subpaths that do not divide into
 //! whole chunks or workgroups).
@@ -25,6 +30,7 @@
 
 mod common;
 
+use std::process::Command;
 use std::sync::Arc;
 
 use common::{invariance_cases, with_gpu};
@@ -113,4 +119,28 @@ fn an_overflow_in_the_middle_of_a_batch_renders_the_rest_of_it_again() {
             assert!(store.most_vertices > first, "{what}: {store:?}");
         }
     });
+}
+
+#[test]
+fn a_store_the_device_cannot_hold_is_refused_with_what_to_lower() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |cap: &str| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_vkvcm"));
+        c.current_dir(dir.path()).env("VKVCM_VALIDATION", "1").env("VKVCM_CACHE_DIR", "");
+        c.env("VKVCM_TEST_MAX_BINDING_BYTES", cap).env("VKVCM_DEVICE_ADDRESSES", "0");
+        if std::env::var_os("VK_DRIVER_FILES").is_none() {
+            c.env("VK_DRIVER_FILES", "/usr/share/vulkan/icd.d/lvp_icd.json");
+        }
+        c.args(["render", "glm_c", "--algo", "bpt", "--width", "48", "--height", "48", "-i", "3", "-o", "out.exr"]);
+        c.output().unwrap()
+    };
+    let refused = run("150000");
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success(), "{err}");
+    for part in ["store up to", "light vertices (2304 light subpaths)", "light_vertices_a", "maxStorageBufferRange"] {
+        assert!(err.contains(part), "{part:?} not in: {err}");
+    }
+    assert!(err.contains("lower --light-paths, the resolution or --max-path-length"), "{err}");
+    let rendered = run("200000");
+    assert!(rendered.status.success(), "{}", String::from_utf8_lossy(&rendered.stderr));
 }

@@ -151,16 +151,20 @@ fn resume_refuses_other_settings() {
 fn absurd_frames_fail_before_allocation() {
     let scene = load_named("gbs_s").unwrap();
     with_gpu(|gpu| {
-        for (algo, w, h, needle) in [
-            (Algorithm::Pt, 60_000, 60_000, "for buffer film"),
-            (Algorithm::Vcm, 60_000, 60_000, "for buffer light_vertices_a"),
-            (Algorithm::Vcm, 4096, 4096, "light_vertices"),
-            (Algorithm::Pt, 0, 16, "width and height"),
-            (Algorithm::Vcm, 16, 0, "width and height"),
-            (Algorithm::Pt, 100_000, 100_000, "pixels"),
+        // The light-vertex store is sized to what the device holds (it grows when an
+        // iteration needs more), so light vertices refuse a render only through the
+        // per-light-subpath offsets: 2^32 - 1 light subpaths.
+        for (algo, w, h, light_paths, needle) in [
+            (Algorithm::Pt, 60_000, 60_000, None, "for buffer film"),
+            (Algorithm::Vcm, 60_000, 60_000, None, "for buffer film"),
+            (Algorithm::Vcm, 64, 64, Some(u32::MAX), "for buffer light_vertex_offsets"),
+            (Algorithm::Pt, 0, 16, None, "width and height"),
+            (Algorithm::Vcm, 16, 0, None, "width and height"),
+            (Algorithm::Pt, 100_000, 100_000, None, "pixels"),
         ] {
             let s = settings(algo, Budget::Iterations(1));
-            let s = RenderSettings { frame: vkvcm::render::FrameSettings { width: w, height: h, ..s.frame }, ..s };
+            let frame = vkvcm::render::FrameSettings { width: w, height: h, ..s.frame };
+            let s = RenderSettings { frame, light_paths, ..s };
             let e = match Renderer::new(gpu, &scene, &s) {
                 Ok(_) => panic!("{w}x{h} {}: no error", algo.name()),
                 Err(e) => format!("{e:#}"),

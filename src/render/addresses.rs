@@ -1,6 +1,6 @@
 //! Buffer device addresses of the frame's large buffers: the film, the splat sums, the
-//! light-vertex store, the hash grid's keys and entries and the light-vertex cache's
-//! dense list ([`GpuAddresses`]).
+//! light-vertex store with its offsets and the light kernel's scratch slots, and the hash
+//! grid's keys and entries ([`GpuAddresses`]).
 //!
 //! A buffer bound through a descriptor is limited to `maxStorageBufferRange` (128 MiB on
 //! lavapipe), which a 4K film (64 bytes per pixel) exceeds. A buffer reached through its

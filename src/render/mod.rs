@@ -162,7 +162,7 @@ impl Renderer {
             capacity: settings.light_vertex_capacity,
         };
         let light_k = |chunk: u32| regen::resolve(gpu, info.regenerates_paths, settings.paths_per_invocation, chunk);
-        let plan = plan::FramePlan::new(
+        let mut plan = plan::FramePlan::new(
             scene,
             settings,
             info.techniques,
@@ -173,6 +173,7 @@ impl Renderer {
             light_sizing,
             light_k,
         )?;
+        plan.fit_light_vertex_capacity(&sizes::SizeLimits::of(gpu));
         plan.check(gpu, &format!("a {}x{} {} render", frame.width, frame.height, info.name))?;
         Ok(plan)
     }
@@ -393,8 +394,11 @@ impl Renderer {
     /// store is freed first.
     fn grow_light_vertex_store(&mut self, needed: u64) -> Result<()> {
         let lv = self.plan.light_vertices.as_ref().expect("an estimator that stores light vertices has a store");
-        let capacity = grown_capacity(needed, lv);
         let mut plan = self.plan.clone();
+        plan.set_light_vertex_capacity(grown_capacity(needed, lv));
+        // The margin only as far as the device allows; `needed` itself is checked below.
+        plan.fit_light_vertex_capacity(&sizes::SizeLimits::of(&self.gpu));
+        let capacity = plan.light_vertices.as_ref().map_or(needed, |lv| lv.capacity.max(needed));
         plan.set_light_vertex_capacity(capacity);
         let f = &self.settings.frame;
         let what = format!(

@@ -14,8 +14,10 @@ use anyhow::{bail, Result};
 
 use super::features::FeatureSet;
 use super::film::FilmPlan;
-use super::passes::hash_grid::{grid_buckets, GridPlan};
-use super::passes::light_subpaths::{light_vertex_b_bytes, LightVertexAccess, LightVertexPlan, LightVertexSizing};
+use super::passes::hash_grid::{grid_buckets, GridPlan, GRID_KEY_BYTES, GRID_POINT_BYTES};
+use super::passes::light_subpaths::{
+    light_vertex_b_bytes, LightVertexAccess, LightVertexPlan, LightVertexSizing, LIGHT_VERTEX_A_BYTES,
+};
 use super::reads::Reads;
 use super::scene_gpu::ScenePlan;
 use super::settings::RenderSettings;
@@ -122,6 +124,24 @@ impl FramePlan {
             if let Some(g) = &mut self.grid {
                 g.set_capacity(capacity);
             }
+        }
+    }
+
+    /// Lowers the light-vertex store's capacity to the most vertices that the store's
+    /// buffers and the hash grid's per-vertex buffers can hold on a device with `limits`,
+    /// when the estimate is more: an iteration that stores fewer renders, and one that
+    /// stores more is refused when the store cannot grow.
+    pub fn fit_light_vertex_capacity(&mut self, limits: &SizeLimits) {
+        let Some(lv) = self.light_vertices.as_ref().filter(|lv| lv.store_vertices) else {
+            return;
+        };
+        let mut per_vertex = vec![(lv.vertices_a, LIGHT_VERTEX_A_BYTES), (lv.vertices_b, lv.vertex_b_bytes)];
+        if let Some(g) = &self.grid {
+            per_vertex.extend([(g.points, GRID_POINT_BYTES), (g.keys, GRID_KEY_BYTES)]);
+        }
+        let fits = per_vertex.iter().map(|(b, bytes)| limits.max_bytes(b) / bytes).min().unwrap_or(u64::MAX);
+        if fits < lv.capacity {
+            self.set_light_vertex_capacity(fits.max(1));
         }
     }
 

@@ -99,6 +99,11 @@ impl SizeLimits {
         }
     }
 
+    /// The largest `b` may be, by how it is reached.
+    pub fn max_bytes(&self, b: &BufferSize) -> u64 {
+        self.for_buffer(b).0
+    }
+
     /// The largest `b` may be, and the limit's name for messages.
     fn for_buffer(&self, b: &BufferSize) -> (u64, &'static str) {
         let binding = match b.access {
@@ -187,7 +192,7 @@ mod tests {
         assert!(e.contains("maxStorageBufferRange"), "{e}");
         let e = check_sizes(&[BufferSize::new("bvh_prims", 401).reached(Access::Texel)], &l, "x").unwrap_err();
         assert!(e.to_string().contains("maxTexelBufferElements"), "{e}");
-        let index = BufferSize::new("light_vertex_dense", 100).reached(Access::TexelU32);
+        let index = BufferSize::new("light_vertex_offsets", 100).reached(Access::TexelU32);
         assert!(check_sizes(&[index], &l, "x").is_ok());
         assert!(check_sizes(&[BufferSize { bytes: 101, ..index }], &l, "x").is_err());
         let film = BufferSize::new("film", 800).reached(Access::Address);

@@ -49,6 +49,11 @@ pub fn grid_buckets(light_paths: u64) -> u32 {
     (light_paths.max(1) * GRID_BUCKETS_PER_LIGHT_PATH).next_power_of_two().min(MAX_GRID_BUCKETS) as u32
 }
 
+/// Bytes per light vertex of `grid_points` (position bits and index, a uvec4).
+pub const GRID_POINT_BYTES: u64 = 16;
+/// Bytes per light vertex of `grid_keys` (bucket and rank, a uvec2).
+pub const GRID_KEY_BYTES: u64 = 8;
+
 /// The sizes of a hash grid over a light-vertex store of `capacity` vertices.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct GridPlan {
@@ -83,8 +88,8 @@ impl GridPlan {
     /// Resizes the grid for a store of `capacity` vertices.
     pub fn set_capacity(&mut self, capacity: u64) {
         self.capacity = capacity;
-        self.points.bytes = capacity.saturating_mul(16);
-        self.keys.bytes = capacity.saturating_mul(8);
+        self.points.bytes = capacity.saturating_mul(GRID_POINT_BYTES);
+        self.keys.bytes = capacity.saturating_mul(GRID_KEY_BYTES);
     }
 
     /// This plan with the entries reached as `points` and the keys as `keys` (how the
