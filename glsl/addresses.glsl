@@ -9,15 +9,8 @@
 #endif
 #include "types.glsl"
 #if DEVICE_ADDRESSES
-#extension GL_EXT_buffer_reference : require
-#extension GL_EXT_buffer_reference_uvec2 : require
+#include "buffer_reference.glsl"
 layout(std430) readonly buffer frame_addresses { GpuAddresses addresses; };
-// Arrays at an address: ARRAY_AT(Vec4s, addresses.film)[i] is the film's vec4 i.
-layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4s { vec4 v[]; };
-layout(buffer_reference, std430, buffer_reference_align = 16) buffer Uvec4s { uvec4 v[]; };
-layout(buffer_reference, std430, buffer_reference_align = 8) buffer Uvec2s { uvec2 v[]; };
-layout(buffer_reference, std430, buffer_reference_align = 4) buffer Uints { uint v[]; };
-#define ARRAY_AT(type, address) type(address).v
 // Each frame buffer as an array of its element type (the splat sums' type depends on
 // SPLAT_ATOMICS_64: glsl/film.glsl).
 #define FRAME_FILM ARRAY_AT(Vec4s, addresses.film)

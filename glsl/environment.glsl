@@ -19,18 +19,24 @@
 // positive wherever the radiance is, and uniform inside the cell in (u, v). The solid-angle
 // pdf is pdf_uv / (2 pi^2 sin(theta)).
 //
-// Bindings: env_texels[j * W + i] = (rgb radiance of texel (i, j), pdf_uv of cell (i, j));
+// Bindings (by device address with DEVICE_ADDRESSES, glsl/scene.glsl): env_texels[j * W + i] = (rgb radiance of texel (i, j), pdf_uv of cell (i, j));
 // env_distribution = the marginal CDF over rows (H entries: 0 ... 1), then per row j the
 // conditional CDF over its W cells (W + 1 entries at H + j * (W + 1)).
 // The background GpuLight carries: a.x, a.y = W, H (uint bits; W = 0: no map, a constant
 // background), b.x, b.y = cos, sin of the rotation; radiance.rgb scales the map.
 //
-// Requires: common.glsl (PI, INV_PI), types.glsl (GpuLight).
+// Requires: common.glsl (PI, INV_PI), types.glsl (GpuLight); with DEVICE_ADDRESSES
+// scene.glsl (SCENE_ENV_TEXELS, SCENE_ENV_DISTRIBUTION).
 #ifndef ENVIRONMENT_GLSL
 #define ENVIRONMENT_GLSL
 
+#if DEVICE_ADDRESSES
+#define env_texel_data SCENE_ENV_TEXELS
+#define env_cdf SCENE_ENV_DISTRIBUTION
+#else
 layout(std430) readonly buffer env_texels { vec4 env_texel_data[]; };
 layout(std430) readonly buffer env_distribution { float env_cdf[]; };
+#endif
 
 bool env_has_map(GpuLight l) { return floatBitsToUint(l.a.x) != 0u; }
 

@@ -2,7 +2,9 @@
 // bvh_prims, triangles, spheres, materials, lights and shading_normals, bound by name:
 // src/render/scene_gpu.rs; with HAS_ENVIRONMENT_MAP also env_texels and env_distribution,
 // declared by glsl/environment.glsl; with HAS_VERTEX_ATTRIBUTES / HAS_TEXTURES
-// vertex_attributes, texture_refs and texture_texels, declared by glsl/textures.glsl),
+// vertex_attributes, texture_refs and texture_texels, declared by glsl/textures.glsl;
+// with DEVICE_ADDRESSES scene_addresses, through which the kernels reach
+// vertex_attributes, texture_texels, env_texels and env_distribution instead),
 // the camera, and the conversion of a BVH hit into a shading point.
 // Scene features the scene lacks compile out (glsl/features.glsl): spheres, shading
 // normals, area lights (then no surface is an emitter) and the background.
@@ -14,6 +16,21 @@
 #include "common.glsl"
 
 layout(std430) readonly buffer scene_params { GpuParams params; };
+// The scene's buffers that can outgrow one binding (vertex attributes, texels, the
+// environment map) are reached by device address where the device has it
+// (DEVICE_ADDRESSES: the binding scene_addresses holds them, src/render/scene_gpu.rs);
+// glsl/textures.glsl and glsl/environment.glsl read them through these arrays.
+#if DEVICE_ADDRESSES
+#include "buffer_reference.glsl"
+layout(std430) readonly buffer scene_addresses { GpuSceneAddresses scene_address; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer VertexAttributeArray {
+    GpuVertexAttributes v[];
+};
+#define SCENE_VERTEX_ATTRIBUTES ARRAY_AT(VertexAttributeArray, scene_address.vertex_attributes)
+#define SCENE_TEXTURE_TEXELS ARRAY_AT(Uvec4s, scene_address.texture_texels)
+#define SCENE_ENV_TEXELS ARRAY_AT(Vec4s, scene_address.env_texels)
+#define SCENE_ENV_DISTRIBUTION ARRAY_AT(Floats, scene_address.env_distribution)
+#endif
 // The BVH: bvh.glsl declares it (64-bit loads, faster on lavapipe than vec4 arrays:
 // docs/bvh.md; with TEXEL_READS uniform texel buffers).
 #define BVH_DECLARES_BUFFERS

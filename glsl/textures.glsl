@@ -7,7 +7,8 @@
 // Bindings (src/render/scene_gpu.rs): vertex_attributes (GpuVertexAttributes, three per
 // triangle that has attributes, at the triangle's first-vertex index p2.w), with
 // HAS_TEXTURES texture_refs (GpuTextureRef per textured material) and texture_texels
-// (RGBA8, R in the lowest byte, four texels per uvec4, all images one after another).
+// (RGBA8, R in the lowest byte, four texels per uvec4, all images one after another);
+// with DEVICE_ADDRESSES vertex_attributes and texture_texels by address (scene.glsl).
 //
 // Sampling is done in software, the same on every device: texel (i, j) covers
 // [i, i+1) x [j, j+1) of the texture's coordinates times its size, (0, 0) is the image's
@@ -23,12 +24,20 @@
 #define TEXTURES_GLSL
 
 #if HAS_VERTEX_ATTRIBUTES
+#if DEVICE_ADDRESSES
+#define vertex_attribute_data SCENE_VERTEX_ATTRIBUTES
+#else
 layout(std430) readonly buffer vertex_attributes { GpuVertexAttributes vertex_attribute_data[]; };
+#endif
 #endif
 
 #if HAS_TEXTURES
 layout(std430) readonly buffer texture_refs { GpuTextureRef texture_ref_data[]; };
+#if DEVICE_ADDRESSES
+#define texture_texel_data SCENE_TEXTURE_TEXELS
+#else
 layout(std430) readonly buffer texture_texels { uvec4 texture_texel_data[]; };
+#endif
 
 // The sRGB transfer function's inverse (IEC 61966-2-1).
 float srgb_to_linear(float c) { return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4); }

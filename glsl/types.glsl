@@ -84,6 +84,14 @@ struct GpuAddresses {
     uvec2 light_scratch_b;
 };
 
+// The scene's buffers reached by device address (src/render/scene_gpu.rs).
+struct GpuSceneAddresses {
+    uvec2 vertex_attributes;
+    uvec2 texture_texels;
+    uvec2 env_texels;
+    uvec2 env_distribution;
+};
+
 struct GpuPush {
     uint iteration;    // 0-based iteration index
     uint count;        // paths (pixels, light subpaths) in this dispatch

@@ -13,6 +13,7 @@ layout(std430, binding = 5) buffer F { GpuPush a_push[]; };
 layout(std430, binding = 6) buffer G { GpuTextureRef a_texture_refs[]; };
 layout(std430, binding = 7) buffer H { GpuVertexAttributes a_vertex_attributes[]; };
 layout(std430, binding = 8) buffer I { GpuAddresses a_addresses[]; };
+layout(std430, binding = 9) buffer J { GpuSceneAddresses a_scene_addresses[]; };
 void main() {
     // Touch every struct so none is optimised away.
     a_materials[1] = a_materials[0];
@@ -24,4 +25,5 @@ void main() {
     a_texture_refs[1] = a_texture_refs[0];
     a_vertex_attributes[1] = a_vertex_attributes[0];
     a_addresses[1] = a_addresses[0];
+    a_scene_addresses[1] = a_scene_addresses[0];
 }

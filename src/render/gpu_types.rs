@@ -168,6 +168,17 @@ pub struct GpuAddresses {
     pub light_scratch_b: [u32; 2],
 }
 
+/// Device addresses of the scene's buffers that can outgrow one binding (glsl/types.glsl;
+/// src/render/scene_gpu.rs): (low, high) 32-bit words.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct GpuSceneAddresses {
+    pub vertex_attributes: [u32; 2],
+    pub texture_texels: [u32; 2],
+    pub env_texels: [u32; 2],
+    pub env_distribution: [u32; 2],
+}
+
 /// Per-dispatch push constants.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

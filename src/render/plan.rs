@@ -110,7 +110,7 @@ impl FramePlan {
             pixels,
             light_paths,
             paths_per_invocation,
-            scene: ScenePlan::new(scene, reads),
+            scene: ScenePlan::new(scene, reads, device_addresses),
             film: FilmPlan::new(s.frame.width, s.frame.height, frame_access),
             light_vertices,
             grid,

@@ -24,8 +24,13 @@ use crate::scene::{AlphaMode, EnvironmentMap, Filter, Light, Scene, VertexAttrib
 /// Upper bounds of the scene's buffers, known before the BVH is built.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ScenePlan {
-    pub buffers: [BufferSize; 13],
+    pub buffers: [BufferSize; 14],
 }
+
+/// The scene's buffers that the kernels reach by device address where the device has it
+/// (glsl/scene.glsl, GpuSceneAddresses): each may then be as large as one allocation
+/// rather than one storage binding (128 MiB on lavapipe).
+const ADDRESSED: [&str; 4] = ["vertex_attributes", "texture_texels", "env_texels", "env_distribution"];
 
 fn size<T>(n: u64) -> u64 {
     n.saturating_mul(std::mem::size_of::<T>() as u64)
@@ -33,8 +38,9 @@ fn size<T>(n: u64) -> u64 {
 
 impl ScenePlan {
     /// The buffers of `scene`, read as `reads` (with texel reads the BVH and the geometry
-    /// are bound only as texel buffers, glsl/scene.glsl and glsl/bvh.glsl).
-    pub fn new(scene: &Scene, reads: Reads) -> ScenePlan {
+    /// are bound only as texel buffers, glsl/scene.glsl and glsl/bvh.glsl), with
+    /// [`ADDRESSED`] reached by address when `device_addresses`.
+    pub fn new(scene: &Scene, reads: Reads, device_addresses: bool) -> ScenePlan {
         let texel = |b: BufferSize| if reads == Reads::Texel { b.reached(Access::Texel) } else { b };
         let tris = scene.triangles.len() as u64;
         // Instances: one primitive in the top-level tree and a two-slot record each.
@@ -69,7 +75,15 @@ impl ScenePlan {
                 BufferSize::new("texture_texels", size::<[u32; 4]>(texels.div_ceil(4))),
                 BufferSize::new("env_texels", size::<[f32; 4]>(env_w * env_h)),
                 BufferSize::new("env_distribution", size::<f32>(env_h + env_h.saturating_sub(1) * (env_w + 1))),
-            ],
+                BufferSize::new("scene_addresses", size::<GpuSceneAddresses>(1)),
+            ]
+            .map(|b| {
+                if device_addresses && ADDRESSED.contains(&b.name) {
+                    b.reached(Access::Address)
+                } else {
+                    b
+                }
+            }),
         }
     }
 
@@ -375,6 +389,22 @@ impl SceneGpu {
             gpu.buffer_from_slice("env_texels", &env.texels)?,
             gpu.buffer_from_slice("env_distribution", &env.distribution)?,
         ];
+        let mut addresses = GpuSceneAddresses::default();
+        if gpu.has(BUFFER_DEVICE_ADDRESS) {
+            let address = |name: &str| -> Result<[u32; 2]> {
+                let b = buffers.iter().find(|b| b.name() == name).expect("a scene buffer of that name");
+                let a = b.device_address()?;
+                Ok([a as u32, (a >> 32) as u32])
+            };
+            addresses = GpuSceneAddresses {
+                vertex_attributes: address(ADDRESSED[0])?,
+                texture_texels: address(ADDRESSED[1])?,
+                env_texels: address(ADDRESSED[2])?,
+                env_distribution: address(ADDRESSED[3])?,
+            };
+        }
+        let mut buffers = buffers;
+        buffers.push(gpu.buffer_from_slice("scene_addresses", &[addresses])?);
         let variant = SceneVariant {
             features: features.clone(),
             reads,
