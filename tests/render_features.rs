@@ -243,8 +243,8 @@ fn bench_suite_row_measures_both_variants() {
         for v in [&row.specialised, &row.generic] {
             assert!(v.gpu_ms_per_iteration > 0.0 && v.rays_per_second > 0.0 && v.rays_per_iteration > 0.0);
             let stages: Vec<&str> = v.stages.iter().map(|s| s.stage.as_str()).collect();
-            // bpt's default connects to the light-vertex cache: its prefix sum is a stage.
-            assert_eq!(stages, ["light subpaths", "light-vertex prefix", "camera subpaths"]);
+            // The light-vertex store's scan and compaction are part of the light subpaths.
+            assert_eq!(stages, ["light subpaths", "camera subpaths"]);
         }
         // Both variants trace the same rays (same random numbers).
         assert_eq!(row.specialised.rays_per_iteration, row.generic.rays_per_iteration);

@@ -6,8 +6,8 @@
 //! measured slightly better at equal time, docs/estimators.md).
 //!
 //! Passes per iteration (src/render/estimators/bidirectional.rs): light subpaths (store
-//! vertices, connect to the camera), with `--connect cache` the light-vertex prefix, camera
-//! subpaths (NEE + vertex connections; splats -> film).
+//! vertices, connect to the camera), camera subpaths (NEE + vertex connections; splats ->
+//! film).
 
 use super::{Algorithm, EstimatorInfo, Techniques};
 use crate::render::settings::{Connect, DEFAULT_CACHE_CONNECTIONS};

@@ -4,8 +4,8 @@
 //! to a light-vertex cache.
 //!
 //! Passes per iteration (src/render/estimators/bidirectional.rs): light subpaths (store
-//! vertices, connect to the camera), with `--connect cache` the light-vertex prefix, grid
-//! build, camera subpaths (NEE + connections + merging, MIS; splats -> film).
+//! vertices, connect to the camera), grid build, camera subpaths (NEE + connections +
+//! merging, MIS; splats -> film).
 
 use super::{Algorithm, EstimatorInfo, Techniques};
 use crate::render::settings::Connect;
