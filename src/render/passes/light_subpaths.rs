@@ -58,7 +58,7 @@ pub fn light_vertex_b_bytes(shading_normals: bool, vertex_attributes: bool) -> u
 }
 
 /// Light vertices per light subpath the store is first sized for. The reference scenes
-/// store 1.3-3.3 per light subpath at the default max path length of 10
+/// store 0.8-2.1 per light subpath at the default max path length of 10
 /// (docs/performance.md, "The light-vertex store"); a scene that stores more grows the
 /// store after its first iteration.
 pub const INITIAL_VERTICES_PER_PATH: u64 = 4;
