@@ -27,10 +27,11 @@ pub const NAME: &str = "light subpaths";
 pub const LIGHT_VERTEX_A_BYTES: u64 = 32;
 
 /// Bytes of one light vertex in `light_vertices_b`: (wo, dVM) and (normal, material and
-/// length), with shading normals a vec4 holding the shading normal, with vertex
-/// attributes one holding the tint (glsl/vcm.glsl, LV_B_STRIDE).
-pub fn light_vertex_b_bytes(shading_normals: bool, vertex_attributes: bool) -> u64 {
-    32 + 16 * shading_normals as u64 + 16 * vertex_attributes as u64
+/// length), with `normal_slot` a vec4 holding the shading normal (and the point's
+/// metallic), with vertex attributes one holding the tint (glsl/vcm.glsl, LV_B_STRIDE).
+/// The normal slot is there with shading normals or metallic-roughness textures.
+pub fn light_vertex_b_bytes(normal_slot: bool, vertex_attributes: bool) -> u64 {
+    32 + 16 * normal_slot as u64 + 16 * vertex_attributes as u64
 }
 
 /// The sizes of the light-vertex store and the splat sums.
@@ -63,7 +64,8 @@ impl LightVertexPlan {
         splat_access: Access,
         store_access: Access,
     ) -> LightVertexPlan {
-        let (shading_normals, vertex_attributes) = (features.shading_normals, features.vertex_attributes);
+        let normal_slot = features.shading_normals || features.metallic_roughness_textures;
+        let vertex_attributes = features.vertex_attributes;
         let slots_per_path = max_path_length.saturating_sub(1).max(1);
         let capacity = if store_vertices { light_paths as u64 * slots_per_path as u64 } else { 1 };
         let count_entries = if store_vertices { light_paths as u64 } else { 1 };
@@ -76,7 +78,7 @@ impl LightVertexPlan {
                 .reached(store_access),
             vertices_b: BufferSize::new(
                 "light_vertices_b",
-                capacity.saturating_mul(light_vertex_b_bytes(shading_normals, vertex_attributes)),
+                capacity.saturating_mul(light_vertex_b_bytes(normal_slot, vertex_attributes)),
             )
             .reached(store_access),
             counts: BufferSize::new("light_vertex_counts", count_entries * 4),
