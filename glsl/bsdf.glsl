@@ -34,7 +34,14 @@
 // HAS_GGX, HAS_MIRROR, HAS_DIELECTRIC: glsl/features.glsl); the branches taken and the
 // arithmetic done for the components present are the same as with all of them.
 //
-// Requires: `material_at(i)` (GpuMaterial) declared by the kernel (scene.glsl), common.glsl, types.glsl.
+// A point's material is its material's, varied by the point's tint (glsl/textures.glsl,
+// `Tint`): the base colour (`diffuse_colour` etc.) and, with a metallic-roughness
+// texture, the lobes that depend on metallic and roughness (`point_material`). The tint
+// is a property of the point, so bsdf_init, bsdf_eval and bsdf_sample all see the same
+// lobes, and the component probabilities and pdfs stay exact.
+//
+// Requires: `material_at(i)` (GpuMaterial) declared by the kernel (scene.glsl), common.glsl, types.glsl,
+// textures.glsl (Tint).
 #ifndef BSDF_GLSL
 #define BSDF_GLSL
 
@@ -54,7 +61,7 @@ struct Bsdf {
     bool valid;
     bool delta;      // only specular components
     bool from_light; // fixed direction belongs to a light subpath (adjoint BSDF)
-    vec3 tint;       // the surface point's tint of the base colour (glsl/textures.glsl)
+    Tint tint;       // the surface point's tint (glsl/textures.glsl)
 };
 
 // The material's colours at a point with tint `tint` (the header of glsl/textures.glsl):
@@ -78,6 +85,32 @@ vec3 glossy_colour(GpuMaterial m, vec3 tint) {
     if (tint != vec3(1.0)) return vec3(m.surface.w) + (m.glossy.rgb - vec3(m.surface.w)) * tint;
 #endif
     return m.glossy.rgb;
+}
+
+// The material `material` at a point of tint `tint`. Where a metallic-roughness texture
+// gave the point a metallic or roughness other than the factors
+// (HAS_METALLIC_ROUGHNESS_TEXTURES), the lobes that depend on them are glTF's at the
+// point's metallic = factor x texel B and roughness = factor x texel G (glTF 2.0 section
+// 3.9.2; Material::metallic_roughness_lobes in src/scene/mod.rs computes the same for
+// the factors): diffuse (1 - metallic) base, GGX F0 mix(dielectric F0, base, metallic)
+// of which mean(dielectric F0) (1 - metallic) is untinted, GGX alpha roughness^2 (at
+// least MIN_GGX_ALPHA). The diffuse lobe's interface F0 (mirror.w) does not depend on
+// them. Elsewhere the material's own values, bit for bit.
+GpuMaterial point_material(uint material, Tint tint) {
+    GpuMaterial m = material_at(material);
+#if HAS_METALLIC_ROUGHNESS_TEXTURES
+    if (tint.roughness != 1.0 || tint.metallic != 1.0) {
+        vec3 base = m.base_metallic.rgb;
+        vec3 f0 = m.f0_roughness.rgb;
+        float metallic = m.base_metallic.w * tint.metallic;
+        float roughness = m.f0_roughness.w * tint.roughness;
+        m.diffuse.rgb = base * (1.0 - metallic);
+        m.glossy.rgb = f0 + (base - f0) * metallic;
+        m.glossy.w = max(roughness * roughness, MIN_GGX_ALPHA);
+        m.surface.w = (f0.r + f0.g + f0.b) / 3.0 * (1.0 - metallic);
+    }
+#endif
+    return m;
 }
 
 // Fresnel reflectance of a smooth dielectric; cos_i > 0 means the incident direction is
@@ -155,9 +188,9 @@ float diffuse_fresnel_weight(float f0, float cos_o, float cos_i) {
 
 // `ng`: geometric normal (for a dielectric it must point outwards); `ns`: shading normal
 // on the same side as ng (== ng for flat shading); `tint`: the point's tint (Surface.tint).
-Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, vec3 tint) {
+Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint tint) {
     Bsdf b;
-    GpuMaterial m = material_at(material);
+    GpuMaterial m = point_material(material, tint);
     float ior = m.phong.w;
     b.material = material;
     b.wo = wo;
@@ -187,7 +220,7 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, vec3 t
     float a_d = 0.0, a_p = 0.0, a_g = 0.0, a_r = 0.0, a_t = 0.0;
     vec3 albedo = vec3(0.0);
 #if HAS_DIFFUSE
-    vec3 diffuse = diffuse_colour(m, tint);
+    vec3 diffuse = diffuse_colour(m, tint.rgb);
     a_d = luminance(diffuse);
     albedo += diffuse;
 #endif
@@ -196,12 +229,12 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, vec3 t
     albedo += m.phong.rgb;
 #endif
 #if HAS_GGX
-    vec3 glossy = glossy_colour(m, tint);
+    vec3 glossy = glossy_colour(m, tint.rgb);
     a_g = luminance(glossy);
     albedo += glossy;
 #endif
 #if HAS_MIRROR
-    vec3 mirror = mirror_colour(m, tint);
+    vec3 mirror = mirror_colour(m, tint.rgb);
     a_r = b.fresnel * luminance(mirror);
     albedo += b.fresnel * mirror;
 #endif
@@ -236,15 +269,15 @@ vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
     // A reflection: wi on wo's side of the geometric surface (no light leaks).
     if (dot(b.ng, wi) <= 0.0 || dot(b.ng, b.wo) <= 0.0) return vec3(0.0);
 #endif
-    GpuMaterial m = material_at(b.material);
+    GpuMaterial m = point_material(b.material, b.tint);
     vec3 f = vec3(0.0);
 #if HAS_DIFFUSE
     if (b.prob_diffuse > 0.0) {
         float f0 = m.mirror.w;
         if (f0 > 0.0) {
-            f += diffuse_colour(m, b.tint) * (INV_PI * diffuse_fresnel_weight(f0, cos_o, cos_i));
+            f += diffuse_colour(m, b.tint.rgb) * (INV_PI * diffuse_fresnel_weight(f0, cos_o, cos_i));
         } else {
-            f += diffuse_colour(m, b.tint) * INV_PI;
+            f += diffuse_colour(m, b.tint.rgb) * INV_PI;
         }
         pdf_fwd += b.prob_diffuse * cos_i * INV_PI;
         pdf_rev += b.prob_diffuse * cos_o * INV_PI;
@@ -267,7 +300,7 @@ vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
 #if HAS_GGX
     if (b.prob_glossy > 0.0) {
         float pf, pr;
-        f += ggx_eval(b.n, b.wo, wi, cos_o, cos_i, glossy_colour(m, b.tint), m.glossy.w, pf, pr);
+        f += ggx_eval(b.n, b.wo, wi, cos_o, cos_i, glossy_colour(m, b.tint.rgb), m.glossy.w, pf, pr);
         pdf_fwd += b.prob_glossy * pf;
         pdf_rev += b.prob_glossy * pr;
     }
@@ -312,7 +345,7 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
     s.wi = vec3(0.0);
     s.cos_wi = 0.0;
     if (!b.valid) return s;
-    GpuMaterial m = material_at(b.material);
+    GpuMaterial m = point_material(b.material, b.tint);
     float cos_o = dot(b.n, b.wo);
     float x = u.z;
     float p_nonspec = b.prob_diffuse + b.prob_phong + b.prob_glossy;
@@ -370,7 +403,7 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
         s.pdf_rev = b.prob_reflect;
         s.cos_wi = bsdf_cos_geometric(b, s.wi);
         // f bsdf_cos / pdf with f = F mirror / |n.wi|.
-        s.weight = b.fresnel * mirror_colour(m, b.tint) * shading_correction(b, s.wi) / b.prob_reflect;
+        s.weight = b.fresnel * mirror_colour(m, b.tint.rgb) * shading_correction(b, s.wi) / b.prob_reflect;
     } else
 #endif
     {

@@ -17,7 +17,7 @@ void main() {
     vec3 v = vec3(0.0);
     if (trace_closest(params.cam_pos.xyz, d, 0.0, 1e30, h)) {
         Surface s = surface_at(h, params.cam_pos.xyz, d);
-        v = abs(dot(s.ns, d)) * s.tint;
+        v = abs(dot(s.ns, d)) * s.tint.rgb;
     }
     film_add(pixel, v);
     COUNT_RAYS_FLUSH();

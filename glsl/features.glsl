@@ -53,7 +53,7 @@
 #define HAS_SHADING_NORMALS 1
 #endif
 // Surface detail (glsl/textures.glsl): per-vertex texture coordinates and colours (the
-// tint), base-colour textures, alpha cut-outs.
+// tint), textures, alpha cut-outs.
 #ifndef HAS_VERTEX_ATTRIBUTES
 #define HAS_VERTEX_ATTRIBUTES 1
 #endif
@@ -69,6 +69,12 @@
 // Area lights whose radiance an emissive texture modulates (glsl/lights.glsl).
 #ifndef HAS_EMISSIVE_TEXTURES
 #define HAS_EMISSIVE_TEXTURES 1
+#endif
+// Materials whose metallic and roughness a metallicRoughnessTexture varies per point
+// (glsl/textures.glsl `surface_tint`, glsl/bsdf.glsl `point_material`; light vertices
+// carry the point's values, glsl/vcm.glsl).
+#ifndef HAS_METALLIC_ROUGHNESS_TEXTURES
+#define HAS_METALLIC_ROUGHNESS_TEXTURES 1
 #endif
 // Profiling: count traced rays into stats[2..3] (glsl/scene.glsl, COUNT_RAYS_FLUSH).
 #ifndef COUNT_RAYS

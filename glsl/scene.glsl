@@ -65,19 +65,24 @@ GpuSphere sphere_at(uint i) {
     s.info = texelFetch(spheres, int(2u * i + 1u));
     return s;
 }
+// GpuMaterial's vec4s, in field order.
+#define MATERIAL_TEXELS 9u
 GpuMaterial material_at(uint i) {
     GpuMaterial m;
-    m.diffuse = texel_vec4(materials, 7u * i);
-    m.phong = texel_vec4(materials, 7u * i + 1u);
-    m.mirror = texel_vec4(materials, 7u * i + 2u);
-    m.emission = texel_vec4(materials, 7u * i + 3u);
-    m.glossy = texel_vec4(materials, 7u * i + 4u);
-    m.surface = texel_vec4(materials, 7u * i + 5u);
-    m.maps = texel_vec4(materials, 7u * i + 6u);
+    uint k = MATERIAL_TEXELS * i;
+    m.diffuse = texel_vec4(materials, k);
+    m.phong = texel_vec4(materials, k + 1u);
+    m.mirror = texel_vec4(materials, k + 2u);
+    m.emission = texel_vec4(materials, k + 3u);
+    m.glossy = texel_vec4(materials, k + 4u);
+    m.surface = texel_vec4(materials, k + 5u);
+    m.maps = texel_vec4(materials, k + 6u);
+    m.base_metallic = texel_vec4(materials, k + 7u);
+    m.f0_roughness = texel_vec4(materials, k + 8u);
     return m;
 }
-vec4 material_surface(uint i) { return texel_vec4(materials, 7u * i + 5u); }
-vec4 material_maps(uint i) { return texel_vec4(materials, 7u * i + 6u); }
+vec4 material_surface(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 5u); }
+vec4 material_maps(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 6u); }
 GpuLight light_at(uint i) {
     GpuLight l;
     l.a = texel_vec4(lights, 5u * i);
@@ -175,7 +180,7 @@ struct Surface {
     vec3 p;
     vec3 ng;        // geometric normal (triangles: (p1-p0)x(p2-p0); spheres: outward)
     vec3 ns;        // shading normal (== ng unless the mesh has normals), same side as ng
-    vec3 tint;      // multiplies the material's base colour (glsl/textures.glsl; else 1)
+    Tint tint;      // multiplies the material's factors (glsl/textures.glsl; else 1)
     uint material;
     uint light;     // light index or NO_LIGHT
 };
@@ -200,7 +205,7 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
         s.p = c + r * n;  // re-projected onto the surface
         s.ng = n;
         s.ns = n;
-        s.tint = vec3(1.0);
+        s.tint = no_tint();
         s.material = sp.info.x;
         s.light = sp.info.y;
     } else
@@ -264,10 +269,7 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
             s.ns = dot(ns, s.ng) < 0.0 ? -ns : ns;
         }
 #endif
-        s.tint = vec3(1.0);
-#if HAS_VERTEX_ATTRIBUTES
-        s.tint = surface_tint_alpha(h.prim, s.material, h.u, h.v).rgb;
-#endif
+        s.tint = surface_tint(h.prim, s.material, h.u, h.v);
 #if HAS_AREA_LIGHTS
         s.light = tri.light;
 #else

@@ -1,8 +1,11 @@
 // Surface detail: per-vertex attributes (texture coordinates, colours), base-colour,
-// normal and emissive textures, and what they make of a point on a triangle: its tint
-// (the texel's linear colour times the vertex colour, multiplying the material's base
-// colour, glsl/bsdf.glsl), its shading normal, its emission and its alpha (the material's alpha factor times the texel's and the vertex colour's:
-// cut-outs, alpha_visible, which the traversal calls at every candidate hit).
+// metallic-roughness, normal and emissive textures, and what they make of a point on a
+// triangle: its tint (`Tint`: the base-colour texel's linear colour times the vertex
+// colour, multiplying the material's base colour, and the metallic-roughness texel,
+// multiplying its metallic and roughness factors: glsl/bsdf.glsl), its shading normal,
+// its emission and its alpha (the material's alpha factor times the texel's and the
+// vertex colour's: cut-outs, alpha_visible, which the traversal calls at every candidate
+// hit).
 //
 // Bindings (src/render/scene_gpu.rs): vertex_attributes (GpuVertexAttributes, three per
 // triangle that has attributes, at the triangle's first-vertex index p2.w), with
@@ -15,8 +18,10 @@
 // top-left corner (glTF); nearest takes the texel under the point, linear interpolates
 // the four texels around it bilinearly; the wrap modes are glTF's (OpenGL's) REPEAT,
 // CLAMP_TO_EDGE and MIRRORED_REPEAT, applied to the integer texel coordinates. RGB is
-// sRGB-decoded per texel before filtering (glTF: base colour textures are sRGB). No
-// mip-maps: the pixel samples of a render average the texture over each pixel.
+// sRGB-decoded per texel before filtering (glTF: base colour and emissive textures are
+// sRGB), except for TEXTURE_LINEAR references (normal and metallic-roughness textures,
+// whose texels are linear values). No mip-maps: the pixel samples of a render average
+// the texture over each pixel.
 //
 // Requires: types.glsl, features.glsl, material_at / material_surface and triangle_at
 // (scene.glsl).
@@ -124,6 +129,20 @@ bool triangle_attributes(uint tri, out GpuVertexAttributes a0, out GpuVertexAttr
 }
 #endif
 
+// A surface point's tint: what its textures and vertex colour multiply the material's
+// factors by. rgb: the base colour (the base-colour texel's linear colour times COLOR_0);
+// roughness and metallic: the roughness and metallic factors (the metallicRoughnessTexture
+// texel's linear G and B, glTF 2.0 section 3.9.2). All 1 where the point has none, and
+// then the material is its own, bit for bit (glsl/bsdf.glsl). Surfaces and light vertices
+// carry it (glsl/scene.glsl, glsl/vcm.glsl).
+struct Tint {
+    vec3 rgb;
+    float roughness;
+    float metallic;
+};
+
+Tint no_tint() { return Tint(vec3(1.0), 1.0, 1.0); }
+
 // The tint (rgb) and alpha (times the material's alpha factor) of triangle `tri` with
 // material `material` at barycentric weights (u, v): (1, 1, 1, factor) where it has no
 // attributes.
@@ -145,6 +164,30 @@ vec4 surface_tint_alpha(uint tri, uint material, float u, float v) {
 #endif
 #endif
     return r;
+}
+
+// The tint of triangle `tri` with material `material` at barycentric weights (u, v):
+// its base colour's (surface_tint_alpha) and, with HAS_METALLIC_ROUGHNESS_TEXTURES, the
+// metallic-roughness texel (linear, TEXTURE_LINEAR) at the point's texture coordinates:
+// glTF 2.0 section 3.9.2, roughness = roughnessFactor x G, metallic = metallicFactor x B
+// (R is unused). Where the material has no such texture or the triangle lacks its
+// coordinates, roughness and metallic stay 1 (the factors alone).
+Tint surface_tint(uint tri, uint material, float u, float v) {
+    Tint t = no_tint();
+#if HAS_VERTEX_ATTRIBUTES
+    t.rgb = surface_tint_alpha(tri, material, u, v).rgb;
+#endif
+#if HAS_METALLIC_ROUGHNESS_TEXTURES
+    uint ref = floatBitsToUint(material_maps(material).w);
+    GpuVertexAttributes a0, a1, a2;
+    vec2 uv;
+    if (ref != NO_TEXTURE && triangle_attributes(tri, a0, a1, a2) && texture_uv(ref, a0, a1, a2, 1.0 - u - v, u, v, uv)) {
+        vec4 texel = texture_sample(ref, uv);
+        t.roughness = texel.g;
+        t.metallic = texel.b;
+    }
+#endif
+    return t;
 }
 
 #if HAS_EMISSIVE_TEXTURES

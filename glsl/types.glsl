@@ -15,6 +15,7 @@
 #define TEXTURE_LINEAR 64u
 #define ALPHA_OPAQUE (-1.0)
 #define ALPHA_BLEND (-2.0)
+#define MIN_GGX_ALPHA 1e-3
 
 struct GpuMaterial {
     vec4 diffuse;   // rgb, w: Phong exponent
@@ -26,7 +27,11 @@ struct GpuMaterial {
                     // z: alpha cutoff of MASK (>= 0), ALPHA_OPAQUE or ALPHA_BLEND,
                     // w: untinted part of the GGX F0
     vec4 maps;      // x: normal map or NO_TEXTURE (bits), y: normal map scale,
-                    // z: emissive texture or NO_TEXTURE (bits)
+                    // z: emissive texture or NO_TEXTURE (bits),
+                    // w: metallic-roughness texture or NO_TEXTURE (bits)
+    vec4 base_metallic;  // with a metallic-roughness texture: rgb base colour factor,
+                         // w metallic factor (glsl/bsdf.glsl, point_material)
+    vec4 f0_roughness;   // rgb: the dielectric's F0, w: roughness factor
 };
 
 struct GpuTextureRef {

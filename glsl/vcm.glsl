@@ -23,11 +23,14 @@ struct SubpathState {
 // the compacted store, glsl/light_vertex_store.glsl), vertex i:
 //   a[2i] = (position, dVCM)      a[2i+1] = (throughput, dVC)
 //   b[Bi] = (wo, dVM)             b[Bi+1] = (normal, material | length << 24)
-//   with HAS_SHADING_NORMALS:     b[Bi+2] = (shading normal, 0)
-//   with HAS_VERTEX_ATTRIBUTES:   b[Bi+LV_TINT] = (tint, 0)
+//   with HAS_SHADING_NORMALS or HAS_METALLIC_ROUGHNESS_TEXTURES:
+//                                 b[Bi+2] = (shading normal, tint.metallic)
+//   with HAS_VERTEX_ATTRIBUTES:   b[Bi+LV_TINT] = (tint.rgb, tint.roughness)
 // B = 2 + the two (src/render/passes/light_subpaths.rs, LightVertexPlan, sizes the store
-// the same way; light_vertex_compact.comp copies B vec4 per vertex).
-#define LV_NORMAL_SLOTS (HAS_SHADING_NORMALS != 0 ? 1u : 0u)
+// the same way; light_vertex_compact.comp copies B vec4 per vertex). The point's metallic
+// and roughness (a metallic-roughness texture's texel) fill the two vec4s' spare w, so a
+// scene with that texture needs the normal slot even without shading normals.
+#define LV_NORMAL_SLOTS ((HAS_SHADING_NORMALS != 0 || HAS_METALLIC_ROUGHNESS_TEXTURES != 0) ? 1u : 0u)
 #define LV_TINT (2u + LV_NORMAL_SLOTS)
 #define LV_B_STRIDE (LV_TINT + (HAS_VERTEX_ATTRIBUTES != 0 ? 1u : 0u))
 struct LightVertex {
@@ -36,7 +39,7 @@ struct LightVertex {
     vec3 wo;   // direction towards the previous vertex
     vec3 n;    // geometric normal
     vec3 ns;   // shading normal (== n for flat shading)
-    vec3 tint; // the point's tint of the base colour (1 without attributes)
+    Tint tint; // the point's tint (1 without attributes)
     uint material;
     uint len;        // segments from the light
     float dvcm, dvc, dvm;
@@ -53,11 +56,11 @@ void lv_store(uint slot, LightVertex v) {
     lv_scratch_a[2u * slot + 1u] = vec4(v.thr, v.dvc);
     lv_scratch_b[LV_B_STRIDE * slot] = vec4(v.wo, v.dvm);
     lv_scratch_b[LV_B_STRIDE * slot + 1u] = vec4(v.n, uintBitsToFloat(v.material | (v.len << 24)));
-#if HAS_SHADING_NORMALS
-    lv_scratch_b[LV_B_STRIDE * slot + 2u] = vec4(v.ns, 0.0);
+#if HAS_SHADING_NORMALS || HAS_METALLIC_ROUGHNESS_TEXTURES
+    lv_scratch_b[LV_B_STRIDE * slot + 2u] = vec4(v.ns, v.tint.metallic);
 #endif
 #if HAS_VERTEX_ATTRIBUTES
-    lv_scratch_b[LV_B_STRIDE * slot + LV_TINT] = vec4(v.tint, 0.0);
+    lv_scratch_b[LV_B_STRIDE * slot + LV_TINT] = vec4(v.tint.rgb, v.tint.roughness);
 #endif
 }
 #endif
@@ -76,10 +79,13 @@ LightVertex lv_load(uint slot) {
 #else
     v.ns = v.n;
 #endif
+    v.tint = no_tint();
 #if HAS_VERTEX_ATTRIBUTES
-    v.tint = lv_b_at(LV_B_STRIDE * slot + LV_TINT).xyz;
-#else
-    v.tint = vec3(1.0);
+    v.tint.rgb = lv_b_at(LV_B_STRIDE * slot + LV_TINT).xyz;
+#endif
+#if HAS_METALLIC_ROUGHNESS_TEXTURES
+    v.tint.roughness = lv_b_at(LV_B_STRIDE * slot + LV_TINT).w;
+    v.tint.metallic = lv_b_at(LV_B_STRIDE * slot + 2u).w;
 #endif
     uint info = floatBitsToUint(b1.w);
     v.material = info & 0xffffffu;

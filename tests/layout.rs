@@ -71,7 +71,17 @@ fn rust_and_glsl_layouts_match() {
     let spirv = shader::compile_glsl_opt("tests/layout.comp", &src, &[], false).unwrap();
     let glsl = reflect(&spirv);
     let rust = [
-        rust_layout!(GpuMaterial { diffuse, phong, mirror, emission, glossy, surface, maps }),
+        rust_layout!(GpuMaterial {
+            diffuse,
+            phong,
+            mirror,
+            emission,
+            glossy,
+            surface,
+            maps,
+            base_metallic,
+            f0_roughness
+        }),
         rust_layout!(GpuTextureRef { image, row0, row1 }),
         rust_layout!(GpuVertexAttributes { uv, color, tangent }),
         rust_layout!(GpuTriangle { material, light, first_vertex, _pad }),

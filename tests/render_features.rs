@@ -232,6 +232,35 @@ fn feature_derivation() {
     let f = FeatureSet::new(&scene, false);
     assert!(!f.mirror && !f.dielectric);
     assert!(f.with_count_rays(true).defines().list().contains(&("COUNT_RAYS".to_string(), "1".to_string())));
+
+    // A metallic-roughness texture on a full metal (no diffuse lobe of its own): compiled in
+    // where triangles have texture coordinates, with the diffuse lobe its less metallic
+    // texels give.
+    use vkvcm::scene::{Filter, TextureRef, VertexAttributes, Wrap};
+    let mut scene = glossy_scene();
+    let texture = TextureRef {
+        image: 0,
+        wrap_s: Wrap::Repeat,
+        wrap_t: Wrap::Repeat,
+        filter: Filter::Linear,
+        tex_coord: 0,
+        transform: TextureRef::IDENTITY,
+    };
+    let f0 = glam::Vec3::splat(vkvcm::scene::GLTF_DIELECTRIC_F0);
+    scene.materials[1] = vkvcm::scene::Material::metallic_roughness_textured(glam::Vec3::ONE, 1.0, 0.5, f0, texture);
+    // No other diffuse lobe (the left floor and the wall lose theirs).
+    scene.materials[0].diffuse = glam::Vec3::ZERO;
+    scene.materials[2].diffuse = glam::Vec3::ZERO;
+    let f = FeatureSet::new(&scene, false);
+    assert!(!f.metallic_roughness_textures && !f.diffuse, "without texture coordinates the factors alone apply");
+    let right_half = scene.triangles.iter_mut().filter(|t| t.material == 1);
+    for t in right_half {
+        t.attributes =
+            Some(Box::new(VertexAttributes { uv: [Some([glam::Vec2::ZERO; 3]), None], ..Default::default() }));
+    }
+    let f = FeatureSet::new(&scene, false);
+    assert!(f.metallic_roughness_textures && f.textures && f.diffuse && f.ggx);
+    assert!(f.to_string().contains("metallic-roughness textures"), "{f}");
 }
 
 #[test]

@@ -124,6 +124,27 @@ fn quad(material: u32, uv_of: &dyn Fn(f32, f32) -> Vec2, color_of: Option<&dyn F
     vec![tri([(0.0, 0.0), (0.0, 1.0), (1.0, 1.0)]), tri([(0.0, 0.0), (1.0, 1.0), (1.0, 0.0)])]
 }
 
+/// Two triangles over the rectangle [u0, u1] x [v0, v1] of the parameter plane that
+/// `corner` maps into the world (affinely), with texture coordinates (u, v) at each point
+/// when `uv`. Their geometric normal is d corner / du x d corner / dv.
+fn rect(
+    corner: &dyn Fn(f32, f32) -> Vec3,
+    (u0, u1): (f32, f32),
+    (v0, v1): (f32, f32),
+    material: u32,
+    uv: bool,
+) -> Vec<Triangle> {
+    let tri = |c: [(f32, f32); 3]| Triangle {
+        p: c.map(|(u, v)| corner(u, v)),
+        n: None,
+        material,
+        attributes: uv.then(|| {
+            Box::new(VertexAttributes { uv: [Some(c.map(|(u, v)| Vec2::new(u, v))), None], color: None, tangent: None })
+        }),
+    };
+    vec![tri([(u0, v0), (u1, v0), (u1, v1)]), tri([(u0, v0), (u1, v1), (u0, v1)])]
+}
+
 /// Image 0 with repeat wrapping on TEXCOORD_0, untransformed, filtered by `filter`.
 fn repeat_texture(filter: Filter) -> TextureRef {
     TextureRef {
@@ -443,12 +464,19 @@ fn alpha_blend_is_stochastic_transparency() {
 /// The generic kernels (every feature compiled in) render a textured scene as the
 /// specialised ones do (same random numbers: bit-identical), and a scene without
 /// attributes is untouched by the texture code (its generic render equals its
-/// specialised render).
+/// specialised render). The scene's material has a base-colour texture, a cut-out and a
+/// metallic-roughness texture (the same image, read linearly).
 #[test]
 fn generic_kernels_render_textures_identically() {
     let t = TextureRef { wrap_s: Wrap::MirroredRepeat, wrap_t: Wrap::ClampToEdge, ..repeat_texture(Filter::Linear) };
-    let mut sc = textured_scene(t, &t_uv, None);
-    sc.materials[0].alpha_mode = AlphaMode::Mask { cutoff: 0.5 };
+    let mut sc = textured_scene(t.clone(), &t_uv, None);
+    let f0 = Vec3::splat(vkvcm::scene::GLTF_DIELECTRIC_F0);
+    sc.materials[0] = Material {
+        base_color_texture: Some(t.clone()),
+        alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
+        ..Material::metallic_roughness_textured(Vec3::ONE, 0.7, 0.9, f0, t)
+    };
+    assert!(vkvcm::render::features::FeatureSet::new(&sc, false).metallic_roughness_textures);
     with_gpu(|gpu| {
         for algo in [Algorithm::Pt, Algorithm::Vcm, Algorithm::El] {
             let a = render_with(gpu, &sc, algo, 4, false);
@@ -566,21 +594,9 @@ fn emissive_texture_modulates_area_lights_in_every_estimator() {
     };
     // The light's rectangle [u0, u1] x [v0, v1] of texture space at height 0.4, facing
     // down (geometric normal -y), texture coordinates (u, v) at its point (u, v).
-    let light_quad = |u0: f32, u1: f32, v0: f32, v1: f32, material: u32, uv: bool| -> Vec<Triangle> {
-        let corner = |u: f32, v: f32| Vec3::new(-0.5 + u, 0.4, -0.5 + v);
-        let tri = |c: [(f32, f32); 3]| Triangle {
-            p: c.map(|(u, v)| corner(u, v)),
-            n: None,
-            material,
-            attributes: uv.then(|| {
-                Box::new(VertexAttributes {
-                    uv: [Some(c.map(|(u, v)| Vec2::new(u, v))), None],
-                    color: None,
-                    tangent: None,
-                })
-            }),
-        };
-        vec![tri([(u0, v0), (u1, v0), (u1, v1)]), tri([(u0, v0), (u1, v1), (u0, v1)])]
+    let light_corner = |u: f32, v: f32| Vec3::new(-0.5 + u, 0.4, -0.5 + v);
+    let light_quad = |u0: f32, u1: f32, v0: f32, v1: f32, material: u32, uv: bool| {
+        rect(&light_corner, (u0, u1), (v0, v1), material, uv)
     };
     let cam = camera(Vec3::new(0.0, 2.5, 2.5), Vec3::new(0.0, -1.0, -1.0), Vec3::Y, 50.0);
     let textured = |with_texture: bool| {
@@ -638,6 +654,159 @@ fn emissive_texture_modulates_area_lights_in_every_estimator() {
         assert!(
             !welch_test(&st, &reference, ALPHA).unwrap().passed(),
             "the untextured light renders as the textured one"
+        );
+    });
+}
+
+/// A 4 x 4 metallic-roughness image (linear values): G (roughness) 90, 145, 200 or 255
+/// and B (metallic) 0, 30, 60 or 90, every pair once (so that a flip or transpose shows),
+/// and R, which glTF leaves unused, different again.
+fn metallic_roughness_image() -> TextureImage {
+    let texels = (0..16)
+        .map(|k| {
+            let (i, j) = (k % 4, k / 4);
+            [(255 - 16 * k) as u8, (90 + 55 * ((i + 2 * j) % 4)) as u8, (30 * ((3 * i + j) % 4)) as u8, 255]
+        })
+        .collect();
+    TextureImage { name: "metallic-roughness".into(), width: 4, height: 4, texels }
+}
+
+/// glTF's metallicRoughnessTexture (glTF 2.0 section 3.9.2: roughness = roughnessFactor
+/// x G, metallic = metallicFactor x B, linear texels) in every estimator. A floor (z = 0,
+/// |x|, |y| <= 1.5) whose metallic and roughness come from a 4 x 4 texture and whose base
+/// colour from the test image (sRGB), both nearest-filtered and repeated twice over it
+/// by a texture transform, lit by a spot light from above whose cone misses the grey wall
+/// behind the floor: the wall is lit only by the floor (paths of at most 3 segments). It
+/// is compared with the same floor split into its 8 x 8 texel squares, each of the
+/// constant material `Material::metallic_roughness(base x texel colour, metallic x B,
+/// roughness x G)`: an independent construction of the same material field. pt reads the
+/// texture at camera vertices, lt at the floor's light vertices it connects to the
+/// camera, bpt and vcm also at the floor's stored light vertices they connect to the
+/// wall's camera vertices (the spot is a point: the wall's light comes through next-event
+/// estimation at the floor, these connections, or light tracing). Each estimator of the
+/// textured floor agrees per pixel with bpt of the split floor (pt also with the generic
+/// kernels); the floor with the constant factors alone (the texture dropped) does not.
+/// The texels make the floor far less metallic than its factors, so that the factors
+/// alone reflect much less light onto the wall. The wall stands 0.3 off the floor: in a
+/// corner light tracing's camera connections are heavy-tailed and its per-pixel variance
+/// underestimated (lt failed against pt there even for a split floor).
+///
+/// Sabotaged, it fails (pixels failed of 576, worst |t| against a threshold near 5):
+/// * roughness read from R instead of G: every estimator (126-138 pixels, |t| 50-112);
+/// * the texels sRGB-decoded: every estimator (124-140 pixels, |t| 47-78);
+/// * the light vertices' metallic and roughness not loaded (glsl/vcm.glsl, lv_load: the
+///   factors alone at stored light vertices): bpt (138 pixels, |z| 16.5) and vcm (136,
+///   17.1); pt and lt, which store none, pass;
+/// * bsdf_sample's GGX width the material's, not the point's (its pdf no longer the one
+///   bsdf_eval reports): only lt, barely (5 pixels, |z| 5.6). Here only light subpaths
+///   scatter off the floor into paths that reach the camera; pt's continuations from it
+///   find no light within 3 segments.
+#[test]
+fn metallic_roughness_texture_varies_the_lobes_in_every_estimator() {
+    let base = Vec3::new(0.95, 0.85, 0.75);
+    let (metallic, roughness) = (0.8, 0.9);
+    let f0 = Vec3::splat(vkvcm::scene::GLTF_DIELECTRIC_F0);
+    // Both textures twice over the floor: uv' = 2 uv.
+    let texture = |image: u32| TextureRef {
+        image,
+        transform: [[2.0, 0.0, 0.0], [0.0, 2.0, 0.0]],
+        ..repeat_texture(Filter::Nearest)
+    };
+    let (mr_img, colour_img) = (metallic_roughness_image(), test_image());
+    // The floor's point (u, v) in [0, 1]^2 (its texture coordinates).
+    let floor_corner = |u: f32, v: f32| Vec3::new(-1.5 + 3.0 * u, -1.5 + 3.0 * v, 0.0);
+    // The grey wall (material 0) y = 1.5, 0.3 <= z <= 2.3, and the spot at height 2.2
+    // pointing down, whose 30 degree cone lights only the floor (the wall is 39 degrees
+    // off its axis or more); the camera sees the floor and the wall.
+    let wall = Material { name: "wall".into(), diffuse: Vec3::splat(0.8), ..Default::default() };
+    let wall_corner = |u: f32, v: f32| Vec3::new(-1.5 + 3.0 * u, 1.5, 0.3 + 2.0 * v);
+    let spot = Light::Spot {
+        position: Vec3::new(0.0, -0.3, 2.2),
+        direction: Vec3::NEG_Z,
+        intensity: Vec3::splat(10.0),
+        cos_inner: 25f32.to_radians().cos(),
+        cos_outer: 30f32.to_radians().cos(),
+    };
+    let cam = camera(Vec3::new(0.0, -3.2, 2.6), Vec3::new(0.0, 3.4, -2.1), Vec3::Z, 50.0);
+    let make = |floor: Vec<Triangle>, materials: Vec<Material>| {
+        let mut tris = rect(&wall_corner, (0.0, 1.0), (0.0, 1.0), 0, false);
+        tris.extend(floor);
+        let mut s = scene("metallic-roughness floor", tris, materials, vec![spot.clone()], cam.clone());
+        s.images = vec![mr_img.clone(), colour_img.clone()];
+        s
+    };
+    let textured = |with_texture: bool| {
+        let mut floor = Material {
+            name: "textured floor".into(),
+            base_color_texture: Some(texture(1)),
+            ..Material::metallic_roughness_textured(base, metallic, roughness, f0, texture(0))
+        };
+        if !with_texture {
+            floor.metallic_roughness_texture = None;
+        }
+        make(rect(&floor_corner, (0.0, 1.0), (0.0, 1.0), 1, true), vec![wall.clone(), floor])
+    };
+    let split = {
+        let mut materials = vec![wall.clone()];
+        // Texel (i, j) of both images: the texel colour tints the base colour (it
+        // multiplies the diffuse lobe and the metal's part of the GGX F0: the material of
+        // the tinted base, as the dielectric F0 is grey), G and B scale the factors.
+        for j in 0..4 {
+            for i in 0..4 {
+                let mr = mr_img.texels[j * 4 + i].map(|b| b as f32 / 255.0);
+                let colour = texel(&colour_img, i as i32, j as i32).truncate();
+                let mut m = Material::metallic_roughness(base * colour, metallic * mr[2], roughness * mr[1]);
+                m.name = format!("texel {i} {j}");
+                materials.push(m);
+            }
+        }
+        // The floor's 8 x 8 squares (a texel each), material texel (i % 4, j % 4).
+        let mut floor = Vec::new();
+        for jj in 0..8 {
+            for ii in 0..8 {
+                let material = 1 + ((jj % 4) * 4 + ii % 4) as u32;
+                let (u0, v0) = (ii as f32 / 8.0, jj as f32 / 8.0);
+                floor.extend(rect(&floor_corner, (u0, u0 + 0.125), (v0, v0 + 0.125), material, false));
+            }
+        }
+        make(floor, materials)
+    };
+    let (with, without) = (textured(true), textured(false));
+    assert!(vkvcm::render::features::FeatureSet::new(&with, false).metallic_roughness_textures);
+    assert!(!vkvcm::render::features::FeatureSet::new(&split, false).metallic_roughness_textures);
+    // Pixels wholly on the floor or the wall: where a surface's edge crosses a pixel, few
+    // of its samples see the dim wall, and their mean is too skewed for the z-test.
+    let covered = common::primary_hit_mask(&split, W, H, |_| true);
+    let run = |gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, iterations: u64, generic: bool| {
+        let mut s = RenderSettings::new(algo, W, H, Budget::Iterations(iterations));
+        s.frame.max_path_length = 3;
+        s.frame.seed = 31 + algo as u32 + 100 * generic as u32;
+        s.generic = generic;
+        let out = render::render(gpu, scene, &s, None, &mut |_| {}).unwrap();
+        assert_eq!(out.rejected_samples, 0, "{algo:?}: rejected samples");
+        render_stats(&out, Some(&covered))
+    };
+    with_gpu(|gpu| {
+        let reference = run(gpu, &split, Algorithm::Bpt, 4096, false);
+        for (algo, iterations, generic) in [
+            (Algorithm::Pt, 2048, false),
+            (Algorithm::Pt, 1024, true),
+            (Algorithm::Lt, 4096, false),
+            (Algorithm::Bpt, 1024, false),
+            (Algorithm::Vcm, 1024, false),
+        ] {
+            let st = run(gpu, &with, algo, iterations, generic);
+            let r = welch_test(&st, &reference, ALPHA).unwrap();
+            assert!(
+                r.passed(),
+                "{algo:?}{}: metallic-roughness texture vs its texels: {r}",
+                if generic { " (generic)" } else { "" }
+            );
+        }
+        let st = run(gpu, &without, Algorithm::Pt, 512, false);
+        assert!(
+            !welch_test(&st, &reference, ALPHA).unwrap().passed(),
+            "the floor without its metallic-roughness texture renders as the textured one"
         );
     });
 }

@@ -402,9 +402,11 @@ fn unsupported_features_warn_once_per_kind() {
     d.json["extensionsUsed"] = json!(["KHR_materials_clearcoat", "VKVCM_spheres", "KHR_lights_punctual"]);
     d.json["images"] = json!([{"uri": "never_loaded.png"}]);
     d.json["textures"] = json!([{"source": 0}]);
+    // Glass does not read metallicRoughnessTexture (its image is never loaded).
+    let glass = json!({"KHR_materials_transmission": {"transmissionFactor": 1.0}});
     d.json["materials"] = json!([
-        {"name": "a", "pbrMetallicRoughness": {"metallicRoughnessTexture": {"index": 0}}},
-        {"name": "b", "pbrMetallicRoughness": {"metallicRoughnessTexture": {"index": 0}}},
+        {"name": "a", "pbrMetallicRoughness": {"metallicRoughnessTexture": {"index": 0}}, "extensions": glass},
+        {"name": "b", "pbrMetallicRoughness": {"metallicRoughnessTexture": {"index": 0}}, "extensions": glass},
     ]);
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
     let mut lines = d.json["meshes"][0]["primitives"][0].clone();
@@ -1621,6 +1623,53 @@ fn emissive_textures_are_read_and_occlusion_is_named() {
     let s = d.load().unwrap();
     assert_eq!(s.materials[0].emission, Vec3::ZERO);
     assert!(s.materials[0].emissive_texture.is_none());
+}
+
+/// metallicRoughnessTexture is read (glTF 2.0 section 3.9.2) with its sampler, texCoord and
+/// KHR_texture_transform, and kept with the factors it multiplies; the material's own
+/// lobes are the factors' (a smooth metal stays a GGX lobe, not a mirror, as the texture
+/// may make a point less metallic or rougher). A primitive without the texture's
+/// coordinates is named in a warning (the factors alone apply there).
+#[test]
+fn metallic_roughness_textures_are_read() {
+    let mut d = Doc::textured();
+    d.json["extensionsUsed"] = json!(["KHR_texture_transform"]);
+    d.json["samplers"] = json!([{"wrapS": 33071, "magFilter": 9728}]);
+    d.json["textures"] = json!([{"source": 0, "sampler": 0}]);
+    d.json["materials"] = json!([{"name": "m", "pbrMetallicRoughness": {
+        "baseColorFactor": [0.5, 0.25, 1.0, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.0,
+        "metallicRoughnessTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"offset": [0.5, 0.0]}}}
+    }}]);
+    let s = d.load().unwrap();
+    let m = &s.materials[0];
+    let base = Vec3::new(0.5, 0.25, 1.0);
+    let want = scene::MetallicRoughnessTexture {
+        texture: TextureRef {
+            image: 0,
+            wrap_s: Wrap::ClampToEdge,
+            wrap_t: Wrap::Repeat,
+            filter: Filter::Nearest,
+            tex_coord: 0,
+            transform: [[1.0, 0.0, 0.5], [0.0, 1.0, 0.0]],
+        },
+        base,
+        metallic: 1.0,
+        roughness: 0.0,
+        dielectric_f0: Vec3::splat(scene::GLTF_DIELECTRIC_F0),
+    };
+    assert_eq!(m.metallic_roughness_texture.as_ref(), Some(&want));
+    assert_eq!((m.mirror, m.glossy, m.diffuse, m.roughness), (Vec3::ZERO, base, Vec3::ZERO, 0.0));
+    assert_eq!(m.diffuse_fresnel_f0, scene::GLTF_DIELECTRIC_F0, "texels below metallic 1 are diffuse");
+    assert_eq!(s.images[0].texels, TEXELS.to_vec(), "texels unchanged (read as linear by the kernels)");
+    assert!(s.report.warnings.iter().all(|w| !w.contains("texture")), "{:?}", s.report.warnings);
+
+    d.json["materials"][0]["pbrMetallicRoughness"]["metallicRoughnessTexture"]["texCoord"] = json!(1);
+    let s = d.load().unwrap();
+    let w = &s.report.warnings;
+    assert!(
+        w.iter().any(|w| w.contains("metallicRoughnessTexture on TEXCOORD_1, which the primitive does not have")),
+        "{w:?}"
+    );
 }
 
 /// KHR_materials_ior and KHR_materials_specular set the dielectric's F0 of a

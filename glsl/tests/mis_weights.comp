@@ -40,7 +40,7 @@ layout(std430) buffer mis_results { float result[]; };
 vec3 vp[MAXV];    // position (y_0 of an infinite light: unused)
 vec3 vn[MAXV];    // geometric normal (y_0: the area light's normal, else 0)
 vec3 vns[MAXV];   // shading normal (y_1..y_{k-1})
-vec3 vtint[MAXV]; // tint of the base colour (y_1..y_{k-1})
+Tint vtint[MAXV]; // the tint (y_1..y_{k-1})
 uint vmat[MAXV];  // material
 bool vdelta[MAXV];
 bool infinite0;   // y_0 lies on an infinite light (directional, background)

@@ -7,8 +7,9 @@
 //! removed code draws no random numbers, so both variants follow the same random sequence
 //! (tests/render_features.rs compares them).
 //!
-//! Surface detail (vertex attributes, base-colour, normal and emissive textures, alpha)
-//! is specialised the same way: its code is compiled in only for scenes that have it.
+//! Surface detail (vertex attributes, base-colour, metallic-roughness, normal and emissive
+//! textures, alpha) is specialised the same way: its code is compiled in only for scenes
+//! that have it.
 
 use std::fmt;
 
@@ -50,7 +51,8 @@ pub struct FeatureSet {
     /// they use (glsl/textures.glsl): the per-vertex attributes are uploaded, surfaces
     /// and light vertices carry a tint.
     pub vertex_attributes: bool,
-    /// Some material has a base-colour texture: the texture lookup is compiled in.
+    /// Some material has a base-colour texture (or another texture that applies): the
+    /// texture lookup is compiled in.
     pub textures: bool,
     /// Some material is a cut-out (alphaMode MASK) or blended (BLEND, stochastic
     /// transparency): traversal tests alpha at every candidate hit.
@@ -61,6 +63,10 @@ pub struct FeatureSet {
     /// Some emitting material has an emissive texture and some triangle texture
     /// coordinates: area lights' radiance is textured (glsl/textures.glsl, `emission_tint`).
     pub emissive_textures: bool,
+    /// Some material has a metallic-roughness texture and some triangle texture
+    /// coordinates: surfaces and light vertices carry the point's metallic and roughness,
+    /// which vary its lobes (glsl/bsdf.glsl, `point_material`).
+    pub metallic_roughness_textures: bool,
 }
 
 fn nonzero(v: Vec3) -> bool {
@@ -87,13 +93,19 @@ impl FeatureSet {
         let tangents = scene.triangles.iter().any(|t| t.attributes.as_ref().is_some_and(|a| a.tangent.is_some()));
         let normal_maps = tangents && any_mat(&|m| m.normal_texture.is_some());
         let emissive_textures = vertex_attributes && any_mat(&|m| m.emissive_texture.is_some() && nonzero(m.emission));
+        let metallic_roughness_textures = vertex_attributes && any_mat(&|m| m.metallic_roughness_texture.is_some());
+        // A metallic-roughness texture can give a point the lobes its factors lack: diffuse
+        // where the base is not black (metallic below 1), GGX where base or dielectric is not.
+        let textured = |m: &crate::scene::Material, f: &dyn Fn(&crate::scene::MetallicRoughnessTexture) -> bool| {
+            metallic_roughness_textures && m.metallic_roughness_texture.as_ref().is_some_and(f)
+        };
         let g = generic;
         FeatureSet {
             generic,
             count_rays: false,
-            diffuse: g || any_mat(&|m| nonzero(m.diffuse)),
+            diffuse: g || any_mat(&|m| nonzero(m.diffuse) || textured(m, &|t| nonzero(t.base))),
             phong: g || any_mat(&|m| nonzero(m.phong)),
-            ggx: g || any_mat(&|m| nonzero(m.glossy)),
+            ggx: g || any_mat(&|m| nonzero(m.glossy) || textured(m, &|t| nonzero(t.base) || nonzero(t.dielectric_f0))),
             mirror: g || any_mat(&|m| nonzero(m.mirror)),
             // The kernels treat every IOR that is not negative (NaN included) as a dielectric.
             dielectric: g || any_mat(&|m| m.ior >= 0.0 || m.ior.is_nan()),
@@ -111,10 +123,12 @@ impl FeatureSet {
             textures: g
                 || (vertex_attributes && any_mat(&|m| m.base_color_texture.is_some()))
                 || normal_maps
-                || emissive_textures,
+                || emissive_textures
+                || metallic_roughness_textures,
             alpha_mask: g || any_mat(&|m| m.alpha_mode != crate::scene::AlphaMode::Opaque),
             normal_maps: g || normal_maps,
             emissive_textures: g || emissive_textures,
+            metallic_roughness_textures: g || metallic_roughness_textures,
         }
     }
 
@@ -147,6 +161,7 @@ impl FeatureSet {
             ("HAS_ALPHA_MASK", self.alpha_mask),
             ("HAS_NORMAL_MAPS", self.normal_maps),
             ("HAS_EMISSIVE_TEXTURES", self.emissive_textures),
+            ("HAS_METALLIC_ROUGHNESS_TEXTURES", self.metallic_roughness_textures),
             ("COUNT_RAYS", self.count_rays),
         ] {
             d = d.flag(name, on);
@@ -209,6 +224,7 @@ impl fmt::Display for FeatureSet {
             ("alpha cut-outs / blending", self.alpha_mask),
             ("normal maps", self.normal_maps),
             ("emissive textures", self.emissive_textures),
+            ("metallic-roughness textures", self.metallic_roughness_textures),
         ];
         writeln!(f, "  surface detail: {}", list(&surface))?;
         write!(f, "  ray counter: {}", if self.count_rays { "on (--profile)" } else { "off" })

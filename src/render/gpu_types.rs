@@ -51,8 +51,15 @@ pub struct GpuMaterial {
     /// (`Material::glossy_untinted`).
     pub surface: [f32; 4],
     /// x: index of its normal map in `texture_refs`, or `NO_TEXTURE` (bits); y: the normal
-    /// map's scale; z: index of its emissive texture, or `NO_TEXTURE` (bits); w unused.
+    /// map's scale; z: index of its emissive texture, or `NO_TEXTURE` (bits); w: index of
+    /// its metallic-roughness texture, or `NO_TEXTURE` (bits).
     pub maps: [f32; 4],
+    /// With a metallic-roughness texture (`scene::MetallicRoughnessTexture`), what the
+    /// kernels recompute the lobes from per point (glsl/bsdf.glsl, `point_material`):
+    /// rgb: base colour factor; w: metallic factor. Zero without one.
+    pub base_metallic: [f32; 4],
+    /// rgb: the dielectric's F0; w: roughness factor. Zero without one.
+    pub f0_roughness: [f32; 4],
 }
 
 /// A texture as a material uses it (`scene::TextureRef`): where its image's texels are,
@@ -82,7 +89,7 @@ pub struct GpuVertexAttributes {
 }
 
 /// Smallest GGX alpha the kernels see (a smaller one makes D(h) overflow-prone and the
-/// lobe a mirror in all but name).
+/// lobe a mirror in all but name); glsl/types.glsl has the same.
 pub const MIN_GGX_ALPHA: f32 = 1e-3;
 
 /// What shading needs of a triangle beyond its vertices, in original scene order (the

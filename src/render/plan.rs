@@ -93,7 +93,7 @@ impl FramePlan {
                 light_paths,
                 s.frame.max_path_length,
                 techniques.store_vertices,
-                light_vertex_b_bytes(features.shading_normals, features.vertex_attributes),
+                light_vertex_b_bytes(features),
                 access,
                 light_sizing,
                 light_paths_per_invocation,

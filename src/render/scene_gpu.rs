@@ -54,6 +54,7 @@ impl ScenePlan {
                 m.base_color_texture.is_some() as u64
                     + m.normal_texture.is_some() as u64
                     + m.emissive_texture.is_some() as u64
+                    + m.metallic_roughness_texture.is_some() as u64
             })
             .sum::<u64>();
         let texels: u64 = scene.images.iter().map(|i| i.texels.len() as u64).sum();
@@ -130,10 +131,11 @@ fn vertex_attributes(a: Option<&VertexAttributes>, k: usize) -> GpuVertexAttribu
 }
 
 /// The scene's textures on the GPU: the texture references of the materials (each
-/// material's base-colour texture, normal map and emissive texture, in material order),
-/// per material the indices of its three (or `NO_TEXTURE`), and the texels of the
-/// scene's images (RGBA8 packed little-endian, R lowest; four to a 16-byte element).
-type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 3]>, Vec<[u32; 4]>);
+/// material's base-colour texture, normal map, emissive texture and metallic-roughness
+/// texture, in material order), per material the indices of its four (or `NO_TEXTURE`),
+/// and the texels of the scene's images (RGBA8 packed little-endian, R lowest; four to a
+/// 16-byte element).
+type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 4]>, Vec<[u32; 4]>);
 
 fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     let mut first = Vec::with_capacity(scene.images.len());
@@ -155,8 +157,14 @@ fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     let mut refs = Vec::new();
     let mut indices = Vec::with_capacity(scene.materials.len());
     for (i, m) in scene.materials.iter().enumerate() {
-        let mut index = [NO_TEXTURE; 3];
-        let slots = [(&m.base_color_texture, false), (&m.normal_texture, true), (&m.emissive_texture, false)];
+        let mut index = [NO_TEXTURE; 4];
+        // Normal maps and metallic-roughness textures hold linear values, not sRGB colours.
+        let slots = [
+            (m.base_color_texture.as_ref(), false),
+            (m.normal_texture.as_ref(), true),
+            (m.emissive_texture.as_ref(), false),
+            (m.metallic_roughness_texture.as_ref().map(|t| &t.texture), true),
+        ];
         for (slot, (t, linear)) in slots.into_iter().enumerate() {
             let Some(t) = t else { continue };
             let img = scene
@@ -344,15 +352,22 @@ impl SceneGpu {
         let (texture_refs, texture_indices, texels) = if features.textures {
             gpu_textures(scene)?
         } else {
-            (Vec::new(), vec![[NO_TEXTURE; 3]; scene.materials.len()], Vec::new())
+            (Vec::new(), vec![[NO_TEXTURE; 4]; scene.materials.len()], Vec::new())
         };
         let materials: Vec<GpuMaterial> = scene
             .materials
             .iter()
             .zip(&texture_indices)
-            .map(|(m, &[texture, normal_map, emissive])| {
+            .map(|(m, &[texture, normal_map, emissive, metallic_roughness])| {
                 let normal_map = if features.normal_maps { normal_map } else { NO_TEXTURE };
                 let emissive = if features.emissive_textures { emissive } else { NO_TEXTURE };
+                let (metallic_roughness, base_metallic, f0_roughness) =
+                    match (&m.metallic_roughness_texture, features.metallic_roughness_textures) {
+                        (Some(t), true) => {
+                            (metallic_roughness, v4(t.base, t.metallic), v4(t.dielectric_f0, t.roughness))
+                        }
+                        _ => (NO_TEXTURE, [0.0; 4], [0.0; 4]),
+                    };
                 // glsl/types.glsl, GpuMaterial.surface.z.
                 let cutoff = match m.alpha_mode {
                     AlphaMode::Mask { cutoff } if features.alpha_mask => cutoff,
@@ -366,7 +381,9 @@ impl SceneGpu {
                     emission: v4(m.emission, 0.0),
                     glossy: v4(m.glossy, (m.roughness * m.roughness).max(MIN_GGX_ALPHA)),
                     surface: [bits(texture), m.alpha, cutoff, m.glossy_untinted],
-                    maps: [bits(normal_map), m.normal_scale, bits(emissive), 0.0],
+                    maps: [bits(normal_map), m.normal_scale, bits(emissive), bits(metallic_roughness)],
+                    base_metallic,
+                    f0_roughness,
                 }
             })
             .collect();

@@ -198,6 +198,32 @@ pub struct Material {
     /// emitted radiance is `emission` times the texel's linear colour (glsl/textures.glsl,
     /// `emission_tint`), for every way an estimator meets the light.
     pub emissive_texture: Option<TextureRef>,
+    /// glTF's metallicRoughnessTexture and the metallic/roughness parameters it modulates
+    /// (`Material::metallic_roughness_textured`): where a triangle has its texture
+    /// coordinates, `diffuse`, `glossy`, `glossy_untinted` and the GGX width are those of
+    /// the point's own metallic and roughness (glsl/bsdf.glsl, `point_material`).
+    pub metallic_roughness_texture: Option<MetallicRoughnessTexture>,
+}
+
+/// glTF 2.0's metallicRoughnessTexture (section 3.9.2, "Metallic-Roughness Material"),
+/// with what [`Material::metallic_roughness_textured`] was given: at a point with the
+/// texture's coordinates the roughness is `roughness` times the texel's G channel and
+/// the metallic `metallic` times its B channel (linear values: the texture is not sRGB;
+/// R is unused), and the material's lobes are those of
+/// [`Material::metallic_roughness_with_f0`]`(base, metallic', roughness', dielectric_f0)`
+/// there, computed per point by the kernels (glsl/bsdf.glsl, `point_material`; the base
+/// colour's own tint applies on top, as for a constant material).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MetallicRoughnessTexture {
+    pub texture: TextureRef,
+    /// baseColorFactor (RGB).
+    pub base: Vec3,
+    /// metallicFactor and roughnessFactor.
+    pub metallic: f32,
+    pub roughness: f32,
+    /// The F0 of the dielectric part (0.04 unless KHR_materials_ior/specular say
+    /// otherwise).
+    pub dielectric_f0: Vec3,
 }
 
 impl Default for Material {
@@ -220,6 +246,7 @@ impl Default for Material {
             normal_texture: None,
             normal_scale: 1.0,
             emissive_texture: None,
+            metallic_roughness_texture: None,
         }
     }
 }
@@ -249,11 +276,52 @@ impl Material {
         if metallic >= 1.0 && roughness <= 0.0 {
             return Material { mirror: base, ..Material::default() };
         }
+        Material::metallic_roughness_lobes(base, metallic, roughness, dielectric_f0, None)
+    }
+
+    /// [`Material::metallic_roughness_with_f0`] with glTF's metallicRoughnessTexture
+    /// `texture`, which multiplies `roughness` by its texels' G and `metallic` by their B
+    /// per point ([`MetallicRoughnessTexture`]). The material's own lobes are those of the
+    /// constant factors (what a triangle without the texture's coordinates shows), except
+    /// that a smooth metal is a GGX lobe of the smallest width rather than a mirror (the
+    /// kernels vary the GGX lobe per point, not the choice of lobes), and that the diffuse
+    /// lobe keeps its interface wherever the texture can make the point less metallic.
+    pub fn metallic_roughness_textured(
+        base: Vec3,
+        metallic: f32,
+        roughness: f32,
+        dielectric_f0: Vec3,
+        texture: TextureRef,
+    ) -> Material {
+        Material::metallic_roughness_lobes(base, metallic, roughness, dielectric_f0, Some(texture))
+    }
+
+    /// The diffuse and GGX lobes of glTF's metallic/roughness model (the kernels' per-point
+    /// twin is glsl/bsdf.glsl, `point_material`).
+    fn metallic_roughness_lobes(
+        base: Vec3,
+        metallic: f32,
+        roughness: f32,
+        dielectric_f0: Vec3,
+        texture: Option<TextureRef>,
+    ) -> Material {
         let diffuse = base * (1.0 - metallic);
         let glossy = dielectric_f0.lerp(base, metallic);
-        let diffuse_fresnel_f0 = if diffuse == Vec3::ZERO { 0.0 } else { dielectric_f0.max_element() };
+        // Is there a diffuse lobe anywhere: with a texture wherever the base is not black.
+        let diffuse_somewhere = if texture.is_some() { base != Vec3::ZERO } else { diffuse != Vec3::ZERO };
+        let diffuse_fresnel_f0 = if diffuse_somewhere { dielectric_f0.max_element() } else { 0.0 };
         let glossy_untinted = dielectric_f0.element_sum() / 3.0 * (1.0 - metallic);
-        Material { diffuse, glossy, roughness, diffuse_fresnel_f0, glossy_untinted, ..Material::default() }
+        let metallic_roughness_texture =
+            texture.map(|texture| MetallicRoughnessTexture { texture, base, metallic, roughness, dielectric_f0 });
+        Material {
+            diffuse,
+            glossy,
+            roughness,
+            diffuse_fresnel_f0,
+            glossy_untinted,
+            metallic_roughness_texture,
+            ..Material::default()
+        }
     }
 }
 
@@ -328,7 +396,7 @@ pub struct Scene {
     pub lights: Vec<Light>,
     pub camera: Camera,
     pub report: LoadReport,
-    /// Texture images, referenced by `Material::base_color_texture`.
+    /// Texture images, referenced by the materials' textures (`TextureRef::image`).
     pub images: Vec<TextureImage>,
 }
 

@@ -38,6 +38,7 @@ use super::PassContext;
 use super::PassInfo;
 use crate::gpu::{Batch, Bind, Buffer, Gpu, Kernel};
 use crate::render::addresses::FrameAddresses;
+use crate::render::features::FeatureSet;
 use crate::render::gpu_types::GpuPush;
 use crate::render::regen;
 use crate::render::sizes::{Access, BufferSize};
@@ -50,11 +51,14 @@ pub const NAME: &str = "light subpaths";
 /// quantities: two vec4).
 pub const LIGHT_VERTEX_A_BYTES: u64 = 32;
 
-/// Bytes of one light vertex in `light_vertices_b`: (wo, dVM) and (normal, material and
-/// length), with shading normals a vec4 holding the shading normal, with vertex
-/// attributes one holding the tint (glsl/vcm.glsl, LV_B_STRIDE).
-pub fn light_vertex_b_bytes(shading_normals: bool, vertex_attributes: bool) -> u64 {
-    32 + 16 * shading_normals as u64 + 16 * vertex_attributes as u64
+/// Bytes of one light vertex in `light_vertices_b` for kernels compiled with `features`:
+/// (wo, dVM) and (normal, material and length), with shading normals or
+/// metallic-roughness textures a vec4 holding the shading normal and the point's metallic,
+/// with vertex attributes one holding the tint and its roughness (glsl/vcm.glsl,
+/// LV_B_STRIDE).
+pub fn light_vertex_b_bytes(features: &FeatureSet) -> u64 {
+    let normal_slot = features.shading_normals || features.metallic_roughness_textures;
+    32 + 16 * normal_slot as u64 + 16 * features.vertex_attributes as u64
 }
 
 /// Light vertices per light subpath the store is first sized for. The reference scenes

@@ -85,22 +85,26 @@ impl Importer<'_> {
                 None => self.default_material(),
             };
             let (uvs, colors) = self.vertex_attributes(&prim, positions.len(), &where_)?;
-            // A base-colour texture on texture coordinates the primitive lacks cannot apply:
-            // the kernels find that set missing (NaN) and use the factor alone, while the
-            // material's other textures on the set it has still apply.
-            let tex_coord = self.scene.materials[material as usize].base_color_texture.as_ref().map(|t| t.tex_coord);
-            if let Some(k) = tex_coord.filter(|&k| uvs[k as usize].is_none()) {
-                self.warnings.warn(
-                    format!("baseColorTexture on TEXCOORD_{k}, which the primitive does not have (the texture is not applied)"),
-                    where_.clone(),
-                );
-            }
-            let emissive = self.scene.materials[material as usize].emissive_texture.as_ref().map(|t| t.tex_coord);
-            if let Some(k) = emissive.filter(|&k| uvs[k as usize].is_none()) {
-                self.warnings.warn(
-                    format!("emissiveTexture on TEXCOORD_{k}, which the primitive does not have (the emissive factor alone applies)"),
-                    where_.clone(),
-                );
+            // A texture on texture coordinates the primitive lacks cannot apply: the kernels
+            // find that set missing (NaN) and use the factors alone, while the material's
+            // other textures on the set it has still apply.
+            let mat = &self.scene.materials[material as usize];
+            let textures = [
+                ("baseColorTexture", mat.base_color_texture.as_ref(), "the texture is not applied"),
+                ("emissiveTexture", mat.emissive_texture.as_ref(), "the emissive factor alone applies"),
+                (
+                    "metallicRoughnessTexture",
+                    mat.metallic_roughness_texture.as_ref().map(|t| &t.texture),
+                    "the metallic and roughness factors alone apply",
+                ),
+            ];
+            for (slot, texture, what) in textures {
+                if let Some(k) = texture.map(|t| t.tex_coord).filter(|&k| uvs[k as usize].is_none()) {
+                    self.warnings.warn(
+                        format!("{slot} on TEXCOORD_{k}, which the primitive does not have ({what})"),
+                        where_.clone(),
+                    );
+                }
             }
             // A normal map needs its texture coordinates, and tangents: the primitive's
             // TANGENT, or MikkTSpace's (glTF 2.0 section 3.7.2.1) generated below.

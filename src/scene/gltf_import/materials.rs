@@ -26,9 +26,10 @@ impl Importer<'_> {
 
     /// The vkvcm material of `m`: `VKVCM_materials_phong` if present, else clear glass for
     /// a transmissive material, else the metallic/roughness mapping, whose base colour
-    /// may come from `baseColorTexture`; plus emission (with `emissiveTexture`), alpha and
-    /// the alpha mode. The other textures are reported as warnings (the constant factors
-    /// are used).
+    /// may come from `baseColorTexture` and whose metallic and roughness may vary by
+    /// `metallicRoughnessTexture`; plus emission (with `emissiveTexture`), alpha and the
+    /// alpha mode. The other textures are reported as warnings (the constant factors are
+    /// used).
     pub(super) fn convert_material(&mut self, m: &gltf::Material) -> Result<Material> {
         let index = m.index().unwrap_or(0);
         let name = m.name().map(str::to_string).unwrap_or_else(|| format!("material{index}"));
@@ -40,7 +41,7 @@ impl Importer<'_> {
         let roughness = pbr.roughness_factor().clamp(0.0, 1.0);
 
         let phong_ext = m.extensions().and_then(|e| e.get(EXT_MATERIALS_PHONG));
-        let mut base_texture_read = false;
+        let (mut base_texture_read, mut metallic_roughness_read) = (false, false);
         let mut out = if let Some(v) = phong_ext {
             let ctx = format!("materials[{index}].extensions.{EXT_MATERIALS_PHONG}");
             if !v.is_object() {
@@ -73,7 +74,19 @@ impl Importer<'_> {
             Material { mirror: Vec3::ONE, ior, ..Material::default() }
         } else {
             let dielectric_f0 = self.dielectric_f0(m, &label)?;
-            let mut mr = Material::metallic_roughness_with_f0(base, metallic, roughness, dielectric_f0);
+            // glTF 2.0 section 3.9.2: roughness = roughnessFactor x G, metallic =
+            // metallicFactor x B of the metallicRoughnessTexture (linear).
+            let texture = match pbr.metallic_roughness_texture() {
+                Some(info) => {
+                    metallic_roughness_read = true;
+                    self.metallic_roughness_texture(&info, &label)?
+                }
+                None => None,
+            };
+            let mut mr = match texture {
+                Some(t) => Material::metallic_roughness_textured(base, metallic, roughness, dielectric_f0, t),
+                None => Material::metallic_roughness_with_f0(base, metallic, roughness, dielectric_f0),
+            };
             if let Some(info) = pbr.base_color_texture() {
                 mr.base_color_texture = self.base_color_texture(&info, &label)?;
                 base_texture_read = true;
@@ -81,13 +94,13 @@ impl Importer<'_> {
             mr
         };
 
-        // The textures that are not read; baseColorTexture only on the paths above that
-        // do not use it.
+        // The textures that are not read; baseColorTexture and metallicRoughnessTexture
+        // only on the paths above that do not use them.
         let mut textures = Vec::new();
         if pbr.base_color_texture().is_some() && !base_texture_read {
             textures.push("baseColorTexture");
         }
-        if pbr.metallic_roughness_texture().is_some() {
+        if pbr.metallic_roughness_texture().is_some() && !metallic_roughness_read {
             textures.push("metallicRoughnessTexture");
         }
         if m.normal_texture().is_some() && phong_ext.is_some() {

@@ -1,4 +1,4 @@
-//! Textures: the base-colour texture of a material (glTF 2.0 section 3.8, "Texture Data":
+//! Textures: the textures of a material (glTF 2.0 section 3.8, "Texture Data":
 //! textures, images, samplers), its `KHR_texture_transform`, and the image decoding (PNG
 //! and JPEG, from files in the scene's folder, `data:` URIs or buffer views).
 
@@ -41,6 +41,18 @@ impl Importer<'_> {
         self.texture_ref(info.texture(), info.tex_coord(), transform, label, "baseColorTexture")
     }
 
+    /// The material's `pbrMetallicRoughness.metallicRoughnessTexture`, as
+    /// `base_color_texture` reads a base-colour texture (its texels are linear: the
+    /// kernels read it so, glsl/textures.glsl `surface_tint`).
+    pub(super) fn metallic_roughness_texture(
+        &mut self,
+        info: &gltf::texture::Info,
+        label: &str,
+    ) -> Result<Option<TextureRef>> {
+        let transform = info.extension_value(KHR_TEXTURE_TRANSFORM);
+        self.texture_ref(info.texture(), info.tex_coord(), transform, label, "metallicRoughnessTexture")
+    }
+
     /// The material's `emissiveTexture`, as `base_color_texture` reads a base-colour texture.
     pub(super) fn emissive_texture(&mut self, info: &gltf::texture::Info, label: &str) -> Result<Option<TextureRef>> {
         let transform = info.extension_value(KHR_TEXTURE_TRANSFORM);
@@ -61,7 +73,8 @@ impl Importer<'_> {
 
     /// The texture reference of `texture` read through texture coordinate set `tex_coord`
     /// with an optional KHR_texture_transform payload, for the material `label`'s `slot`
-    /// (`baseColorTexture`, `normalTexture`); `None` (with a warning) when it cannot apply.
+    /// (`baseColorTexture`, `normalTexture`, ...); `None` (with a warning) when it cannot
+    /// apply.
     fn texture_ref(
         &mut self,
         texture: gltf::Texture,
