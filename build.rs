@@ -74,7 +74,11 @@ fn debian_compiler_identity(dir: &std::path::Path, linked: &[&str]) -> String {
 /// Embeds every file under glsl/ into the binary (`glsl_sources.rs` in OUT_DIR) so that
 /// `vkvcm` compiles its kernels at run time without needing the source tree.
 fn embed_glsl() {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl");
+    // The manifest directory of this run (cargo sets it for build scripts), not the one
+    // this script was compiled in: a target/ dir copied to another checkout would
+    // otherwise list (and watch) the first checkout's shaders.
+    let manifest = std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR");
+    let root = std::path::Path::new(&manifest).join("glsl");
     println!("cargo:rerun-if-changed={}", root.display());
     let mut files = Vec::new();
     collect(&root, &root, &mut files);
