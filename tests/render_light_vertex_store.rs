@@ -11,7 +11,7 @@
 //!   the sums are bit-identical too, and the store reports that it grew;
 //! * with a store that holds exactly what the first iteration stored, a later iteration
 //!   of a batch overflows: it and the rest of its batch are left out and rendered again,
-//!   with the same image;
+//!   with the same image, and the progress reports name the iterations rendered again;
 //! * where the device cannot hold the store an iteration needs (a binding limit capped to
 //!   150,000 bytes, no device addresses: the store starts at what fits, 4687 vertices, and
 //!   glm_c's bpt stores about 4900 per iteration at 48 x 48), the render stops with a
@@ -45,10 +45,20 @@ fn settings(algo: Algorithm, connect: Connect, iterations: u64) -> RenderSetting
 }
 
 fn render(gpu: &Arc<Gpu>, name: &str, s: &RenderSettings) -> (RenderOutput, Option<StoreUse>) {
+    render_with_notes(gpu, name, s).0
+}
+
+/// [`render`], with the notes its progress reports carried.
+fn render_with_notes(
+    gpu: &Arc<Gpu>,
+    name: &str,
+    s: &RenderSettings,
+) -> ((RenderOutput, Option<StoreUse>), Vec<String>) {
     let scene = vkvcm::scene::load_named(name).unwrap();
     let mut r = Renderer::new(gpu, &scene, s).unwrap();
-    r.run(s.budget, None, &mut |_| {}).unwrap();
-    (r.output().unwrap(), r.light_vertex_store_use())
+    let mut notes = Vec::new();
+    r.run(s.budget, None, &mut |p| notes.extend(p.note.clone())).unwrap();
+    ((r.output().unwrap(), r.light_vertex_store_use()), notes)
 }
 
 fn light_subpath_cases() -> Vec<(&'static str, Algorithm, Connect)> {
@@ -111,12 +121,16 @@ fn an_overflow_in_the_middle_of_a_batch_renders_the_rest_of_it_again() {
             // Iteration 0 fits exactly (the first batch is one iteration); the next batch
             // holds the other 15, and one of them stores more.
             let tight = RenderSettings { light_vertex_capacity: Some(first), ..s };
-            let (grown, store) = render(gpu, name, &tight);
+            let ((grown, store), notes) = render_with_notes(gpu, name, &tight);
             let what = format!("{name} {algo:?} {connect:?}, a store of {first} vertices at first");
             assert_same(&what, &sized, &grown);
             let store = store.unwrap();
             assert!(store.grown >= 1, "{what}: no later iteration overflowed: {store:?}");
             assert!(store.most_vertices > first, "{what}: {store:?}");
+            // The progress says so, naming the iterations rendered again.
+            assert_eq!(notes.len() as u32, store.grown, "{what}: {notes:?}");
+            let named = notes[0].starts_with("light-vertex store grown to") && notes[0].ends_with("rendered again");
+            assert!(named, "{what}: {notes:?}");
         }
     });
 }

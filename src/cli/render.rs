@@ -393,7 +393,12 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
         if finished || cancel.load(Ordering::SeqCst) {
             break None;
         }
-        let mut on_progress = |p: &Progress| reporter.update(p, pixels);
+        let mut on_progress = |p: &Progress| {
+            if let Some(n) = &p.note {
+                reporter.note(n);
+            }
+            reporter.update(p, pixels)
+        };
         if let Err(e) = r.run_slice(slice_budget, Some(slice), Some(&cancel), &mut on_progress) {
             break Some(e);
         }

@@ -346,7 +346,17 @@ impl Renderer {
             self.batch.submit_wait(Some(&mut self.profile)).with_context(what)?;
             // Iterations whose light vertices did not fit the store are not in the film
             // (the camera kernel skips them): grow the store and render them again.
+            let grown_before = self.store_use.map_or(0, |u| u.grown);
             let accepted = self.check_light_vertex_store(first, n).with_context(what)?;
+            let note = self.store_use.filter(|u| u.grown > grown_before).map(|u| {
+                format!(
+                    "light-vertex store grown to {} vertices (an iteration stored {}); iterations {}-{} rendered again",
+                    u.capacity,
+                    u.most_vertices,
+                    first + accepted,
+                    first + n - 1
+                )
+            });
             done += accepted;
             self.done += accepted;
             let dt = t0.elapsed().as_secs_f64().max(1e-6);
@@ -363,7 +373,7 @@ impl Renderer {
                 Budget::Iterations(n) => done as f64 / n as f64,
                 Budget::Seconds(t) => (seconds / t).min(1.0),
             };
-            progress(&Progress { iterations: self.done, seconds: self.seconds, fraction });
+            progress(&Progress { iterations: self.done, seconds: self.seconds, fraction, note });
         }
         Ok(())
     }

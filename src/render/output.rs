@@ -12,6 +12,9 @@ pub struct Progress {
     pub seconds: f64,
     /// Fraction done in [0, 1].
     pub fraction: f64,
+    /// Something the batch changed that a user should hear of (the light-vertex store
+    /// grew and iterations were rendered again).
+    pub note: Option<String>,
 }
 
 /// What a render produced.
