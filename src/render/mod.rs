@@ -73,6 +73,14 @@ pub struct StoreUse {
     pub iterations_redone: u64,
 }
 
+/// The counters of [`StoreUse`].
+#[derive(Clone, Copy, Debug, Default)]
+struct StoreCounters {
+    most_vertices: u64,
+    grown: u32,
+    iterations_redone: u64,
+}
+
 /// A render in progress: the pipelines, scene buffers and film of one scene and setting,
 /// kept between calls to [`Renderer::run`] so that a render can be continued, sampled at
 /// checkpoints (`vkvcm converge`) or resumed from saved sums.
@@ -87,8 +95,8 @@ pub struct Renderer {
     batch: Batch,
     gpu: Arc<Gpu>,
     profile: Profile,
-    /// How the light-vertex store was used so far (estimators that store light vertices).
-    store_use: Option<StoreUse>,
+    /// What the light-vertex store has seen so far ([`StoreUse`] without what the plan says).
+    store_counters: StoreCounters,
     /// Iterations accumulated in the film (including resumed ones).
     done: u64,
     /// Iterations per submit, adapted to about a quarter second and kept between runs.
@@ -117,14 +125,6 @@ impl Renderer {
         // Every kernel of the render exists now: keep their pipelines for later processes
         // even if this one does not end normally.
         gpu.save_pipeline_cache();
-        let store_use = plan.light_vertices.as_ref().filter(|lv| lv.store_vertices).map(|lv| StoreUse {
-            light_paths: lv.light_paths,
-            slots_per_path: lv.slots_per_path,
-            capacity: lv.capacity,
-            most_vertices: 0,
-            grown: 0,
-            iterations_redone: 0,
-        });
         Ok(Renderer {
             settings: settings.clone(),
             est: Some(est),
@@ -134,7 +134,7 @@ impl Renderer {
             batch: gpu.batch()?,
             gpu: gpu.clone(),
             profile: Profile::default(),
-            store_use,
+            store_counters: StoreCounters::default(),
             done: 0,
             per_batch: 1,
             prior_rejected: (0, 0),
@@ -221,7 +221,16 @@ impl Renderer {
     /// How the light-vertex store was used so far (None: the estimator stores no light
     /// vertices).
     pub fn light_vertex_store_use(&self) -> Option<StoreUse> {
-        self.store_use
+        let lv = self.plan.light_vertices.as_ref().filter(|lv| lv.store_vertices)?;
+        let c = self.store_counters;
+        Some(StoreUse {
+            light_paths: lv.light_paths,
+            slots_per_path: lv.slots_per_path,
+            capacity: lv.capacity,
+            most_vertices: c.most_vertices,
+            grown: c.grown,
+            iterations_redone: c.iterations_redone,
+        })
     }
 
     /// What the kernels were compiled with and the passes of an iteration
@@ -346,9 +355,10 @@ impl Renderer {
             self.batch.submit_wait(Some(&mut self.profile)).with_context(what)?;
             // Iterations whose light vertices did not fit the store are not in the film
             // (the camera kernel skips them): grow the store and render them again.
-            let grown_before = self.store_use.map_or(0, |u| u.grown);
+            let grown_before = self.store_counters.grown;
             let accepted = self.check_light_vertex_store(first, n).with_context(what)?;
-            let note = self.store_use.filter(|u| u.grown > grown_before).map(|u| {
+            let grown = self.store_counters.grown > grown_before;
+            let note = self.light_vertex_store_use().filter(|_| grown).map(|u| {
                 format!(
                     "light-vertex store grown to {} vertices (an iteration stored {}); iterations {}-{} rendered again",
                     u.capacity,
@@ -382,19 +392,17 @@ impl Renderer {
     /// status back and, when an iteration's vertices did not fit, grows the store. Returns
     /// how many of the batch's iterations are in the film.
     fn check_light_vertex_store(&mut self, first: u64, n: u64) -> Result<u64> {
-        let Some((status, _)) = self.est().light_vertex_store()? else {
+        let Some(status) = self.est().light_vertex_store()? else {
             return Ok(n);
         };
-        let Some(store_use) = &mut self.store_use else {
-            return Ok(n);
-        };
-        store_use.most_vertices = store_use.most_vertices.max(status.most_vertices as u64);
+        let c = &mut self.store_counters;
+        c.most_vertices = c.most_vertices.max(status.most_vertices as u64);
         if status.first_overflow == StoreStatus::NONE {
             return Ok(n);
         }
         let accepted = (status.first_overflow as u64).saturating_sub(first).min(n);
-        store_use.grown += 1;
-        store_use.iterations_redone += n - accepted;
+        c.grown += 1;
+        c.iterations_redone += n - accepted;
         self.grow_light_vertex_store(status.most_vertices as u64)?;
         Ok(accepted)
     }
@@ -429,9 +437,6 @@ impl Renderer {
             plan: &plan,
         };
         self.est = Some((info.build)(&b).context("growing the light-vertex store")?);
-        if let Some(u) = &mut self.store_use {
-            u.capacity = capacity;
-        }
         self.plan = plan;
         Ok(())
     }

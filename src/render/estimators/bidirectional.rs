@@ -139,10 +139,10 @@ impl Estimator for LightSubpathEstimator {
         b
     }
 
-    fn light_vertex_store(&self) -> Result<Option<(StoreStatus, u64)>> {
+    fn light_vertex_store(&self) -> Result<Option<StoreStatus>> {
         if !self.techniques.store_vertices {
             return Ok(None);
         }
-        Ok(Some((self.store.status()?, self.store.capacity)))
+        Ok(Some(self.store.status()?))
     }
 }

@@ -251,9 +251,8 @@ pub trait Estimator {
     /// The buffers it allocated (beyond the scene's and the film's).
     fn buffers(&self) -> Vec<&Buffer>;
     /// For an estimator that stores light vertices: what the light pass recorded of the
-    /// iterations submitted so far (read back; the device must be idle) and the store's
-    /// capacity in vertices.
-    fn light_vertex_store(&self) -> Result<Option<(StoreStatus, u64)>> {
+    /// iterations submitted so far (read back; the device must be idle).
+    fn light_vertex_store(&self) -> Result<Option<StoreStatus>> {
         Ok(None)
     }
 }

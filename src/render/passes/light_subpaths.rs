@@ -233,8 +233,6 @@ pub struct LightVertexStore {
     pub offsets: Buffer,
     /// [`StoreStatus`] (binding `light_vertex_status`).
     pub status: Buffer,
-    pub light_paths: u32,
-    pub capacity: u64,
 }
 
 impl LightVertexStore {
@@ -250,15 +248,7 @@ impl LightVertexStore {
         addresses.set(|a| &mut a.light_vertex_offsets, &offsets)?;
         let status = plan.status.zeroed(gpu)?;
         status.write(&[StoreStatus { first_overflow: StoreStatus::NONE, most_vertices: 0 }])?;
-        Ok(LightVertexStore {
-            splat,
-            vertices_a,
-            vertices_b,
-            offsets,
-            status,
-            light_paths: plan.light_paths,
-            capacity: plan.capacity,
-        })
+        Ok(LightVertexStore { splat, vertices_a, vertices_b, offsets, status })
     }
 
     /// The store's bindings (the splat sums, both vertex halves, the offsets, the status).
