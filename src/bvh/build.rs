@@ -155,6 +155,9 @@ struct PrimRef {
 }
 
 impl PrimRef {
+    /// Marks a left-out primitive while the references are made (ids are below 2^28).
+    const SKIPPED: PrimRef = PrimRef { min: Vec3::ZERO, id: u32::MAX, max: Vec3::ZERO, _pad: 0 };
+
     /// The reference of a primitive with box `[min, max]` and unified index `id`, or `None`
     /// where the centroid sum or the padded box (see [`Aabb::padded`]) overflows
     /// (coordinates near `f32::MAX`).
@@ -386,14 +389,19 @@ fn build_in_pool(triangles: &[Triangle], spheres: &[Sphere], instances: &[Aabb],
     // Progress: primitives placed in subtrees (see Builder::build_node).
     let total = nt + ns + instances.len();
     let activity = Activity::begin(|| format!("building the BVH ({total} primitives)"), Some(total as u64));
-    // Primitive references in input order (rayon's collect keeps the order).
+    // Primitive references in input order (rayon's collect keeps the order). An indexed
+    // collect writes each reference in place; the rare non-finite primitive is marked and
+    // removed afterwards (a filtering collect would gather pieces and copy them again).
     let mut refs: Vec<PrimRef> = triangles
         .par_iter()
         .enumerate()
-        .filter_map(|(i, t)| PrimRef::of_triangle(t, i))
-        .chain(spheres.par_iter().enumerate().filter_map(|(i, s)| PrimRef::of_sphere(s, nt + i)))
-        .chain(instances.par_iter().enumerate().filter_map(|(i, b)| PrimRef::of_box(b, nt + ns + i)))
+        .map(|(i, t)| PrimRef::of_triangle(t, i).unwrap_or(PrimRef::SKIPPED))
+        .chain(spheres.par_iter().enumerate().map(|(i, s)| PrimRef::of_sphere(s, nt + i).unwrap_or(PrimRef::SKIPPED)))
+        .chain(instances.par_iter().enumerate().map(|(i, b)| PrimRef::of_box(b, nt + ns + i).unwrap_or(PrimRef::SKIPPED)))
         .collect();
+    if refs.par_iter().any(|r| r.id == PrimRef::SKIPPED.id) {
+        refs.retain(|r| r.id != PrimRef::SKIPPED.id);
+    }
     let skipped = total - refs.len();
     let (bounds, cbounds) = refs
         .par_iter()
@@ -451,33 +459,53 @@ fn build_in_pool(triangles: &[Triangle], spheres: &[Sphere], instances: &[Aabb],
 }
 
 /// Leaves, most internal levels on a path, and the SAH cost (relative to the root box)
-/// of a flattened BVH.
+/// of a flattened BVH (one tree, nodes in preorder, as a build makes them).
+///
+/// The cost sums each node's children in node order, in parallel over fixed chunks of
+/// nodes whose sums are added in order, so it is the same number for any thread count.
 pub fn tree_stats(bvh: &Bvh, c_trav: f64, c_isect: f64) -> (usize, u32, f64) {
     let root_area = bvh.bounds().half_area();
     let inv = if root_area > 0.0 { 1.0 / root_area } else { 0.0 };
-    let mut leaves = 0;
+    // Levels: a parent precedes its children in preorder.
+    let mut level = vec![0u32; bvh.nodes.len()];
+    level[0] = 1;
     let mut max_depth = 0;
-    let mut cost = c_trav * if root_area > 0.0 { 1.0 } else { 0.0 };
-    let mut stack = vec![(0u32, 1u32)];
-    while let Some((ni, level)) = stack.pop() {
-        max_depth = max_depth.max(level);
-        let n = &bvh.nodes[ni as usize];
-        let boxes = n.boxes();
-        for (i, b) in boxes.iter().enumerate() {
-            let area = b.half_area() * inv;
-            match decode_ref(n.child(i)) {
-                Ok(c) => {
-                    cost += c_trav * area;
-                    stack.push((c, level + 1));
-                }
-                Err((_, count)) => {
-                    if count > 0 {
-                        leaves += 1;
-                        cost += c_isect * count as f64 * area;
+    for (i, n) in bvh.nodes.iter().enumerate() {
+        max_depth = max_depth.max(level[i]);
+        for k in 0..2 {
+            if let Ok(c) = decode_ref(n.child(k)) {
+                level[c as usize] = level[i] + 1;
+            }
+        }
+    }
+    const CHUNK: usize = 4096;
+    let per_chunk: Vec<(usize, f64)> = bvh
+        .nodes
+        .par_chunks(CHUNK)
+        .map(|nodes| {
+            let (mut leaves, mut cost) = (0usize, 0.0f64);
+            for n in nodes {
+                for (i, b) in n.boxes().iter().enumerate() {
+                    let area = b.half_area() * inv;
+                    match decode_ref(n.child(i)) {
+                        Ok(_) => cost += c_trav * area,
+                        Err((_, count)) => {
+                            if count > 0 {
+                                leaves += 1;
+                                cost += c_isect * count as f64 * area;
+                            }
+                        }
                     }
                 }
             }
-        }
+            (leaves, cost)
+        })
+        .collect();
+    let mut leaves = 0;
+    let mut cost = c_trav * if root_area > 0.0 { 1.0 } else { 0.0 };
+    for (l, c) in per_chunk {
+        leaves += l;
+        cost += c;
     }
     (leaves, max_depth, cost)
 }
@@ -807,11 +835,9 @@ impl Builder<'_> {
             // All centroids coincide: SAH cannot separate them.
             return if leaf_allowed { SahResult::Leaf } else { SahResult::Median };
         };
-
-        // Near the root, per-chunk bins merged (the same bins: the merge is exact).
-        let parallel_bins;
-        let bins: &Bins = if n >= PARALLEL_BIN_MIN_PRIMS {
-            parallel_bins = refs
+        if n >= PARALLEL_BIN_MIN_PRIMS {
+            // Near the root, per-chunk bins merged (the same bins: the merge is exact).
+            let bins = refs
                 .par_chunks(PARALLEL_BIN_CHUNK)
                 .map(|chunk| {
                     let mut b = Bins::new();
@@ -823,13 +849,26 @@ impl Builder<'_> {
                     a
                 })
                 .expect("a node has primitives");
-            &parallel_bins
-        } else {
-            bins.clear(nb);
-            bins.add(&grid, refs);
-            bins
-        };
+            return self.split_from_bins(refs, bounds, level, leaf_allowed, &grid, &bins);
+        }
+        bins.clear(nb);
+        bins.add(&grid, refs);
+        self.split_from_bins(refs, bounds, level, leaf_allowed, &grid, bins)
+    }
 
+    /// The best split of `refs` (or a leaf, or a median split) from their `bins` on
+    /// `grid`; partitions `refs` when it splits.
+    fn split_from_bins(
+        &self,
+        refs: &mut [PrimRef],
+        bounds: &Bounds,
+        level: u32,
+        leaf_allowed: bool,
+        grid: &BinGrid,
+        bins: &Bins,
+    ) -> SahResult {
+        let n = refs.len();
+        let nb = grid.count;
         let ct = self.opts.traversal_cost as f64;
         let ci = self.opts.intersection_cost as f64;
         let parea = bounds.half_area();
@@ -885,20 +924,27 @@ impl Builder<'_> {
             return SahResult::Median;
         }
 
-        // Partition in place, collecting the children's boxes and centroid boxes. (Serial:
-        // the order it leaves the primitives in is part of the tree.)
-        // Four separate accumulators (not arrays indexed by side) stay in registers.
-        let (mut lbox, mut lc, mut rbox, mut rc) = (Bounds::EMPTY, Bounds::EMPTY, Bounds::EMPTY, Bounds::EMPTY);
+        // The children's boxes are the unions of their bins' boxes (exact: minima and
+        // maxima), so the partition only collects the centroid boxes.
+        let (mut lbox, mut rbox) = (Bounds::EMPTY, Bounds::EMPTY);
+        for (bin, b) in bins.boxes[axis][..nb].iter().enumerate() {
+            if bin < plane {
+                lbox.grow(b);
+            } else {
+                rbox.grow(b);
+            }
+        }
+        // Partition in place. (Serial: the order it leaves the primitives in is part of
+        // the tree.)
+        let (mut lc, mut rc) = (Bounds::EMPTY, Bounds::EMPTY);
         let mut i = 0;
         let mut j = n;
         while i < j {
             let c = refs[i].c2();
             if grid.bin_on(c[axis], axis) < plane {
-                lbox.grow(&refs[i].bounds());
                 lc.grow_point(c);
                 i += 1;
             } else {
-                rbox.grow(&refs[i].bounds());
                 rc.grow_point(c);
                 j -= 1;
                 refs.swap(i, j);

@@ -155,18 +155,19 @@ pub fn quantize_boxes(boxes: [Aabb; 2]) -> [u32; 6] {
         // Smallest step with 255 steps covering the node, with slack for the rounding of
         // the decode; grown below if a bound still does not fit.
         let need = ((hi as f64 - origin as f64) + hi.abs() as f64 * 1e-6 + 1e-38) / 255.0;
-        let mut biased = (need.log2().ceil() as i32 + 127).clamp(1, 254) as u32;
+        let mut biased = (ceil_log2(need) + 127).clamp(1, 254) as u32;
         'grid: loop {
             let step = f32::from_bits(biased << 23);
+            // The step is a power of two, so dividing by it is multiplying by its exact
+            // reciprocal (in f64, without overflow or underflow).
+            let inv_step = 1.0 / step as f64;
             for c in 0..2 {
                 let (blo, bhi) = (boxes[c].min[a], boxes[c].max[a]);
-                let ql = ((blo as f64 - origin as f64) / step as f64).floor();
-                let mut ql = ql.clamp(0.0, 255.0) as u32;
+                let mut ql = floor_to_byte((blo as f64 - origin as f64) * inv_step);
                 while ql > 0 && dequant(origin, step, ql) > blo {
                     ql -= 1;
                 }
-                let qh = ((bhi as f64 - origin as f64) / step as f64).ceil();
-                let mut qh = qh.clamp(0.0, 255.0) as u32;
+                let mut qh = ceil_to_byte((bhi as f64 - origin as f64) * inv_step);
                 while dequant(origin, step, qh) < bhi {
                     if qh == 255 {
                         assert!(biased < 254, "box not representable: {boxes:?}");
@@ -191,6 +192,43 @@ pub fn quantize_boxes(boxes: [Aabb; 2]) -> [u32; 6] {
         pack([q[0][1][0], q[0][1][1], q[0][1][2], q[1][1][0]]),
         pack([q[1][0][1], q[1][0][2], q[1][1][1], q[1][1][2]]),
     ]
+}
+
+/// `ceil(log2(x))` for a positive normal `x`, exactly, from the bits: the exponent, plus one
+/// unless `x` is a power of two. (`f64::log2` is a libm call on baseline x86-64, a large
+/// share of the build's time, and may round `log2` of a value just above a power of two
+/// down to that power.)
+#[inline]
+fn ceil_log2(x: f64) -> i32 {
+    let bits = x.to_bits();
+    let exponent = ((bits >> 52) & 0x7ff) as i32 - 1023;
+    exponent + i32::from(bits & ((1 << 52) - 1) != 0)
+}
+
+/// `floor(x)` clamped to `0..=255` (NaN: 0), without libm's `floor` (not inlined on
+/// baseline x86-64): for `0 <= x < 255` truncation is the floor.
+#[inline]
+fn floor_to_byte(x: f64) -> u32 {
+    if x >= 255.0 {
+        255
+    } else if x > 0.0 {
+        x as u32
+    } else {
+        0
+    }
+}
+
+/// `ceil(x)` clamped to `0..=255` (NaN: 0), as [`floor_to_byte`].
+#[inline]
+fn ceil_to_byte(x: f64) -> u32 {
+    if x >= 255.0 {
+        255
+    } else if x > 0.0 {
+        let t = x as u32;
+        t + u32::from((t as f64) < x)
+    } else {
+        0
+    }
 }
 
 /// Decodes [`quantize_boxes`]'s words (as `bvh_load_node` in glsl/bvh.glsl does).
