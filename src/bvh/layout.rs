@@ -158,9 +158,10 @@ pub fn quantize_boxes(boxes: [Aabb; 2]) -> [u32; 6] {
         let mut biased = (ceil_log2(need) + 127).clamp(1, 254) as u32;
         'grid: loop {
             let step = f32::from_bits(biased << 23);
-            // The step is a power of two, so dividing by it is multiplying by its exact
-            // reciprocal (in f64, without overflow or underflow).
-            let inv_step = 1.0 / step as f64;
+            // The step is a power of two, 2^(biased - 127), so dividing by it is
+            // multiplying by its exact reciprocal, made from its exponent (in f64, without
+            // overflow or underflow).
+            let inv_step = f64::from_bits(((1023 + 127 - biased) as u64) << 52);
             for c in 0..2 {
                 let (blo, bhi) = (boxes[c].min[a], boxes[c].max[a]);
                 let mut ql = floor_to_byte((blo as f64 - origin as f64) * inv_step);
