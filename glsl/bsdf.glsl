@@ -30,9 +30,37 @@
 // are the densities the estimators sample with. Without shading normals (n == ng) both
 // cosines are |ng.wi|, bit for bit.
 //
+// Rough dielectric (`rough`, glTF KHR_materials_transmission with roughness > 0; a
+// dielectric, phong.w = IOR >= 0, whose emission.w = GGX alpha > 0): Walter et al. 2007's
+// BSDF, reflection and transmission through GGX microfacets, with the exact dielectric
+// Fresnel F(wo.h) and Smith's separable shadowing G1(wo) G1(wi) (their eq. 23; Mitsuba 3's
+// `roughdielectric`, the reference of tests/render_environment.rs). It is the material's
+// only component (probability 1, no other lobe is evaluated; continuation probability 1
+// as for smooth glass: F + (1 - F)) and it is not delta, so every estimator connects to it,
+// NEE reaches it and photons are stored on it and merged. With eta = eta_o / eta_i (the
+// IORs on wo's and on wi's side), the half vector is h = wo + wi (reflection) or
+// eta wo + wi (transmission, Walter's generalised h_t), normalised and turned to wo's side:
+//   reflection:   f = F D G / (4 |n.wo| |n.wi|), pdf = F D (n.h) / (4 |wo.h|)
+//   transmission: f = (1 - F) D G |wo.h| |wi.h| s / (|n.wo| |n.wi| (eta wo.h + wi.h)^2),
+//                 pdf = (1 - F) D (n.h) |wi.h| / (eta wo.h + wi.h)^2
+// (Walter's eq. 21 and 17 divided through by eta_i^2), where s = eta^2 for radiance and 1
+// for importance (light subpaths: the adjoint BSDF, Veach 1997, 5.2; the same rule as the
+// smooth refraction's `scale`). The reverse pdfs swap wo and wi: for reflection |wi.h| in
+// place of |wo.h|, for transmission eta^2 |wo.h| in place of |wi.h| (the Fresnel term of a
+// refracted pair is the same both ways). Sampling: h from D(h) (n.h) about n (as the GGX
+// lobe), then reflection with probability F(wo.h), else refraction about h. The geometric
+// normal decides reflection or transmission (the shading-normal rules above: a direction
+// on wo's side is a reflection, on the other side a transmission, and the shading normal
+// must agree or the BSDF is 0); a sample whose side is not the event drawn is rejected, so
+// bsdf_eval's pdf is the density that bsdf_sample draws. Single-scattering microfacets
+// lose the energy of paths that would bounce between microfacets (more with roughness);
+// they never add any (tests/render_rough_glass.rs). Roughness 0 stays the smooth delta
+// dielectric, bit for bit.
+//
 // Components no material of the scene has are compiled out (HAS_DIFFUSE, HAS_PHONG,
-// HAS_GGX, HAS_MIRROR, HAS_DIELECTRIC: glsl/features.glsl); the branches taken and the
-// arithmetic done for the components present are the same as with all of them.
+// HAS_GGX, HAS_MIRROR, HAS_DIELECTRIC, HAS_ROUGH_DIELECTRIC: glsl/features.glsl); the
+// branches taken and the arithmetic done for the components present are the same as with
+// all of them.
 //
 // A point's material is its material's, varied by the point's tint (glsl/textures.glsl,
 // `Tint`): the base colour (`diffuse_colour` etc.) and, with a metallic-roughness
@@ -55,6 +83,7 @@ struct Bsdf {
     vec3 wo;         // the fixed direction (towards the previous vertex), unit
     uint material;
     float prob_diffuse, prob_phong, prob_glossy, prob_reflect, prob_refract;
+    float prob_rough; // the rough dielectric (1 for its materials, else 0)
     float cont_prob;
     float fresnel;   // reflectance F (1 for non-dielectrics)
     float eta_ratio; // eta on the wo side / eta on the other side (dielectrics)
@@ -149,6 +178,16 @@ float ggx_lambda(float c, float a) {
     return 0.5 * (sqrt(1.0 + a * a * tan2) - 1.0);
 }
 
+// A half vector drawn from D(h) cos(theta_h) about n for width `a` and uniform `u`:
+// tan^2(theta_h) = a^2 u.x / (1 - u.x), phi = 2 pi u.y (Walter et al. 2007, eq. 35-36).
+vec3 ggx_sample_h(vec3 n, float a, vec2 u) {
+    float t2 = a * a * u.x / max(1.0 - u.x, 1e-7);
+    float ch = 1.0 / sqrt(1.0 + t2);
+    float sh = sqrt(max(0.0, 1.0 - ch * ch));
+    float phi = 2.0 * PI * u.y;
+    return to_world(vec3(sh * cos(phi), sh * sin(phi), ch), n);
+}
+
 // The GGX lobe for unit wo, wi above the surface (cos_o, cos_i > 0): f, and the pdfs of
 // sampling wi given wo (fwd) and wo given wi (rev) by D(h) cos(theta_h), without the
 // component probability.
@@ -241,6 +280,21 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint t
 #if HAS_DIELECTRIC
     a_t = ior < 0.0 ? 0.0 : 1.0 - b.fresnel;
 #endif
+    b.prob_rough = 0.0;
+#if HAS_ROUGH_DIELECTRIC
+    if (ior >= 0.0 && m.emission.w > 0.0) {
+        // The rough dielectric: the material's only component (the header).
+        b.prob_diffuse = 0.0;
+        b.prob_phong = 0.0;
+        b.prob_glossy = 0.0;
+        b.prob_reflect = 0.0;
+        b.prob_refract = 0.0;
+        b.prob_rough = 1.0;
+        b.cont_prob = 1.0;
+        b.delta = false;
+        return b;
+    }
+#endif
     float total = a_d + a_p + a_g + a_r + a_t;
     if (total < 1e-9) {
         b.valid = false;
@@ -256,12 +310,80 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint t
     return b;
 }
 
+#if HAS_ROUGH_DIELECTRIC
+// Smith's G1 = 1 / (1 + Lambda) for GGX at |cos(theta)| = `c` > 0.
+float ggx_g1(float c, float a) { return 1.0 / (1.0 + ggx_lambda(c, a)); }
+
+// The rough dielectric (the header): f(wo, wi) for wi on either side of the surface, with
+// the pdfs of sampling wi given wo (fwd) and wo given wi (rev).
+vec3 rough_dielectric_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
+    pdf_fwd = 0.0;
+    pdf_rev = 0.0;
+    GpuMaterial m = material_at(b.material);
+    float ior = m.phong.w;
+    float a = m.emission.w;
+    // Normals turned to wo's side of the geometric surface (b.valid: wo is off it, and above
+    // the shading surface on that side).
+    float side = dot(b.ng, b.wo) >= 0.0 ? 1.0 : -1.0;
+    vec3 n = side * b.n;
+    float cos_o = dot(n, b.wo);
+    float cos_i = dot(n, wi);
+    float g_i = side * dot(b.ng, wi);
+    if (cos_o < EPS_COSINE || g_i == 0.0) return vec3(0.0);
+    float g = ggx_g1(cos_o, a) * ggx_g1(abs(cos_i), a);
+    if (g_i > 0.0) {
+        // Reflection: wi on wo's side, above the shading surface too.
+        if (cos_i < EPS_COSINE) return vec3(0.0);
+        vec3 hs = b.wo + wi;
+        float hl = length(hs);
+        if (hl < 1e-7) return vec3(0.0);
+        vec3 h = hs / hl;
+        float ch = dot(n, h);
+        float oh = dot(b.wo, h);
+        float ih = dot(wi, h);
+        if (ch < EPS_COSINE || oh < EPS_COSINE || ih < EPS_COSINE) return vec3(0.0);
+        float fr = fresnel_dielectric(side * oh, ior);
+        float d = ggx_d(ch, a);
+        pdf_fwd = fr * d * ch / (4.0 * oh);
+        pdf_rev = fr * d * ch / (4.0 * ih);
+        return vec3(fr * d * g / (4.0 * cos_o * cos_i));
+    }
+    // Transmission: wi on the other side, below the shading surface too.
+    if (cos_i > -EPS_COSINE) return vec3(0.0);
+    float eta = b.eta_ratio;  // eta_o / eta_i
+    vec3 hs = eta * b.wo + wi;
+    float hl = length(hs);
+    if (hl < 1e-7) return vec3(0.0);
+    vec3 h = hs / hl;
+    if (dot(n, h) < 0.0) h = -h;
+    float ch = dot(n, h);
+    float oh = dot(b.wo, h);
+    float ih = dot(wi, h);
+    // Both directions must see the microfacet from their own side.
+    if (ch < EPS_COSINE || oh < EPS_COSINE || ih > -EPS_COSINE) return vec3(0.0);
+    float t = 1.0 - fresnel_dielectric(side * oh, ior);
+    if (t <= 0.0) return vec3(0.0);
+    float den = eta * oh + ih;
+    float den2 = den * den;
+    float d = ggx_d(ch, a);
+    pdf_fwd = t * d * ch * -ih / den2;
+    pdf_rev = t * d * ch * eta * eta * oh / den2;
+    // Radiance is scaled by (eta_o / eta_i)^2 crossing the boundary; importance is not.
+    float scale = b.from_light ? 1.0 : eta * eta;
+    return vec3(t * d * g * oh * -ih * scale / (cos_o * -cos_i * den2));
+}
+#endif
+
 // Non-specular part: f(wo, wi) and the solid-angle pdfs of sampling wi given wo (fwd)
 // and wo given wi (rev), both including the component probability but not Russian
-// roulette. Zero when either direction is below the surface.
+// roulette. Zero when either direction is below the surface (but for the rough
+// dielectric, which transmits).
 vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
     pdf_fwd = 0.0;
     pdf_rev = 0.0;
+#if HAS_ROUGH_DIELECTRIC
+    if (b.prob_rough > 0.0) return rough_dielectric_eval(b, wi, pdf_fwd, pdf_rev);
+#endif
     float cos_o = dot(b.n, b.wo);
     float cos_i = dot(b.n, wi);
     if (b.delta || cos_o < EPS_COSINE || cos_i < EPS_COSINE) return vec3(0.0);
@@ -345,6 +467,35 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
     s.wi = vec3(0.0);
     s.cos_wi = 0.0;
     if (!b.valid) return s;
+#if HAS_ROUGH_DIELECTRIC
+    if (b.prob_rough > 0.0) {
+        // The rough dielectric (the header): h from D(h) cos(theta_h) about the normal on
+        // wo's side, then reflection with probability F(wo.h) (u.z), else refraction.
+        GpuMaterial mr = material_at(b.material);
+        float side = dot(b.ng, b.wo) >= 0.0 ? 1.0 : -1.0;
+        vec3 h = ggx_sample_h(side * b.n, mr.emission.w, u.xy);
+        float oh = dot(b.wo, h);
+        if (oh < EPS_COSINE) return s;
+        bool reflect_h = u.z < fresnel_dielectric(side * oh, mr.phong.w);
+        if (reflect_h) {
+            s.wi = 2.0 * oh * h - b.wo;
+        } else {
+            float eta = b.eta_ratio;
+            float sin2_t = eta * eta * max(0.0, 1.0 - oh * oh);
+            if (sin2_t >= 1.0) return s;  // total internal reflection has F = 1
+            float ct = sqrt(1.0 - sin2_t);
+            s.wi = normalize(-eta * b.wo + (eta * oh - ct) * h);
+        }
+        // bsdf_eval's event (the geometric side of wi) must be the one drawn.
+        if ((side * dot(b.ng, s.wi) > 0.0) != reflect_h) return s;
+        vec3 f = bsdf_eval(b, s.wi, s.pdf, s.pdf_rev);
+        if (s.pdf <= 0.0) return s;
+        s.cos_wi = bsdf_cos_geometric(b, s.wi);
+        s.weight = f * (bsdf_cos(b, s.wi) / s.pdf);
+        s.ok = true;
+        return s;
+    }
+#endif
     GpuMaterial m = point_material(b.material, b.tint);
     float cos_o = dot(b.n, b.wo);
     float x = u.z;

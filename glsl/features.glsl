@@ -25,6 +25,13 @@
 #ifndef HAS_DIELECTRIC
 #define HAS_DIELECTRIC 1
 #endif
+// The rough dielectric (glsl/bsdf.glsl): a dielectric whose GGX alpha is > 0.
+#ifndef HAS_ROUGH_DIELECTRIC
+#define HAS_ROUGH_DIELECTRIC 1
+#endif
+#if HAS_ROUGH_DIELECTRIC && !HAS_DIELECTRIC
+#error "HAS_ROUGH_DIELECTRIC needs HAS_DIELECTRIC (a rough dielectric is a dielectric)"
+#endif
 // Light kinds (glsl/lights.glsl).
 #ifndef HAS_AREA_LIGHTS
 #define HAS_AREA_LIGHTS 1

@@ -25,6 +25,14 @@ Mitsuba's `dielectric` (int_ior 1.5, ext_ior 1). Both use the exact Fresnel equa
 Mitsuba scales radiance by the squared IOR ratio at each refraction, which cancels over
 the entry and the exit of a closed sphere lit from outside.
 
+With `--rough-glass` (both commands) that glass sphere is rough instead: a glTF material
+with KHR_materials_transmission (transmissionFactor 1), KHR_materials_ior (1.5) and
+roughnessFactor ROUGH_GLASS_ROUGHNESS (tests/env/rough_glass_scene.gltf,
+tests/env/mitsuba_rough_glass_{mean,var}.exr, mitsuba_rough_glass.json), which vkvcm
+imports as its rough dielectric of GGX alpha = roughness^2 (glsl/bsdf.glsl), against
+Mitsuba's `roughdielectric` (distribution ggx, the same alpha, int_ior 1.5): both are the
+BSDF of Walter et al. 2007 with the separable Smith shadowing G1(wo) G1(wi).
+
 With `--smooth` (both commands) the diffuse sphere is a coarse smooth-shaded mesh instead
 (a UV sphere of 6 x 10 quads with the sphere's normals at its vertices, tests/env/
 smooth_scene.gltf, tests/env/mitsuba_smooth_{mean,var}.exr, mitsuba_smooth.json): the
@@ -118,15 +126,22 @@ def smooth_sphere_triangles(center, radius):
 
 
 GLASS_IOR = 1.5
+ROUGH_GLASS_ROUGHNESS = 0.3
 
 
-def glass_spheres(spheres):
-    """`spheres` with the mirror sphere made of glass (`--glass`)."""
-    return [{k: v for k, v in sp.items() if k != "mirror"} | {"glass": GLASS_IOR} if "mirror" in sp else sp for sp in spheres]
+def glass_spheres(spheres, rough=False):
+    """`spheres` with the mirror sphere made of glass (`--glass`), rough with `--rough-glass`."""
+    glass = {"glass": GLASS_IOR} | ({"roughness": ROUGH_GLASS_ROUGHNESS} if rough else {})
+    return [{k: v for k, v in sp.items() if k != "mirror"} | glass if "mirror" in sp else sp for sp in spheres]
 
 
-def write_gltf(path, smooth, glass=False):
-    s = dict(SCENE, spheres=glass_spheres(SCENE["spheres"])) if glass else SCENE
+def scene_of(glass, rough):
+    """The scene description: SCENE, with the glass sphere for --glass / --rough-glass."""
+    return dict(SCENE, spheres=glass_spheres(SCENE["spheres"], rough)) if glass or rough else SCENE
+
+
+def write_gltf(path, smooth, glass=False, rough=False):
+    s = scene_of(glass, rough)
     h = s["ground"]["half_size"]
     quad = [(-h, 0, -h), (-h, 0, h), (h, 0, h), (-h, 0, -h), (h, 0, h), (h, 0, -h)]
     blob = b"".join(struct.pack("<3f", *p) for p in quad)
@@ -138,9 +153,15 @@ def write_gltf(path, smooth, glass=False):
     spheres = []
     for i, sp in enumerate(s["spheres"]):
         ext = phong(d=sp.get("diffuse", (0, 0, 0)), m=sp.get("mirror", (0, 0, 0)))
-        if "glass" in sp:
-            ext = {"VKVCM_materials_phong": {"diffuse": [0, 0, 0], "mirror": [1, 1, 1], "ior": sp["glass"]}}
-        materials.append({"name": f"sphere{i}", "extensions": ext})
+        if "roughness" in sp:
+            # glTF's own rough glass: white base, metallic 0, full transmission.
+            pbr = {"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0.0, "roughnessFactor": sp["roughness"]}
+            ext = {"KHR_materials_transmission": {"transmissionFactor": 1.0}, "KHR_materials_ior": {"ior": sp["glass"]}}
+            materials.append({"name": f"sphere{i}", "pbrMetallicRoughness": pbr, "extensions": ext})
+        else:
+            if "glass" in sp:
+                ext = {"VKVCM_materials_phong": {"diffuse": [0, 0, 0], "mirror": [1, 1, 1], "ior": sp["glass"]}}
+            materials.append({"name": f"sphere{i}", "extensions": ext})
         if smooth and "diffuse" in sp:
             tris = smooth_sphere_triangles(sp["center"], sp["radius"])
             pos = [p for t in tris for p in t[0]]
@@ -162,10 +183,11 @@ def write_gltf(path, smooth, glass=False):
     env = s["environment"]
     doc = {
         "asset": {"version": "2.0", "generator": "vkvcm scripts/env_reference.py"},
-        "extensionsUsed": ["VKVCM_spheres", "VKVCM_materials_phong", "VKVCM_environment"],
+        "extensionsUsed": ["VKVCM_spheres", "VKVCM_materials_phong", "VKVCM_environment"]
+        + (["KHR_materials_transmission", "KHR_materials_ior"] if rough else []),
         "extensions": {"VKVCM_environment": {"uri": env["file"], "strength": env["strength"], "rotation": env["rotation_deg"]}},
         "scene": 0,
-        "scenes": [{"name": scene_stem(smooth, glass), "nodes": list(range(3 + len(meshes) - 1))}],
+        "scenes": [{"name": scene_stem(smooth, glass, rough), "nodes": list(range(3 + len(meshes) - 1))}],
         "nodes": [
             {"name": "ground", "mesh": 0},
             {"name": "spheres", "extensions": {"VKVCM_spheres": {"spheres": spheres}}},
@@ -194,12 +216,12 @@ def write_obj(path, tris):
             f.write(f"f {a}//{a} {a + 1}//{a + 1} {a + 2}//{a + 2}\n")
 
 
-def scene_stem(smooth, glass):
-    return "smooth_scene" if smooth else "glass_scene" if glass else "env_scene"
+def scene_stem(smooth, glass, rough=False):
+    return "smooth_scene" if smooth else "rough_glass_scene" if rough else "glass_scene" if glass else "env_scene"
 
 
-def mitsuba_scene(mi, seed, spp, smooth, tmp, glass=False):
-    s = dict(SCENE, spheres=glass_spheres(SCENE["spheres"])) if glass else SCENE
+def mitsuba_scene(mi, seed, spp, smooth, tmp, glass=False, rough=False):
+    s = scene_of(glass, rough)
     T = mi.ScalarTransform4f
     cam = s["camera"]
     env = s["environment"]
@@ -226,6 +248,9 @@ def mitsuba_scene(mi, seed, spp, smooth, tmp, glass=False):
     for i, sp in enumerate(s["spheres"]):
         if "mirror" in sp:
             bsdf = {"type": "conductor", "material": "none", "specular_reflectance": {"type": "rgb", "value": sp["mirror"]}}
+        elif "roughness" in sp:
+            bsdf = {"type": "roughdielectric", "distribution": "ggx", "alpha": sp["roughness"] ** 2,
+                    "sample_visible": False, "int_ior": sp["glass"], "ext_ior": 1.0}
         elif "glass" in sp:
             bsdf = {"type": "dielectric", "int_ior": sp["glass"], "ext_ior": 1.0}
         elif smooth:
@@ -240,7 +265,7 @@ def mitsuba_scene(mi, seed, spp, smooth, tmp, glass=False):
     return d
 
 
-def render_mitsuba(seeds, spp, variant, smooth, glass=False):
+def render_mitsuba(seeds, spp, variant, smooth, glass=False, rough=False):
     try:
         import mitsuba as mi
         import numpy as np
@@ -249,11 +274,11 @@ def render_mitsuba(seeds, spp, variant, smooth, glass=False):
     mi.set_variant(variant)
     import tempfile
     tmp = tempfile.mkdtemp()
-    stem = "mitsuba_smooth" if smooth else "mitsuba_glass" if glass else "mitsuba"
+    stem = "mitsuba_smooth" if smooth else "mitsuba_rough_glass" if rough else "mitsuba_glass" if glass else "mitsuba"
     images = []
     t0 = time.time()
     for seed in range(seeds):
-        scene = mi.load_dict(mitsuba_scene(mi, seed, spp, smooth, tmp, glass))
+        scene = mi.load_dict(mitsuba_scene(mi, seed, spp, smooth, tmp, glass, rough))
         images.append(np.array(mi.render(scene, seed=seed, spp=spp), dtype=np.float64))
         print(f"seed {seed}: {time.time() - t0:.0f} s", flush=True)
     stack = np.stack(images)
@@ -262,7 +287,7 @@ def render_mitsuba(seeds, spp, variant, smooth, glass=False):
     mi.Bitmap(mean).write(os.path.join(OUT, f"{stem}_mean.exr"))
     mi.Bitmap(var).write(os.path.join(OUT, f"{stem}_var.exr"))
     meta = {"renderer": f"Mitsuba {mi.__version__} {variant}, integrator path", "seeds": seeds, "spp_per_seed": spp,
-            "scene": dict(SCENE, spheres=glass_spheres(SCENE["spheres"])) if glass else SCENE,
+            "scene": scene_of(glass, rough),
             "smooth_sphere": [SMOOTH_RINGS, SMOOTH_SEGMENTS] if smooth else None,
             "command": " ".join(sys.argv)}
     write_json(os.path.join(OUT, f"{stem}.json"), meta)
@@ -277,13 +302,14 @@ def main():
     ap.add_argument("--variant", default="scalar_rgb")
     ap.add_argument("--smooth", action="store_true", help="the diffuse sphere as a smooth-shaded mesh")
     ap.add_argument("--glass", action="store_true", help="the mirror sphere made of glass (IOR 1.5)")
+    ap.add_argument("--rough-glass", action="store_true", help="the mirror sphere made of rough glass (IOR 1.5, glTF roughness 0.3)")
     a = ap.parse_args()
-    if a.smooth and a.glass:
-        sys.exit("--smooth and --glass are separate scenes")
+    if a.smooth + a.glass + a.rough_glass > 1:
+        sys.exit("--smooth, --glass and --rough-glass are separate scenes")
     if a.what == "gltf":
-        write_gltf(os.path.join(OUT, scene_stem(a.smooth, a.glass) + ".gltf"), a.smooth, a.glass)
+        write_gltf(os.path.join(OUT, scene_stem(a.smooth, a.glass, a.rough_glass) + ".gltf"), a.smooth, a.glass, a.rough_glass)
     else:
-        render_mitsuba(a.seeds, a.spp, a.variant, a.smooth, a.glass)
+        render_mitsuba(a.seeds, a.spp, a.variant, a.smooth, a.glass, a.rough_glass)
 
 
 if __name__ == "__main__":

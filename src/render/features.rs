@@ -32,6 +32,8 @@ pub struct FeatureSet {
     pub ggx: bool,
     pub mirror: bool,
     pub dielectric: bool,
+    /// Some dielectric is rough (`Material::is_rough_dielectric`, glsl/bsdf.glsl).
+    pub rough_dielectric: bool,
     /// Light kinds.
     pub area_lights: bool,
     pub point_lights: bool,
@@ -109,6 +111,7 @@ impl FeatureSet {
             mirror: g || any_mat(&|m| nonzero(m.mirror)),
             // The kernels treat every IOR that is not negative (NaN included) as a dielectric.
             dielectric: g || any_mat(&|m| m.ior >= 0.0 || m.ior.is_nan()),
+            rough_dielectric: g || any_mat(&|m| m.is_rough_dielectric()),
             area_lights: g || any_light(&|l| matches!(l, Light::Area { .. })),
             point_lights: g || any_light(&|l| matches!(l, Light::Point { .. })),
             spot_lights: g || any_light(&|l| matches!(l, Light::Spot { .. })),
@@ -148,6 +151,7 @@ impl FeatureSet {
             ("HAS_GGX", self.ggx),
             ("HAS_MIRROR", self.mirror),
             ("HAS_DIELECTRIC", self.dielectric),
+            ("HAS_ROUGH_DIELECTRIC", self.rough_dielectric),
             ("HAS_AREA_LIGHTS", self.area_lights),
             ("HAS_POINT_LIGHTS", self.point_lights),
             ("HAS_SPOT_LIGHTS", self.spot_lights),
@@ -196,6 +200,7 @@ impl fmt::Display for FeatureSet {
             ("ggx", self.ggx),
             ("mirror", self.mirror),
             ("dielectric", self.dielectric),
+            ("rough dielectric", self.rough_dielectric),
         ];
         writeln!(f, "  materials: {}", list(&mats))?;
         let lights = [

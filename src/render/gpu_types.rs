@@ -39,7 +39,9 @@ pub struct GpuMaterial {
     /// rgb: specular (mirror) reflectance; w: the diffuse lobe's Fresnel F0
     /// (`Material::diffuse_fresnel_f0`).
     pub mirror: [f32; 4],
-    /// rgb: emitted radiance; w: unused.
+    /// rgb: emitted radiance; w: a dielectric's GGX alpha (`Material::dielectric_roughness`
+    /// squared, at least `MIN_GGX_ALPHA`): > 0 is the rough dielectric of glsl/bsdf.glsl,
+    /// 0 smooth glass (and every other material).
     pub emission: [f32; 4],
     /// rgb: GGX microfacet lobe colour (Schlick's F0); w: GGX alpha = roughness^2, at
     /// least `MIN_GGX_ALPHA`.

@@ -378,7 +378,7 @@ impl SceneGpu {
                     diffuse: v4(m.diffuse, m.phong_exponent),
                     phong: v4(m.phong, m.ior),
                     mirror: v4(m.mirror, m.diffuse_fresnel_f0),
-                    emission: v4(m.emission, 0.0),
+                    emission: v4(m.emission, m.dielectric_alpha()),
                     glossy: v4(m.glossy, (m.roughness * m.roughness).max(MIN_GGX_ALPHA)),
                     surface: [bits(texture), m.alpha, cutoff, m.glossy_untinted],
                     maps: [bits(normal_map), m.normal_scale, bits(emissive), bits(metallic_roughness)],

@@ -164,8 +164,14 @@ pub struct Material {
     pub phong_exponent: f32,
     /// Perfect specular reflectance (Fresnel-weighted when `ior >= 0`).
     pub mirror: Vec3,
-    /// Index of refraction of a smooth dielectric; negative means "not a dielectric".
+    /// Index of refraction of a dielectric; negative means "not a dielectric".
     pub ior: f32,
+    /// Perceptual roughness of the dielectric (with `ior >= 0`): 0 is smooth glass (delta
+    /// reflection and refraction, `mirror` its reflectance), > 0 the rough dielectric of
+    /// glsl/bsdf.glsl, GGX microfacet reflection and transmission of alpha = roughness^2
+    /// (at least 1e-3; Walter et al. 2007), which is then the material's only component
+    /// (the other lobes are ignored).
+    pub dielectric_roughness: f32,
     /// Emitted radiance (W/(m^2 sr)) for area emitters; zero for non-emitters.
     pub emission: Vec3,
     /// GGX microfacet reflection lobe: colour = Schlick's F0 (zero: no lobe). See
@@ -235,6 +241,7 @@ impl Default for Material {
             phong_exponent: 1.0,
             mirror: Vec3::ZERO,
             ior: -1.0,
+            dielectric_roughness: 0.0,
             emission: Vec3::ZERO,
             glossy: Vec3::ZERO,
             roughness: 1.0,
@@ -256,6 +263,24 @@ impl Default for Material {
 pub const GLTF_DIELECTRIC_F0: f32 = 0.04;
 
 impl Material {
+    /// The GGX alpha of a rough dielectric (`dielectric_roughness`^2, at least
+    /// `MIN_GGX_ALPHA`), 0 for smooth glass and every other material (GpuMaterial's
+    /// emission.w, glsl/bsdf.glsl).
+    pub fn dielectric_alpha(&self) -> f32 {
+        if self.is_rough_dielectric() {
+            (self.dielectric_roughness * self.dielectric_roughness).max(crate::render::gpu_types::MIN_GGX_ALPHA)
+        } else {
+            0.0
+        }
+    }
+
+    /// A rough dielectric: a dielectric (`ior >= 0`, not 1) of `dielectric_roughness` > 0.
+    pub fn is_rough_dielectric(&self) -> bool {
+        // IOR 1 refracts straight through any microfacet and reflects nothing: the rough
+        // dielectric would be a delta transmission, which smooth glass is exactly.
+        self.ior >= 0.0 && self.ior != 1.0 && self.dielectric_roughness > 0.0
+    }
+
     /// glTF 2.0's metallic/roughness material (Appendix B) in vkvcm's model: a GGX lobe
     /// whose Schlick F0 is mix(0.04, base, metallic) (the dielectric's and the metal's
     /// Fresnel terms are the same Schlick form, so their mix is one lobe), over a diffuse

@@ -1,5 +1,5 @@
 //! glTF materials mapped to vkvcm's material model: metallic/roughness to diffuse + GGX
-//! (+ mirror), `KHR_materials_transmission`/`KHR_materials_ior` to smooth glass,
+//! (+ mirror), `KHR_materials_transmission`/`KHR_materials_ior` to smooth or rough glass,
 //! `KHR_materials_emissive_strength`, and vkvcm's own `VKVCM_materials_phong`.
 
 use super::extensions::{ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG};
@@ -24,8 +24,8 @@ impl Importer<'_> {
         i
     }
 
-    /// The vkvcm material of `m`: `VKVCM_materials_phong` if present, else clear glass for
-    /// a transmissive material, else the metallic/roughness mapping, whose base colour
+    /// The vkvcm material of `m`: `VKVCM_materials_phong` if present, else clear glass of
+    /// the material's roughness for a transmissive material, else the metallic/roughness mapping, whose base colour
     /// may come from `baseColorTexture` and whose metallic and roughness may vary by
     /// `metallicRoughnessTexture`; plus emission (with `emissiveTexture`), alpha and the
     /// alpha mode. The other textures are reported as warnings (the constant factors are
@@ -66,12 +66,17 @@ impl Importer<'_> {
                 ..Material::default()
             }
         } else if let Some(t) = m.transmission().filter(|t| t.transmission_factor() > 0.0) {
-            if t.transmission_factor() < 1.0 || roughness > 0.0 || base != Vec3::ONE {
-                self.warnings
-                    .warn("partial, rough or tinted transmission is approximated by clear smooth glass", label.clone());
+            // Clear glass of the material's roughness: smooth (delta) at roughness 0, else
+            // the rough dielectric (GGX alpha = roughness^2, glsl/bsdf.glsl). What it does
+            // not model is approximated by clear glass, with a warning.
+            if t.transmission_factor() < 1.0 {
+                self.warnings.warn("partial transmission is approximated by clear glass", label.clone());
+            }
+            if base != Vec3::ONE {
+                self.warnings.warn("tinted transmission is approximated by clear glass", label.clone());
             }
             let ior = ior(m, &label)?.unwrap_or(1.5);
-            Material { mirror: Vec3::ONE, ior, ..Material::default() }
+            Material { mirror: Vec3::ONE, ior, dielectric_roughness: roughness, ..Material::default() }
         } else {
             let dielectric_f0 = self.dielectric_f0(m, &label)?;
             // glTF 2.0 section 3.9.2: roughness = roughnessFactor x G, metallic =
