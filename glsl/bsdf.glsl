@@ -363,8 +363,9 @@ vec3 rough_dielectric_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev
     if (ch < EPS_COSINE || oh < EPS_COSINE || ih > -EPS_COSINE) return vec3(0.0);
     float t = 1.0 - fresnel_dielectric(side * oh, ior);
     if (t <= 0.0) return vec3(0.0);
-    float den = eta * oh + ih;
-    float den2 = den * den;
+    // (eta wo.h + wi.h)^2 = |eta wo + wi|^2 (h is that vector normalised, up to sign),
+    // without the cancellation of the sum of two terms of opposite signs.
+    float den2 = hl * hl;
     float d = ggx_d(ch, a);
     pdf_fwd = t * d * ch * -ih / den2;
     pdf_rev = t * d * ch * eta * eta * oh / den2;

@@ -70,10 +70,27 @@ fn glossy_scene() -> Scene {
     common::scenes::glossy_floor_scene(left, right)
 }
 
+/// glossy_scene with a rough glass sphere (a rough dielectric, HAS_ROUGH_DIELECTRIC).
+fn rough_glass_scene() -> Scene {
+    let mut s = glossy_scene();
+    let a = s.materials.len() as u32;
+    s.materials.push(vkvcm::scene::Material {
+        name: "rough glass".into(),
+        mirror: glam::Vec3::ONE,
+        ior: 1.5,
+        dielectric_roughness: 0.3,
+        ..Default::default()
+    });
+    s.spheres.push(vkvcm::scene::Sphere { center: glam::Vec3::new(-0.8, 0.2, 0.5), radius: 0.5, material: a });
+    s.name = "glossy + rough glass".into();
+    s
+}
+
 #[test]
 fn specialised_equals_generic_on_every_reference_scene() {
     let mut scenes: Vec<Scene> = ["gbs_s", "glm_c", "gbs_p", "gbs_b"].iter().map(|n| load_named(n).unwrap()).collect();
     scenes.push(glossy_scene());
+    scenes.push(rough_glass_scene());
     with_gpu(|gpu| {
         let mut report = String::new();
         for scene in &scenes {
@@ -231,6 +248,10 @@ fn feature_derivation() {
     scene.materials.push(vkvcm::scene::Material { mirror: glam::Vec3::ONE, ior: 1.5, ..Default::default() });
     let f = FeatureSet::new(&scene, false);
     assert!(!f.mirror && !f.dielectric);
+    // A rough dielectric is a dielectric, compiled in only where a primitive uses one.
+    let f = FeatureSet::new(&rough_glass_scene(), false);
+    assert!(f.dielectric && f.rough_dielectric && f.mirror && f.spheres, "{f}");
+    assert!(!FeatureSet::new(&load_named("gbs_s").unwrap(), false).rough_dielectric);
     assert!(f.with_count_rays(true).defines().list().contains(&("COUNT_RAYS".to_string(), "1".to_string())));
 
     // A metallic-roughness texture on a full metal (no diffuse lobe of its own): compiled in

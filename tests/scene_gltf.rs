@@ -425,6 +425,41 @@ fn unsupported_features_warn_once_per_kind() {
     assert_eq!(s.triangles.len(), 1, "the LINES primitive is skipped");
 }
 
+/// KHR_materials_transmission (+ KHR_materials_ior): clear glass of the material's
+/// roughness: smooth at roughness 0, the rough dielectric (GGX alpha = roughness^2) above;
+/// partial or tinted transmission is approximated by clear glass, with a warning naming
+/// the material; roughness alone warns of nothing.
+#[test]
+fn transmission_is_smooth_or_rough_glass() {
+    let mut d = Doc::triangle();
+    let t =
+        |f: f64| json!({"KHR_materials_transmission": {"transmissionFactor": f}, "KHR_materials_ior": {"ior": 1.4}});
+    let pbr =
+        |b: f64, r: f64| json!({"baseColorFactor": [1.0, b, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": r});
+    d.json["materials"] = json!([
+        {"name": "smooth", "pbrMetallicRoughness": pbr(1.0, 0.0), "extensions": t(1.0)},
+        {"name": "rough", "pbrMetallicRoughness": pbr(1.0, 0.3), "extensions": t(1.0)},
+        {"name": "partial", "pbrMetallicRoughness": pbr(1.0, 0.5), "extensions": t(0.5)},
+        {"name": "tinted", "pbrMetallicRoughness": pbr(0.5, 0.5), "extensions": t(1.0)},
+        {"name": "default_roughness", "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}}},
+    ]);
+    let s = d.load().unwrap();
+    let m = &s.materials;
+    for g in m.iter().take(5) {
+        assert_eq!((g.mirror, g.diffuse, g.glossy), (Vec3::ONE, Vec3::ZERO, Vec3::ZERO), "{}", g.name);
+    }
+    assert_eq!((m[0].ior, m[0].dielectric_roughness, m[0].is_rough_dielectric()), (1.4, 0.0, false));
+    assert_eq!((m[1].ior, m[1].dielectric_roughness, m[1].is_rough_dielectric()), (1.4, 0.3, true));
+    assert!((m[1].dielectric_alpha() - 0.09).abs() < 1e-6);
+    // glTF's default roughnessFactor is 1, KHR_materials_ior's default ior 1.5.
+    assert_eq!((m[4].ior, m[4].dielectric_roughness), (1.5, 1.0));
+    let w = &s.report.warnings;
+    let has = |needle: &str, name: &str| w.iter().any(|x| x.contains(needle) && x.contains(name));
+    assert!(has("partial transmission", "'partial'"), "{w:?}");
+    assert!(has("tinted transmission", "'tinted'"), "{w:?}");
+    assert_eq!(w.iter().filter(|x| x.contains("transmission")).count(), 2, "{w:?}");
+}
+
 /// A file without a perspective camera gets a default camera that frames its geometry
 /// (scene::Camera::framing), with one warning; without geometry either, it is an error.
 #[test]
