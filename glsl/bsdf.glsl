@@ -85,7 +85,7 @@ struct Bsdf {
     float prob_diffuse, prob_phong, prob_glossy, prob_reflect, prob_refract;
     float prob_rough; // the rough dielectric (1 for its materials, else 0)
     float cont_prob;
-    float fresnel;   // reflectance F (1 for non-dielectrics)
+    float fresnel;   // reflectance F (1 for non-dielectrics; unused by the rough dielectric)
     float eta_ratio; // eta on the wo side / eta on the other side (dielectrics)
     bool valid;
     bool delta;      // only specular components
