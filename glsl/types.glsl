@@ -95,6 +95,7 @@ struct GpuSceneAddresses {
     uvec2 texture_texels;
     uvec2 env_texels;
     uvec2 env_distribution;
+    uvec4 chunk_first;  // bvh_nodes, bvh_prims, triangles, shading_normals (SCENE_CHUNKS)
 };
 
 struct GpuPush {

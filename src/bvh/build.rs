@@ -397,7 +397,9 @@ fn build_in_pool(triangles: &[Triangle], spheres: &[Sphere], instances: &[Aabb],
         .enumerate()
         .map(|(i, t)| PrimRef::of_triangle(t, i).unwrap_or(PrimRef::SKIPPED))
         .chain(spheres.par_iter().enumerate().map(|(i, s)| PrimRef::of_sphere(s, nt + i).unwrap_or(PrimRef::SKIPPED)))
-        .chain(instances.par_iter().enumerate().map(|(i, b)| PrimRef::of_box(b, nt + ns + i).unwrap_or(PrimRef::SKIPPED)))
+        .chain(
+            instances.par_iter().enumerate().map(|(i, b)| PrimRef::of_box(b, nt + ns + i).unwrap_or(PrimRef::SKIPPED)),
+        )
         .collect();
     if refs.par_iter().any(|r| r.id == PrimRef::SKIPPED.id) {
         refs.retain(|r| r.id != PrimRef::SKIPPED.id);

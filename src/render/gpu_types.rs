@@ -184,6 +184,9 @@ pub struct GpuSceneAddresses {
     pub texture_texels: [u32; 2],
     pub env_texels: [u32; 2],
     pub env_distribution: [u32; 2],
+    /// Where in `scene_chunks` the chunks of the BVH nodes, BVH primitives, triangles and
+    /// shading normals start, when the scene reads them in chunks (SCENE_CHUNKS).
+    pub chunk_first: [u32; 4],
 }
 
 /// Per-dispatch push constants.
