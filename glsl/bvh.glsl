@@ -87,10 +87,10 @@ bool alpha_visible(uint id, uint material, float u, float v, float t);
 #if defined(BVH_DECLARES_BUFFERS) && defined(SCENE_CHUNKS) && SCENE_CHUNKS
 // In chunks, by device address (glsl/scene.glsl, SCENE_CHUNKS).
 uvec4 bvh_node_elem(uint i) {
-    return scene_chunked_elem(scene_address.chunk_first.x, i);
+    return scene_chunked_elem(CHUNK_NODES, i);
 }
 uvec4 bvh_prim_elem(uint i) {
-    return scene_chunked_elem(scene_address.chunk_first.y, i);
+    return scene_chunked_elem(CHUNK_PRIMS, i);
 }
 #elif defined(BVH_DECLARES_BUFFERS) && BVH_TEXEL
 #extension GL_EXT_samplerless_texture_functions : require

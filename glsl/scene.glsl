@@ -33,20 +33,26 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer VertexAttri
 #endif
 // SCENE_CHUNKS (a scene whose BVH or geometry is larger than one binding,
 // src/render/scene_gpu.rs CHUNKED): the BVH nodes, BVH primitives, triangles and shading
-// normals are arrays of 16-byte elements in chunks of 2^SCENE_CHUNK_SHIFT elements, each
-// chunk its own buffer; the binding scene_chunks holds the chunks' addresses, each array's
-// from scene_address.chunk_first (x: nodes, y: prims, z: triangles, w: normals).
+// normals, and the vertex attributes, are arrays of 16-byte elements in chunks of
+// 2^SCENE_CHUNK_SHIFT elements, each chunk its own buffer; the binding scene_chunks holds
+// the chunks' addresses, each array's from scene_address.chunk_first[CHUNK_...].
 #ifndef SCENE_CHUNKS
 #define SCENE_CHUNKS 0
 #endif
 #if SCENE_CHUNKS
+#define CHUNK_NODES 0
+#define CHUNK_PRIMS 1
+#define CHUNK_TRIANGLES 2
+#define CHUNK_SHADING_NORMALS 3
+#define CHUNK_VERTEX_ATTRIBUTES 4
 layout(std430) readonly buffer scene_chunks { uvec2 scene_chunk[]; };
-uvec4 scene_chunked_elem(uint first_chunk, uint i) {
-    uvec2 chunk = scene_chunk[first_chunk + (i >> SCENE_CHUNK_SHIFT)];
+// Element i of the chunked array `array` (CHUNK_...).
+uvec4 scene_chunked_elem(uint array, uint i) {
+    uvec2 chunk = scene_chunk[scene_address.chunk_first[array] + (i >> SCENE_CHUNK_SHIFT)];
     return ARRAY_AT(Uvec4s, chunk)[i & ((1u << SCENE_CHUNK_SHIFT) - 1u)];
 }
 GpuTriangle triangle_at(uint i) {
-    uvec4 v = scene_chunked_elem(scene_address.chunk_first.z, i);
+    uvec4 v = scene_chunked_elem(CHUNK_TRIANGLES, i);
     GpuTriangle t;
     t.material = v.x;
     t.light = v.y;
@@ -54,7 +60,7 @@ GpuTriangle triangle_at(uint i) {
     t._pad = v.w;
     return t;
 }
-vec4 shading_normal_at(uint i) { return uintBitsToFloat(scene_chunked_elem(scene_address.chunk_first.w, i)); }
+vec4 shading_normal_at(uint i) { return uintBitsToFloat(scene_chunked_elem(CHUNK_SHADING_NORMALS, i)); }
 #endif
 // The BVH: bvh.glsl declares it (64-bit loads, faster on lavapipe than vec4 arrays:
 // docs/bvh.md; with TEXEL_READS uniform texel buffers).

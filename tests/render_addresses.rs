@@ -188,7 +188,8 @@ fn render_chunked(
     chunk: Option<u64>,
     addresses: bool,
 ) -> Result<Vec<[f32; 3]>, String> {
-    let out = dir.join(format!("chunked-{}-{reads}-{cap:?}-{chunk:?}-{addresses}.exr", args.join("")));
+    let stem = scene.file_stem().unwrap().to_string_lossy();
+    let out = dir.join(format!("{stem}-{}-{reads}-{cap:?}-{chunk:?}-{addresses}.exr", args.join("")));
     let mut c = vkvcm(dir);
     c.arg("render").arg(scene).args(args).args(["--width", "16", "--height", "16", "-i", "2", "--reads", reads, "-o"]);
     c.arg(&out);
@@ -216,13 +217,16 @@ fn render_chunked(
 /// chunks of 512 bytes (a BVH primitive's three elements then often straddle two chunks,
 /// and each array has several), every estimator renders the instanced scene (mesh trees,
 /// instance records, smooth normals) with storage reads, el, pt and lt with texel reads,
-/// pt and vcm its flattened form, each bit-identical to the uncapped render, which binds
-/// the arrays whole; without device addresses the capped render is refused naming the
-/// buffer.
+/// pt and vcm its flattened form, and el, pt and lt BoxTextured's texture coordinates
+/// (the vertex attributes, otherwise one allocation), each bit-identical to the uncapped
+/// render, which binds the arrays whole; without device addresses the capped render is
+/// refused naming the buffer.
 ///
 /// Sabotage (by hand, not kept): the triangles' chunks looked up from the BVH nodes'
-/// first chunk (`chunk_first.x` for `.z` in glsl/scene.glsl) fails the first case (the
-/// render crashes on an address outside any buffer).
+/// first chunk (CHUNK_NODES for CHUNK_TRIANGLES in glsl/scene.glsl) fails the first case
+/// (the render crashes on an address outside any buffer); the texture coordinates read
+/// from a vertex's second element (glsl/textures.glsl, vertex_attribute_at) fails
+/// BoxTextured.
 #[test]
 fn scene_bvh_and_geometry_larger_than_one_binding_render_in_chunks() {
     let dir = tempfile::tempdir().unwrap();
@@ -249,6 +253,15 @@ fn scene_bvh_and_geometry_larger_than_one_binding_render_in_chunks() {
             .unwrap_or_else(|e| panic!("{what} with a {cap}-byte binding limit: {e}"));
         assert!(free.iter().any(|p| p[0] > 0.0), "{what}: black image");
         assert!(chunked == free, "{what}: the image read in chunks differs");
+    }
+    // Texture coordinates (vertex attributes) in chunks of 256 bytes, a vertex's three
+    // elements often in two: BoxTextured (its arrays are small, hence the smaller cap).
+    let textured = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/khronos/BoxTextured.gltf");
+    for algo in ["el", "pt", "lt"] {
+        let free = render_chunked(dir.path(), &textured, &["-a", algo], "storage", None, None, true).unwrap();
+        let chunked = render_chunked(dir.path(), &textured, &["-a", algo], "storage", Some(512), Some(256), true)
+            .unwrap_or_else(|e| panic!("BoxTextured {algo} with a 512-byte binding limit: {e}"));
+        assert!(chunked == free, "BoxTextured {algo}: the image read in chunks differs");
     }
     let e = render_chunked(dir.path(), &scene, &["-a", "pt"], "storage", Some(cap), Some(chunk), false)
         .expect_err("a bound BVH over the cap rendered");

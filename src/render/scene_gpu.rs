@@ -30,10 +30,12 @@ pub struct ScenePlan {
 }
 
 /// The scene's arrays that the kernels read by device address in chunks, each chunk its
-/// own allocation, when one of them is larger than one binding (glsl/scene.glsl,
-/// SCENE_CHUNKS): the BVH and the per-triangle geometry, which grow with the triangles.
-/// The scene's size is then limited by device memory, not by one binding or allocation.
-pub const CHUNKED: [&str; 4] = ["bvh_nodes", "bvh_prims", "triangles", "shading_normals"];
+/// own allocation, when one of them is larger than one binding (or, reached by address,
+/// than one allocation) allows (glsl/scene.glsl, SCENE_CHUNKS): the BVH and the
+/// per-triangle geometry, which grow with the triangles, in the order of
+/// `GpuSceneAddresses::chunk_first` (CHUNK_NODES .. CHUNK_VERTEX_ATTRIBUTES). The scene's
+/// size is then limited by device memory, not by one binding or allocation.
+pub const CHUNKED: [&str; 5] = ["bvh_nodes", "bvh_prims", "triangles", "shading_normals", "vertex_attributes"];
 
 /// The scene's buffers that the kernels reach by device address where the device has it
 /// (glsl/scene.glsl, GpuSceneAddresses): each may then be as large as one allocation
@@ -422,16 +424,17 @@ impl SceneGpu {
             Some(m) if features.environment_map => EnvironmentTables::new(m),
             _ => EnvironmentTables { texels: Vec::new(), distribution: Vec::new() },
         };
-        let chunked: [(&'static str, &[u8]); 4] = [
+        let chunked: [(&'static str, &[u8]); 5] = [
             (CHUNKED[0], bytemuck::cast_slice(&gb.nodes)),
             (CHUNKED[1], bytemuck::cast_slice(&gb.prims)),
             (CHUNKED[2], bytemuck::cast_slice(&triangles)),
             (CHUNKED[3], bytemuck::cast_slice(&normals)),
+            (CHUNKED[4], bytemuck::cast_slice(&attributes)),
         ];
         let mut buffers = vec![gpu.buffer_from_slice("scene_params", &[params])?];
         let mut chunks = Vec::new();
         let mut chunk_table: Vec<[u32; 2]> = Vec::new();
-        let mut chunk_first = [0u32; 4];
+        let mut chunk_first = [0u32; 8];
         match chunk_bytes {
             None => {
                 for (name, bytes) in chunked {
@@ -461,7 +464,6 @@ impl SceneGpu {
             gpu.buffer_from_slice("spheres", &spheres)?,
             gpu.buffer_from_slice("materials", &materials)?,
             gpu.buffer_from_slice("lights", &lights)?,
-            gpu.buffer_from_slice("vertex_attributes", &attributes)?,
             gpu.buffer_from_slice("texture_refs", &texture_refs)?,
             gpu.buffer_from_slice("texture_texels", &texels)?,
             gpu.buffer_from_slice("env_texels", &env.texels)?,
@@ -469,8 +471,9 @@ impl SceneGpu {
         ]);
         let mut addresses = GpuSceneAddresses { chunk_first, ..Default::default() };
         if gpu.has(BUFFER_DEVICE_ADDRESS) {
+            // (None for the vertex attributes when they are read in chunks.)
             let address = |name: &str| -> Result<[u32; 2]> {
-                let b = buffers.iter().find(|b| b.name() == name).expect("a scene buffer of that name");
+                let Some(b) = buffers.iter().find(|b| b.name() == name) else { return Ok([0, 0]) };
                 let a = b.device_address()?;
                 Ok([a as u32, (a >> 32) as u32])
             };
