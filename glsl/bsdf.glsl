@@ -4,7 +4,7 @@
 // docs/smallvcm.md 2.4 states: component probabilities proportional to luminance
 // albedo, continuation probability = clamp(max RGB of (diffuse + phong + glossy +
 // F mirror) + (1 - F), 0, 1) (glossy is zero for SmallVCM's materials, so their rule is
-// unchanged).
+// unchanged). pt.comp does not use this continuation probability (pbrt-v4's rule there).
 //
 // GGX lobe (`glossy`, used for glTF metallic/roughness): Trowbridge-Reitz distribution D
 // as in Walter, Marschner, Li, Torrance, "Microfacet Models for Refraction through Rough

@@ -18,6 +18,9 @@
 //      layout(std430) readonly buffer bvh_nodes { vec4 bvh_node_data[]; };
 //      layout(std430) readonly buffer bvh_prims { vec4 bvh_prim_data[]; };
 //
+// 3. With SCENE_CHUNKS (glsl/scene.glsl) and BVH_DECLARES_BUFFERS: read by device address
+//    in chunks, for scenes larger than one binding.
+//
 // Optional: `#define BVH_NO_SPHERES` when the scene has no spheres (GpuBvh::glsl_defines
 // says so): the sphere test is compiled out. `#define BVH_INSTANCES` when it has instances
 // (the two-level BVH below).
@@ -81,7 +84,15 @@ bool alpha_visible(uint id, uint material, float u, float v, float t);
 #ifndef BVH_INT64
 #define BVH_INT64 1
 #endif
-#if defined(BVH_DECLARES_BUFFERS) && BVH_TEXEL
+#if defined(BVH_DECLARES_BUFFERS) && defined(SCENE_CHUNKS) && SCENE_CHUNKS
+// In chunks, by device address (glsl/scene.glsl, SCENE_CHUNKS).
+uvec4 bvh_node_elem(uint i) {
+    return scene_chunked_elem(CHUNK_NODES, i);
+}
+uvec4 bvh_prim_elem(uint i) {
+    return scene_chunked_elem(CHUNK_PRIMS, i);
+}
+#elif defined(BVH_DECLARES_BUFFERS) && BVH_TEXEL
 #extension GL_EXT_samplerless_texture_functions : require
 // Uniform texel buffers of uvec4 texels (scene.glsl's TEXEL_READS).
 uniform utextureBuffer bvh_nodes;

@@ -1,7 +1,13 @@
 #version 460
 // Path tracing (push.paths_per_invocation pixel samples per invocation: path
 // regeneration, common.glsl regen_stride): BSDF sampling with next-event
-// estimation, combined by the balance heuristic; Russian roulette as bsdf.glsl says.
+// estimation, combined by the balance heuristic (Veach 1997, 9.2; the power heuristic
+// was measured and not kept: docs/performance.md, "pt: variance per sample"). MIS pdfs
+// are the BSDF's and the light's only: Russian roulette is not in them.
+// Russian roulette as pbrt-v4 (PathIntegrator::Li), not bsdf.glsl's per-vertex albedo
+// rule (which lt/bpt/vcm keep): none at the first RR_MIN_LENGTH - 1 vertices, then the
+// path continues with probability min(1, maxcomp(throughput * eta_scale)), eta_scale
+// undoing the eta^2 radiance scaling of refraction.
 // Variants (src/render/variants.rs, PtKernel): NEE=1 the estimator, NEE=0 pure BSDF
 // sampling (emitter hits only, weight 1), for tests.
 #extension GL_GOOGLE_include_directive : require
@@ -11,6 +17,11 @@
 #endif
 
 layout(local_size_x = WORKGROUP_SIZE) in;
+
+// Russian roulette applies at vertices whose path so far has at least this many segments
+// (the camera's first hit has 1): measured against 2 (pbrt-v4's), 4 and 5 (Mitsuba 3's
+// rr_depth), docs/performance.md, "pt: variance per sample".
+const uint RR_MIN_LENGTH = 3u;
 
 #include "scene.glsl"
 #include "push.glsl"
@@ -25,7 +36,7 @@ void main() {
     uint min_len = min_path_length();
     uint rng, len;
     vec3 o, d, thr, L;
-    float last_pdf;
+    float last_pdf, eta_scale;
     bool last_specular;
     bool alive = false;
     bool started = false;
@@ -45,6 +56,7 @@ void main() {
             thr = vec3(1.0);
             L = vec3(0.0);
             last_pdf = 1.0;
+            eta_scale = 1.0;
             last_specular = true;
             len = 1u;
         }
@@ -82,7 +94,7 @@ void main() {
                 vec3 f = bsdf_eval(b, ls.wi, pf, pr);
                 if (max3(f) > 0.0) {
                     if (light_sample_visible(s.p, s.ng, ls)) {
-                        float wgt = ls.delta ? 1.0 : balance(pick * ls.pdf_w, pf * b.cont_prob);
+                        float wgt = ls.delta ? 1.0 : balance(pick * ls.pdf_w, pf);
                         float cos_x = bsdf_cos(b, ls.wi);
                         L += thr * f * ls.radiance * (wgt * cos_x / (pick * ls.pdf_w));
                     }
@@ -92,13 +104,24 @@ void main() {
 #endif
         BsdfSample bs = bsdf_sample(b, vec3(rnd2(rng), rnd(rng)));
         if (!bs.ok) continue;
-        if (rnd(rng) >= b.cont_prob) continue;
-        thr *= bs.weight / b.cont_prob;
-        last_pdf = bs.pdf * b.cont_prob;
+        thr *= bs.weight;
+        // Refraction scales radiance by eta_ratio^2 (bsdf.glsl); the roulette undoes it.
+        if (dot(bs.wi, b.ng) * dot(b.wo, b.ng) < 0.0) eta_scale /= b.eta_ratio * b.eta_ratio;
+        last_pdf = bs.pdf;
         last_specular = bs.specular;
+        if (max3(thr) <= 0.0) continue;
+        // Russian roulette as pbrt-v4 (PathIntegrator::Li): from vertex RR_MIN_LENGTH on,
+        // end the path with probability q = max(0, 1 - maxcomp(throughput * eta_scale))
+        // and divide the throughput by 1 - q. Not part of the MIS pdfs (as pbrt-v4).
+        if (len >= RR_MIN_LENGTH) {
+            float p = max3(thr) * eta_scale;
+            if (p < 1.0) {
+                if (rnd(rng) >= p) continue;
+                thr /= p;
+            }
+        }
         o = offset_ray(s.p, s.ng, bs.wi, scene_radius());
         d = bs.wi;
-        if (max3(thr) <= 0.0) continue;
         len++;
         alive = true;
     }

@@ -31,6 +31,37 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer VertexAttri
 #define SCENE_ENV_TEXELS ARRAY_AT(Vec4s, scene_address.env_texels)
 #define SCENE_ENV_DISTRIBUTION ARRAY_AT(Floats, scene_address.env_distribution)
 #endif
+// SCENE_CHUNKS (a scene whose BVH or geometry is larger than one binding,
+// src/render/scene_gpu.rs CHUNKED): the BVH nodes, BVH primitives, triangles and shading
+// normals, and the vertex attributes, are arrays of 16-byte elements in chunks of
+// 2^SCENE_CHUNK_SHIFT elements, each chunk its own buffer; the binding scene_chunks holds
+// the chunks' addresses, each array's from scene_address.chunk_first[CHUNK_...].
+#ifndef SCENE_CHUNKS
+#define SCENE_CHUNKS 0
+#endif
+#if SCENE_CHUNKS
+#define CHUNK_NODES 0
+#define CHUNK_PRIMS 1
+#define CHUNK_TRIANGLES 2
+#define CHUNK_SHADING_NORMALS 3
+#define CHUNK_VERTEX_ATTRIBUTES 4
+layout(std430) readonly buffer scene_chunks { uvec2 scene_chunk[]; };
+// Element i of the chunked array `array` (CHUNK_...).
+uvec4 scene_chunked_elem(uint array, uint i) {
+    uvec2 chunk = scene_chunk[scene_address.chunk_first[array] + (i >> SCENE_CHUNK_SHIFT)];
+    return ARRAY_AT(Uvec4s, chunk)[i & ((1u << SCENE_CHUNK_SHIFT) - 1u)];
+}
+GpuTriangle triangle_at(uint i) {
+    uvec4 v = scene_chunked_elem(CHUNK_TRIANGLES, i);
+    GpuTriangle t;
+    t.material = v.x;
+    t.light = v.y;
+    t.first_vertex = v.z;
+    t._pad = v.w;
+    return t;
+}
+vec4 shading_normal_at(uint i) { return uintBitsToFloat(scene_chunked_elem(CHUNK_SHADING_NORMALS, i)); }
+#endif
 // The BVH: bvh.glsl declares it (64-bit loads, faster on lavapipe than vec4 arrays:
 // docs/bvh.md; with TEXEL_READS uniform texel buffers).
 #define BVH_DECLARES_BUFFERS
@@ -44,12 +75,13 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer VertexAttri
 #if TEXEL_READS
 #extension GL_EXT_samplerless_texture_functions : require
 #define BVH_TEXEL 1
-uniform utextureBuffer triangles;
 uniform utextureBuffer spheres;
 uniform utextureBuffer materials;
 uniform utextureBuffer lights;
-uniform utextureBuffer shading_normals;
 vec4 texel_vec4(utextureBuffer b, uint i) { return uintBitsToFloat(texelFetch(b, int(i))); }
+#if !SCENE_CHUNKS
+uniform utextureBuffer triangles;
+uniform utextureBuffer shading_normals;
 GpuTriangle triangle_at(uint i) {
     uvec4 v = texelFetch(triangles, int(i));
     GpuTriangle t;
@@ -59,6 +91,8 @@ GpuTriangle triangle_at(uint i) {
     t._pad = v.w;
     return t;
 }
+vec4 shading_normal_at(uint i) { return texel_vec4(shading_normals, i); }
+#endif
 GpuSphere sphere_at(uint i) {
     GpuSphere s;
     s.center_radius = texel_vec4(spheres, 2u * i);
@@ -92,20 +126,21 @@ GpuLight light_at(uint i) {
     l.radiance = texel_vec4(lights, 5u * i + 4u);
     return l;
 }
-vec4 shading_normal_at(uint i) { return texel_vec4(shading_normals, i); }
 #else
-layout(std430) readonly buffer triangles { GpuTriangle triangle_data[]; };
 layout(std430) readonly buffer spheres { GpuSphere sphere_data[]; };
 layout(std430) readonly buffer materials { GpuMaterial material_data[]; };
 layout(std430) readonly buffer lights { GpuLight light_data[]; };
+#if !SCENE_CHUNKS
+layout(std430) readonly buffer triangles { GpuTriangle triangle_data[]; };
 layout(std430) readonly buffer shading_normals { vec4 shading_normal_data[]; };
 GpuTriangle triangle_at(uint i) { return triangle_data[i]; }
+vec4 shading_normal_at(uint i) { return shading_normal_data[i]; }
+#endif
 GpuSphere sphere_at(uint i) { return sphere_data[i]; }
 GpuMaterial material_at(uint i) { return material_data[i]; }
 vec4 material_surface(uint i) { return material_data[i].surface; }
 vec4 material_maps(uint i) { return material_data[i].maps; }
 GpuLight light_at(uint i) { return light_data[i]; }
-vec4 shading_normal_at(uint i) { return shading_normal_data[i]; }
 #endif
 
 #if HAS_ALPHA_MASK
@@ -230,11 +265,14 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
         // likewise (normal_mapped): what the flattened mesh stores.
         uint record = h.instance_record;
         uint w2o = 3u * record;
-        vec3 w0 = uintBitsToFloat(bvh_prim_elem(w2o).xyz);
-        vec3 w1 = uintBitsToFloat(bvh_prim_elem(w2o + 1u).xyz);
-        vec3 w2 = uintBitsToFloat(bvh_prim_elem(w2o + 2u).xyz);
         bool instanced = record != BVH_NO_INSTANCE;
+        // The record is read only for an instance's hit (past the arrays otherwise, which
+        // an array read by address must not be).
+        vec3 w0 = vec3(0.0), w1 = vec3(0.0), w2 = vec3(0.0);
         if (instanced) {
+            w0 = uintBitsToFloat(bvh_prim_elem(w2o).xyz);
+            w1 = uintBitsToFloat(bvh_prim_elem(w2o + 1u).xyz);
+            w2 = uintBitsToFloat(bvh_prim_elem(w2o + 2u).xyz);
             s.p = bvh_apply_rows(w2o + 3u, s.p, 1.0);
             s.ng = normalize(instance_normal(w0, w1, w2, cross(e1, e2)));
             s.ns = s.ng;

@@ -29,10 +29,22 @@
 #define TEXTURES_GLSL
 
 #if HAS_VERTEX_ATTRIBUTES
+#if SCENE_CHUNKS
+// Three 16-byte elements per vertex, in field order (glsl/scene.glsl, SCENE_CHUNKS).
+GpuVertexAttributes vertex_attribute_at(uint i) {
+    GpuVertexAttributes a;
+    a.uv = uintBitsToFloat(scene_chunked_elem(CHUNK_VERTEX_ATTRIBUTES, 3u * i));
+    a.color = uintBitsToFloat(scene_chunked_elem(CHUNK_VERTEX_ATTRIBUTES, 3u * i + 1u));
+    a.tangent = uintBitsToFloat(scene_chunked_elem(CHUNK_VERTEX_ATTRIBUTES, 3u * i + 2u));
+    return a;
+}
+#else
 #if DEVICE_ADDRESSES
 #define vertex_attribute_data SCENE_VERTEX_ATTRIBUTES
 #else
 layout(std430) readonly buffer vertex_attributes { GpuVertexAttributes vertex_attribute_data[]; };
+#endif
+GpuVertexAttributes vertex_attribute_at(uint i) { return vertex_attribute_data[i]; }
 #endif
 #endif
 
@@ -122,9 +134,9 @@ bool triangle_attributes(uint tri, out GpuVertexAttributes a0, out GpuVertexAttr
                          out GpuVertexAttributes a2) {
     uint first = triangle_at(tri).first_vertex;
     if (first == 0xffffffffu) return false;
-    a0 = vertex_attribute_data[first];
-    a1 = vertex_attribute_data[first + 1u];
-    a2 = vertex_attribute_data[first + 2u];
+    a0 = vertex_attribute_at(first);
+    a1 = vertex_attribute_at(first + 1u);
+    a2 = vertex_attribute_at(first + 2u);
     return true;
 }
 #endif

@@ -95,6 +95,9 @@ struct GpuSceneAddresses {
     uvec2 texture_texels;
     uvec2 env_texels;
     uvec2 env_distribution;
+    // SCENE_CHUNKS: where each chunked array's chunks start in scene_chunks
+    // (CHUNK_NODES .. CHUNK_VERTEX_ATTRIBUTES, glsl/scene.glsl).
+    uint chunk_first[8];
 };
 
 struct GpuPush {

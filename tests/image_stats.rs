@@ -303,10 +303,18 @@ fn zero_variance_pixels() {
     assert!(t.passed(), "{t}");
     assert_eq!(t.worst_z, 0.0);
 
-    // Equal within 1e-6 relative passes; a larger difference fails with an infinite z.
+    // Equal within 1e-6 relative passes (EQUAL_RELATIVE, whatever the variances).
     let mut close = white.clone();
     close.set(1, 2, [1.0 + 5e-7, 0.5, 0.0]);
     assert!(z_test(&same, &[close.clone(), close.clone()], 0.01).passed());
+    // With no variance on either side (two exact values, e.g. from two renderers'
+    // different f32 arithmetic) up to 1e-5 relative passes, and no further.
+    let mut rounded = white.clone();
+    rounded.set(1, 2, [1.0 - 5e-6, 0.5, 0.0]);
+    assert!(z_test(&same, &[rounded.clone(), rounded.clone()], 0.01).passed());
+    let mut beyond = white.clone();
+    beyond.set(1, 2, [1.0 - 2e-5, 0.5, 0.0]);
+    assert!(!z_test(&same, &[beyond.clone(), beyond.clone()], 0.01).passed());
     let mut off = white.clone();
     off.set(1, 2, [1.0, 0.5 + 1e-3, 0.0]);
     let t = z_test(&same, &[off.clone(), off.clone()], 0.01);

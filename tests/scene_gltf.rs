@@ -1608,11 +1608,12 @@ fn normal_maps_get_mikktspace_tangents_when_the_file_has_none() {
     assert_eq!(m.normal_scale, 0.5);
     assert!(s.report.warnings.iter().all(|w| !w.contains("normalTexture")), "{:?}", s.report.warnings);
     // The triangle (0,0,0), (1,0,0), (0,1,0) with uv (0,0), (1,0), (0,1): u grows along +x
-    // and v along +y; its normal is +z, so MikkTSpace's tangent is +x with bitangent
-    // +y = cross(+z, +x): sign +1.
+    // and v along +y; its normal is +z, so the tangent is +x. The normal map's +Y is up
+    // in its image, towards decreasing v (glTF's texture origin is the top-left corner):
+    // -y = -cross(+z, +x), sign -1 (the image is mirrored on this triangle).
     let t = s.triangles[0].attributes.as_ref().unwrap().tangent.expect("generated tangents");
     for v in t {
-        assert!((v - glam::Vec4::new(1.0, 0.0, 0.0, 1.0)).abs().max_element() < 1e-5, "{v:?}");
+        assert!((v - glam::Vec4::new(1.0, 0.0, 0.0, -1.0)).abs().max_element() < 1e-5, "{v:?}");
     }
 }
 

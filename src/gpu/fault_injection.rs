@@ -8,7 +8,10 @@
 //! * `VKVCM_TEST_WITHOUT_INT64=1`: devices look as if they lacked 64-bit integers, so
 //!   that tests/render_atomics.rs can run the fallbacks of docs/devices.md on lavapipe;
 //! * `VKVCM_TEST_MAX_BINDING_BYTES=N`: the device binds at most N bytes per buffer, so
-//!   that tests/render_addresses.rs reaches the binding limits with tiny frames.
+//!   that tests/render_addresses.rs reaches the binding limits with tiny frames;
+//! * `VKVCM_TEST_SCENE_CHUNK_BYTES=N`: scene arrays read in chunks (past one binding) are
+//!   split into chunks of at most N bytes, so that tests reach several chunks with tiny
+//!   scenes.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
@@ -64,4 +67,15 @@ pub(crate) fn capped_binding_limits(mut limits: vk::PhysicalDeviceLimits) -> vk:
         limits.max_texel_buffer_elements = limits.max_texel_buffer_elements.min(cap / 16);
     }
     limits
+}
+
+/// The environment variable that caps the chunk of scene arrays read in chunks
+/// (src/render/sizes.rs, `scene_chunk_bytes`).
+pub const SCENE_CHUNK_BYTES_VAR: &str = "VKVCM_TEST_SCENE_CHUNK_BYTES";
+
+/// [`SCENE_CHUNK_BYTES_VAR`]'s cap in bytes (no cap: `u64::MAX`).
+pub(crate) fn scene_chunk_cap() -> u64 {
+    static CAP: OnceLock<Option<u64>> = OnceLock::new();
+    CAP.get_or_init(|| std::env::var(SCENE_CHUNK_BYTES_VAR).ok().and_then(|v| v.trim().parse().ok()))
+        .unwrap_or(u64::MAX)
 }

@@ -186,6 +186,10 @@ pub struct GpuSceneAddresses {
     pub texture_texels: [u32; 2],
     pub env_texels: [u32; 2],
     pub env_distribution: [u32; 2],
+    /// Where in `scene_chunks` the chunks of the BVH nodes, BVH primitives, triangles,
+    /// shading normals and vertex attributes start (then 3 unused), when the scene reads
+    /// them in chunks (SCENE_CHUNKS; src/render/scene_gpu.rs, CHUNKED).
+    pub chunk_first: [u32; 8],
 }
 
 /// Per-dispatch push constants.

@@ -119,7 +119,7 @@ impl Renderer {
         let features = features::FeatureSet::new(scene, settings.generic).with_count_rays(settings.count_rays);
         let reads = reads::Reads::resolve(gpu, settings.reads)?;
         let atomics = atomics::SplatAtomics::resolve(gpu, settings.atomics)?;
-        let scene_gpu = SceneGpu::with_features(gpu, scene, frame, &features, reads, atomics)?;
+        let scene_gpu = SceneGpu::with_features(gpu, scene, frame, &features, reads, atomics, plan.scene.chunk_bytes)?;
         let film = Film::new(gpu, &plan.film)?;
         let est = (info.build)(&estimators::Build { gpu, scene: &scene_gpu, film: &film, settings, plan: &plan })?;
         // Every kernel of the render exists now: keep their pipelines for later processes
@@ -173,7 +173,9 @@ impl Renderer {
             light_sizing,
             light_k,
         )?;
-        plan.fit_light_vertex_capacity(&sizes::SizeLimits::of(gpu));
+        let limits = sizes::SizeLimits::of(gpu);
+        plan.scene.chunk_if_over_binding(&limits, device_addresses);
+        plan.fit_light_vertex_capacity(&limits);
         plan.check(gpu, &format!("a {}x{} {} render", frame.width, frame.height, info.name))?;
         Ok(plan)
     }
@@ -258,7 +260,7 @@ impl Renderer {
 
     /// `(name, bytes)` of every buffer the render allocated.
     pub fn buffers(&self) -> Vec<(String, u64)> {
-        let mut b: Vec<&crate::gpu::Buffer> = self.scene_gpu.buffers.iter().collect();
+        let mut b: Vec<&crate::gpu::Buffer> = self.scene_gpu.buffers.iter().chain(&self.scene_gpu.chunks).collect();
         b.extend([&self.film.accum, &self.film.stats]);
         b.extend(self.est().buffers());
         b.iter().map(|b| (b.name().to_string(), b.size())).collect()

@@ -14,7 +14,7 @@ use super::features::FeatureSet;
 use super::gpu_types::*;
 use super::reads::Reads;
 use super::settings::FrameSettings;
-use super::sizes::{Access, BufferSize};
+use super::sizes::{Access, BufferSize, SizeLimits};
 use super::variants::SceneVariant;
 use crate::bvh;
 use crate::bvh::layout::{GpuNode, GpuPrim};
@@ -25,7 +25,17 @@ use crate::scene::{AlphaMode, EnvironmentMap, Filter, Light, Scene, VertexAttrib
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ScenePlan {
     pub buffers: [BufferSize; 14],
+    /// The chunk size in bytes when the kernels read [`CHUNKED`] in chunks.
+    pub chunk_bytes: Option<u64>,
 }
+
+/// The scene's arrays that the kernels read by device address in chunks, each chunk its
+/// own allocation, when one of them is larger than one binding (or, reached by address,
+/// than one allocation) allows (glsl/scene.glsl, SCENE_CHUNKS): the BVH and the
+/// per-triangle geometry, which grow with the triangles, in the order of
+/// `GpuSceneAddresses::chunk_first` (CHUNK_NODES .. CHUNK_VERTEX_ATTRIBUTES). The scene's
+/// size is then limited by device memory, not by one binding or allocation.
+pub const CHUNKED: [&str; 5] = ["bvh_nodes", "bvh_prims", "triangles", "shading_normals", "vertex_attributes"];
 
 /// The scene's buffers that the kernels reach by device address where the device has it
 /// (glsl/scene.glsl, GpuSceneAddresses): each may then be as large as one allocation
@@ -85,7 +95,24 @@ impl ScenePlan {
                     b
                 }
             }),
+            chunk_bytes: None,
         }
+    }
+
+    /// Makes the kernels read [`CHUNKED`] in chunks when one of them is larger than a
+    /// device with `limits` binds and the device has addresses (else the plan's check
+    /// refuses the scene, naming the buffer).
+    pub fn chunk_if_over_binding(&mut self, limits: &SizeLimits, device_addresses: bool) {
+        let over = |b: &BufferSize| CHUNKED.contains(&b.name) && b.bytes > limits.max_bytes(b);
+        if !device_addresses || self.chunk_bytes.is_some() || !self.buffers.iter().any(over) {
+            return;
+        }
+        for b in &mut self.buffers {
+            if CHUNKED.contains(&b.name) {
+                *b = b.reached(Access::Chunked);
+            }
+        }
+        self.chunk_bytes = Some(limits.scene_chunk);
     }
 
     pub fn buffers(&self) -> Vec<BufferSize> {
@@ -96,8 +123,12 @@ impl ScenePlan {
 /// The scene's buffers and what every kernel reading them is compiled with.
 pub struct SceneGpu {
     pub params: GpuParams,
-    /// In [`ScenePlan`]'s order; each named as the binding it fills.
+    /// In [`ScenePlan`]'s order; each named as the binding it fills (but [`CHUNKED`] when
+    /// read in chunks).
     pub buffers: Vec<Buffer>,
+    /// When the kernels read [`CHUNKED`] in chunks: the chunks, which no kernel binds (the
+    /// binding `scene_chunks` holds their addresses).
+    pub chunks: Vec<Buffer>,
     /// The scene's part of every render kernel's variant (features, reads).
     pub variant: SceneVariant,
 }
@@ -280,13 +311,14 @@ impl SceneGpu {
     /// The scene with kernels specialised to it, read as `reads`.
     pub fn new(gpu: &Arc<Gpu>, scene: &Scene, frame: &FrameSettings, reads: Reads) -> Result<SceneGpu> {
         let atomics = SplatAtomics::resolve(gpu, None)?;
-        Self::with_features(gpu, scene, frame, &FeatureSet::new(scene, false), reads, atomics)
+        Self::with_features(gpu, scene, frame, &FeatureSet::new(scene, false), reads, atomics, None)
     }
 
     /// The scene for kernels compiled with `features`, reading it as `reads` and summing
     /// splats with `atomics`: shading normals are uploaded when the scene has them and
     /// the kernels read them (a 16-byte placeholder is bound otherwise); the BVH is read with 64-bit loads when
-    /// the device has `shaderInt64`.
+    /// the device has `shaderInt64`. With `chunk_bytes` ([`ScenePlan::chunk_bytes`]) the
+    /// kernels read [`CHUNKED`] in chunks of that many bytes.
     pub fn with_features(
         gpu: &Arc<Gpu>,
         scene: &Scene,
@@ -294,6 +326,7 @@ impl SceneGpu {
         features: &FeatureSet,
         reads: Reads,
         atomics: SplatAtomics,
+        chunk_bytes: Option<u64>,
     ) -> Result<SceneGpu> {
         if scene.lights.is_empty() {
             bail!("scene {:?} has no light source (no emissive material, punctual light or background)", scene.name);
@@ -391,25 +424,56 @@ impl SceneGpu {
             Some(m) if features.environment_map => EnvironmentTables::new(m),
             _ => EnvironmentTables { texels: Vec::new(), distribution: Vec::new() },
         };
-        let buffers = vec![
-            gpu.buffer_from_slice("scene_params", &[params])?,
-            gpu.buffer_from_slice("bvh_nodes", &gb.nodes)?,
-            gpu.buffer_from_slice("bvh_prims", &gb.prims)?,
-            gpu.buffer_from_slice("triangles", &triangles)?,
+        let chunked: [(&'static str, &[u8]); 5] = [
+            (CHUNKED[0], bytemuck::cast_slice(&gb.nodes)),
+            (CHUNKED[1], bytemuck::cast_slice(&gb.prims)),
+            (CHUNKED[2], bytemuck::cast_slice(&triangles)),
+            (CHUNKED[3], bytemuck::cast_slice(&normals)),
+            (CHUNKED[4], bytemuck::cast_slice(&attributes)),
+        ];
+        let mut buffers = vec![gpu.buffer_from_slice("scene_params", &[params])?];
+        let mut chunks = Vec::new();
+        let mut chunk_table: Vec<[u32; 2]> = Vec::new();
+        let mut chunk_first = [0u32; 8];
+        match chunk_bytes {
+            None => {
+                for (name, bytes) in chunked {
+                    buffers.push(gpu.buffer_from_slice(name, bytes)?);
+                }
+            }
+            Some(size) => {
+                // Each array in chunks of `size` bytes (a power of two, so the kernels find
+                // element i's chunk by a shift), each chunk its own buffer.
+                for (k, (name, bytes)) in chunked.into_iter().enumerate() {
+                    chunk_first[k] = chunk_table.len() as u32;
+                    for piece in bytes.chunks(size as usize) {
+                        let b = gpu.buffer_from_slice(name, piece)?;
+                        let a = b.device_address()?;
+                        chunk_table.push([a as u32, (a >> 32) as u32]);
+                        chunks.push(b);
+                    }
+                }
+            }
+        }
+        // The chunks' addresses (a placeholder entry when there are none).
+        if chunk_table.is_empty() {
+            chunk_table.push([0, 0]);
+        }
+        buffers.push(gpu.buffer_from_slice("scene_chunks", &chunk_table)?);
+        buffers.extend([
             gpu.buffer_from_slice("spheres", &spheres)?,
             gpu.buffer_from_slice("materials", &materials)?,
             gpu.buffer_from_slice("lights", &lights)?,
-            gpu.buffer_from_slice("shading_normals", &normals)?,
-            gpu.buffer_from_slice("vertex_attributes", &attributes)?,
             gpu.buffer_from_slice("texture_refs", &texture_refs)?,
             gpu.buffer_from_slice("texture_texels", &texels)?,
             gpu.buffer_from_slice("env_texels", &env.texels)?,
             gpu.buffer_from_slice("env_distribution", &env.distribution)?,
-        ];
-        let mut addresses = GpuSceneAddresses::default();
+        ]);
+        let mut addresses = GpuSceneAddresses { chunk_first, ..Default::default() };
         if gpu.has(BUFFER_DEVICE_ADDRESS) {
+            // (None for the vertex attributes when they are read in chunks.)
             let address = |name: &str| -> Result<[u32; 2]> {
-                let b = buffers.iter().find(|b| b.name() == name).expect("a scene buffer of that name");
+                let Some(b) = buffers.iter().find(|b| b.name() == name) else { return Ok([0, 0]) };
                 let a = b.device_address()?;
                 Ok([a as u32, (a >> 32) as u32])
             };
@@ -418,6 +482,7 @@ impl SceneGpu {
                 texture_texels: address(ADDRESSED[1])?,
                 env_texels: address(ADDRESSED[2])?,
                 env_distribution: address(ADDRESSED[3])?,
+                chunk_first,
             };
         }
         let mut buffers = buffers;
@@ -428,8 +493,9 @@ impl SceneGpu {
             int64_loads: gpu.has(SHADER_INT64),
             atomics,
             device_addresses: gpu.has(BUFFER_DEVICE_ADDRESS),
+            chunk_shift: chunk_bytes.map(|b| (b / 16).trailing_zeros()),
         };
-        Ok(SceneGpu { params, buffers, variant })
+        Ok(SceneGpu { params, buffers, chunks, variant })
     }
 
     /// The scene's bindings, each buffer at the binding of its name (all are arrays of

@@ -20,6 +20,10 @@ pub enum Access {
     /// Reached by device address (src/render/addresses.rs): limited by the allocation size
     /// and by [`MAX_ADDRESSED_BYTES`].
     Address,
+    /// Reached by device address in chunks of [`SizeLimits::scene_chunk`] bytes, each its
+    /// own allocation (the scene's BVH and geometry past one binding:
+    /// src/render/scene_gpu.rs): limited by [`MAX_CHUNKED_BYTES`] and the memory heap.
+    Chunked,
 }
 
 /// One buffer of the plan.
@@ -76,6 +80,10 @@ fn remedy(name: &str) -> &'static str {
 /// the address, so at most 2^31 of them.
 pub const MAX_ADDRESSED_BYTES: u64 = 4 << 31;
 
+/// The largest array read in chunks: the kernels index its 16-byte elements with 32-bit
+/// integers.
+pub const MAX_CHUNKED_BYTES: u64 = 16 << 32;
+
 /// The device's limits on buffer sizes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SizeLimits {
@@ -87,6 +95,9 @@ pub struct SizeLimits {
     pub allocation: u64,
     /// The largest device-local memory heap: all buffers together.
     pub heap: u64,
+    /// The chunk of an array read in chunks ([`Access::Chunked`]): the largest power of two
+    /// bytes one allocation holds (at most [`MAX_ADDRESSED_BYTES`]).
+    pub scene_chunk: u64,
 }
 
 impl SizeLimits {
@@ -96,6 +107,7 @@ impl SizeLimits {
             texel_elements: gpu.limits.max_texel_buffer_elements as u64,
             allocation: gpu.max_allocation_bytes,
             heap: gpu.device_local_heap_bytes(),
+            scene_chunk: scene_chunk_bytes(gpu.max_allocation_bytes),
         }
     }
 
@@ -119,12 +131,27 @@ impl SizeLimits {
                 Some((MAX_ADDRESSED_BYTES, "the kernels index at most {} of a buffer by address (2^31 elements)"))
             }
             Access::Address => None,
+            Access::Chunked => {
+                return (MAX_CHUNKED_BYTES, "the kernels index at most {} of a scene array (2^32 16-byte elements)")
+            }
         };
         match binding {
             Some((max, text)) if max <= self.allocation => (max, text),
             _ => (self.allocation, "the device allocates at most {} per buffer (maxMemoryAllocationSize)"),
         }
     }
+}
+
+/// The chunk size of arrays read in chunks on a device that allocates at most
+/// `allocation` bytes per buffer: the largest power of two that fits, at most
+/// [`MAX_ADDRESSED_BYTES`] (and for tests at most `VKVCM_TEST_SCENE_CHUNK_BYTES`,
+/// src/gpu/fault_injection.rs), at least 256.
+pub fn scene_chunk_bytes(allocation: u64) -> u64 {
+    let max = allocation.min(MAX_ADDRESSED_BYTES).min(crate::gpu::fault_injection::scene_chunk_cap());
+    if max < 256 {
+        return 256;
+    }
+    1 << (63 - max.leading_zeros())
 }
 
 /// Checks `sizes` against each buffer's limit (by how it is reached) and all of them
@@ -162,7 +189,13 @@ mod tests {
     use super::*;
 
     fn limits(binding: u64, heap: u64) -> SizeLimits {
-        SizeLimits { storage_binding: binding, texel_elements: binding / 4, allocation: 8 * binding, heap }
+        SizeLimits {
+            storage_binding: binding,
+            texel_elements: binding / 4,
+            allocation: 8 * binding,
+            heap,
+            scene_chunk: 256,
+        }
     }
 
     #[test]

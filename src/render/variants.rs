@@ -36,16 +36,24 @@ pub struct SceneVariant {
     /// DEVICE_ADDRESSES: the film and the frame's other large buffers are reached by
     /// device address (src/render/addresses.rs).
     pub device_addresses: bool,
+    /// SCENE_CHUNK_SHIFT: the kernels read the BVH and the geometry in chunks of 2^shift
+    /// 16-byte elements (src/render/scene_gpu.rs, CHUNKED).
+    pub chunk_shift: Option<u32>,
 }
 
 impl SceneVariant {
     pub fn defines(&self) -> Defines {
-        self.features
+        let defines = self
+            .features
             .defines()
             .flag("TEXEL_READS", self.reads == Reads::Texel)
             .flag("BVH_INT64", self.int64_loads)
             .with(&self.film_defines())
-            .with(&workgroup_defines())
+            .with(&workgroup_defines());
+        match self.chunk_shift {
+            Some(shift) => defines.flag("SCENE_CHUNKS", true).value("SCENE_CHUNK_SHIFT", shift),
+            None => defines,
+        }
     }
 
     /// What glsl/film.glsl is compiled with: SPLAT_ATOMICS_64 and DEVICE_ADDRESSES.

@@ -39,7 +39,15 @@ impl bevy_mikktspace::Geometry for Faces<'_> {
         n.to_array()
     }
     fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
-        self.uv(face)[vert].to_array()
+        // MikkTSpace's bitangent points towards increasing v of the coordinates it is
+        // given, and a normal map's +Y is up in its image (glTF 2.0, material.normalTexture:
+        // "+X is right and +Y is up"), which is decreasing v in glTF's coordinates (origin
+        // at the image's top-left). So it is given v flipped, as the OpenGL-style texture
+        // space normal maps are baked in: for an unmirrored layout the bitangent is then
+        // cross(normal, tangent) (w = +1), as Mitsuba 3's normalmap and the glTF sample
+        // viewer's derivative tangents have it.
+        let [u, v] = self.uv(face)[vert].to_array();
+        [u, 1.0 - v]
     }
     fn set_tangent(&mut self, tangent_space: Option<bevy_mikktspace::TangentSpace>, face: usize, vert: usize) {
         // A vertex MikkTSpace cannot give a tangent (degenerate texture coordinates) gets
