@@ -99,7 +99,13 @@ fn rust_and_glsl_layouts_match() {
             light_scratch_a,
             light_scratch_b
         }),
-        rust_layout!(GpuSceneAddresses { vertex_attributes, texture_texels, env_texels, env_distribution, chunk_first }),
+        rust_layout!(GpuSceneAddresses {
+            vertex_attributes,
+            texture_texels,
+            env_texels,
+            env_distribution,
+            chunk_first
+        }),
         rust_layout!(GpuPush {
             iteration,
             count,
