@@ -216,9 +216,9 @@ fn render_chunked(
 /// by device memory: with the binding limit capped below the BVH primitives' size and
 /// chunks of 512 bytes (a BVH primitive's three elements then often straddle two chunks,
 /// and each array has several), every estimator renders the instanced scene (mesh trees,
-/// instance records, smooth normals) with storage reads, el, pt and lt with texel reads,
-/// pt and vcm its flattened form, and el, pt and lt BoxTextured's texture coordinates
-/// (the vertex attributes, otherwise one allocation), each bit-identical to the uncapped
+/// instance records, smooth normals) with storage reads, pt with texel reads, vcm its
+/// flattened form, and pt and lt BoxTextured's texture coordinates (the vertex
+/// attributes, otherwise one allocation), each bit-identical to the uncapped
 /// render, which binds the arrays whole; without device addresses the capped render is
 /// refused naming the buffer.
 ///
@@ -239,13 +239,9 @@ fn scene_bvh_and_geometry_larger_than_one_binding_render_in_chunks() {
         cases.push(([["-a", algo].as_slice(), &radius].concat(), "storage"));
     }
     // With texel reads the camera kernel also reads the light-vertex store and the grid
-    // as texels, which the cap would refuse: the estimators without them.
-    for algo in ["el", "pt", "lt"] {
-        cases.push(([["-a", algo].as_slice(), &radius].concat(), "texel"));
-    }
-    for algo in ["pt", "vcm"] {
-        cases.push(([["-a", algo, "--flatten-instances"].as_slice(), &radius].concat(), "storage"));
-    }
+    // as texels, which the cap would refuse: pt, which has neither.
+    cases.push((vec!["-a", "pt"], "texel"));
+    cases.push(([["-a", "vcm", "--flatten-instances"].as_slice(), &radius].concat(), "storage"));
     for (args, reads) in cases {
         let what = format!("{args:?} reads {reads}");
         let free = render_chunked(dir.path(), &scene, &args, reads, None, None, true).unwrap();
@@ -257,7 +253,7 @@ fn scene_bvh_and_geometry_larger_than_one_binding_render_in_chunks() {
     // Texture coordinates (vertex attributes) in chunks of 256 bytes, a vertex's three
     // elements often in two: BoxTextured (its arrays are small, hence the smaller cap).
     let textured = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/khronos/BoxTextured.gltf");
-    for algo in ["el", "pt", "lt"] {
+    for algo in ["pt", "lt"] {
         let free = render_chunked(dir.path(), &textured, &["-a", algo], "storage", None, None, true).unwrap();
         let chunked = render_chunked(dir.path(), &textured, &["-a", algo], "storage", Some(512), Some(256), true)
             .unwrap_or_else(|e| panic!("BoxTextured {algo} with a 512-byte binding limit: {e}"));
