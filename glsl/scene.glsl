@@ -16,6 +16,15 @@
 #include "common.glsl"
 
 layout(std430) readonly buffer scene_params { GpuParams params; };
+// A GpuTriangle from its 16 bytes read as a uvec4 (texel and chunked reads).
+GpuTriangle triangle_of(uvec4 v) {
+    GpuTriangle t;
+    t.material = v.x;
+    t.light = v.y;
+    t.first_vertex = v.z;
+    t._pad = v.w;
+    return t;
+}
 // The scene's buffers that can outgrow one binding (vertex attributes, texels, the
 // environment map) are reached by device address where the device has it
 // (DEVICE_ADDRESSES: the binding scene_addresses holds them, src/render/scene_gpu.rs);
@@ -51,15 +60,7 @@ uvec4 scene_chunked_elem(uint array, uint i) {
     uvec2 chunk = scene_chunk[scene_address.chunk_first[array] + (i >> SCENE_CHUNK_SHIFT)];
     return ARRAY_AT(Uvec4s, chunk)[i & ((1u << SCENE_CHUNK_SHIFT) - 1u)];
 }
-GpuTriangle triangle_at(uint i) {
-    uvec4 v = scene_chunked_elem(CHUNK_TRIANGLES, i);
-    GpuTriangle t;
-    t.material = v.x;
-    t.light = v.y;
-    t.first_vertex = v.z;
-    t._pad = v.w;
-    return t;
-}
+GpuTriangle triangle_at(uint i) { return triangle_of(scene_chunked_elem(CHUNK_TRIANGLES, i)); }
 vec4 shading_normal_at(uint i) { return uintBitsToFloat(scene_chunked_elem(CHUNK_SHADING_NORMALS, i)); }
 #endif
 // The BVH: bvh.glsl declares it (64-bit loads, faster on lavapipe than vec4 arrays:
@@ -82,15 +83,7 @@ vec4 texel_vec4(utextureBuffer b, uint i) { return uintBitsToFloat(texelFetch(b,
 #if !SCENE_CHUNKS
 uniform utextureBuffer triangles;
 uniform utextureBuffer shading_normals;
-GpuTriangle triangle_at(uint i) {
-    uvec4 v = texelFetch(triangles, int(i));
-    GpuTriangle t;
-    t.material = v.x;
-    t.light = v.y;
-    t.first_vertex = v.z;
-    t._pad = v.w;
-    return t;
-}
+GpuTriangle triangle_at(uint i) { return triangle_of(texelFetch(triangles, int(i))); }
 vec4 shading_normal_at(uint i) { return texel_vec4(shading_normals, i); }
 #endif
 GpuSphere sphere_at(uint i) {

@@ -101,20 +101,39 @@ fn render_scene_capped(
     cap: Option<u64>,
     addresses: bool,
 ) -> Result<Vec<[f32; 3]>, String> {
+    render_cli(dir, scene, &["-a", algo], "storage", size, (cap, None), addresses)
+}
+
+/// `vkvcm render` of `scene` with `args` at `size` x `size`, 2 iterations, reading it as
+/// `reads`, with the binding limit capped at `caps.0` bytes and scene arrays read in
+/// chunks cut to `caps.1` bytes; the image, or the error text.
+fn render_cli(
+    dir: &Path,
+    scene: &str,
+    args: &[&str],
+    reads: &str,
+    size: u32,
+    (cap, chunk): (Option<u64>, Option<u64>),
+    addresses: bool,
+) -> Result<Vec<[f32; 3]>, String> {
     let stem = Path::new(scene).file_stem().unwrap().to_string_lossy();
-    let out = dir.join(format!("{stem}-{algo}-{size}-{cap:?}-{addresses}.exr"));
+    let out = dir.join(format!("{stem}-{}-{reads}-{size}-{cap:?}-{chunk:?}-{addresses}.exr", args.join("")));
     let mut c = vkvcm(dir);
-    c.args(["render", scene, "-a", algo, "--width", &size.to_string(), "--height", &size.to_string()]);
-    c.args(["-i", "2", "--reads", "storage", "-o"]).arg(&out);
+    c.args(["render", scene]).args(args);
+    c.args(["--width", &size.to_string(), "--height", &size.to_string(), "-i", "2", "--reads", reads, "-o"]);
+    c.arg(&out);
     if let Some(cap) = cap {
         c.env("VKVCM_TEST_MAX_BINDING_BYTES", cap.to_string());
+    }
+    if let Some(chunk) = chunk {
+        c.env("VKVCM_TEST_SCENE_CHUNK_BYTES", chunk.to_string());
     }
     if !addresses {
         c.env("VKVCM_DEVICE_ADDRESSES", "0");
     }
     let o = c.output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr).to_string();
-    assert!(!err.contains("panicked") && !err.contains("validation"), "{algo}: {err}");
+    assert!(!err.contains("panicked") && !err.contains("validation"), "{args:?}: {err}");
     if !o.status.success() {
         return Err(err);
     }
@@ -176,9 +195,7 @@ fn scene_buffers_larger_than_one_binding_render() {
     }
 }
 
-/// `vkvcm render` of `scene` (with `args`) at 16 x 16, 2 iterations, reading it as `reads`,
-/// with the binding limit capped at `cap` bytes and scene arrays read in chunks cut to
-/// `chunk` bytes; the image, or the error text.
+/// [`render_cli`] at 16 x 16.
 fn render_chunked(
     dir: &Path,
     scene: &Path,
@@ -188,27 +205,7 @@ fn render_chunked(
     chunk: Option<u64>,
     addresses: bool,
 ) -> Result<Vec<[f32; 3]>, String> {
-    let stem = scene.file_stem().unwrap().to_string_lossy();
-    let out = dir.join(format!("{stem}-{}-{reads}-{cap:?}-{chunk:?}-{addresses}.exr", args.join("")));
-    let mut c = vkvcm(dir);
-    c.arg("render").arg(scene).args(args).args(["--width", "16", "--height", "16", "-i", "2", "--reads", reads, "-o"]);
-    c.arg(&out);
-    if let Some(cap) = cap {
-        c.env("VKVCM_TEST_MAX_BINDING_BYTES", cap.to_string());
-    }
-    if let Some(chunk) = chunk {
-        c.env("VKVCM_TEST_SCENE_CHUNK_BYTES", chunk.to_string());
-    }
-    if !addresses {
-        c.env("VKVCM_DEVICE_ADDRESSES", "0");
-    }
-    let o = c.output().unwrap();
-    let err = String::from_utf8_lossy(&o.stderr).to_string();
-    assert!(!err.contains("panicked") && !err.contains("validation"), "{args:?}: {err}");
-    if !o.status.success() {
-        return Err(err);
-    }
-    Ok(vkvcm::image::read_exr(&out).unwrap().0.data)
+    render_cli(dir, &scene.to_string_lossy(), args, reads, 16, (cap, chunk), addresses)
 }
 
 /// A scene whose BVH and geometry are larger than one binding (src/render/scene_gpu.rs,

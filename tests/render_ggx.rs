@@ -13,30 +13,23 @@ mod common;
 use std::sync::Arc;
 
 use common::scenes::*;
-use common::{render_stats, with_gpu};
+use common::{render_checked, render_stats, with_gpu};
 use glam::Vec3;
 use vkvcm::gpu::Gpu;
 use vkvcm::image::stats::{welch_test, PixelStats};
-use vkvcm::render::{self, Algorithm, Budget, RenderSettings};
+use vkvcm::render::{Algorithm, Budget, RenderSettings};
 use vkvcm::scene::{Light, Material, Scene, Sphere};
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 24;
 const H: u32 = 24;
 
-fn render_one(gpu: &Arc<Gpu>, scene: &Scene, s: &RenderSettings) -> render::RenderOutput {
-    let out = render::render(gpu, scene, s, None, &mut |_| {}).unwrap();
-    assert_eq!(out.rejected_samples, 0, "{} {:?}: rejected samples", scene.name, s.algorithm);
-    assert_eq!(out.overflow_splats, 0, "{} {:?}: overflowing splats", scene.name, s.algorithm);
-    out
-}
-
 fn stats(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, nee: bool, iterations: u64, seed: u32) -> PixelStats {
     let mut s = RenderSettings::new(algo, W, H, Budget::Iterations(iterations));
     s.frame.seed = seed;
     s.frame.max_path_length = 4;
     s.nee = nee;
-    render_stats(&render_one(gpu, scene, &s), None)
+    render_stats(&render_checked(gpu, scene, &s), None)
 }
 
 /// Left half: pure GGX metal, roughness 0.3 (alpha 0.09), coloured F0. Right half:
@@ -173,7 +166,7 @@ fn ggx_furnace_conserves_energy() {
             let mut s = RenderSettings::new(Algorithm::Pt, 16, 16, Budget::Iterations(256));
             s.frame.max_path_length = k_max;
             s.frame.seed = 31;
-            let st = render_stats(&render_one(gpu, &scene, &s), None);
+            let st = render_stats(&render_checked(gpu, &scene, &s), None);
             let n = st.mean.len() as f64;
             let mean = st.mean.iter().map(|c| c[0]).sum::<f64>() / n;
             let se = (st.variance.iter().map(|v| v[0]).sum::<f64>() / (n * n * st.count as f64)).sqrt();
@@ -228,7 +221,7 @@ fn gltf_material_never_reflects_more_than_it_receives() {
                 let mut s = RenderSettings::new(algo, w, h, Budget::Iterations(iterations));
                 s.frame.max_path_length = 2;
                 s.frame.seed = 41 + algo as u32;
-                render_one(gpu, &sc, &s)
+                render_checked(gpu, &sc, &s)
             };
             let run = |algo: Algorithm, iterations: u64| render_stats(&render(algo, iterations), None);
             let pt_out = render(Algorithm::Pt, 512);

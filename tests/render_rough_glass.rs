@@ -14,7 +14,7 @@ mod common;
 use std::sync::Arc;
 
 use common::scenes::*;
-use common::{render_stats, with_gpu};
+use common::{render_checked, render_stats, with_gpu};
 use glam::Vec3;
 use vkvcm::gpu::Gpu;
 use vkvcm::image::stats::{welch_test, PixelStats};
@@ -24,13 +24,6 @@ use vkvcm::scene::{Light, Material, Scene, Sphere};
 const ALPHA: f64 = 1e-3;
 const W: u32 = 24;
 const H: u32 = 24;
-
-fn render_one(gpu: &Arc<Gpu>, scene: &Scene, s: &RenderSettings) -> render::RenderOutput {
-    let out = render::render(gpu, scene, s, None, &mut |_| {}).unwrap();
-    assert_eq!(out.rejected_samples, 0, "{} {:?}: rejected samples", scene.name, s.algorithm);
-    assert_eq!(out.overflow_splats, 0, "{} {:?}: overflowing splats", scene.name, s.algorithm);
-    out
-}
 
 fn render(
     gpu: &Arc<Gpu>,
@@ -44,7 +37,7 @@ fn render(
     s.frame.seed = seed;
     s.frame.max_path_length = 6;
     s.nee = nee;
-    render_one(gpu, scene, &s)
+    render_checked(gpu, scene, &s)
 }
 
 fn stats(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, nee: bool, iterations: u64, seed: u32) -> PixelStats {
@@ -181,7 +174,7 @@ fn rough_glass_furnace() {
             let mut s = RenderSettings::new(Algorithm::Pt, w, h, Budget::Iterations(512));
             s.frame.max_path_length = 24;
             s.frame.seed = 61;
-            let st = render_stats(&render_one(gpu, &sc, &s), None);
+            let st = render_stats(&render_checked(gpu, &sc, &s), None);
             let z = vkvcm::image::stats::inverse_normal_cdf(1.0 - vkvcm::image::stats::sidak(ALPHA, 3 * st.mean.len()));
             let (mut worst, mut sum, mut var, mut n) = (0.0f64, 0.0f64, 0.0f64, 0usize);
             for (m, v) in st.mean.iter().zip(&st.variance) {
@@ -245,7 +238,7 @@ fn rough_glass_furnace_from_inside() {
             let mut s = RenderSettings::new(Algorithm::Pt, w, h, Budget::Iterations(256));
             s.frame.max_path_length = 24;
             s.frame.seed = 71;
-            let st = render_stats(&render_one(gpu, &sc, &s), None);
+            let st = render_stats(&render_checked(gpu, &sc, &s), None);
             let z = vkvcm::image::stats::inverse_normal_cdf(1.0 - vkvcm::image::stats::sidak(ALPHA, 3 * st.mean.len()));
             let (mut sum, mut var) = (0.0f64, 0.0f64);
             for (m, v) in st.mean.iter().zip(&st.variance) {

@@ -151,3 +151,15 @@ pub fn assert_matches_mitsuba(
         assert!((a - b).abs() < 0.005 * b, "{stem} {}: image mean {a}, Mitsuba's {b}", algo.name());
     }
 }
+
+/// `render::render` of `scene` with `s`, failing on rejected samples or overflowing splats.
+pub fn render_checked(
+    gpu: &Arc<Gpu>,
+    scene: &vkvcm::scene::Scene,
+    s: &vkvcm::render::RenderSettings,
+) -> vkvcm::render::RenderOutput {
+    let out = vkvcm::render::render(gpu, scene, s, None, &mut |_| {}).unwrap();
+    assert_eq!(out.rejected_samples, 0, "{} {:?}: rejected samples", scene.name, s.algorithm);
+    assert_eq!(out.overflow_splats, 0, "{} {:?}: overflowing splats", scene.name, s.algorithm);
+    out
+}
