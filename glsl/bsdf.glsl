@@ -511,14 +511,8 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
 #endif
 #if HAS_GGX
         if (x >= b.prob_diffuse + b.prob_phong) {
-            // GGX: half vector from D(h) cos(theta_h): tan^2(theta_h) = a^2 u / (1 - u)
-            // (Walter et al. 2007, eq. 35-36), then reflect wo about it.
-            float a = m.glossy.w;
-            float t2 = a * a * u.x / max(1.0 - u.x, 1e-7);
-            float ch = 1.0 / sqrt(1.0 + t2);
-            float sh = sqrt(max(0.0, 1.0 - ch * ch));
-            float phi = 2.0 * PI * u.y;
-            vec3 h = to_world(vec3(sh * cos(phi), sh * sin(phi), ch), b.n);
+            // GGX: half vector from D(h) cos(theta_h), then reflect wo about it.
+            vec3 h = ggx_sample_h(b.n, m.glossy.w, u.xy);
             float oh = dot(b.wo, h);
             if (oh <= 0.0) return s;
             s.wi = 2.0 * oh * h - b.wo;
