@@ -151,6 +151,27 @@ fn rough_glass_bpt_and_lt_match_pt() {
     });
 }
 
+/// The white furnace: a glass sphere of IOR 1.5 and `roughness` (radius 1, at the origin)
+/// under a white sky of radiance 1, seen by `cam`, rendered by pt with paths of up to 24
+/// segments; the scene and its per-pixel statistics.
+fn furnace(
+    gpu: &Arc<Gpu>,
+    roughness: f32,
+    cam: vkvcm::scene::Camera,
+    (w, h): (u32, u32),
+    iterations: u64,
+    seed: u32,
+) -> (Scene, PixelStats) {
+    let mat = rough_glass(&format!("furnace r {roughness}"), 1.5, roughness);
+    let mut sc = scene("rough glass furnace", vec![], vec![mat], vec![Light::Background { radiance: Vec3::ONE }], cam);
+    sc.spheres = vec![Sphere { center: Vec3::ZERO, radius: 1.0, material: 0 }];
+    let mut s = RenderSettings::new(Algorithm::Pt, w, h, Budget::Iterations(iterations));
+    s.frame.max_path_length = 24;
+    s.frame.seed = seed;
+    let st = render_stats(&render_checked(gpu, &sc, &s), None);
+    (sc, st)
+}
+
 /// A white furnace: a rough glass sphere under a uniform white background of radiance 1.
 /// A lossless dielectric would show exactly 1 in every pixel (radiance is eta^2 times
 /// larger inside and scaled back on the way out), so no pixel may exceed 1 (one-sided
@@ -166,15 +187,8 @@ fn rough_glass_furnace() {
         // (roughness, smallest mean of the sphere's pixels, Mitsuba 3.9.1's mean and its
         // standard error); roughness 0 is smooth glass (Mitsuba's `dielectric` gives 1).
         for (roughness, min_mean, mitsuba, mitsuba_se) in MITSUBA_FURNACE {
-            let mat = rough_glass(&format!("furnace r {roughness}"), 1.5, roughness);
             let cam = camera(Vec3::new(0.0, 0.0, 3.2), Vec3::new(0.0, 0.0, -1.0), Vec3::Y, 45.0);
-            let mut sc =
-                scene("rough glass furnace", vec![], vec![mat], vec![Light::Background { radiance: Vec3::ONE }], cam);
-            sc.spheres = vec![Sphere { center: Vec3::ZERO, radius: 1.0, material: 0 }];
-            let mut s = RenderSettings::new(Algorithm::Pt, w, h, Budget::Iterations(512));
-            s.frame.max_path_length = 24;
-            s.frame.seed = 61;
-            let st = render_stats(&render_checked(gpu, &sc, &s), None);
+            let (sc, st) = furnace(gpu, roughness, cam, (w, h), 512, 61);
             let z = vkvcm::image::stats::inverse_normal_cdf(1.0 - vkvcm::image::stats::sidak(ALPHA, 3 * st.mean.len()));
             let (mut worst, mut sum, mut var, mut n) = (0.0f64, 0.0f64, 0.0f64, 0usize);
             for (m, v) in st.mean.iter().zip(&st.variance) {
@@ -230,15 +244,8 @@ fn rough_glass_furnace_from_inside() {
     let eta2 = 2.25f64;
     with_gpu(|gpu| {
         for (roughness, mitsuba, mitsuba_se) in MITSUBA_FURNACE_INSIDE {
-            let mat = rough_glass(&format!("furnace r {roughness}"), 1.5, roughness);
             let cam = camera(Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), Vec3::Y, 45.0);
-            let mut sc =
-                scene("rough glass furnace", vec![], vec![mat], vec![Light::Background { radiance: Vec3::ONE }], cam);
-            sc.spheres = vec![Sphere { center: Vec3::ZERO, radius: 1.0, material: 0 }];
-            let mut s = RenderSettings::new(Algorithm::Pt, w, h, Budget::Iterations(256));
-            s.frame.max_path_length = 24;
-            s.frame.seed = 71;
-            let st = render_stats(&render_checked(gpu, &sc, &s), None);
+            let (_, st) = furnace(gpu, roughness, cam, (w, h), 256, 71);
             let z = vkvcm::image::stats::inverse_normal_cdf(1.0 - vkvcm::image::stats::sidak(ALPHA, 3 * st.mean.len()));
             let (mut sum, mut var) = (0.0f64, 0.0f64);
             for (m, v) in st.mean.iter().zip(&st.variance) {

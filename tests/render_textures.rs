@@ -522,9 +522,9 @@ fn textured_and_masked_scene_matches_mitsuba() {
 /// 24 segments; Mitsuba's `normalmap` BSDF around its `diffuse`. The material is made
 /// Lambertian (the normal map kept), as the script's Mitsuba scene describes it. pt and
 /// vcm per pixel: vcm's light subpaths reach the camera through the ground's adjoint
-/// shading-normal correction. With the generated tangents' bitangent reversed (as vkvcm
-/// generated them before this test: MikkTSpace given glTF's v unflipped,
-/// src/scene/gltf_import/tangents.rs) pt fails on 344 of 2304 pixels.
+/// shading-normal correction. With the generated tangents' bitangent reversed (MikkTSpace
+/// given glTF's v unflipped, src/scene/gltf_import/tangents.rs) pt fails on 344 of 2304
+/// pixels.
 #[test]
 fn normal_mapped_ground_matches_mitsuba() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/env");

@@ -471,7 +471,8 @@ impl SceneGpu {
         ]);
         let mut addresses = GpuSceneAddresses { chunk_first, ..Default::default() };
         if gpu.has(BUFFER_DEVICE_ADDRESS) {
-            // (None for the vertex attributes when they are read in chunks.)
+            // (Zero for the vertex attributes when they are read in chunks: no buffer of
+            // that name then.)
             let address = |name: &str| -> Result<[u32; 2]> {
                 let Some(b) = buffers.iter().find(|b| b.name() == name) else { return Ok([0, 0]) };
                 let a = b.device_address()?;
