@@ -8,8 +8,8 @@ use rand::Rng;
 use vkvcm::bvh::build::tree_stats;
 use vkvcm::bvh::layout::{decode_ref, dequantize_boxes, quantize_boxes};
 use vkvcm::bvh::{
-    brute_force_any, brute_force_closest, build, build_with, Aabb, BuildOptions, Bvh, Ray, SplitMethod, MAX_DEPTH,
-    MAX_LEAF_PRIMS,
+    brute_force_any, brute_force_closest, build, build_with, Aabb, BuildOptions, Bvh, LeafRule, Ray, SplitMethod,
+    MAX_DEPTH, MAX_LEAF_PRIMS, SIZE_LEAF_RULE_MIN_PRIMS,
 };
 use vkvcm::scene::{Sphere, Triangle};
 
@@ -275,6 +275,15 @@ fn parallel_build_is_the_serial_build() {
             let parallel = build_with(&tris, &spheres, &BuildOptions { threads, ..Default::default() });
             assert_same_bvh(&serial, &parallel, &format!("{what}, {threads} threads"));
         }
+        // The size rule (the default for large scenes) too.
+        let by_size = |threads| BuildOptions { threads, leaf_rule: LeafRule::Size, ..Default::default() };
+        let serial_by_size = build_with(&tris, &spheres, &by_size(1));
+        check_structure(&serial_by_size);
+        check_ids(&serial_by_size, &tris, &spheres, 0);
+        for threads in [2, 8] {
+            let parallel = build_with(&tris, &spheres, &by_size(threads));
+            assert_same_bvh(&serial_by_size, &parallel, &format!("{what}, size rule, {threads} threads"));
+        }
         // `threads: 0` builds on the caller's rayon pool, whatever its size.
         for pool_threads in [1, 2, 4] {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(pool_threads).build().unwrap();
@@ -294,31 +303,79 @@ fn parallel_median_build_is_the_serial_build() {
     assert_same_bvh(&serial, &build_with(&s.triangles, &s.spheres, &opts(4)), "median split, 4 threads");
 }
 
-/// The tree is the one the serial builder made before the build was parallelised (commit
-/// ce99580, `threads: 1`): CRC-32 of the node and primitive arrays of the 1M-triangle
-/// `displaced` scene, whose mesh needs no libm function (only sqrt and floor, exact
-/// everywhere). Images rendered with the BVH are therefore unchanged as well.
+/// With the SAH leaf rule the tree is the one the serial builder made before the build was
+/// parallelised (commit ce99580, `threads: 1`): CRC-32 of the node and primitive arrays of
+/// the 1M-triangle `displaced` scene, whose mesh needs no libm function (only sqrt and
+/// floor, exact everywhere). The default build of that mesh (over
+/// `SIZE_LEAF_RULE_MIN_PRIMS` primitives: the size rule) is pinned too, so that a change
+/// of either tree, and so of rendered images, is noticed.
 #[test]
 fn tree_unchanged_since_the_serial_builder() {
     let scene = vkvcm::bench::traverse::scene_displaced();
-    let bvh = build(&scene.triangles, &scene.spheres);
-    assert_eq!((bvh.nodes.len(), bvh.prims.len()), (543_136, 1_002_252));
-    assert_eq!(format!("{:08x}", vkvcm::bench::build::checksum(&bvh)), "dda26bfc");
+    assert!(scene.triangles.len() >= SIZE_LEAF_RULE_MIN_PRIMS);
+    let sah =
+        build_with(&scene.triangles, &scene.spheres, &BuildOptions { leaf_rule: LeafRule::Sah, ..Default::default() });
+    assert_eq!((sah.nodes.len(), sah.prims.len()), (543_136, 1_002_252));
+    assert_eq!(format!("{:08x}", vkvcm::bench::build::checksum(&sah)), "dda26bfc");
+    let default = build(&scene.triangles, &scene.spheres);
+    assert_eq!((default.nodes.len(), default.prims.len()), (302_975, 1_002_252));
+    assert_eq!(format!("{:08x}", vkvcm::bench::build::checksum(&default)), "3a840532");
+}
+
+/// Primitives below each internal node (index = node), from the leaves up.
+fn subtree_prims(bvh: &Bvh) -> Vec<u32> {
+    let mut below = vec![0u32; bvh.nodes.len()];
+    // Preorder: every child has a larger index than its parent.
+    for ni in (0..bvh.nodes.len()).rev() {
+        let n = &bvh.nodes[ni];
+        below[ni] = (0..2)
+            .map(|i| match decode_ref(n.child(i)) {
+                Ok(c) => below[c as usize],
+                Err((_, count)) => count,
+            })
+            .sum();
+    }
+    below
+}
+
+/// The size rule makes every node of at most `max_leaf` primitives a leaf (no internal
+/// node but the root has that few below it), where the SAH rule splits some of them; the
+/// automatic rule is the SAH rule below `SIZE_LEAF_RULE_MIN_PRIMS` primitives.
+#[test]
+fn leaf_rules() {
+    let s = test_scene(41, 20_000, 200);
+    let with = |leaf_rule| build_with(&s.triangles, &s.spheres, &BuildOptions { leaf_rule, ..Default::default() });
+    let (sah, size, auto) = (with(LeafRule::Sah), with(LeafRule::Size), with(LeafRule::Auto));
+    for bvh in [&sah, &size] {
+        check_structure(bvh);
+        check_ids(bvh, &s.triangles, &s.spheres, 0);
+    }
+    let small = |bvh: &Bvh| subtree_prims(bvh).iter().skip(1).filter(|&&n| n as usize <= MAX_LEAF_PRIMS).count();
+    assert_eq!(small(&size), 0, "the size rule split a node of at most {MAX_LEAF_PRIMS} primitives");
+    assert!(small(&sah) > 0, "the SAH rule split no small node: the test cannot tell the rules apart");
+    assert!(size.nodes.len() < sah.nodes.len());
+    assert_same_bvh(&sah, &auto, "automatic rule on 20,200 primitives");
 }
 
 #[test]
 fn cpu_traversal_matches_brute_force() {
     let s = test_scene(6, 3000, 300);
-    let bvh = build(&s.triangles, &s.spheres);
+    for leaf_rule in [LeafRule::Auto, LeafRule::Size] {
+        let bvh = build_with(&s.triangles, &s.spheres, &BuildOptions { leaf_rule, ..Default::default() });
+        cpu_traversal_matches_brute_force_on(&s, &bvh);
+    }
+}
+
+fn cpu_traversal_matches_brute_force_on(s: &TestScene, bvh: &Bvh) {
     let gpu = bvh.to_gpu();
-    let rays = test_rays(&s, 7, 3000);
+    let rays = test_rays(s, 7, 3000);
     let mut errors = Vec::new();
     let mut hits = 0;
     for (ray, tmin, tmax) in &rays {
         let want = brute_force_closest(&s.triangles, &s.spheres, ray, *tmin, *tmax);
         let got = gpu.closest_hit(ray, *tmin, *tmax);
         hits += want.is_some() as usize;
-        if let Err(e) = check_hit(&s, "cpu bvh", ray, got, want) {
+        if let Err(e) = check_hit(s, "cpu bvh", ray, got, want) {
             errors.push(e);
         }
         let any = gpu.any_hit(ray, *tmin, *tmax);

@@ -10,7 +10,7 @@ use bvh_common::*;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use rand::Rng;
-use vkvcm::bvh::{brute_force_closest, build, GpuBvh, Hit, Ray};
+use vkvcm::bvh::{brute_force_closest, build, build_with, BuildOptions, GpuBvh, Hit, LeafRule, Ray};
 use vkvcm::gpu::{groups_for, Bind, Gpu};
 
 #[repr(C)]
@@ -174,22 +174,31 @@ fn gpu_icosphere_is_watertight() {
 #[test]
 fn gpu_matches_cpu_traversal_on_large_scene() {
     // 200k triangles + 5k spheres: the GPU must agree with the CPU traversal (itself
-    // checked against the brute force) on the primitive hit and t.
+    // checked against the brute force) on the primitive hit and t, for trees of both leaf
+    // rules (the SAH's, the default at this size, and the size rule of larger scenes).
     let s = test_scene(15, 200_000, 5000);
-    let bvh = build(&s.triangles, &s.spheres).into_gpu();
     let rays = test_rays(&s, 16, 30_000);
-    let results = common::with_gpu(|gpu| trace_on_gpu(gpu, &bvh, &rays));
-    let mut errors = Vec::new();
-    for ((ray, tmin, tmax), r) in rays.iter().zip(&results) {
-        let want = bvh.closest_hit(ray, *tmin, *tmax);
-        if let Err(e) = check_hit(&s, "gpu vs cpu bvh", ray, r.closest, want) {
-            errors.push(e);
+    for leaf_rule in [LeafRule::Auto, LeafRule::Size] {
+        let bvh = build_with(&s.triangles, &s.spheres, &BuildOptions { leaf_rule, ..Default::default() }).into_gpu();
+        let results = common::with_gpu(|gpu| trace_on_gpu(gpu, &bvh, &rays));
+        let mut errors = Vec::new();
+        for ((ray, tmin, tmax), r) in rays.iter().zip(&results) {
+            let want = bvh.closest_hit(ray, *tmin, *tmax);
+            if let Err(e) = check_hit(&s, "gpu vs cpu bvh", ray, r.closest, want) {
+                errors.push(e);
+            }
+            if r.any != bvh.any_hit(ray, *tmin, *tmax) {
+                errors.push(format!("any-hit differs for {ray:?}"));
+            }
         }
-        if r.any != bvh.any_hit(ray, *tmin, *tmax) {
-            errors.push(format!("any-hit differs for {ray:?}"));
-        }
+        assert!(
+            errors.is_empty(),
+            "{leaf_rule:?}: {} of {} rays: {:#?}",
+            errors.len(),
+            rays.len(),
+            &errors[..errors.len().min(10)]
+        );
     }
-    assert!(errors.is_empty(), "{} of {} rays: {:#?}", errors.len(), rays.len(), &errors[..errors.len().min(10)]);
 }
 
 /// The two-level BVH on the GPU against its CPU mirror (itself checked against the brute

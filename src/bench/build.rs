@@ -15,7 +15,7 @@ use anyhow::{bail, Context, Result};
 use serde::Serialize;
 
 use super::traverse::{bench_scene, displaced_sphere, process_cpu_seconds, sphere_grid};
-use crate::bvh::{build_instanced, BuildOptions, Bvh};
+use crate::bvh::{build_instanced, BuildOptions, Bvh, LeafRule};
 use crate::scene::{self, Instance, SharedMesh, Sphere, Triangle};
 
 /// The generated meshes [`build_scene`] knows.
@@ -109,9 +109,9 @@ pub struct BuildRow {
     pub same_as_first: bool,
 }
 
-/// Builds `scene` `rounds` times with each of `threads` (default options otherwise), and
-/// compares every BVH with the first one built.
-pub fn bench_build(scene: &BuildScene, threads: &[usize], rounds: u32) -> Result<Vec<BuildRow>> {
+/// Builds `scene` `rounds` times with each of `threads` and `leaf_rule` (default options
+/// otherwise), and compares every BVH with the first one built.
+pub fn bench_build(scene: &BuildScene, threads: &[usize], rounds: u32, leaf_rule: LeafRule) -> Result<Vec<BuildRow>> {
     if threads.is_empty() || rounds == 0 {
         bail!("need at least one thread count and one round");
     }
@@ -119,7 +119,7 @@ pub fn bench_build(scene: &BuildScene, threads: &[usize], rounds: u32) -> Result
     let mut first: Option<Bvh> = None;
     let mut rows = Vec::new();
     for &t in threads {
-        let opts = BuildOptions { threads: t, ..Default::default() };
+        let opts = BuildOptions { threads: t, leaf_rule, ..Default::default() };
         let mut seconds = Vec::new();
         let mut cpu_seconds = Vec::new();
         let mut same = true;

@@ -24,6 +24,9 @@ pub mod layout;
 pub mod traverse;
 
 pub use aabb::Aabb;
-pub use build::{build, build_instanced, build_scene, build_with, BuildOptions, BuildStats, Bvh, SplitMethod};
+pub use build::{
+    build, build_instanced, build_scene, build_with, BuildOptions, BuildStats, Bvh, LeafRule, SplitMethod,
+    SIZE_LEAF_RULE_MIN_PRIMS,
+};
 pub use intersect::{brute_force_any, brute_force_closest, intersect_sphere, intersect_triangle, Hit, Ray};
 pub use layout::{GpuBvh, GpuNode, GpuPrim, INSTANCE_FLAG, MAX_DEPTH, MAX_LEAF_PRIMS, SPHERE_FLAG};

@@ -99,6 +99,9 @@ pub struct BenchTraverseArgs {
     /// Rays per ray set.
     #[arg(long, default_value_t = 1 << 20)]
     pub rays: u32,
+    /// When the BVH build makes a node of few primitives a leaf (docs/bvh.md, "Build").
+    #[arg(long, value_enum, default_value = "auto")]
+    pub leaf_rule: vkvcm::bvh::LeafRule,
     #[command(flatten)]
     pub gpu: super::GpuArgs,
 }
@@ -115,6 +118,9 @@ pub struct BenchBvhBuildArgs {
     /// Builds per scene and thread count; the median counts.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
     pub rounds: u32,
+    /// When the build makes a node of few primitives a leaf (docs/bvh.md, "Build").
+    #[arg(long, value_enum, default_value = "auto")]
+    pub leaf_rule: vkvcm::bvh::LeafRule,
     /// Also write the results as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -185,7 +191,8 @@ fn open_bench_gpu(args: &super::GpuArgs) -> Result<Arc<Gpu>> {
 
 fn bench_traverse(a: BenchTraverseArgs) -> Result<()> {
     let gpu = open_bench_gpu(&a.gpu)?;
-    let opts = vkvcm::bench::traverse::TraverseBenchOptions { rays: a.rays.max(1), ..Default::default() };
+    let build = vkvcm::bvh::BuildOptions { leaf_rule: a.leaf_rule, ..Default::default() };
+    let opts = vkvcm::bench::traverse::TraverseBenchOptions { rays: a.rays.max(1), build, ..Default::default() };
     for name in &a.scenes {
         let scene = vkvcm::bench::traverse::bench_scene(name)
             .with_context(|| format!("unknown traversal scene {name:?} (cornell, spheres, displaced)"))?;
@@ -207,7 +214,7 @@ fn bench_bvh_build(a: BenchBvhBuildArgs) -> Result<()> {
             let path = vkvcm::bench::build::export_triangles(&scene, dir)?;
             println!("{name}: triangles written to {}", path.display());
         }
-        for row in vkvcm::bench::build::bench_build(&scene, &a.threads, a.rounds)? {
+        for row in vkvcm::bench::build::bench_build(&scene, &a.threads, a.rounds, a.leaf_rule)? {
             println!("{row}");
             rows.push(row);
         }
