@@ -93,7 +93,7 @@ GpuSphere sphere_at(uint i) {
     return s;
 }
 // GpuMaterial's vec4s, in field order.
-#define MATERIAL_TEXELS 9u
+#define MATERIAL_TEXELS 10u
 GpuMaterial material_at(uint i) {
     GpuMaterial m;
     uint k = MATERIAL_TEXELS * i;
@@ -106,10 +106,12 @@ GpuMaterial material_at(uint i) {
     m.maps = texel_vec4(materials, k + 6u);
     m.base_metallic = texel_vec4(materials, k + 7u);
     m.f0_roughness = texel_vec4(materials, k + 8u);
+    m.medium = texel_vec4(materials, k + 9u);
     return m;
 }
 vec4 material_surface(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 5u); }
 vec4 material_maps(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 6u); }
+vec4 material_medium(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 9u); }
 GpuLight light_at(uint i) {
     GpuLight l;
     l.a = texel_vec4(lights, 5u * i);
@@ -133,6 +135,7 @@ GpuSphere sphere_at(uint i) { return sphere_data[i]; }
 GpuMaterial material_at(uint i) { return material_data[i]; }
 vec4 material_surface(uint i) { return material_data[i].surface; }
 vec4 material_maps(uint i) { return material_data[i].maps; }
+vec4 material_medium(uint i) { return material_data[i].medium; }
 GpuLight light_at(uint i) { return light_data[i]; }
 #endif
 

@@ -16,6 +16,7 @@
 #define ALPHA_OPAQUE (-1.0)
 #define ALPHA_BLEND (-2.0)
 #define MIN_GGX_ALPHA 1e-3
+#define MATERIAL_ONE_SIDED 1u
 
 struct GpuMaterial {
     vec4 diffuse;   // rgb, w: Phong exponent
@@ -32,6 +33,8 @@ struct GpuMaterial {
     vec4 base_metallic;  // with a metallic-roughness texture: rgb base colour factor,
                          // w metallic factor (glsl/bsdf.glsl, point_material)
     vec4 f0_roughness;   // rgb: the dielectric's F0, w: roughness factor
+    vec4 medium;         // rgb: attenuation coefficient inside a transmissive volume (0: none),
+                         // w: flag bits (MATERIAL_ONE_SIDED)
 };
 
 struct GpuTextureRef {

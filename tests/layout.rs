@@ -80,7 +80,8 @@ fn rust_and_glsl_layouts_match() {
             surface,
             maps,
             base_metallic,
-            f0_roughness
+            f0_roughness,
+            medium
         }),
         rust_layout!(GpuTextureRef { image, row0, row1 }),
         rust_layout!(GpuVertexAttributes { uv, color, tangent }),

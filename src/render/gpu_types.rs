@@ -27,6 +27,8 @@ pub const TEXTURE_LINEAR: u32 = 1 << 6;
 pub const ALPHA_OPAQUE: f32 = -1.0;
 /// `GpuMaterial::surface[2]` of an alphaMode BLEND material (stochastic transparency).
 pub const ALPHA_BLEND: f32 = -2.0;
+/// `GpuMaterial::medium[3]` bit: the surface is one-sided (`Material::one_sided`).
+pub const MATERIAL_ONE_SIDED: u32 = 1;
 
 /// A material (see `scene::Material`).
 #[repr(C)]
@@ -62,6 +64,10 @@ pub struct GpuMaterial {
     pub base_metallic: [f32; 4],
     /// rgb: the dielectric's F0; w: roughness factor. Zero without one.
     pub f0_roughness: [f32; 4],
+    /// rgb: the attenuation coefficient inside a transmissive volume
+    /// (`Material::attenuation`, per unit length; zero: none); w: flag bits
+    /// (`MATERIAL_ONE_SIDED`), as an f32 bit pattern.
+    pub medium: [f32; 4],
 }
 
 /// A texture as a material uses it (`scene::TextureRef`): where its image's texels are,

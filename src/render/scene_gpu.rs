@@ -417,6 +417,7 @@ impl SceneGpu {
                     maps: [bits(normal_map), m.normal_scale, bits(emissive), bits(metallic_roughness)],
                     base_metallic,
                     f0_roughness,
+                    medium: v4(m.attenuation, f32::from_bits(if m.one_sided { MATERIAL_ONE_SIDED } else { 0 })),
                 }
             })
             .collect();

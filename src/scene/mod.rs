@@ -209,6 +209,14 @@ pub struct Material {
     /// coordinates, `diffuse`, `glossy`, `glossy_untinted` and the GGX width are those of
     /// the point's own metallic and roughness (glsl/bsdf.glsl, `point_material`).
     pub metallic_roughness_texture: Option<MetallicRoughnessTexture>,
+    /// A one-sided surface (glTF `doubleSided: false` on a surface that is not a
+    /// dielectric): a ray that meets a triangle's back side (against the winding's normal)
+    /// passes through it, for every kind of ray.
+    pub one_sided: bool,
+    /// Attenuation coefficient (per unit length, per channel) of the medium inside a
+    /// closed dielectric mesh (KHR_materials_volume: -ln(attenuationColor) /
+    /// attenuationDistance); zero: clear.
+    pub attenuation: Vec3,
 }
 
 /// glTF 2.0's metallicRoughnessTexture (section 3.9.2, "Metallic-Roughness Material"),
@@ -254,6 +262,8 @@ impl Default for Material {
             normal_scale: 1.0,
             emissive_texture: None,
             metallic_roughness_texture: None,
+            one_sided: false,
+            attenuation: Vec3::ZERO,
         }
     }
 }
