@@ -77,6 +77,16 @@
 #ifdef BVH_ALPHA_TEST
 bool alpha_visible(uint id, uint material, float u, float v, float t);
 #endif
+// Optional: `#define BVH_FACE_TEST` and define back_face_visible (glsl/scene.glsl): in a
+// traversal with `cull_back_faces`, a candidate triangle hit on the back side (the ray
+// along the winding's normal cross(v1 - v0, v2 - v0), in the space the triangle is stored
+// in) is not a hit when back_face_visible(material) is false: one-sided surfaces, for
+// closest and any hits alike. In an instance's object space the test gives glTF's facing
+// in world space for mirroring transforms too, since the glTF front side is the
+// object-space one.
+#ifdef BVH_FACE_TEST
+bool back_face_visible(uint material);
+#endif
 
 #ifndef BVH_TEXEL
 #define BVH_TEXEL 0
@@ -237,7 +247,7 @@ void bvh_load_node(uint n, out vec3 lo0, out vec3 hi0, out vec3 lo1, out vec3 hi
 // internal nodes (nearer child first, the farther one pushed with its entry distance)
 // until a leaf, tests the leaf, and pops. The inner node loop runs until every lane of
 // a SIMD group has reached a leaf, so the leaf tests of the group run together.
-int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hit,
+int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hit, bool cull_back_faces,
                  out float hu, out float hv, out uint hrecord) {
     vec3 inv_d = bvh_safe_inv(d);
     RayShear sh = ray_shear(d);
@@ -314,9 +324,14 @@ int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hi
             } else
 #endif
             {
+                vec3 v0 = uintBitsToFloat(pa.xyz);
+                vec3 v1 = uintBitsToFloat(pb.xyz);
                 vec3 v2 = uintBitsToFloat(bvh_prim_elem(3u * i + 2u).xyz);
-                hit = intersect_triangle(o, sh, uintBitsToFloat(pa.xyz), uintBitsToFloat(pb.xyz),
-                                         v2, tmin, tmax, t, u, v);
+                hit = intersect_triangle(o, sh, v0, v1, v2, tmin, tmax, t, u, v);
+#ifdef BVH_FACE_TEST
+                if (cull_back_faces && hit && dot(d, cross(v1 - v0, v2 - v0)) > 0.0 && !back_face_visible(pb.w))
+                    hit = false;
+#endif
             }
 #ifdef BVH_ALPHA_TEST
             if (hit && !alpha_visible(pa.w, pb.w, u, v, t)) hit = false;
@@ -346,12 +361,12 @@ int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hi
 }
 
 // Closest hit with tmin <= t <= tmax. On a miss returns false, h.t = tmax,
-// h.prim = 0xffffffff.
-bool trace_closest(vec3 o, vec3 d, float tmin, float tmax, out Hit h) {
+// h.prim = 0xffffffff. `cull_back_faces`: see BVH_FACE_TEST.
+bool trace_closest_culling(vec3 o, vec3 d, float tmin, float tmax, bool cull_back_faces, out Hit h) {
     float t = tmax;
     float u, v;
     uint record;
-    int slot = bvh_traverse(o, d, tmin, t, false, u, v, record);
+    int slot = bvh_traverse(o, d, tmin, t, false, cull_back_faces, u, v, record);
     h.t = t;
     h.u = u;
     h.v = v;
@@ -371,11 +386,19 @@ bool trace_closest(vec3 o, vec3 d, float tmin, float tmax, out Hit h) {
 }
 
 // Whether anything is hit with tmin <= t <= tmax (shadow rays; stops at the first hit).
-bool trace_any(vec3 o, vec3 d, float tmin, float tmax) {
+bool trace_any_culling(vec3 o, vec3 d, float tmin, float tmax, bool cull_back_faces) {
     float t = tmax;
     float u, v;
     uint record;
-    return bvh_traverse(o, d, tmin, t, true, u, v, record) >= 0;
+    return bvh_traverse(o, d, tmin, t, true, cull_back_faces, u, v, record) >= 0;
+}
+
+// Every surface on both sides.
+bool trace_closest(vec3 o, vec3 d, float tmin, float tmax, out Hit h) {
+    return trace_closest_culling(o, d, tmin, tmax, false, h);
+}
+bool trace_any(vec3 o, vec3 d, float tmin, float tmax) {
+    return trace_any_culling(o, d, tmin, tmax, false);
 }
 
 #endif

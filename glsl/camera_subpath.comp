@@ -182,7 +182,7 @@ void main() {
         }
         alive = false;
         Hit h;
-        if (!trace_closest(st.o, st.d, 0.0, 1e30, h)) {
+        if (!(st.len == 1u ? trace_camera_segment(st.o, st.d, h) : trace_closest(st.o, st.d, 0.0, 1e30, h))) {
             uint bg = background_light();
             if (bg != NO_LIGHT && st.len >= min_len) {
                 float dpdf, epdf;

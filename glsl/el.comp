@@ -15,7 +15,7 @@ void main() {
     vec3 d = camera_sample(pixel, rng);
     Hit h;
     vec3 v = vec3(0.0);
-    if (trace_closest(params.cam_pos.xyz, d, 0.0, 1e30, h)) {
+    if (trace_camera_segment(params.cam_pos.xyz, d, h)) {
         Surface s = surface_at(h, params.cam_pos.xyz, d);
         v = abs(dot(s.ns, d)) * s.tint.rgb;
     }

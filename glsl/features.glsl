@@ -70,6 +70,10 @@
 #ifndef HAS_ALPHA_MASK
 #define HAS_ALPHA_MASK 1
 #endif
+// One-sided surfaces (glTF doubleSided false): rays pass through their back side.
+#ifndef HAS_ONE_SIDED
+#define HAS_ONE_SIDED 1
+#endif
 #ifndef HAS_NORMAL_MAPS
 #define HAS_NORMAL_MAPS 1
 #endif

@@ -45,7 +45,8 @@ bool start_path(uint path, out SubpathState st, out uint rng) {
             float dist = length(to_cam);
             to_cam /= dist;
             float cos_l = dot(e.normal, to_cam);
-            if (cos_l > EPS_COSINE_LIGHT && visible(e.pos, e.normal, params.cam_pos.xyz, vec3(0.0))) {
+            // The camera is on the emitting (front) side: camera_segment_clear suffices.
+            if (cos_l > EPS_COSINE_LIGHT && camera_segment_clear(e.pos, e.normal)) {
                 float cos_cam = dot(params.cam_forward.xyz, -to_cam);
                 float plane = params.cam_pos.w;
                 float we_g = plane * plane / (cos_cam * cos_cam * cos_cam) * cos_l / (dist * dist);
@@ -114,7 +115,7 @@ void main() {
 #endif
 #if CONNECT_CAMERA
             if (st.len + 1u >= min_path_length())
-                connect_to_camera(st, s.p, s.ng, b, LIGHT_TRACE_ONLY != 0);
+                connect_to_camera(st, s.p, s.ng, h.is_sphere, b, LIGHT_TRACE_ONLY != 0);
 #endif
         }
         if (st.len + 2u > max_len) continue;

@@ -62,7 +62,7 @@ void main() {
         }
         alive = false;
         Hit h;
-        if (!trace_closest(o, d, 0.0, 1e30, h)) {
+        if (!(len == 1u ? trace_camera_segment(o, d, h) : trace_closest(o, d, 0.0, 1e30, h))) {
             uint bg = background_light();
             if (bg != NO_LIGHT && len >= min_len) {
                 float dpdf, epdf;

@@ -142,6 +142,14 @@ GpuLight light_at(uint i) { return light_data[i]; }
 #if HAS_ALPHA_MASK
 #define BVH_ALPHA_TEST
 #endif
+#if HAS_ONE_SIDED
+#define BVH_FACE_TEST
+// Whether a triangle of `material` is there for a ray meeting its back side (the side
+// its winding's normal points away from): not when the material is one-sided.
+bool back_face_visible(uint material) {
+    return (floatBitsToUint(material_medium(material).w) & MATERIAL_ONE_SIDED) == 0u;
+}
+#endif
 #include "bvh.glsl"
 #include "textures.glsl"
 
@@ -159,8 +167,18 @@ bool trace_any_counted(vec3 o, vec3 d, float tmin, float tmax) {
     rays_traced += 1u;
     return trace_any(o, d, tmin, tmax);
 }
+bool trace_closest_culling_counted(vec3 o, vec3 d, float tmin, float tmax, bool cull, out Hit h) {
+    rays_traced += 1u;
+    return trace_closest_culling(o, d, tmin, tmax, cull, h);
+}
+bool trace_any_culling_counted(vec3 o, vec3 d, float tmin, float tmax, bool cull) {
+    rays_traced += 1u;
+    return trace_any_culling(o, d, tmin, tmax, cull);
+}
 #define trace_closest trace_closest_counted
 #define trace_any trace_any_counted
+#define trace_closest_culling trace_closest_culling_counted
+#define trace_any_culling trace_any_culling_counted
 #define COUNT_RAYS_FLUSH()                                                \
     if (rays_traced > 0u) {                                               \
         uint old_rays_ = atomicAdd(stats[2], rays_traced);                \
@@ -333,6 +351,34 @@ bool visible(vec3 a, vec3 na, vec3 b, vec3 nb) {
     float tmax;
     if (!shadow_ray(a, na, b, nb, o, d, tmax)) return true;
     return !trace_any(o, d, 0.0, tmax);
+}
+
+// What the camera sees. glTF's doubleSided false is back-face culling, a rule of what is
+// seen: the camera does not see the back side of a one-sided surface (BVH_FACE_TEST),
+// it sees what lies behind it. The rule applies to the segment at the camera, in every
+// estimator alike: camera rays, and connections of light-subpath vertices to the camera,
+// traced from the camera. Every other segment meets both sides of every surface, so
+// light transport between surfaces stays reciprocal (culling every ray would make a
+// surface block light in one direction and pass it in the other, and light tracing
+// would then disagree with path tracing).
+bool trace_camera_segment(vec3 o, vec3 d, out Hit h) {
+    return trace_closest_culling(o, d, 0.0, 1e30, HAS_ONE_SIDED != 0, h);
+}
+// Whether nothing the camera sees lies between it and point p (normal ng, p offset off
+// its surface along it): the segment traced from the camera.
+bool camera_segment_clear(vec3 p, vec3 ng) {
+    vec3 o, d;
+    float tmax;
+    if (!shadow_ray(params.cam_pos.xyz, vec3(0.0), p, ng, o, d, tmax)) return true;
+    return !trace_any_culling(o, d, 0.0, tmax, HAS_ONE_SIDED != 0);
+}
+// Whether the camera sees point p (winding normal ng, `material`; on a triangle unless
+// `sphere`): not from the back side of a one-sided triangle, else camera_segment_clear.
+bool visible_to_camera(vec3 p, vec3 ng, uint material, bool sphere) {
+#if HAS_ONE_SIDED
+    if (!sphere && dot(params.cam_pos.xyz - p, ng) < 0.0 && !back_face_visible(material)) return false;
+#endif
+    return camera_segment_clear(p, ng);
 }
 
 // Shadow ray for a direct-illumination sample taken at p (geometric normal ng): towards

@@ -301,7 +301,8 @@ bool camera_connection_eval(SubpathState st, vec3 p, Bsdf b, bool weight_one, ou
 // Connects a light-subpath surface vertex to the camera and splats the contribution,
 // weighted by eq. 46-47 (docs/smallvcm.md 4.4.10). `weight_one` disables MIS (pure light
 // tracing).
-void connect_to_camera(SubpathState st, vec3 p, vec3 ng, Bsdf b, bool weight_one) {
+// p lies on a sphere when `sphere`, else on a triangle of winding normal ng.
+void connect_to_camera(SubpathState st, vec3 p, vec3 ng, bool sphere, Bsdf b, bool weight_one) {
     float w, camera_pdf_a, importance;
     vec3 f;
     vec2 raster;
@@ -309,7 +310,7 @@ void connect_to_camera(SubpathState st, vec3 p, vec3 ng, Bsdf b, bool weight_one
     if (max3(f) <= 0.0) return;
     vec3 contrib = (w / float(push.light_paths)) * st.thr * f * importance;
     if (max3(contrib) <= 0.0) return;
-    if (!visible(p, ng, params.cam_pos.xyz, vec3(0.0))) return;
+    if (!visible_to_camera(p, ng, b.material, sphere)) return;
     uint pixel = uint(raster.y) * image_width() + uint(raster.x);
     splat_add(pixel, contrib);
 }

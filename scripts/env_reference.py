@@ -200,6 +200,9 @@ def write_gltf(path, smooth, glass=False, rough=False):
         "bufferViews": views,
         "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}],
     }
+    # vkvcm's two-sided surfaces (the Mitsuba side's BSDFs are `twosided`).
+    for m in doc["materials"]:
+        m["doubleSided"] = True
     write_json(path, doc)
     print(f"wrote {path}")
 

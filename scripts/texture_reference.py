@@ -175,6 +175,9 @@ def write_gltf(path, normal_map=False):
         doc["samplers"] = [{"magFilter": 9728, "minFilter": 9728, "wrapS": 10497, "wrapT": 10497}]
         doc["textures"] = [{"sampler": 0, "source": 0}]
         doc["images"] = [{"uri": data_uri(png(4, 4, normal_texels(), 4))}]
+    # vkvcm's two-sided surfaces (the Mitsuba side's BSDFs are `twosided`).
+    for m in doc["materials"]:
+        m["doubleSided"] = True
     write_json(path, doc)
     print(f"wrote {path}")
 

@@ -592,7 +592,7 @@ fn material_mapping_and_emission() {
     d.json["meshes"][0]["primitives"] = json!(prims);
     d.json["materials"] = json!([
         {"name": "plastic", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0}},
-        {"name": "mirror", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 0.5, 0.25, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.0}},
+        {"name": "mirror", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 0.5, 0.25, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.0}, "doubleSided": true},
         {"name": "glass", "pbrMetallicRoughness": {"roughnessFactor": 0.0, "metallicFactor": 0.0},
          "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}, "KHR_materials_ior": {"ior": 1.33}}},
         {"name": "lamp", "emissiveFactor": [1.0, 0.5, 0.0], "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}}},
@@ -626,6 +626,10 @@ fn material_mapping_and_emission() {
     // glTF's default material: base 1, metallic 1, roughness 1 -> a rough white metal.
     assert_eq!((m[5].diffuse, m[5].glossy, m[5].roughness), (Vec3::ZERO, Vec3::ONE, 1.0));
     assert_eq!(s.lights, vec![Light::Area { triangle: 3, radiance: Vec3::new(4.0, 2.0, 0.0) }]);
+    // doubleSided (default false, as for the default material): one-sided, except a
+    // dielectric, whose refracted rays leave through its back side.
+    let one_sided: Vec<bool> = m.iter().map(|m| m.one_sided).collect();
+    assert_eq!(one_sided, [true, false, false, true, true, true]);
 }
 
 #[test]

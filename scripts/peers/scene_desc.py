@@ -137,6 +137,7 @@ def _vkvcm_material(name, m):
         ext["KHR_materials_emissive_strength"] = {"emissiveStrength": peak}
         ext["VKVCM_materials_phong"] = {"diffuse": zero, "phong": zero, "exponent": 1, "mirror": zero, "ior": -1}
     out["extensions"] = ext
+    out["doubleSided"] = True  # vkvcm's two-sided surfaces (Mitsuba: `twosided`)
     return out
 
 

@@ -59,6 +59,9 @@ pub struct FeatureSet {
     /// Some material is a cut-out (alphaMode MASK) or blended (BLEND, stochastic
     /// transparency): traversal tests alpha at every candidate hit.
     pub alpha_mask: bool,
+    /// Some material is one-sided (glTF doubleSided false): traversal drops hits on the
+    /// back side of its triangles (glsl/bvh.glsl, BVH_FACE_TEST).
+    pub one_sided: bool,
     /// Some material has a normal map and some triangle tangents: the shading normal is
     /// bent by it (with the shading-normal code compiled in).
     pub normal_maps: bool,
@@ -129,6 +132,7 @@ impl FeatureSet {
                 || emissive_textures
                 || metallic_roughness_textures,
             alpha_mask: g || any_mat(&|m| m.alpha_mode != crate::scene::AlphaMode::Opaque),
+            one_sided: g || any_mat(&|m| m.one_sided),
             normal_maps: g || normal_maps,
             emissive_textures: g || emissive_textures,
             metallic_roughness_textures: g || metallic_roughness_textures,
@@ -163,6 +167,7 @@ impl FeatureSet {
             ("HAS_VERTEX_ATTRIBUTES", self.vertex_attributes),
             ("HAS_TEXTURES", self.textures),
             ("HAS_ALPHA_MASK", self.alpha_mask),
+            ("HAS_ONE_SIDED", self.one_sided),
             ("HAS_NORMAL_MAPS", self.normal_maps),
             ("HAS_EMISSIVE_TEXTURES", self.emissive_textures),
             ("HAS_METALLIC_ROUGHNESS_TEXTURES", self.metallic_roughness_textures),
@@ -227,6 +232,7 @@ impl fmt::Display for FeatureSet {
             ("vertex colours / texture coordinates", self.vertex_attributes),
             ("base-colour textures", self.textures),
             ("alpha cut-outs / blending", self.alpha_mask),
+            ("one-sided surfaces", self.one_sided),
             ("normal maps", self.normal_maps),
             ("emissive textures", self.emissive_textures),
             ("metallic-roughness textures", self.metallic_roughness_textures),

@@ -204,7 +204,8 @@ fn material(name: &str, pbr: Value, phong: (P, P, f32, P, f32), extra_ext: Optio
     if let Some((k, v)) = extra_ext {
         ext.insert(k.into(), v);
     }
-    json!({ "name": name, "pbrMetallicRoughness": pbr, "extensions": ext })
+    // SmallVCM's surfaces scatter on both sides.
+    json!({ "name": name, "pbrMetallicRoughness": pbr, "doubleSided": true, "extensions": ext })
 }
 
 fn materials(id: u32) -> Vec<Value> {

@@ -15,9 +15,10 @@ impl Importer<'_> {
         if let Some(i) = self.default_material {
             return i;
         }
-        // glTF's default material: baseColor 1, metallic 1, roughness 1.
+        // glTF's default material: baseColor 1, metallic 1, roughness 1, one-sided.
         let mut m = Material::metallic_roughness(Vec3::ONE, 1.0, 1.0);
         m.name = "gltf-default".into();
+        m.one_sided = true;
         let i = self.scene.materials.len() as u32;
         self.scene.materials.push(m);
         self.default_material = Some(i);
@@ -164,6 +165,12 @@ impl Importer<'_> {
                 out.emissive_texture = self.emissive_texture(&info, &label)?;
             }
         }
+        // glTF 2.0 section 3.9.6 ("Double Sided"): with doubleSided false (the default)
+        // back faces are culled. Here for every ray, so that every estimator sees the same
+        // surfaces: a ray meeting the back side passes through (glsl/bvh.glsl,
+        // BVH_FACE_TEST). A dielectric stays two-sided: its refracted rays leave through
+        // the back side.
+        out.one_sided = !m.double_sided() && out.ior < 0.0;
         out.name = name;
         Ok(out)
     }
