@@ -62,7 +62,7 @@ fn a_one_sided_quad_seen_from_behind_is_not_there() {
         for one_sided in [true, false] {
             let scene = quad_against_the_sky(one_sided);
             let out = render(gpu, &scene, Algorithm::Pt, 8);
-            let mean = |i: usize| out.sum[i][1] as f64 / out.iterations as f64;
+            let mean = |i: usize| out.sum[i][1] / out.iterations as f64;
             if one_sided {
                 for i in 0..(W * H) as usize {
                     assert_eq!(mean(i), 1.0, "pixel {i}: the sky through a one-sided quad's back");
