@@ -57,6 +57,12 @@
 // they never add any (tests/render_rough_glass.rs). Roughness 0 stays the smooth delta
 // dielectric, bit for bit.
 //
+// Tinted transmission (glTF KHR_materials_transmission): the transmitted part of smooth
+// and rough glass, f and hence the sample weight, in both directions, is multiplied by
+// the material's transmission colour (`transmission_colour`, the base colour); the
+// reflected part and every pdf are not (the component and event probabilities stay the
+// Fresnel terms, so the sampling is the clear glass's and the MIS weights are exact).
+//
 // Components no material of the scene has are compiled out (HAS_DIFFUSE, HAS_PHONG,
 // HAS_GGX, HAS_MIRROR, HAS_DIELECTRIC, HAS_ROUGH_DIELECTRIC: glsl/features.glsl); the
 // branches taken and the arithmetic done for the components present are the same as with
@@ -114,6 +120,16 @@ vec3 glossy_colour(GpuMaterial m, vec3 tint) {
     if (tint != vec3(1.0)) return vec3(m.surface.w) + (m.glossy.rgb - vec3(m.surface.w)) * tint;
 #endif
     return m.glossy.rgb;
+}
+
+// The colour of a dielectric's transmitted part (glTF KHR_materials_transmission: the
+// BTDF is multiplied by the base colour, the reflection is not), times the point's tint
+// as the other colours; 1 for clear glass.
+vec3 transmission_colour(GpuMaterial m, vec3 tint) {
+#if HAS_VERTEX_ATTRIBUTES
+    if (tint != vec3(1.0)) return m.transmission.rgb * tint;
+#endif
+    return m.transmission.rgb;
 }
 
 // The material `material` at a point of tint `tint`. Where a metallic-roughness texture
@@ -371,7 +387,7 @@ vec3 rough_dielectric_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev
     pdf_rev = t * d * ch * eta * eta * oh / den2;
     // Radiance is scaled by (eta_o / eta_i)^2 crossing the boundary; importance is not.
     float scale = b.from_light ? 1.0 : eta * eta;
-    return vec3(t * d * g * oh * -ih * scale / (cos_o * -cos_i * den2));
+    return transmission_colour(m, b.tint.rgb) * (t * d * g * oh * -ih * scale / (cos_o * -cos_i * den2));
 }
 #endif
 
@@ -573,7 +589,8 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
         // Radiance is scaled by (eta_o / eta_t)^2 crossing the boundary; the adjoint
         // (light subpath) transport is not (Veach 1997, 5.2). f = (1 - F) scale / |n.wi|.
         float scale = b.from_light ? 1.0 : eta * eta;
-        s.weight = vec3((1.0 - b.fresnel) * scale * shading_correction(b, s.wi) / b.prob_refract);
+        s.weight = transmission_colour(m, b.tint.rgb) *
+                   ((1.0 - b.fresnel) * scale * shading_correction(b, s.wi) / b.prob_refract);
 #else
         // Without dielectrics prob_refract is 0: the generic kernel reaches this branch
         // only through rounding (x >= p_nonspec + prob_reflect) and fails (pdf 0) too.

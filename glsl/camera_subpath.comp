@@ -54,7 +54,8 @@ vec3 direct_illumination(SubpathState st, Surface s, Bsdf b, inout uint rng) {
     float w = nee_eval(st, b, ls, pick, f, cos_x);
     if (max3(f) <= 0.0) return vec3(0.0);
     if (!light_sample_visible(s.p, s.ng, ls)) return vec3(0.0);
-    return (w * cos_x / (pick * ls.pdf_w)) * ls.radiance * f;
+    vec3 tr = segment_transmittance(s.material, s.ng, NO_MATERIAL, vec3(0.0), ls.wi, ls.dist);
+    return (w * cos_x / (pick * ls.pdf_w)) * tr * ls.radiance * f;
 }
 
 vec3 connect_vertices(SubpathState st, Surface s, Bsdf b, LightVertex v) {
@@ -63,7 +64,10 @@ vec3 connect_vertices(SubpathState st, Surface s, Bsdf b, LightVertex v) {
     float w = connection_eval(st, s.p, b, v, fc, fl, g);
     if (max3(fc) <= 0.0 || max3(fl) <= 0.0) return vec3(0.0);
     if (!visible(s.p, s.ng, v.p, v.n)) return vec3(0.0);
-    return (w * g) * fc * fl;
+    vec3 dir = v.p - s.p;
+    float dist = length(dir);
+    vec3 tr = segment_transmittance(s.material, s.ng, v.material, v.n, dir / dist, dist);
+    return (w * g) * tr * fc * fl;
 }
 
 #if LV_CACHE
@@ -148,6 +152,8 @@ void start_path(uint pixel, out SubpathState st, out uint rng) {
     st.len = 1u;
     st.specular = true;
     st.finite_light = true;
+    st.from_material = NO_MATERIAL;
+    st.from_ng = vec3(0.0);
     mis_camera_start(st, st.d);
 }
 
@@ -183,6 +189,7 @@ void main() {
         alive = false;
         Hit h;
         if (!(st.len == 1u ? trace_camera_segment(st.o, st.d, h) : trace_closest(st.o, st.d, 0.0, 1e30, h))) {
+            st.thr *= segment_transmittance(st.from_material, st.from_ng, NO_MATERIAL, vec3(0.0), st.d, 1e30);
             uint bg = background_light();
             if (bg != NO_LIGHT && st.len >= min_len) {
                 float dpdf, epdf;
@@ -192,6 +199,9 @@ void main() {
             continue;
         }
         Surface s = surface_at(h, st.o, st.d);
+        // The segment's transmittance (glsl/medium.glsl), before emission, connections and
+        // merges use the throughput.
+        st.thr *= segment_transmittance(st.from_material, st.from_ng, s.material, s.ng, st.d, h.t);
         mis_on_hit(st, h.t, abs(dot(s.ng, st.d)), false);
         if (s.light != NO_LIGHT && st.len >= min_len) {
             float dpdf_a, epdf;

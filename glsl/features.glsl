@@ -29,6 +29,13 @@
 #ifndef HAS_ROUGH_DIELECTRIC
 #define HAS_ROUGH_DIELECTRIC 1
 #endif
+// Absorbing media inside dielectrics (KHR_materials_volume; glsl/medium.glsl).
+#ifndef HAS_VOLUME
+#define HAS_VOLUME 1
+#endif
+#if HAS_VOLUME && !HAS_DIELECTRIC
+#error "HAS_VOLUME needs HAS_DIELECTRIC (only a dielectric bounds a medium)"
+#endif
 #if HAS_ROUGH_DIELECTRIC && !HAS_DIELECTRIC
 #error "HAS_ROUGH_DIELECTRIC needs HAS_DIELECTRIC (a rough dielectric is a dielectric)"
 #endif

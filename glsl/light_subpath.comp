@@ -62,6 +62,8 @@ bool start_path(uint path, out SubpathState st, out uint rng) {
     st.thr = e.energy / emission_pdf;
     st.finite_light = e.finite;
     st.specular = true;
+    st.from_material = NO_MATERIAL;
+    st.from_ng = vec3(0.0);
     mis_light_start(st, emission_pdf, direct_pdf, e.cos_light, e.delta, e.finite);
     return true;
 }
@@ -101,6 +103,9 @@ void main() {
         Hit h;
         if (!trace_closest(st.o, st.d, 0.0, 1e30, h)) continue;
         Surface s = surface_at(h, st.o, st.d);
+        // The segment's transmittance (glsl/medium.glsl) before the vertex is stored: light
+        // vertices (connections, merges) carry it in their throughput.
+        st.thr *= segment_transmittance(st.from_material, st.from_ng, s.material, s.ng, st.d, h.t);
         Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, true, s.tint);
         if (!b.valid) continue;
         mis_on_hit(st, h.t, abs(dot(s.ng, st.d)), st.len == 1u && !st.finite_light);

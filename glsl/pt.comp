@@ -8,6 +8,8 @@
 // rule (which lt/bpt/vcm keep): none at the first RR_MIN_LENGTH - 1 vertices, then the
 // path continues with probability min(1, maxcomp(throughput * eta_scale)), eta_scale
 // undoing the eta^2 radiance scaling of refraction.
+// Absorbing media (glsl/medium.glsl) multiply the throughput of every traced segment and
+// the contribution of every light sample by their transmittance; no pdf has it.
 // Variants (src/render/variants.rs, PtKernel): NEE=1 the estimator, NEE=0 pure BSDF
 // sampling (emitter hits only, weight 1), for tests.
 #extension GL_GOOGLE_include_directive : require
@@ -36,6 +38,10 @@ void main() {
     uint min_len = min_path_length();
     uint rng, len;
     vec3 o, d, thr, L;
+    // The surface the current segment leaves (its material and geometric normal; the
+    // camera: NO_MATERIAL), for the segment's transmittance (glsl/medium.glsl).
+    uint from_material;
+    vec3 from_ng;
     float last_pdf, eta_scale;
     bool last_specular;
     bool alive = false;
@@ -59,10 +65,13 @@ void main() {
             eta_scale = 1.0;
             last_specular = true;
             len = 1u;
+            from_material = NO_MATERIAL;
+            from_ng = vec3(0.0);
         }
         alive = false;
         Hit h;
         if (!(len == 1u ? trace_camera_segment(o, d, h) : trace_closest(o, d, 0.0, 1e30, h))) {
+            thr *= segment_transmittance(from_material, from_ng, NO_MATERIAL, vec3(0.0), d, 1e30);
             uint bg = background_light();
             if (bg != NO_LIGHT && len >= min_len) {
                 float dpdf, epdf;
@@ -73,6 +82,7 @@ void main() {
             continue;
         }
         Surface s = surface_at(h, o, d);
+        thr *= segment_transmittance(from_material, from_ng, s.material, s.ng, d, h.t);
         if (s.light != NO_LIGHT && len >= min_len) {
             float dpdf_a, epdf;
             vec3 Le = area_light_radiance(s.light, h.u, h.v, d, dpdf_a, epdf);
@@ -96,7 +106,8 @@ void main() {
                     if (light_sample_visible(s.p, s.ng, ls)) {
                         float wgt = ls.delta ? 1.0 : balance(pick * ls.pdf_w, pf);
                         float cos_x = bsdf_cos(b, ls.wi);
-                        L += thr * f * ls.radiance * (wgt * cos_x / (pick * ls.pdf_w));
+                        vec3 tr = segment_transmittance(s.material, s.ng, NO_MATERIAL, vec3(0.0), ls.wi, ls.dist);
+                        L += thr * tr * f * ls.radiance * (wgt * cos_x / (pick * ls.pdf_w));
                     }
                 }
             }
@@ -122,6 +133,8 @@ void main() {
         }
         o = offset_ray(s.p, s.ng, bs.wi, scene_radius());
         d = bs.wi;
+        from_material = s.material;
+        from_ng = s.ng;
         len++;
         alive = true;
     }

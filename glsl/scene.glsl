@@ -93,7 +93,7 @@ GpuSphere sphere_at(uint i) {
     return s;
 }
 // GpuMaterial's vec4s, in field order.
-#define MATERIAL_TEXELS 10u
+#define MATERIAL_TEXELS 11u
 GpuMaterial material_at(uint i) {
     GpuMaterial m;
     uint k = MATERIAL_TEXELS * i;
@@ -107,6 +107,7 @@ GpuMaterial material_at(uint i) {
     m.base_metallic = texel_vec4(materials, k + 7u);
     m.f0_roughness = texel_vec4(materials, k + 8u);
     m.medium = texel_vec4(materials, k + 9u);
+    m.transmission = texel_vec4(materials, k + 10u);
     return m;
 }
 vec4 material_surface(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 5u); }
@@ -190,6 +191,7 @@ bool trace_any_culling_counted(vec3 o, vec3 d, float tmin, float tmax, bool cull
 
 #include "bsdf.glsl"
 #include "lights.glsl"
+#include "medium.glsl"
 
 uint image_width() { return params.dims.x; }
 uint image_height() { return params.dims.y; }

@@ -17,6 +17,10 @@ struct SubpathState {
     float dvcm, dvc, dvm;
     bool specular;     // all scattering events so far were specular (camera: since the eye)
     bool finite_light; // light subpaths: started on a finite light
+    // The surface the current segment leaves (material, geometric normal; NO_MATERIAL at
+    // the camera and at a light), for the segment's transmittance (glsl/medium.glsl).
+    uint from_material;
+    vec3 from_ng;
 };
 
 // A light vertex's layout (the same in the scratch slots the light kernel writes and in
@@ -239,6 +243,7 @@ vec3 merge_eval(SubpathState st, Bsdf b, LightVertex v, out float w) {
 }
 
 // Samples the continuation at a vertex: Russian roulette, throughput and MIS update.
+// `ng` is the vertex's geometric normal as the surface gives it (not turned to wo).
 // Returns false when the subpath ends.
 bool scatter(inout SubpathState st, Bsdf b, vec3 p, vec3 ng, inout uint rng) {
     BsdfSample bs = bsdf_sample(b, vec3(rnd2(rng), rnd(rng)));
@@ -248,6 +253,8 @@ bool scatter(inout SubpathState st, Bsdf b, vec3 p, vec3 ng, inout uint rng) {
     st.thr *= bs.weight / b.cont_prob;
     st.o = offset_ray(p, ng, bs.wi, scene_radius());
     st.d = bs.wi;
+    st.from_material = b.material;
+    st.from_ng = ng;
     return max3(st.thr) > 0.0;
 }
 
@@ -308,7 +315,10 @@ void connect_to_camera(SubpathState st, vec3 p, vec3 ng, bool sphere, Bsdf b, bo
     vec2 raster;
     if (!camera_connection_eval(st, p, b, weight_one, w, f, camera_pdf_a, importance, raster)) return;
     if (max3(f) <= 0.0) return;
-    vec3 contrib = (w / float(push.light_paths)) * st.thr * f * importance;
+    vec3 to_cam = params.cam_pos.xyz - p;
+    float dist = length(to_cam);
+    vec3 tr = segment_transmittance(b.material, ng, NO_MATERIAL, vec3(0.0), to_cam / dist, dist);
+    vec3 contrib = (w / float(push.light_paths)) * st.thr * tr * f * importance;
     if (max3(contrib) <= 0.0) return;
     if (!visible_to_camera(p, ng, b.material, sphere)) return;
     uint pixel = uint(raster.y) * image_width() + uint(raster.x);

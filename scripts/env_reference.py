@@ -33,6 +33,18 @@ imports as its rough dielectric of GGX alpha = roughness^2 (glsl/bsdf.glsl), aga
 Mitsuba's `roughdielectric` (distribution ggx, the same alpha, int_ior 1.5): both are the
 BSDF of Walter et al. 2007 with the separable Smith shadowing G1(wo) G1(wi).
 
+With `--volume` / `--rough-volume` (both commands) that glass sphere, smooth / of roughness
+ROUGH_GLASS_ROUGHNESS, is a glTF material with KHR_materials_transmission, KHR_materials_ior
+(1.5), a tinting baseColorFactor VOLUME_TINT and KHR_materials_volume (attenuationColor
+VOLUME_COLOR at attenuationDistance VOLUME_DISTANCE): vkvcm tints the transmitted part by
+the base colour and attenuates segments inside the sphere by exp(-sigma l), sigma =
+-ln(attenuationColor) / attenuationDistance (Beer-Lambert, glsl/medium.glsl). Mitsuba:
+`dielectric` / `roughdielectric` with specular_transmittance = the tint, the sphere's
+`interior` a `homogeneous` medium of albedo 0 and sigma_t = sigma, integrator `volpath`
+(tests/env/{volume,rough_volume}_scene.gltf, mitsuba_{volume,rough_volume}_{mean,var}.exr
+and .json). These scenes are VOLUME_SIZE pixels square, looking down at the glass sphere (no pixel sees only the sky, whose
+clipped texels have no variance to test with).
+
 With `--smooth` (both commands) the diffuse sphere is a coarse smooth-shaded mesh instead
 (a UV sphere of 6 x 10 quads with the sphere's normals at its vertices, tests/env/
 smooth_scene.gltf, tests/env/mitsuba_smooth_{mean,var}.exr, mitsuba_smooth.json): the
@@ -127,6 +139,16 @@ def smooth_sphere_triangles(center, radius):
 
 GLASS_IOR = 1.5
 ROUGH_GLASS_ROUGHNESS = 0.3
+VOLUME_TINT = [1.0, 0.85, 0.6]
+VOLUME_COLOR = [0.7, 0.35, 0.15]
+VOLUME_DISTANCE = 0.8
+VOLUME_SIZE = 32
+VOLUME_CAMERA = {"from": [1.0, 2.6, 1.6], "to": [0.55, 0.4, 0.0], "up": [0.0, 1.0, 0.0], "yfov_deg": 30.0}
+
+
+def volume_sigma():
+    """The attenuation coefficient of --volume / --rough-volume: -ln(c) / d per channel."""
+    return [-math.log(c) / VOLUME_DISTANCE for c in VOLUME_COLOR]
 
 
 def glass_spheres(spheres, rough=False):
@@ -135,13 +157,18 @@ def glass_spheres(spheres, rough=False):
     return [{k: v for k, v in sp.items() if k != "mirror"} | glass if "mirror" in sp else sp for sp in spheres]
 
 
-def scene_of(glass, rough):
-    """The scene description: SCENE, with the glass sphere for --glass / --rough-glass."""
+def scene_of(glass, rough, volume=False):
+    """The scene description: SCENE, with the glass sphere for --glass / --rough-glass, and
+    with the absorbing tinted glass sphere for --volume (glass) / --rough-volume (rough)."""
+    if volume:
+        vol = {"volume": {"color": VOLUME_COLOR, "distance": VOLUME_DISTANCE, "sigma": volume_sigma()}, "tint": VOLUME_TINT}
+        spheres = [sp | vol if "glass" in sp else sp for sp in glass_spheres(SCENE["spheres"], rough)]
+        return dict(SCENE, spheres=spheres, width=VOLUME_SIZE, height=VOLUME_SIZE, camera=VOLUME_CAMERA)
     return dict(SCENE, spheres=glass_spheres(SCENE["spheres"], rough)) if glass or rough else SCENE
 
 
-def write_gltf(path, smooth, glass=False, rough=False):
-    s = scene_of(glass, rough)
+def write_gltf(path, smooth, glass=False, rough=False, volume=False):
+    s = scene_of(glass, rough, volume)
     h = s["ground"]["half_size"]
     quad = [(-h, 0, -h), (-h, 0, h), (h, 0, h), (-h, 0, -h), (h, 0, h), (h, 0, -h)]
     blob = b"".join(struct.pack("<3f", *p) for p in quad)
@@ -153,10 +180,14 @@ def write_gltf(path, smooth, glass=False, rough=False):
     spheres = []
     for i, sp in enumerate(s["spheres"]):
         ext = phong(d=sp.get("diffuse", (0, 0, 0)), m=sp.get("mirror", (0, 0, 0)))
-        if "roughness" in sp:
-            # glTF's own rough glass: white base, metallic 0, full transmission.
-            pbr = {"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0.0, "roughnessFactor": sp["roughness"]}
+        if "roughness" in sp or "volume" in sp:
+            # glTF's own glass: base colour (white: clear), metallic 0, full transmission.
+            tint = sp.get("tint", [1, 1, 1])
+            pbr = {"baseColorFactor": tint + [1], "metallicFactor": 0.0, "roughnessFactor": sp.get("roughness", 0.0)}
             ext = {"KHR_materials_transmission": {"transmissionFactor": 1.0}, "KHR_materials_ior": {"ior": sp["glass"]}}
+            if "volume" in sp:
+                v = sp["volume"]
+                ext["KHR_materials_volume"] = {"attenuationColor": v["color"], "attenuationDistance": v["distance"]}
             materials.append({"name": f"sphere{i}", "pbrMetallicRoughness": pbr, "extensions": ext})
         else:
             if "glass" in sp:
@@ -184,10 +215,11 @@ def write_gltf(path, smooth, glass=False, rough=False):
     doc = {
         "asset": {"version": "2.0", "generator": "vkvcm scripts/env_reference.py"},
         "extensionsUsed": ["VKVCM_spheres", "VKVCM_materials_phong", "VKVCM_environment"]
-        + (["KHR_materials_transmission", "KHR_materials_ior"] if rough else []),
+        + (["KHR_materials_transmission", "KHR_materials_ior"] if rough or volume else [])
+        + (["KHR_materials_volume"] if volume else []),
         "extensions": {"VKVCM_environment": {"uri": env["file"], "strength": env["strength"], "rotation": env["rotation_deg"]}},
         "scene": 0,
-        "scenes": [{"name": scene_stem(smooth, glass, rough), "nodes": list(range(3 + len(meshes) - 1))}],
+        "scenes": [{"name": scene_stem(smooth, glass, rough, volume), "nodes": list(range(3 + len(meshes) - 1))}],
         "nodes": [
             {"name": "ground", "mesh": 0},
             {"name": "spheres", "extensions": {"VKVCM_spheres": {"spheres": spheres}}},
@@ -219,19 +251,21 @@ def write_obj(path, tris):
             f.write(f"f {a}//{a} {a + 1}//{a + 1} {a + 2}//{a + 2}\n")
 
 
-def scene_stem(smooth, glass, rough=False):
+def scene_stem(smooth, glass, rough=False, volume=False):
+    if volume:
+        return "rough_volume_scene" if rough else "volume_scene"
     return "smooth_scene" if smooth else "rough_glass_scene" if rough else "glass_scene" if glass else "env_scene"
 
 
-def mitsuba_scene(mi, seed, spp, smooth, tmp, glass=False, rough=False):
-    s = scene_of(glass, rough)
+def mitsuba_scene(mi, seed, spp, smooth, tmp, glass=False, rough=False, volume=False):
+    s = scene_of(glass, rough, volume)
     T = mi.ScalarTransform4f
     cam = s["camera"]
     env = s["environment"]
     h = s["ground"]["half_size"]
     d = {
         "type": "scene",
-        "integrator": {"type": "path", "max_depth": s["max_path_length"], "hide_emitters": False},
+        "integrator": {"type": "volpath" if volume else "path", "max_depth": s["max_path_length"], "hide_emitters": False},
         "sensor": {
             "type": "perspective",
             "fov": cam["yfov_deg"],
@@ -264,11 +298,18 @@ def mitsuba_scene(mi, seed, spp, smooth, tmp, glass=False, rough=False):
             continue
         else:
             bsdf = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": sp["diffuse"]}}}
+        if "tint" in sp:
+            bsdf["specular_transmittance"] = {"type": "rgb", "value": sp["tint"]}
         d[f"sphere{i}"] = {"type": "sphere", "center": sp["center"], "radius": sp["radius"], "bsdf": bsdf}
+        if "volume" in sp:
+            # An RGB value must lie in [0, 1]: sigma_t = (sigma / max) x scale max.
+            top = max(sp["volume"]["sigma"])
+            sigma = {"type": "rgb", "value": [x / top for x in sp["volume"]["sigma"]]}
+            d[f"sphere{i}"]["interior"] = {"type": "homogeneous", "albedo": 0.0, "sigma_t": sigma, "scale": top}
     return d
 
 
-def render_mitsuba(seeds, spp, variant, smooth, glass=False, rough=False):
+def render_mitsuba(seeds, spp, variant, smooth, glass=False, rough=False, volume=False):
     try:
         import mitsuba as mi
         import numpy as np
@@ -277,11 +318,11 @@ def render_mitsuba(seeds, spp, variant, smooth, glass=False, rough=False):
     mi.set_variant(variant)
     import tempfile
     tmp = tempfile.mkdtemp()
-    stem = "mitsuba_smooth" if smooth else "mitsuba_rough_glass" if rough else "mitsuba_glass" if glass else "mitsuba"
+    stem = ("mitsuba_rough_volume" if rough else "mitsuba_volume") if volume else "mitsuba_smooth" if smooth else "mitsuba_rough_glass" if rough else "mitsuba_glass" if glass else "mitsuba"
     images = []
     t0 = time.time()
     for seed in range(seeds):
-        scene = mi.load_dict(mitsuba_scene(mi, seed, spp, smooth, tmp, glass, rough))
+        scene = mi.load_dict(mitsuba_scene(mi, seed, spp, smooth, tmp, glass, rough, volume))
         images.append(np.array(mi.render(scene, seed=seed, spp=spp), dtype=np.float64))
         print(f"seed {seed}: {time.time() - t0:.0f} s", flush=True)
     stack = np.stack(images)
@@ -289,8 +330,9 @@ def render_mitsuba(seeds, spp, variant, smooth, glass=False, rough=False):
     var = stack.var(axis=0, ddof=1).astype(np.float32)
     mi.Bitmap(mean).write(os.path.join(OUT, f"{stem}_mean.exr"))
     mi.Bitmap(var).write(os.path.join(OUT, f"{stem}_var.exr"))
-    meta = {"renderer": f"Mitsuba {mi.__version__} {variant}, integrator path", "seeds": seeds, "spp_per_seed": spp,
-            "scene": scene_of(glass, rough),
+    integrator = "volpath" if volume else "path"
+    meta = {"renderer": f"Mitsuba {mi.__version__} {variant}, integrator {integrator}", "seeds": seeds, "spp_per_seed": spp,
+            "scene": scene_of(glass, rough, volume),
             "smooth_sphere": [SMOOTH_RINGS, SMOOTH_SEGMENTS] if smooth else None,
             "command": " ".join(sys.argv)}
     write_json(os.path.join(OUT, f"{stem}.json"), meta)
@@ -306,13 +348,18 @@ def main():
     ap.add_argument("--smooth", action="store_true", help="the diffuse sphere as a smooth-shaded mesh")
     ap.add_argument("--glass", action="store_true", help="the mirror sphere made of glass (IOR 1.5)")
     ap.add_argument("--rough-glass", action="store_true", help="the mirror sphere made of rough glass (IOR 1.5, glTF roughness 0.3)")
+    ap.add_argument("--volume", action="store_true", help="the mirror sphere made of tinted glass holding an absorbing medium")
+    ap.add_argument("--rough-volume", action="store_true", help="--volume with rough glass (glTF roughness 0.3)")
     a = ap.parse_args()
-    if a.smooth + a.glass + a.rough_glass > 1:
-        sys.exit("--smooth, --glass and --rough-glass are separate scenes")
+    if a.smooth + a.glass + a.rough_glass + a.volume + a.rough_volume > 1:
+        sys.exit("--smooth, --glass, --rough-glass, --volume and --rough-volume are separate scenes")
+    volume = a.volume or a.rough_volume
+    rough = a.rough_glass or a.rough_volume
     if a.what == "gltf":
-        write_gltf(os.path.join(OUT, scene_stem(a.smooth, a.glass, a.rough_glass) + ".gltf"), a.smooth, a.glass, a.rough_glass)
+        stem = scene_stem(a.smooth, a.glass, rough, volume)
+        write_gltf(os.path.join(OUT, stem + ".gltf"), a.smooth, a.glass, rough, volume)
     else:
-        render_mitsuba(a.seeds, a.spp, a.variant, a.smooth, a.glass, a.rough_glass)
+        render_mitsuba(a.seeds, a.spp, a.variant, a.smooth, a.glass, rough, volume)
 
 
 if __name__ == "__main__":

@@ -81,7 +81,8 @@ fn rust_and_glsl_layouts_match() {
             maps,
             base_metallic,
             f0_roughness,
-            medium
+            medium,
+            transmission
         }),
         rust_layout!(GpuTextureRef { image, row0, row1 }),
         rust_layout!(GpuVertexAttributes { uv, color, tangent }),

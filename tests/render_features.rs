@@ -70,7 +70,8 @@ fn glossy_scene() -> Scene {
     common::scenes::glossy_floor_scene(left, right)
 }
 
-/// glossy_scene with a rough glass sphere (a rough dielectric, HAS_ROUGH_DIELECTRIC).
+/// glossy_scene with a tinted rough glass sphere holding an absorbing medium (a rough
+/// dielectric, HAS_ROUGH_DIELECTRIC, and HAS_VOLUME).
 fn rough_glass_scene() -> Scene {
     let mut s = glossy_scene();
     let a = s.materials.len() as u32;
@@ -79,6 +80,8 @@ fn rough_glass_scene() -> Scene {
         mirror: glam::Vec3::ONE,
         ior: 1.5,
         dielectric_roughness: 0.3,
+        attenuation: glam::Vec3::new(0.5, 1.0, 2.0),
+        transmission: glam::Vec3::new(1.0, 0.9, 0.7),
         ..Default::default()
     });
     s.spheres.push(vkvcm::scene::Sphere { center: glam::Vec3::new(-0.8, 0.2, 0.5), radius: 0.5, material: a });
@@ -250,8 +253,14 @@ fn feature_derivation() {
     assert!(!f.mirror && !f.dielectric);
     // A rough dielectric is a dielectric, compiled in only where a primitive uses one.
     let f = FeatureSet::new(&rough_glass_scene(), false);
-    assert!(f.dielectric && f.rough_dielectric && f.mirror && f.spheres, "{f}");
-    assert!(!FeatureSet::new(&load_named("gbs_s").unwrap(), false).rough_dielectric);
+    assert!(f.dielectric && f.rough_dielectric && f.mirror && f.spheres && f.volume, "{f}");
+    assert!(f.to_string().contains("absorbing volume"), "{f}");
+    let smallvcm = FeatureSet::new(&load_named("gbs_s").unwrap(), false);
+    assert!(!smallvcm.rough_dielectric && !smallvcm.volume, "{smallvcm}");
+    // An attenuation on a material that is not a dielectric bounds no medium.
+    let mut scene = glossy_scene();
+    scene.materials[0].attenuation = glam::Vec3::ONE;
+    assert!(!FeatureSet::new(&scene, false).volume);
     assert!(f.with_count_rays(true).defines().list().contains(&("COUNT_RAYS".to_string(), "1".to_string())));
 
     // A metallic-roughness texture on a full metal (no diffuse lobe of its own): compiled in

@@ -427,8 +427,9 @@ fn unsupported_features_warn_once_per_kind() {
 
 /// KHR_materials_transmission (+ KHR_materials_ior): clear glass of the material's
 /// roughness: smooth at roughness 0, the rough dielectric (GGX alpha = roughness^2) above;
-/// partial or tinted transmission is approximated by clear glass, with a warning naming
-/// the material; roughness alone warns of nothing.
+/// the base colour tints the transmitted part (Material::transmission); partial
+/// transmission is approximated by full transmission, with a warning naming the material;
+/// roughness and tint alone warn of nothing.
 #[test]
 fn transmission_is_smooth_or_rough_glass() {
     let mut d = Doc::triangle();
@@ -456,8 +457,44 @@ fn transmission_is_smooth_or_rough_glass() {
     let w = &s.report.warnings;
     let has = |needle: &str, name: &str| w.iter().any(|x| x.contains(needle) && x.contains(name));
     assert!(has("partial transmission", "'partial'"), "{w:?}");
-    assert!(has("tinted transmission", "'tinted'"), "{w:?}");
-    assert_eq!(w.iter().filter(|x| x.contains("transmission")).count(), 2, "{w:?}");
+    assert_eq!(m[3].transmission, Vec3::new(1.0, 0.5, 1.0));
+    assert_eq!(m[0].transmission, Vec3::ONE);
+    assert_eq!(w.iter().filter(|x| x.contains("transmission")).count(), 1, "{w:?}");
+}
+
+/// KHR_materials_volume: on a transmissive material the attenuation coefficient is
+/// -ln(attenuationColor) / attenuationDistance per channel (Beer-Lambert), zero without a
+/// distance (infinite), MAX_ATTENUATION for a black channel; thickness is ignored without
+/// a warning; on an opaque material the extension is ignored with one warning naming it;
+/// a distance <= 0 is an error.
+#[test]
+fn volume_gives_the_attenuation_of_transmissive_materials() {
+    use vkvcm::scene::gltf_import::MAX_ATTENUATION;
+    let mut d = Doc::triangle();
+    d.json["extensionsUsed"] = json!(["KHR_materials_transmission", "KHR_materials_volume"]);
+    let t = json!({"transmissionFactor": 1.0});
+    let vol = |v: serde_json::Value| json!({"KHR_materials_transmission": t, "KHR_materials_volume": v});
+    d.json["materials"] = json!([
+        {"name": "absorbing", "extensions": vol(json!({"thicknessFactor": 0.2, "attenuationDistance": 2.0, "attenuationColor": [0.5, 0.25, 1.0]}))},
+        {"name": "no_distance", "extensions": vol(json!({"attenuationColor": [0.5, 0.5, 0.5]}))},
+        {"name": "black", "extensions": vol(json!({"attenuationDistance": 1.0, "attenuationColor": [0.0, 1.0, 0.5]}))},
+        {"name": "opaque", "extensions": {"KHR_materials_volume": {"attenuationDistance": 1.0, "attenuationColor": [0.5, 0.5, 0.5]}}},
+    ]);
+    let s = d.load().unwrap();
+    let m = &s.materials;
+    let ln2 = std::f32::consts::LN_2;
+    assert!((m[0].attenuation - Vec3::new(ln2 / 2.0, ln2, 0.0)).abs().max_element() < 1e-6, "{}", m[0].attenuation);
+    assert_eq!(m[1].attenuation, Vec3::ZERO);
+    assert_eq!(m[2].attenuation.x, MAX_ATTENUATION);
+    assert_eq!((m[2].attenuation.y, m[2].attenuation.z), (0.0, ln2));
+    assert_eq!((m[3].ior < 0.0, m[3].attenuation), (true, Vec3::ZERO));
+    let w = &s.report.warnings;
+    assert_eq!(w.iter().filter(|x| x.contains("KHR_materials_volume")).count(), 1, "{w:?}");
+    assert!(w.iter().any(|x| x.contains("KHR_materials_volume") && x.contains("'opaque'")), "{w:?}");
+    assert!(!w.iter().any(|x| x.contains("thickness") || x.contains("not supported")), "{w:?}");
+    d.json["materials"][0]["extensions"]["KHR_materials_volume"]["attenuationDistance"] = json!(0.0);
+    let e = err_of(d.load());
+    assert!(e.contains("attenuationDistance"), "{e}");
 }
 
 /// A file without a perspective camera gets a default camera that frames its geometry

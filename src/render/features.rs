@@ -34,6 +34,9 @@ pub struct FeatureSet {
     pub dielectric: bool,
     /// Some dielectric is rough (`Material::is_rough_dielectric`, glsl/bsdf.glsl).
     pub rough_dielectric: bool,
+    /// Some dielectric bounds an absorbing medium (`Material::medium_attenuation`,
+    /// glsl/medium.glsl): path segments inside it are attenuated (Beer-Lambert).
+    pub volume: bool,
     /// Light kinds.
     pub area_lights: bool,
     pub point_lights: bool,
@@ -115,6 +118,7 @@ impl FeatureSet {
             // The kernels treat every IOR that is not negative (NaN included) as a dielectric.
             dielectric: g || any_mat(&|m| m.ior >= 0.0 || m.ior.is_nan()),
             rough_dielectric: g || any_mat(&|m| m.is_rough_dielectric()),
+            volume: g || any_mat(&|m| nonzero(m.medium_attenuation())),
             area_lights: g || any_light(&|l| matches!(l, Light::Area { .. })),
             point_lights: g || any_light(&|l| matches!(l, Light::Point { .. })),
             spot_lights: g || any_light(&|l| matches!(l, Light::Spot { .. })),
@@ -156,6 +160,7 @@ impl FeatureSet {
             ("HAS_MIRROR", self.mirror),
             ("HAS_DIELECTRIC", self.dielectric),
             ("HAS_ROUGH_DIELECTRIC", self.rough_dielectric),
+            ("HAS_VOLUME", self.volume),
             ("HAS_AREA_LIGHTS", self.area_lights),
             ("HAS_POINT_LIGHTS", self.point_lights),
             ("HAS_SPOT_LIGHTS", self.spot_lights),
@@ -206,6 +211,7 @@ impl fmt::Display for FeatureSet {
             ("mirror", self.mirror),
             ("dielectric", self.dielectric),
             ("rough dielectric", self.rough_dielectric),
+            ("absorbing volume", self.volume),
         ];
         writeln!(f, "  materials: {}", list(&mats))?;
         let lights = [

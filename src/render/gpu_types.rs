@@ -68,6 +68,9 @@ pub struct GpuMaterial {
     /// (`Material::attenuation`, per unit length; zero: none); w: flag bits
     /// (`MATERIAL_ONE_SIDED`), as an f32 bit pattern.
     pub medium: [f32; 4],
+    /// rgb: the colour that multiplies a dielectric's transmitted part
+    /// (`Material::transmission`; 1: clear); w: unused.
+    pub transmission: [f32; 4],
 }
 
 /// A texture as a material uses it (`scene::TextureRef`): where its image's texels are,

@@ -417,7 +417,11 @@ impl SceneGpu {
                     maps: [bits(normal_map), m.normal_scale, bits(emissive), bits(metallic_roughness)],
                     base_metallic,
                     f0_roughness,
-                    medium: v4(m.attenuation, f32::from_bits(if m.one_sided { MATERIAL_ONE_SIDED } else { 0 })),
+                    medium: v4(
+                        m.medium_attenuation(),
+                        f32::from_bits(if m.one_sided { MATERIAL_ONE_SIDED } else { 0 }),
+                    ),
+                    transmission: v4(m.transmission, 0.0),
                 }
             })
             .collect();

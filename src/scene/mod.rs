@@ -215,8 +215,17 @@ pub struct Material {
     pub one_sided: bool,
     /// Attenuation coefficient (per unit length, per channel) of the medium inside a
     /// closed dielectric mesh (KHR_materials_volume: -ln(attenuationColor) /
-    /// attenuationDistance); zero: clear.
+    /// attenuationDistance); zero: clear. Beer-Lambert absorption: a path segment with an
+    /// end on the inner side of a surface of this material (the side opposite the
+    /// geometric normal, which the winding gives: the side a refracted ray enters),
+    /// travelling into the inside from there, is multiplied by exp(-attenuation x length)
+    /// (glsl/medium.glsl). Only dielectrics (`ior >= 0`) that do not emit bound a medium;
+    /// the kernels see zero for every other material (src/render/scene_gpu.rs).
     pub attenuation: Vec3,
+    /// Colour that multiplies the dielectric's transmitted part, smooth and rough, in both
+    /// directions (glTF KHR_materials_transmission: the transmission BTDF is tinted by the
+    /// base colour; reflection is not). One: clear. The pdfs do not depend on it.
+    pub transmission: Vec3,
 }
 
 /// glTF 2.0's metallicRoughnessTexture (section 3.9.2, "Metallic-Roughness Material"),
@@ -264,6 +273,7 @@ impl Default for Material {
             metallic_roughness_texture: None,
             one_sided: false,
             attenuation: Vec3::ZERO,
+            transmission: Vec3::ONE,
         }
     }
 }
@@ -281,6 +291,17 @@ impl Material {
             (self.dielectric_roughness * self.dielectric_roughness).max(crate::render::gpu_types::MIN_GGX_ALPHA)
         } else {
             0.0
+        }
+    }
+
+    /// The medium coefficient the kernels get (GpuMaterial.medium.rgb): `attenuation` on a
+    /// dielectric that does not emit, else zero (an emitter's surface never starts a
+    /// medium segment of a light sample, so it bounds no medium anywhere).
+    pub fn medium_attenuation(&self) -> Vec3 {
+        if (self.ior >= 0.0 || self.ior.is_nan()) && self.emission == Vec3::ZERO {
+            self.attenuation
+        } else {
+            Vec3::ZERO
         }
     }
 

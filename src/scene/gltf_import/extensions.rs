@@ -27,6 +27,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_ior",
     "KHR_materials_emissive_strength",
     "KHR_materials_specular",
+    "KHR_materials_volume",
     KHR_MESH_QUANTIZATION,
     KHR_TEXTURE_TRANSFORM,
     EXT_MESH_GPU_INSTANCING,

@@ -1,12 +1,18 @@
 //! glTF materials mapped to vkvcm's material model: metallic/roughness to diffuse + GGX
 //! (+ mirror), `KHR_materials_transmission`/`KHR_materials_ior` to smooth or rough glass,
-//! `KHR_materials_emissive_strength`, and vkvcm's own `VKVCM_materials_phong`.
+//! `KHR_materials_emissive_strength`, `KHR_materials_volume` (absorption inside
+//! transmissive meshes), and vkvcm's own `VKVCM_materials_phong`.
 
 use super::extensions::{ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG};
 use super::Importer;
 use crate::scene::{AlphaMode, Material, GLTF_DIELECTRIC_F0};
 use anyhow::{bail, Result};
 use glam::Vec3;
+
+/// The attenuation coefficient (per unit length) of a channel that KHR_materials_volume's
+/// attenuationColor makes black: finite (exp(-0 x it) stays 1 for a segment of length 0),
+/// and large enough that any segment longer than 1e-25 transmits nothing.
+pub const MAX_ATTENUATION: f32 = 1e30;
 
 impl Importer<'_> {
     /// Index of glTF's default material (for primitives and spheres without one), added
@@ -67,17 +73,22 @@ impl Importer<'_> {
                 ..Material::default()
             }
         } else if let Some(t) = m.transmission().filter(|t| t.transmission_factor() > 0.0) {
-            // Clear glass of the material's roughness: smooth (delta) at roughness 0, else
-            // the rough dielectric (GGX alpha = roughness^2, glsl/bsdf.glsl). What it does
-            // not model is approximated by clear glass, with a warning.
+            // Glass of the material's roughness: smooth (delta) at roughness 0, else the
+            // rough dielectric (GGX alpha = roughness^2, glsl/bsdf.glsl). Its transmitted
+            // part is tinted by the base colour (KHR_materials_transmission: the BTDF is
+            // multiplied by baseColor; the reflection is not). Partial transmission is
+            // approximated by full transmission, with a warning.
             if t.transmission_factor() < 1.0 {
                 self.warnings.warn("partial transmission is approximated by clear glass", label.clone());
             }
-            if base != Vec3::ONE {
-                self.warnings.warn("tinted transmission is approximated by clear glass", label.clone());
-            }
             let ior = ior(m, &label)?.unwrap_or(1.5);
-            Material { mirror: Vec3::ONE, ior, dielectric_roughness: roughness, ..Material::default() }
+            Material {
+                mirror: Vec3::ONE,
+                ior,
+                dielectric_roughness: roughness,
+                transmission: base,
+                ..Material::default()
+            }
         } else {
             let dielectric_f0 = self.dielectric_f0(m, &label)?;
             // glTF 2.0 section 3.9.2: roughness = roughnessFactor x G, metallic =
@@ -165,14 +176,56 @@ impl Importer<'_> {
                 out.emissive_texture = self.emissive_texture(&info, &label)?;
             }
         }
-        // glTF 2.0 section 3.9.6 ("Double Sided"): with doubleSided false (the default)
-        // back faces are culled. Here for every ray, so that every estimator sees the same
-        // surfaces: a ray meeting the back side passes through (glsl/bvh.glsl,
-        // BVH_FACE_TEST). A dielectric stays two-sided: its refracted rays leave through
-        // the back side.
+        // glTF's doubleSided false (the default) is back-face culling: the camera does not
+        // see the back side of such a surface (glsl/scene.glsl, trace_camera_segment and
+        // visible_to_camera; light meets both sides). A dielectric stays two-sided: its
+        // refracted rays leave through the back side.
         out.one_sided = !m.double_sided() && out.ior < 0.0;
+        // KHR_materials_volume describes the inside of a transmissive mesh; on an opaque
+        // material, or one that emits (whose surface bounds no medium:
+        // Material::medium_attenuation), it has nothing to apply to.
+        if out.ior >= 0.0 {
+            out.attenuation = self.volume_attenuation(m, &label)?;
+        }
+        if m.volume().is_some() {
+            if out.ior < 0.0 {
+                self.warnings.warn("KHR_materials_volume without transmission is ignored", label.clone());
+            } else if out.attenuation != Vec3::ZERO && out.emission != Vec3::ZERO {
+                self.warnings.warn("KHR_materials_volume on an emissive material is ignored", label.clone());
+            }
+        }
         out.name = name;
         Ok(out)
+    }
+
+    /// The attenuation coefficient of KHR_materials_volume on a transmissive material
+    /// (Beer-Lambert absorption, glTF KHR_materials_volume: light that travels
+    /// attenuationDistance d inside the volume is tinted by attenuationColor c, so the
+    /// coefficient is -ln(c) / d per channel). No extension, or d infinite (its default):
+    /// zero. A channel with c = 0 absorbs everything: its coefficient is MAX_ATTENUATION,
+    /// finite so that a segment of length 0 keeps exp(-0) = 1. thicknessFactor and
+    /// thicknessTexture serve rasterisers that have no closed mesh to trace: ignored.
+    fn volume_attenuation(&mut self, m: &gltf::Material, label: &str) -> Result<Vec3> {
+        let Some(v) = m.volume() else { return Ok(Vec3::ZERO) };
+        let d = v.attenuation_distance();
+        let c = Vec3::from_array(v.attenuation_color());
+        if d.is_nan() || d <= 0.0 {
+            bail!("{label}: KHR_materials_volume attenuationDistance must be > 0, is {d}");
+        }
+        if !c.is_finite() || c.min_element() < 0.0 {
+            bail!("{label}: KHR_materials_volume attenuationColor must be finite and >= 0, is {c}");
+        }
+        if d.is_infinite() {
+            return Ok(Vec3::ZERO);
+        }
+        let c = c.min(Vec3::ONE);
+        Ok(Vec3::from_array(c.to_array().map(|c| {
+            if c > 0.0 {
+                (-c.ln() / d).min(MAX_ATTENUATION)
+            } else {
+                MAX_ATTENUATION
+            }
+        })))
     }
 
     /// The F0 of the dielectric part of a metallic/roughness material: 0.04, or

@@ -49,6 +49,7 @@ mod textures;
 mod warnings;
 
 pub use extensions::{EXT_BACKGROUND, EXT_MATERIALS_PHONG, EXT_SPHERES, SUPPORTED_EXTENSIONS};
+pub use materials::MAX_ATTENUATION;
 pub use sources::{decode_data_uri, encode_data_uri};
 pub use textures::{MAX_IMAGE_SIDE, MAX_IMAGE_TEXELS};
 
