@@ -157,20 +157,27 @@ fn index_matched_absorbing_sphere_is_beer_lambert() {
 const TINT: Vec3 = Vec3::new(1.0, 0.85, 0.6);
 const ABSORB: Vec3 = Vec3::new(0.3, 1.0, 2.5);
 
-fn absorbing_bulb_scene() -> Scene {
+/// glossy_floor_scene with a two-coloured diffuse floor, and a material of absorbing rough
+/// glass (IOR 1.5) added, whose index it returns.
+fn floor_with_absorbing_glass(roughness: f32, attenuation: Vec3, transmission: Vec3) -> (Scene, u32) {
     let left = Material { name: "floor_left".into(), diffuse: Vec3::new(0.6, 0.5, 0.4), ..Default::default() };
     let right = Material { name: "floor_right".into(), diffuse: Vec3::new(0.3, 0.5, 0.6), ..Default::default() };
     let mut s = glossy_floor_scene(left, right);
-    let a = s.materials.len() as u32;
+    let glass = s.materials.len() as u32;
     s.materials.push(Material {
         name: "absorbing rough glass".into(),
         mirror: Vec3::ONE,
         ior: 1.5,
-        dielectric_roughness: 0.3,
-        attenuation: ABSORB,
-        transmission: TINT,
+        dielectric_roughness: roughness,
+        attenuation,
+        transmission,
         ..Default::default()
     });
+    (s, glass)
+}
+
+fn absorbing_bulb_scene() -> Scene {
+    let (mut s, a) = floor_with_absorbing_glass(0.3, ABSORB, TINT);
     s.spheres.push(Sphere { center: Vec3::new(-0.3, 0.2, 0.5), radius: 0.5, material: a });
     // The filament: a 0.3 x 0.3 square at the sphere's centre, emitting towards -y (the
     // camera).
@@ -230,18 +237,7 @@ fn absorbing_bulb_estimators_agree() {
 #[test]
 fn ball_in_an_absorbing_sphere_bpt_agrees_with_pt() {
     let size = (16u32, 16u32);
-    let left = Material { name: "floor_left".into(), diffuse: Vec3::new(0.6, 0.5, 0.4), ..Default::default() };
-    let right = Material { name: "floor_right".into(), diffuse: Vec3::new(0.3, 0.5, 0.6), ..Default::default() };
-    let mut scene = glossy_floor_scene(left, right);
-    let a = scene.materials.len() as u32;
-    scene.materials.push(Material {
-        name: "absorbing rough glass".into(),
-        mirror: Vec3::ONE,
-        ior: 1.5,
-        dielectric_roughness: 1.0,
-        attenuation: Vec3::new(1.0, 3.0, 6.0),
-        ..Default::default()
-    });
+    let (mut scene, a) = floor_with_absorbing_glass(1.0, Vec3::new(1.0, 3.0, 6.0), Vec3::ONE);
     scene.materials.push(Material { name: "ball".into(), diffuse: Vec3::splat(0.8), ..Default::default() });
     let centre = Vec3::new(0.0, 0.2, 0.5);
     scene.spheres.push(Sphere { center: centre, radius: 0.5, material: a });
