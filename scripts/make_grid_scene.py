@@ -7,7 +7,9 @@ scene-size benchmarks (docs/performance.md, "Scene size"). Standard library only
 
 With a third argument K, the mesh is placed by K nodes (an instanced scene of K x N
 triangles that stores N): K tiles side by side, each the grid scaled down by the number of
-tiles per row, covering the same square.
+tiles per row, covering the same square. With --double-sided anywhere among the arguments
+the material says doubleSided true (else glTF's default, one-sided: docs/scene-format.md,
+"One-sided surfaces"; the camera sees the grid's front either way).
 
 The grid spans [-1, 1]^2 in x/z with a gentle height y = 0.05 sin(7x) cos(5z), so the BVH
 is not trivially flat; positions are float32, indices uint32, one mesh, one node. The
@@ -20,11 +22,13 @@ import sys
 
 
 def main():
-    if len(sys.argv) not in (3, 4):
+    args = [a for a in sys.argv[1:] if a != "--double-sided"]
+    double_sided = len(args) < len(sys.argv) - 1
+    if len(args) not in (2, 3):
         sys.exit(__doc__)
-    target = int(sys.argv[1])
-    out = sys.argv[2]
-    instances = int(sys.argv[3]) if len(sys.argv) == 4 else 1
+    target = int(args[0])
+    out = args[1]
+    instances = int(args[2]) if len(args) == 3 else 1
     per_row = math.ceil(math.sqrt(instances))
     tiles = [
         {"mesh": 0, "scale": [1 / per_row] * 3,
@@ -56,7 +60,8 @@ def main():
         "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.01}}],
         "extensionsUsed": ["KHR_lights_punctual"],
         "extensions": {"KHR_lights_punctual": {"lights": [{"type": "directional", "intensity": 3.0}]}},
-        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.7, 0.7, 1], "metallicFactor": 0, "roughnessFactor": 1}}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.7, 0.7, 1], "metallicFactor": 0, "roughnessFactor": 1},
+                       "doubleSided": double_sided}],
         "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
         "buffers": [{"byteLength": len(binary)}],
         "bufferViews": [
