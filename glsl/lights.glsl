@@ -83,6 +83,9 @@ LightSample light_illuminate(uint index, vec3 x, vec2 u) {
 #if HAS_EMISSIVE_TEXTURES
         s.radiance *= emission_tint(floatBitsToUint(l.a.w), bc.x, bc.y);
 #endif
+#if HAS_ALPHA_MASK
+        s.radiance *= emitter_presence(floatBitsToUint(l.a.w), bc.x, bc.y);
+#endif
     }
 #endif
 #if HAS_POINT_LIGHTS || HAS_SPOT_LIGHTS
@@ -212,6 +215,9 @@ LightEmission light_emit(uint index, vec2 u_pos, vec2 u_dir) {
         e.energy *= e.cos_light;
 #if HAS_EMISSIVE_TEXTURES
         e.energy *= emission_tint(floatBitsToUint(l.a.w), bc.x, bc.y);
+#endif
+#if HAS_ALPHA_MASK
+        e.energy *= emitter_presence(floatBitsToUint(l.a.w), bc.x, bc.y);
 #endif
     }
 #endif

@@ -296,4 +296,20 @@ bool alpha_visible(uint id, uint material, float u, float v, float t) {
     return float(h >> 8) * (1.0 / 16777216.0) < alpha;
 }
 
+// How much of an emitting triangle `tri` is there at barycentric weights (u, v), for
+// light that leaves it without a ray meeting it first (next-event estimation's light
+// samples and the start of light subpaths): MASK 1 or 0 by the cutoff, BLEND alpha (the
+// probability alpha_visible lets a ray meet it, so a path that hits it collects the same
+// expectation), OPAQUE 1. A path that hits the light has passed alpha_visible already,
+// so its radiance is not scaled. Light points are still sampled uniformly by area: the
+// pdfs, and so the MIS weights, are unchanged.
+float emitter_presence(uint tri, float u, float v) {
+    uint material = triangle_at(tri).material;
+    vec4 srf = material_surface(material);
+    if (srf.z == ALPHA_OPAQUE) return 1.0;
+    float alpha = surface_tint_alpha(tri, material, u, v).a;
+    if (srf.z != ALPHA_BLEND) return alpha >= srf.z ? 1.0 : 0.0;
+    return alpha;
+}
+
 #endif

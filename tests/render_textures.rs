@@ -844,3 +844,64 @@ fn metallic_roughness_texture_varies_the_lobes_in_every_estimator() {
         );
     });
 }
+
+/// z-up: a grey floor z = 0 lit only by a 1 x 1 emitting quad at z = 1 facing down whose
+/// material is `lamp`; the camera looks down at both from the side.
+fn floor_under_a_lamp(lamp: Material) -> Scene {
+    let v = Vec3::new;
+    let quad = |a: Vec3, b: Vec3, c: Vec3, d: Vec3, material: u32| {
+        [[a, b, c], [a, c, d]].map(|p| Triangle { p, n: None, material, attributes: None })
+    };
+    let mut tris = Vec::new();
+    tris.extend(quad(v(-2., -2., 0.), v(2., -2., 0.), v(2., 2., 0.), v(-2., 2., 0.), 0));
+    tris.extend(quad(v(-0.5, -0.5, 1.), v(-0.5, 0.5, 1.), v(0.5, 0.5, 1.), v(0.5, -0.5, 1.), 1)); // normal -z
+    let floor = Material { name: "floor".into(), diffuse: Vec3::splat(0.5), ..Default::default() };
+    let materials = vec![floor, lamp];
+    let lights = common::scenes::area_lights(&tris, &materials);
+    scene("floor under a lamp", tris, materials, lights, camera(v(0., -3., 2.5), v(0., 3., -2.2), Vec3::Z, 50.0))
+}
+
+/// An emitting cut-out or blended surface emits where it is there: next-event
+/// estimation's light samples and light subpaths' starting points are weighted by its
+/// presence (glsl/textures.glsl, `emitter_presence`), as paths that hit it are by the
+/// traversal's alpha test.
+/// * A lamp cut away entirely (MASK, alpha 0.3 < cutoff 0.5) lights nothing: every pixel
+///   of pt, lt and bpt is exactly 0 (without the presence weight next-event estimation
+///   and light subpaths would light the floor).
+/// * A blended lamp of alpha 0.4: pt with next-event estimation (presence-weighted light
+///   samples) against pt without (only hits of the lamp, which the stochastic alpha test
+///   thins), and lt and bpt against pt, per pixel.
+#[test]
+fn emitting_cut_outs_and_blended_lamps_emit_where_they_are() {
+    let lamp = |alpha: f32, alpha_mode: AlphaMode| Material {
+        name: "lamp".into(),
+        emission: Vec3::splat(4.0),
+        alpha,
+        alpha_mode,
+        ..Default::default()
+    };
+    let run = |gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, nee: bool, iterations: u64| {
+        let mut s = RenderSettings::new(algo, W, H, Budget::Iterations(iterations));
+        s.frame.max_path_length = 4;
+        s.frame.seed = 17 + algo as u32;
+        s.nee = nee;
+        render::render(gpu, scene, &s, None, &mut |_| {}).unwrap()
+    };
+    with_gpu(|gpu| {
+        let cut_away = floor_under_a_lamp(lamp(0.3, AlphaMode::Mask { cutoff: 0.5 }));
+        for algo in [Algorithm::Pt, Algorithm::Lt, Algorithm::Bpt] {
+            let out = run(gpu, &cut_away, algo, true, 16);
+            let lit = out.sum.iter().filter(|p| p.iter().any(|&c| c != 0.0)).count();
+            assert_eq!(lit, 0, "{}: {lit} pixels lit by a lamp that is cut away", algo.name());
+        }
+        let blended = floor_under_a_lamp(lamp(0.4, AlphaMode::Blend));
+        let pt = render_stats(&run(gpu, &blended, Algorithm::Pt, true, 1024), None);
+        for (algo, nee, iterations) in
+            [(Algorithm::Pt, false, 4096), (Algorithm::Lt, true, 2048), (Algorithm::Bpt, true, 1024)]
+        {
+            let other = render_stats(&run(gpu, &blended, algo, nee, iterations), None);
+            let r = welch_test(&pt, &other, ALPHA).unwrap();
+            assert!(r.passed(), "blended lamp: PT vs {} (nee {nee}): {r}", algo.name());
+        }
+    });
+}
