@@ -57,7 +57,7 @@ pub enum LeafRule {
     /// [`LeafRule::Size`] for a tree of at least [`SIZE_LEAF_RULE_MIN_PRIMS`] primitives,
     /// else [`LeafRule::Sah`] (docs/bvh.md, "Leaves": on 1M-triangle meshes the size rule
     /// builds 13-22% faster at the same trace speed; on a 4k-triangle scene it
-    /// traces 14-17% slower, and such a build takes milliseconds either way).
+    /// traces 13-17% slower, and such a build takes milliseconds either way).
     Auto,
     /// A node of at most `max_leaf` primitives becomes a leaf when the SAH says a leaf
     /// costs no more than its best split (so splits go down to single primitives).
