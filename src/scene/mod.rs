@@ -210,8 +210,10 @@ pub struct Material {
     /// the point's own metallic and roughness (glsl/bsdf.glsl, `point_material`).
     pub metallic_roughness_texture: Option<MetallicRoughnessTexture>,
     /// A one-sided surface (glTF `doubleSided: false` on a surface that is not a
-    /// dielectric): a ray that meets a triangle's back side (against the winding's normal)
-    /// passes through it, for every kind of ray.
+    /// dielectric): the camera does not see a triangle's back side (against the winding's
+    /// normal): camera rays pass through it and light-subpath vertices on it do not reach
+    /// the camera (glsl/scene.glsl, `trace_camera_segment`, `visible_to_camera`). Light
+    /// meets both sides.
     pub one_sided: bool,
     /// Attenuation coefficient (per unit length, per channel) of the medium inside a
     /// closed dielectric mesh (KHR_materials_volume: -ln(attenuationColor) /
