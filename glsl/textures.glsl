@@ -271,6 +271,17 @@ vec3 normal_mapped(uint tri, uint record, uint material, float u, float v, vec3 
 }
 #endif
 
+// The probability that the surface is there at the point (alpha_visible's rules below):
+// 1 or 0 for OPAQUE and MASK, alpha for BLEND (`blend` says which).
+float surface_presence(uint id, uint material, float u, float v, out bool blend) {
+    vec4 srf = material_surface(material);
+    blend = srf.z == ALPHA_BLEND;
+    if (srf.z == ALPHA_OPAQUE) return 1.0;
+    float alpha = (id & BVH_SPHERE_FLAG) != 0u ? srf.y : surface_tint_alpha(id, material, u, v).a;
+    if (!blend) return alpha >= srf.z ? 1.0 : 0.0;
+    return alpha;
+}
+
 // Whether a candidate hit (primitive id `id` with the BVH's sphere flag, `material`, at
 // (u, v), distance t along the ray) is there, for every ray:
 // * alphaMode MASK (surface.z = its cutoff >= 0): false on the cut-away part, where alpha
@@ -287,29 +298,24 @@ vec3 normal_mapped(uint tri, uint record, uint material, float u, float v, vec3 
 // * else (OPAQUE) true.
 // Spheres have no attributes: their alpha is the material's factor.
 bool alpha_visible(uint id, uint material, float u, float v, float t) {
-    vec4 srf = material_surface(material);
-    if (srf.z == ALPHA_OPAQUE) return true;
-    float alpha = (id & BVH_SPHERE_FLAG) != 0u ? srf.y : surface_tint_alpha(id, material, u, v).a;
-    if (srf.z != ALPHA_BLEND) return alpha >= srf.z;
+    bool blend;
+    float presence = surface_presence(id, material, u, v, blend);
+    if (!blend) return presence > 0.0;
     uint h = pcg_hash(id ^ pcg_hash(params.misc.x));
     h = pcg_hash(floatBitsToUint(t) ^ pcg_hash(floatBitsToUint(u) ^ pcg_hash(floatBitsToUint(v) ^ h)));
-    return float(h >> 8) * (1.0 / 16777216.0) < alpha;
+    return float(h >> 8) * (1.0 / 16777216.0) < presence;
 }
 
 // How much of an emitting triangle `tri` is there at barycentric weights (u, v), for
 // light that leaves it without a ray meeting it first (next-event estimation's light
-// samples and the start of light subpaths): MASK 1 or 0 by the cutoff, BLEND alpha (the
-// probability alpha_visible lets a ray meet it, so a path that hits it collects the same
-// expectation), OPAQUE 1. A path that hits the light has passed alpha_visible already,
-// so its radiance is not scaled. Light points are still sampled uniformly by area: the
-// pdfs, and so the MIS weights, are unchanged.
+// samples and the start of light subpaths): its surface_presence, the probability that
+// alpha_visible lets a ray meet it there, so a path that hits it collects the same
+// expectation. A path that hits the light has passed alpha_visible already, so its
+// radiance is not scaled. Light points are still sampled uniformly by area: the pdfs,
+// and so the MIS weights, are unchanged.
 float emitter_presence(uint tri, float u, float v) {
-    uint material = triangle_at(tri).material;
-    vec4 srf = material_surface(material);
-    if (srf.z == ALPHA_OPAQUE) return 1.0;
-    float alpha = surface_tint_alpha(tri, material, u, v).a;
-    if (srf.z != ALPHA_BLEND) return alpha >= srf.z ? 1.0 : 0.0;
-    return alpha;
+    bool blend;
+    return surface_presence(tri, triangle_at(tri).material, u, v, blend);
 }
 
 #endif
