@@ -80,15 +80,8 @@ fn rough_glass_scene(shading_normals: bool) -> Scene {
         }
     }
     s.triangles.extend(mesh);
-    // The bulb's filament: a 0.3 x 0.3 square at the sphere's centre, emitting towards -y
-    // (the camera).
-    s.materials.push(Material { name: "filament".into(), emission: Vec3::splat(4.0), ..Default::default() });
-    let (x0, x1, z0, z1, y) = (-0.95, -0.65, 0.35, 0.65, 0.2);
-    let p = |x: f32, z: f32| Vec3::new(x, y, z);
-    for t in [[p(x0, z0), p(x1, z0), p(x1, z1)], [p(x0, z0), p(x1, z1), p(x0, z1)]] {
-        s.triangles.push(vkvcm::scene::Triangle { p: t, n: None, material: a + 2, attributes: None });
-    }
-    s.lights = area_lights(&s.triangles, &s.materials);
+    // The bulb's filament, at the sphere's centre, emitting towards -y (the camera).
+    add_filament(&mut s, Vec3::new(-0.8, 0.2, 0.5), 4.0);
     s.name = format!("rough glass{}", if shading_normals { ", shading normals" } else { "" });
     s
 }

@@ -179,15 +179,8 @@ fn floor_with_absorbing_glass(roughness: f32, attenuation: Vec3, transmission: V
 fn absorbing_bulb_scene() -> Scene {
     let (mut s, a) = floor_with_absorbing_glass(0.3, ABSORB, TINT);
     s.spheres.push(Sphere { center: Vec3::new(-0.3, 0.2, 0.5), radius: 0.5, material: a });
-    // The filament: a 0.3 x 0.3 square at the sphere's centre, emitting towards -y (the
-    // camera).
-    s.materials.push(Material { name: "filament".into(), emission: Vec3::splat(6.0), ..Default::default() });
-    let (x0, x1, z0, z1, y) = (-0.45, -0.15, 0.35, 0.65, 0.2);
-    let p = |x: f32, z: f32| Vec3::new(x, y, z);
-    for t in [[p(x0, z0), p(x1, z0), p(x1, z1)], [p(x0, z0), p(x1, z1), p(x0, z1)]] {
-        s.triangles.push(vkvcm::scene::Triangle { p: t, n: None, material: a + 1, attributes: None });
-    }
-    s.lights = area_lights(&s.triangles, &s.materials);
+    // The filament, at the sphere's centre, emitting towards -y (the camera).
+    add_filament(&mut s, Vec3::new(-0.3, 0.2, 0.5), 6.0);
     s.name = "absorbing bulb".into();
     s
 }

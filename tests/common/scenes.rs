@@ -198,3 +198,17 @@ pub fn smooth_sphere_mesh(center: Vec3, radius: f32, rings: u32, segments: u32, 
     }
     out
 }
+
+/// Adds a small emitter, a 0.3 x 0.3 square in the plane y = `centre.y` around `centre`,
+/// emitting towards -y with `radiance` (a frosted bulb's filament inside a glass sphere
+/// centred there), and makes the scene's lights again.
+pub fn add_filament(s: &mut Scene, centre: Vec3, radiance: f32) {
+    let material = s.materials.len() as u32;
+    s.materials.push(Material { name: "filament".into(), emission: Vec3::splat(radiance), ..Default::default() });
+    let p = |dx: f32, dz: f32| Vec3::new(centre.x + dx, centre.y, centre.z + dz);
+    let (lo, hi) = (-0.15, 0.15);
+    for t in [[p(lo, lo), p(hi, lo), p(hi, hi)], [p(lo, lo), p(hi, hi), p(lo, hi)]] {
+        s.triangles.push(Triangle { p: t, n: None, material, attributes: None });
+    }
+    s.lights = area_lights(&s.triangles, &s.materials);
+}
