@@ -34,9 +34,10 @@
 // dielectric, phong.w = IOR >= 0, whose emission.w = GGX alpha > 0): Walter et al. 2007's
 // BSDF, reflection and transmission through GGX microfacets, with the exact dielectric
 // Fresnel F(wo.h) and Smith's separable shadowing G1(wo) G1(wi) (their eq. 23; Mitsuba 3's
-// `roughdielectric`, the reference of tests/render_environment.rs). It is the material's
+// `roughdielectric`, the reference of tests/render_environment.rs). It is clear glass's
 // only component (probability 1, no other lobe is evaluated; continuation probability 1
-// as for smooth glass: F + (1 - F)) and it is not delta, so every estimator connects to it,
+// as for smooth glass: F + (1 - F)); partial transmission adds lobes beside it (below).
+// It is not delta, so every estimator connects to it,
 // NEE reaches it and photons are stored on it and merged. With eta = eta_o / eta_i (the
 // IORs on wo's and on wi's side), the half vector is h = wo + wi (reflection) or
 // eta wo + wi (transmission, Walter's generalised h_t), normalised and turned to wo's side:
@@ -62,6 +63,19 @@
 // the material's transmission colour (`transmission_colour`, the base colour); the
 // reflected part and every pdf are not (the component and event probabilities stay the
 // Fresnel terms, so the sampling is the clear glass's and the MIS weights are exact).
+//
+// Partial transmission (glTF KHR_materials_transmission with transmissionFactor t < 1, or
+// metallic m > 0): glTF's BSDF is linear in t and m, mix(mix(opaque dielectric, glass, t),
+// metal, m), so it is the glass with weight w = (1 - m) t plus, with weight 1 - w, the
+// metallic/roughness lobes of metallic m / (1 - w) (src/scene/gltf_import/materials.rs).
+// A dielectric's glass weight w is transmission.w: its interface components (the
+// Fresnel-weighted mirror reflection and refraction of smooth glass, or the rough
+// dielectric) are weighted by w, and its diffuse, Phong and GGX lobes by 1 - w; the
+// component probabilities are proportional to the weighted albedos, so f, pdf and the
+// reverse pdf are those of the mixture. Each part conserves energy, so the mixture does.
+// The lobes reflect on both sides of the surface (wo outside or inside the dielectric,
+// `lobe_normal`). Clear glass has w = 1 and no other lobe (src/scene/validate.rs checks
+// it), so without HAS_PARTIAL_TRANSMISSION no weight is applied.
 //
 // Components no material of the scene has are compiled out (HAS_DIFFUSE, HAS_PHONG,
 // HAS_GGX, HAS_MIRROR, HAS_DIELECTRIC, HAS_ROUGH_DIELECTRIC: glsl/features.glsl); the
@@ -97,6 +111,10 @@ struct Bsdf {
     bool delta;      // only specular components
     bool from_light; // fixed direction belongs to a light subpath (adjoint BSDF)
     Tint tint;       // the surface point's tint (glsl/textures.glsl)
+#if HAS_PARTIAL_TRANSMISSION
+    float interface_weight;  // a dielectric's glass weight; 1 on opaque materials
+    float lobes_weight;      // 1 - the glass weight on a dielectric; 1 on opaque materials
+#endif
 };
 
 // The material's colours at a point with tint `tint` (the header of glsl/textures.glsl):
@@ -111,7 +129,8 @@ vec3 diffuse_colour(GpuMaterial m, vec3 tint) {
 }
 vec3 mirror_colour(GpuMaterial m, vec3 tint) {
 #if HAS_VERTEX_ATTRIBUTES
-    if (tint != vec3(1.0)) return m.mirror.rgb * tint;
+    // A dielectric's reflection is not tinted (glTF KHR_materials_transmission).
+    if (tint != vec3(1.0) && m.phong.w < 0.0) return m.mirror.rgb * tint;
 #endif
     return m.mirror.rgb;
 }
@@ -288,16 +307,57 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint t
     a_g = luminance(glossy);
     albedo += glossy;
 #endif
+#if HAS_PARTIAL_TRANSMISSION
+    // Partial transmission (the header): the lobes so far carry 1 - the glass weight, the
+    // interface's components the glass weight.
+    b.interface_weight = 1.0;
+    b.lobes_weight = 1.0;
+    if (ior >= 0.0) {
+        b.interface_weight = m.transmission.w;
+        b.lobes_weight = 1.0 - m.transmission.w;
+        a_d *= b.lobes_weight;
+        a_p *= b.lobes_weight;
+        a_g *= b.lobes_weight;
+        albedo *= b.lobes_weight;
+    }
+#endif
 #if HAS_MIRROR
     vec3 mirror = mirror_colour(m, tint.rgb);
     a_r = b.fresnel * luminance(mirror);
+#if HAS_PARTIAL_TRANSMISSION
+    a_r *= b.interface_weight;
+    mirror *= b.interface_weight;
+#endif
     albedo += b.fresnel * mirror;
 #endif
 #if HAS_DIELECTRIC
     a_t = ior < 0.0 ? 0.0 : 1.0 - b.fresnel;
+#if HAS_PARTIAL_TRANSMISSION
+    a_t *= b.interface_weight;
+#endif
 #endif
     b.prob_rough = 0.0;
 #if HAS_ROUGH_DIELECTRIC
+#if HAS_PARTIAL_TRANSMISSION
+    if (ior >= 0.0 && m.emission.w > 0.0 && b.lobes_weight > 0.0) {
+        // The rough dielectric with weight w beside the lobes: its albedo, reflection plus
+        // transmission, is counted as 1 (the event within it is drawn by Fresnel).
+        float total = a_d + a_p + a_g + b.interface_weight;
+        if (total < 1e-9) {
+            b.valid = false;
+            total = 1.0;
+        }
+        b.prob_diffuse = a_d / total;
+        b.prob_phong = a_p / total;
+        b.prob_glossy = a_g / total;
+        b.prob_reflect = 0.0;
+        b.prob_refract = 0.0;
+        b.prob_rough = b.interface_weight / total;
+        b.cont_prob = clamp(max3(albedo) + b.interface_weight, 0.0, 1.0);
+        b.delta = false;
+        return b;
+    }
+#endif
     if (ior >= 0.0 && m.emission.w > 0.0) {
         // The rough dielectric: the material's only component (the header).
         b.prob_diffuse = 0.0;
@@ -321,7 +381,11 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint t
     b.prob_glossy = a_g / total;
     b.prob_reflect = a_r / total;
     b.prob_refract = a_t / total;
+#if HAS_PARTIAL_TRANSMISSION
+    b.cont_prob = clamp(max3(albedo) + a_t, 0.0, 1.0);
+#else
     b.cont_prob = clamp(max3(albedo) + (1.0 - b.fresnel), 0.0, 1.0);
+#endif
     b.delta = b.prob_diffuse == 0.0 && b.prob_phong == 0.0 && b.prob_glossy == 0.0;
     return b;
 }
@@ -391,22 +455,32 @@ vec3 rough_dielectric_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev
 }
 #endif
 
-// Non-specular part: f(wo, wi) and the solid-angle pdfs of sampling wi given wo (fwd)
-// and wo given wi (rev), both including the component probability but not Russian
-// roulette. Zero when either direction is below the surface (but for the rough
-// dielectric, which transmits).
-vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
+// The sign that turns the Bsdf's normals to wo's side of the geometric surface, where the
+// reflection lobes (diffuse, Phong, GGX, mirror) are evaluated and sampled. bsdf_init
+// turns an opaque material's normals there already; a dielectric's stay outward (its
+// refraction needs the side), which only its partial transmission's lobes must undo.
+float lobe_side(Bsdf b) {
+#if HAS_PARTIAL_TRANSMISSION
+    return dot(b.ng, b.wo) >= 0.0 ? 1.0 : -1.0;
+#else
+    return 1.0;
+#endif
+}
+
+// The diffuse, Phong and GGX lobes: f(wo, wi) and the pdfs with their component
+// probabilities (bsdf_eval).
+vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
     pdf_fwd = 0.0;
     pdf_rev = 0.0;
-#if HAS_ROUGH_DIELECTRIC
-    if (b.prob_rough > 0.0) return rough_dielectric_eval(b, wi, pdf_fwd, pdf_rev);
-#endif
-    float cos_o = dot(b.n, b.wo);
-    float cos_i = dot(b.n, wi);
+    float side = lobe_side(b);
+    vec3 n = side * b.n;
+    float cos_o = dot(n, b.wo);
+    float cos_i = dot(n, wi);
     if (b.delta || cos_o < EPS_COSINE || cos_i < EPS_COSINE) return vec3(0.0);
 #if HAS_SHADING_NORMALS
     // A reflection: wi on wo's side of the geometric surface (no light leaks).
-    if (dot(b.ng, wi) <= 0.0 || dot(b.ng, b.wo) <= 0.0) return vec3(0.0);
+    vec3 ng = side * b.ng;
+    if (dot(ng, wi) <= 0.0 || dot(ng, b.wo) <= 0.0) return vec3(0.0);
 #endif
     GpuMaterial m = point_material(b.material, b.tint);
     vec3 f = vec3(0.0);
@@ -425,7 +499,7 @@ vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
 #if HAS_PHONG
     if (b.prob_phong > 0.0) {
         float e = m.diffuse.w;
-        vec3 r = 2.0 * cos_o * b.n - b.wo;
+        vec3 r = 2.0 * cos_o * n - b.wo;
         float cos_r = dot(r, wi);
         if (cos_r > EPS_COSINE) {
             float v = pow(cos_r, e);
@@ -439,12 +513,38 @@ vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
 #if HAS_GGX
     if (b.prob_glossy > 0.0) {
         float pf, pr;
-        f += ggx_eval(b.n, b.wo, wi, cos_o, cos_i, glossy_colour(m, b.tint.rgb), m.glossy.w, pf, pr);
+        f += ggx_eval(n, b.wo, wi, cos_o, cos_i, glossy_colour(m, b.tint.rgb), m.glossy.w, pf, pr);
         pdf_fwd += b.prob_glossy * pf;
         pdf_rev += b.prob_glossy * pr;
     }
 #endif
+#if HAS_PARTIAL_TRANSMISSION
+    f *= b.lobes_weight;
+#endif
     return f;
+}
+
+// Non-specular part: f(wo, wi) and the solid-angle pdfs of sampling wi given wo (fwd)
+// and wo given wi (rev), both including the component probability but not Russian
+// roulette. Zero when either direction is below the surface (but for the rough
+// dielectric, which transmits).
+vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
+#if HAS_ROUGH_DIELECTRIC
+    if (b.prob_rough > 0.0) {
+        vec3 f = rough_dielectric_eval(b, wi, pdf_fwd, pdf_rev);
+#if HAS_PARTIAL_TRANSMISSION
+        if (b.prob_rough < 1.0) {
+            // Beside the lobes (partial transmission): the mixture's f and pdfs.
+            float pf, pr;
+            f = f * b.interface_weight + lobes_eval(b, wi, pf, pr);
+            pdf_fwd = pdf_fwd * b.prob_rough + pf;
+            pdf_rev = pdf_rev * b.prob_rough + pr;
+        }
+#endif
+        return f;
+    }
+#endif
+    return lobes_eval(b, wi, pdf_fwd, pdf_rev);
 }
 
 // Veach's adjoint correction |n.wo| |ng.wi| / (|ng.wo| |n.wi|) for light subpaths (eq.
@@ -484,16 +584,22 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
     s.wi = vec3(0.0);
     s.cos_wi = 0.0;
     if (!b.valid) return s;
+    float x = u.z;
+    float p_nonspec = b.prob_diffuse + b.prob_phong + b.prob_glossy;
 #if HAS_ROUGH_DIELECTRIC
-    if (b.prob_rough > 0.0) {
+    // The rough dielectric is drawn for x in [p_nonspec, 1) (all of it without partial
+    // transmission, where p_nonspec is 0), the lobes below.
+    if (b.prob_rough > 0.0 && x >= p_nonspec) {
         // The rough dielectric (the header): h from D(h) cos(theta_h) about the normal on
-        // wo's side, then reflection with probability F(wo.h) (u.z), else refraction.
+        // wo's side, then reflection with probability F(wo.h) (x rescaled to [0, 1)), else
+        // refraction.
+        float x_rough = (x - p_nonspec) / b.prob_rough;
         GpuMaterial mr = material_at(b.material);
         float side = dot(b.ng, b.wo) >= 0.0 ? 1.0 : -1.0;
         vec3 h = ggx_sample_h(side * b.n, mr.emission.w, u.xy);
         float oh = dot(b.wo, h);
         if (oh < EPS_COSINE) return s;
-        bool reflect_h = u.z < fresnel_dielectric(side * oh, mr.phong.w);
+        bool reflect_h = x_rough < fresnel_dielectric(side * oh, mr.phong.w);
         if (reflect_h) {
             s.wi = 2.0 * oh * h - b.wo;
         } else {
@@ -514,21 +620,20 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
     }
 #endif
     GpuMaterial m = point_material(b.material, b.tint);
-    float cos_o = dot(b.n, b.wo);
-    float x = u.z;
-    float p_nonspec = b.prob_diffuse + b.prob_phong + b.prob_glossy;
+    vec3 n = lobe_side(b) * b.n;
+    float cos_o = dot(n, b.wo);
 #if HAS_DIFFUSE || HAS_PHONG || HAS_GGX
     if (x < p_nonspec) {
         // An absent component has probability 0, so its branch is never taken.
 #if HAS_DIFFUSE
         if (x < b.prob_diffuse) {
-            s.wi = to_world(sample_cosine_hemisphere(u.xy), b.n);
+            s.wi = to_world(sample_cosine_hemisphere(u.xy), n);
         } else
 #endif
 #if HAS_GGX
         if (x >= b.prob_diffuse + b.prob_phong) {
             // GGX: half vector from D(h) cos(theta_h), then reflect wo about it.
-            vec3 h = ggx_sample_h(b.n, m.glossy.w, u.xy);
+            vec3 h = ggx_sample_h(n, m.glossy.w, u.xy);
             float oh = dot(b.wo, h);
             if (oh <= 0.0) return s;
             s.wi = 2.0 * oh * h - b.wo;
@@ -537,7 +642,7 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
         {
 #if HAS_PHONG
             float e = m.diffuse.w;
-            vec3 r = 2.0 * cos_o * b.n - b.wo;
+            vec3 r = 2.0 * cos_o * n - b.wo;
             float ct = pow(u.x, 1.0 / (e + 1.0));
             float st = sqrt(max(0.0, 1.0 - ct * ct));
             float phi = 2.0 * PI * u.y;
@@ -547,7 +652,7 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
 #endif
         }
         vec3 f = bsdf_eval(b, s.wi, s.pdf, s.pdf_rev);
-        if (s.pdf <= 0.0 || dot(b.n, s.wi) < EPS_COSINE) return s;
+        if (s.pdf <= 0.0 || dot(n, s.wi) < EPS_COSINE) return s;
         s.cos_wi = bsdf_cos_geometric(b, s.wi);
         s.weight = f * (bsdf_cos(b, s.wi) / s.pdf);
         s.ok = true;
@@ -566,6 +671,9 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
         s.cos_wi = bsdf_cos_geometric(b, s.wi);
         // f bsdf_cos / pdf with f = F mirror / |n.wi|.
         s.weight = b.fresnel * mirror_colour(m, b.tint.rgb) * shading_correction(b, s.wi) / b.prob_reflect;
+#if HAS_PARTIAL_TRANSMISSION
+        s.weight *= b.interface_weight;
+#endif
     } else
 #endif
     {
@@ -591,6 +699,9 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
         float scale = b.from_light ? 1.0 : eta * eta;
         s.weight = transmission_colour(m, b.tint.rgb) *
                    ((1.0 - b.fresnel) * scale * shading_correction(b, s.wi) / b.prob_refract);
+#if HAS_PARTIAL_TRANSMISSION
+        s.weight *= b.interface_weight;
+#endif
 #else
         // Without dielectrics prob_refract is 0: the generic kernel reaches this branch
         // only through rounding (x >= p_nonspec + prob_reflect) and fails (pdf 0) too.

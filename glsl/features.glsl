@@ -29,12 +29,20 @@
 #ifndef HAS_ROUGH_DIELECTRIC
 #define HAS_ROUGH_DIELECTRIC 1
 #endif
+// A dielectric whose glass weight is below 1 (glsl/bsdf.glsl, "Partial transmission"):
+// its diffuse, Phong and GGX lobes carry the rest, on both sides of the surface.
+#ifndef HAS_PARTIAL_TRANSMISSION
+#define HAS_PARTIAL_TRANSMISSION 1
+#endif
 // Absorbing media inside dielectrics (KHR_materials_volume; glsl/medium.glsl).
 #ifndef HAS_VOLUME
 #define HAS_VOLUME 1
 #endif
 #if HAS_VOLUME && !HAS_DIELECTRIC
 #error "HAS_VOLUME needs HAS_DIELECTRIC (only a dielectric bounds a medium)"
+#endif
+#if HAS_PARTIAL_TRANSMISSION && !HAS_DIELECTRIC
+#error "HAS_PARTIAL_TRANSMISSION needs HAS_DIELECTRIC"
 #endif
 #if HAS_ROUGH_DIELECTRIC && !HAS_DIELECTRIC
 #error "HAS_ROUGH_DIELECTRIC needs HAS_DIELECTRIC (a rough dielectric is a dielectric)"

@@ -35,7 +35,7 @@ struct GpuMaterial {
     vec4 f0_roughness;   // rgb: the dielectric's F0, w: roughness factor
     vec4 medium;         // rgb: attenuation coefficient inside a transmissive volume (0: none),
                          // w: flag bits (MATERIAL_ONE_SIDED)
-    vec4 transmission;   // rgb: colour of a dielectric's transmitted part (1: clear)
+    vec4 transmission;   // rgb: colour of a dielectric's transmitted part (1: clear); w: its glass weight (glsl/bsdf.glsl)
 };
 
 struct GpuTextureRef {

@@ -71,7 +71,8 @@ fn glossy_scene() -> Scene {
 }
 
 /// glossy_scene with a tinted rough glass sphere holding an absorbing medium (a rough
-/// dielectric, HAS_ROUGH_DIELECTRIC, and HAS_VOLUME).
+/// dielectric, HAS_ROUGH_DIELECTRIC, and HAS_VOLUME) and two partially transmissive
+/// spheres, smooth and rough (HAS_PARTIAL_TRANSMISSION).
 fn rough_glass_scene() -> Scene {
     let mut s = glossy_scene();
     let a = s.materials.len() as u32;
@@ -85,7 +86,14 @@ fn rough_glass_scene() -> Scene {
         ..Default::default()
     });
     s.spheres.push(vkvcm::scene::Sphere { center: glam::Vec3::new(-0.8, 0.2, 0.5), radius: 0.5, material: a });
-    s.name = "glossy + rough glass".into();
+    let f0 = glam::Vec3::splat(vkvcm::scene::GLTF_DIELECTRIC_F0);
+    let base = glam::Vec3::new(0.9, 0.7, 0.5);
+    for (i, roughness) in [0.0f32, 0.4].into_iter().enumerate() {
+        s.materials.push(vkvcm::scene::Material::transmissive(base, 0.2, roughness, 0.6, 1.5, f0));
+        let center = glam::Vec3::new(0.4 + 0.8 * i as f32, -0.6, 0.3);
+        s.spheres.push(vkvcm::scene::Sphere { center, radius: 0.3, material: a + 1 + i as u32 });
+    }
+    s.name = "glossy + rough glass + partial transmission".into();
     s
 }
 
@@ -255,8 +263,22 @@ fn feature_derivation() {
     let f = FeatureSet::new(&rough_glass_scene(), false);
     assert!(f.dielectric && f.rough_dielectric && f.mirror && f.spheres && f.volume, "{f}");
     assert!(f.to_string().contains("absorbing volume"), "{f}");
+    assert!(f.partial_transmission && f.diffuse && f.ggx, "{f}");
     let smallvcm = FeatureSet::new(&load_named("gbs_s").unwrap(), false);
-    assert!(!smallvcm.rough_dielectric && !smallvcm.volume, "{smallvcm}");
+    assert!(!smallvcm.rough_dielectric && !smallvcm.volume && !smallvcm.partial_transmission, "{smallvcm}");
+    // Clear glass's other lobes have no weight: they compile nothing in.
+    let mut scene = glossy_scene();
+    scene.materials[0] = vkvcm::scene::Material {
+        mirror: glam::Vec3::ONE,
+        ior: 1.5,
+        diffuse: glam::Vec3::ONE,
+        glossy: glam::Vec3::ONE,
+        ..Default::default()
+    };
+    scene.materials[1] = scene.materials[0].clone();
+    scene.materials[2] = scene.materials[0].clone();
+    let f = FeatureSet::new(&scene, false);
+    assert!(f.dielectric && !f.partial_transmission && !f.diffuse && !f.ggx, "{f}");
     // An attenuation on a material that is not a dielectric bounds no medium.
     let mut scene = glossy_scene();
     scene.materials[0].attenuation = glam::Vec3::ONE;

@@ -405,8 +405,8 @@ fn unsupported_features_warn_once_per_kind() {
     // Glass does not read metallicRoughnessTexture (its image is never loaded).
     let glass = json!({"KHR_materials_transmission": {"transmissionFactor": 1.0}});
     d.json["materials"] = json!([
-        {"name": "a", "pbrMetallicRoughness": {"metallicRoughnessTexture": {"index": 0}}, "extensions": glass},
-        {"name": "b", "pbrMetallicRoughness": {"metallicRoughnessTexture": {"index": 0}}, "extensions": glass},
+        {"name": "a", "pbrMetallicRoughness": {"metallicFactor": 0.0, "metallicRoughnessTexture": {"index": 0}}, "extensions": glass},
+        {"name": "b", "pbrMetallicRoughness": {"metallicFactor": 0.0, "metallicRoughnessTexture": {"index": 0}}, "extensions": glass},
     ]);
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
     let mut lines = d.json["meshes"][0]["primitives"][0].clone();
@@ -425,41 +425,76 @@ fn unsupported_features_warn_once_per_kind() {
     assert_eq!(s.triangles.len(), 1, "the LINES primitive is skipped");
 }
 
-/// KHR_materials_transmission (+ KHR_materials_ior): clear glass of the material's
-/// roughness: smooth at roughness 0, the rough dielectric (GGX alpha = roughness^2) above;
-/// the base colour tints the transmitted part (Material::transmission); partial
-/// transmission is approximated by full transmission, with a warning naming the material;
-/// roughness and tint alone warn of nothing.
+/// KHR_materials_transmission (+ KHR_materials_ior): glass of the material's roughness:
+/// smooth at roughness 0, the rough dielectric (GGX alpha = roughness^2) above; the base
+/// colour tints the transmitted part (Material::transmission). Partial transmission t and
+/// metallic m make glass of weight w = (1 - m) t beside the metallic/roughness lobes of
+/// metallic m / (1 - w) (glsl/bsdf.glsl, "Partial transmission"); metallic 1 is a metal.
+/// None of it warns.
 #[test]
 fn transmission_is_smooth_or_rough_glass() {
     let mut d = Doc::triangle();
     let t =
         |f: f64| json!({"KHR_materials_transmission": {"transmissionFactor": f}, "KHR_materials_ior": {"ior": 1.4}});
-    let pbr =
-        |b: f64, r: f64| json!({"baseColorFactor": [1.0, b, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": r});
+    let pbr = |b: f64, r: f64, metallic: f64| json!({"baseColorFactor": [1.0, b, 1.0, 1.0], "metallicFactor": metallic, "roughnessFactor": r});
     d.json["materials"] = json!([
-        {"name": "smooth", "pbrMetallicRoughness": pbr(1.0, 0.0), "extensions": t(1.0)},
-        {"name": "rough", "pbrMetallicRoughness": pbr(1.0, 0.3), "extensions": t(1.0)},
-        {"name": "partial", "pbrMetallicRoughness": pbr(1.0, 0.5), "extensions": t(0.5)},
-        {"name": "tinted", "pbrMetallicRoughness": pbr(0.5, 0.5), "extensions": t(1.0)},
-        {"name": "default_roughness", "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}}},
+        {"name": "smooth", "pbrMetallicRoughness": pbr(1.0, 0.0, 0.0), "extensions": t(1.0)},
+        {"name": "rough", "pbrMetallicRoughness": pbr(1.0, 0.3, 0.0), "extensions": t(1.0)},
+        {"name": "tinted", "pbrMetallicRoughness": pbr(0.5, 0.5, 0.0), "extensions": t(1.0)},
+        {"name": "default_roughness", "pbrMetallicRoughness": {"metallicFactor": 0.0},
+         "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}}},
+        {"name": "partial", "pbrMetallicRoughness": pbr(0.5, 0.5, 0.0), "extensions": t(0.5)},
+        {"name": "partial_metal", "pbrMetallicRoughness": pbr(0.5, 0.0, 0.2), "extensions": t(0.5)},
+        {"name": "half_metal", "pbrMetallicRoughness": pbr(0.5, 0.5, 0.5), "extensions": t(1.0)},
+        {"name": "metal", "pbrMetallicRoughness": pbr(0.5, 0.5, 1.0), "extensions": t(1.0)},
     ]);
     let s = d.load().unwrap();
     let m = &s.materials;
-    for g in m.iter().take(5) {
+    for g in m.iter().take(4) {
         assert_eq!((g.mirror, g.diffuse, g.glossy), (Vec3::ONE, Vec3::ZERO, Vec3::ZERO), "{}", g.name);
+        assert_eq!((g.glass_weight, g.lobes_weight(), g.has_partial_transmission()), (1.0, 0.0, false), "{}", g.name);
     }
     assert_eq!((m[0].ior, m[0].dielectric_roughness, m[0].is_rough_dielectric()), (1.4, 0.0, false));
     assert_eq!((m[1].ior, m[1].dielectric_roughness, m[1].is_rough_dielectric()), (1.4, 0.3, true));
     assert!((m[1].dielectric_alpha() - 0.09).abs() < 1e-6);
     // glTF's default roughnessFactor is 1, KHR_materials_ior's default ior 1.5.
-    assert_eq!((m[4].ior, m[4].dielectric_roughness), (1.5, 1.0));
-    let w = &s.report.warnings;
-    let has = |needle: &str, name: &str| w.iter().any(|x| x.contains(needle) && x.contains(name));
-    assert!(has("partial transmission", "'partial'"), "{w:?}");
-    assert_eq!(m[3].transmission, Vec3::new(1.0, 0.5, 1.0));
+    assert_eq!((m[3].ior, m[3].dielectric_roughness), (1.5, 1.0));
+    assert_eq!(m[2].transmission, Vec3::new(1.0, 0.5, 1.0));
     assert_eq!(m[0].transmission, Vec3::ONE);
+    let base = Vec3::new(1.0, 0.5, 1.0);
+    // KHR_materials_ior 1.4: the dielectric F0 ((1.4 - 1) / (1.4 + 1))^2.
+    let f0 = (0.4f32 / 2.4).powi(2);
+    let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-6;
+    // (material, glass weight, the lobes' metallic)
+    for (i, w, metallic) in [(4, 0.5, 0.0), (5, 0.4, 0.2 / 0.6), (6, 0.5, 1.0)] {
+        let g = &m[i];
+        assert!(g.is_dielectric() && g.has_partial_transmission(), "{}", g.name);
+        assert_eq!((g.mirror, g.ior, g.transmission), (Vec3::ONE, 1.4, base), "{}", g.name);
+        assert!((g.glass_weight - w).abs() < 1e-6 && (g.lobes_weight() - (1.0 - w)).abs() < 1e-6, "{}", g.name);
+        assert!(close(g.diffuse, base * (1.0 - metallic)), "{}: diffuse {}", g.name, g.diffuse);
+        assert!(close(g.glossy, Vec3::splat(f0).lerp(base, metallic)), "{}: glossy {}", g.name, g.glossy);
+        assert_eq!(g.roughness, g.dielectric_roughness, "{}", g.name);
+    }
+    // A smooth partial metal: the lobes' metal is GGX, the mirror stays the glass's.
+    assert_eq!((m[5].roughness, m[5].is_rough_dielectric()), (0.0, false));
+    // Metallic 1 (glTF's default) does not transmit: one warning names the material.
+    assert!(!m[7].is_dielectric() && m[7].glossy == base, "metallic 1 does not transmit");
+    let w = &s.report.warnings;
     assert_eq!(w.iter().filter(|x| x.contains("transmission")).count(), 1, "{w:?}");
+    assert!(w.iter().any(|x| x.contains("transmission") && x.contains("metallic") && x.contains("'metal'")), "{w:?}");
+}
+
+/// A transmissive material reads its baseColorTexture: it tints the transmitted part and
+/// the lobes beside partial glass, like the base colour factor.
+#[test]
+fn transmission_reads_the_base_color_texture() {
+    let mut d = Doc::textured();
+    d.json["materials"][0]["extensions"] = json!({"KHR_materials_transmission": {"transmissionFactor": 0.7}});
+    d.json["materials"][0]["pbrMetallicRoughness"]["metallicFactor"] = json!(0.0);
+    let s = d.load().unwrap();
+    assert!(s.materials[0].is_dielectric());
+    let _ = texture_of(&s, 0);
+    assert!(s.report.warnings.iter().all(|w| !w.contains("texture")), "{:?}", s.report.warnings);
 }
 
 /// KHR_materials_volume: on a transmissive material the attenuation coefficient is
@@ -474,10 +509,11 @@ fn volume_gives_the_attenuation_of_transmissive_materials() {
     d.json["extensionsUsed"] = json!(["KHR_materials_transmission", "KHR_materials_volume"]);
     let t = json!({"transmissionFactor": 1.0});
     let vol = |v: serde_json::Value| json!({"KHR_materials_transmission": t, "KHR_materials_volume": v});
+    let pbr = json!({"metallicFactor": 0.0});
     d.json["materials"] = json!([
-        {"name": "absorbing", "extensions": vol(json!({"thicknessFactor": 0.2, "attenuationDistance": 2.0, "attenuationColor": [0.5, 0.25, 1.0]}))},
-        {"name": "no_distance", "extensions": vol(json!({"attenuationColor": [0.5, 0.5, 0.5]}))},
-        {"name": "black", "extensions": vol(json!({"attenuationDistance": 1.0, "attenuationColor": [0.0, 1.0, 0.5]}))},
+        {"name": "absorbing", "pbrMetallicRoughness": pbr, "extensions": vol(json!({"thicknessFactor": 0.2, "attenuationDistance": 2.0, "attenuationColor": [0.5, 0.25, 1.0]}))},
+        {"name": "no_distance", "pbrMetallicRoughness": pbr, "extensions": vol(json!({"attenuationColor": [0.5, 0.5, 0.5]}))},
+        {"name": "black", "pbrMetallicRoughness": pbr, "extensions": vol(json!({"attenuationDistance": 1.0, "attenuationColor": [0.0, 1.0, 0.5]}))},
         {"name": "opaque", "extensions": {"KHR_materials_volume": {"attenuationDistance": 1.0, "attenuationColor": [0.5, 0.5, 0.5]}}},
     ]);
     let s = d.load().unwrap();

@@ -32,6 +32,9 @@ pub struct FeatureSet {
     pub ggx: bool,
     pub mirror: bool,
     pub dielectric: bool,
+    /// Some dielectric transmits partially (`Material::has_partial_transmission`): its
+    /// diffuse, Phong and GGX lobes carry 1 - its glass weight (glsl/bsdf.glsl).
+    pub partial_transmission: bool,
     /// Some dielectric is rough (`Material::is_rough_dielectric`, glsl/bsdf.glsl).
     pub rough_dielectric: bool,
     /// Some dielectric bounds an absorbing medium (`Material::medium_attenuation`,
@@ -107,16 +110,19 @@ impl FeatureSet {
         let textured = |m: &crate::scene::Material, f: &dyn Fn(&crate::scene::MetallicRoughnessTexture) -> bool| {
             metallic_roughness_textures && m.metallic_roughness_texture.as_ref().is_some_and(f)
         };
+        // A lobe counts where it has weight (clear glass's other lobes have none).
+        let lobe = |m: &crate::scene::Material, c: Vec3| m.lobes_weight() > 0.0 && nonzero(c);
         let g = generic;
         FeatureSet {
             generic,
             count_rays: false,
-            diffuse: g || any_mat(&|m| nonzero(m.diffuse) || textured(m, &|t| nonzero(t.base))),
-            phong: g || any_mat(&|m| nonzero(m.phong)),
-            ggx: g || any_mat(&|m| nonzero(m.glossy) || textured(m, &|t| nonzero(t.base) || nonzero(t.dielectric_f0))),
+            diffuse: g || any_mat(&|m| lobe(m, m.diffuse) || textured(m, &|t| nonzero(t.base))),
+            phong: g || any_mat(&|m| lobe(m, m.phong)),
+            ggx: g || any_mat(&|m| lobe(m, m.glossy) || textured(m, &|t| nonzero(t.base) || nonzero(t.dielectric_f0))),
             mirror: g || any_mat(&|m| nonzero(m.mirror)),
             // The kernels treat every IOR that is not negative (NaN included) as a dielectric.
-            dielectric: g || any_mat(&|m| m.ior >= 0.0 || m.ior.is_nan()),
+            dielectric: g || any_mat(&|m| m.is_dielectric()),
+            partial_transmission: g || any_mat(&|m| m.has_partial_transmission()),
             rough_dielectric: g || any_mat(&|m| m.is_rough_dielectric()),
             volume: g || any_mat(&|m| nonzero(m.medium_attenuation())),
             area_lights: g || any_light(&|l| matches!(l, Light::Area { .. })),
@@ -159,6 +165,7 @@ impl FeatureSet {
             ("HAS_GGX", self.ggx),
             ("HAS_MIRROR", self.mirror),
             ("HAS_DIELECTRIC", self.dielectric),
+            ("HAS_PARTIAL_TRANSMISSION", self.partial_transmission),
             ("HAS_ROUGH_DIELECTRIC", self.rough_dielectric),
             ("HAS_VOLUME", self.volume),
             ("HAS_AREA_LIGHTS", self.area_lights),
@@ -210,6 +217,7 @@ impl fmt::Display for FeatureSet {
             ("ggx", self.ggx),
             ("mirror", self.mirror),
             ("dielectric", self.dielectric),
+            ("partial transmission", self.partial_transmission),
             ("rough dielectric", self.rough_dielectric),
             ("absorbing volume", self.volume),
         ];

@@ -69,7 +69,8 @@ pub struct GpuMaterial {
     /// (`MATERIAL_ONE_SIDED`), as an f32 bit pattern.
     pub medium: [f32; 4],
     /// rgb: the colour that multiplies a dielectric's transmitted part
-    /// (`Material::transmission`; 1: clear); w: unused.
+    /// (`Material::transmission`; 1: clear); w: a dielectric's glass weight
+    /// (`Material::glass_weight`, clamped to [0, 1]; 1 on opaque materials, where it is unused).
     pub transmission: [f32; 4],
 }
 

@@ -407,12 +407,16 @@ impl SceneGpu {
                     AlphaMode::Blend if features.alpha_mask => ALPHA_BLEND,
                     _ => ALPHA_OPAQUE,
                 };
+                // A dielectric's lobes beside its glass have weight lobes_weight (glsl/bsdf.glsl);
+                // of weight 0 (clear glass) they are uploaded black, so that kernels without
+                // HAS_PARTIAL_TRANSMISSION, which apply no weight, give them none too.
+                let lobe = |c: Vec3| if m.lobes_weight() > 0.0 { c } else { Vec3::ZERO };
                 GpuMaterial {
-                    diffuse: v4(m.diffuse, m.phong_exponent),
-                    phong: v4(m.phong, m.ior),
+                    diffuse: v4(lobe(m.diffuse), m.phong_exponent),
+                    phong: v4(lobe(m.phong), m.ior),
                     mirror: v4(m.mirror, m.diffuse_fresnel_f0),
                     emission: v4(m.emission, m.dielectric_alpha()),
-                    glossy: v4(m.glossy, (m.roughness * m.roughness).max(MIN_GGX_ALPHA)),
+                    glossy: v4(lobe(m.glossy), (m.roughness * m.roughness).max(MIN_GGX_ALPHA)),
                     surface: [bits(texture), m.alpha, cutoff, m.glossy_untinted],
                     maps: [bits(normal_map), m.normal_scale, bits(emissive), bits(metallic_roughness)],
                     base_metallic,
@@ -421,7 +425,7 @@ impl SceneGpu {
                         m.medium_attenuation(),
                         f32::from_bits(if m.one_sided { MATERIAL_ONE_SIDED } else { 0 }),
                     ),
-                    transmission: v4(m.transmission, 0.0),
+                    transmission: v4(m.transmission, 1.0 - m.lobes_weight()),
                 }
             })
             .collect();

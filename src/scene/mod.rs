@@ -228,6 +228,12 @@ pub struct Material {
     /// directions (glTF KHR_materials_transmission: the transmission BTDF is tinted by the
     /// base colour; reflection is not). One: clear. The pdfs do not depend on it.
     pub transmission: Vec3,
+    /// A dielectric's glass weight w in [0, 1] (partial transmission, glsl/bsdf.glsl): its
+    /// interface (the Fresnel-weighted `mirror` reflection and the refraction, or the rough
+    /// dielectric) is weighted by w and its `diffuse`, `phong` and `glossy` lobes by
+    /// 1 - w ([`Material::lobes_weight`]), on both sides of the surface. One (clear glass,
+    /// the default): the other lobes have no weight. Unused by opaque materials.
+    pub glass_weight: f32,
 }
 
 /// glTF 2.0's metallicRoughnessTexture (section 3.9.2, "Metallic-Roughness Material"),
@@ -276,6 +282,7 @@ impl Default for Material {
             one_sided: false,
             attenuation: Vec3::ZERO,
             transmission: Vec3::ONE,
+            glass_weight: 1.0,
         }
     }
 }
@@ -300,11 +307,32 @@ impl Material {
     /// dielectric that does not emit, else zero (an emitter's surface never starts a
     /// medium segment of a light sample, so it bounds no medium anywhere).
     pub fn medium_attenuation(&self) -> Vec3 {
-        if (self.ior >= 0.0 || self.ior.is_nan()) && self.emission == Vec3::ZERO {
+        if self.is_dielectric() && self.emission == Vec3::ZERO {
             self.attenuation
         } else {
             Vec3::ZERO
         }
+    }
+
+    /// A dielectric: the kernels treat every IOR that is not negative (NaN included) as one.
+    pub fn is_dielectric(&self) -> bool {
+        self.ior >= 0.0 || self.ior.is_nan()
+    }
+
+    /// The weight of the `diffuse`, `phong` and `glossy` lobes: 1 - `glass_weight` on a
+    /// dielectric (clamped to [0, 1]; 0 for a NaN weight), 1 on an opaque material.
+    pub fn lobes_weight(&self) -> f32 {
+        if self.is_dielectric() {
+            (1.0 - self.glass_weight.clamp(0.0, 1.0)).max(0.0)
+        } else {
+            1.0
+        }
+    }
+
+    /// A dielectric whose glass weight is below 1: partial transmission, its other lobes
+    /// weighted by 1 - the glass weight (HAS_PARTIAL_TRANSMISSION).
+    pub fn has_partial_transmission(&self) -> bool {
+        self.lobes_weight() > 0.0 && self.is_dielectric()
     }
 
     /// A rough dielectric: a dielectric (`ior >= 0`, not 1) of `dielectric_roughness` > 0.
@@ -335,6 +363,39 @@ impl Material {
             return Material { mirror: base, ..Material::default() };
         }
         Material::metallic_roughness_lobes(base, metallic, roughness, dielectric_f0, None)
+    }
+
+    /// glTF 2.0's metallic/roughness material with KHR_materials_transmission factor
+    /// `transmission` > 0 and metallic < 1, of index of refraction `ior`: glTF's BSDF,
+    /// mix(mix(opaque dielectric, glass, transmission), metal, metallic), is linear in both
+    /// factors, so it is glass of weight w = (1 - metallic) transmission (`glass_weight`)
+    /// plus, with weight 1 - w, the metallic/roughness lobes of metallic
+    /// metallic / (1 - w), which keeps the metal's weight metallic (glsl/bsdf.glsl,
+    /// "Partial transmission"). The glass has the material's roughness (smooth at 0, else
+    /// the rough dielectric) and its transmitted part is tinted by `base`; its reflection
+    /// is the mirror (white, Fresnel-weighted), so the lobes' smooth metal is a GGX lobe of
+    /// the smallest width.
+    pub fn transmissive(
+        base: Vec3,
+        metallic: f32,
+        roughness: f32,
+        transmission: f32,
+        ior: f32,
+        dielectric_f0: Vec3,
+    ) -> Material {
+        let glass_weight = (1.0 - metallic) * transmission.min(1.0);
+        let mut m = if glass_weight < 1.0 {
+            let lobes_metallic = (metallic / (1.0 - glass_weight)).min(1.0);
+            Material::metallic_roughness_lobes(base, lobes_metallic, roughness, dielectric_f0, None)
+        } else {
+            Material::default()
+        };
+        m.mirror = Vec3::ONE;
+        m.ior = ior;
+        m.dielectric_roughness = roughness;
+        m.transmission = base;
+        m.glass_weight = glass_weight;
+        m
     }
 
     /// [`Material::metallic_roughness_with_f0`] with glTF's metallicRoughnessTexture

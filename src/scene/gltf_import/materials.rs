@@ -1,5 +1,6 @@
 //! glTF materials mapped to vkvcm's material model: metallic/roughness to diffuse + GGX
-//! (+ mirror), `KHR_materials_transmission`/`KHR_materials_ior` to smooth or rough glass,
+//! (+ mirror), `KHR_materials_transmission`/`KHR_materials_ior` to smooth or rough glass
+//! (beside diffuse + GGX where it transmits partially),
 //! `KHR_materials_emissive_strength`, `KHR_materials_volume` (absorption inside
 //! transmissive meshes), and vkvcm's own `VKVCM_materials_phong`.
 
@@ -31,10 +32,12 @@ impl Importer<'_> {
         i
     }
 
-    /// The vkvcm material of `m`: `VKVCM_materials_phong` if present, else clear glass of
-    /// the material's roughness for a transmissive material, else the metallic/roughness mapping, whose base colour
-    /// may come from `baseColorTexture` and whose metallic and roughness may vary by
-    /// `metallicRoughnessTexture`; plus emission (with `emissiveTexture`), alpha and the
+    /// The vkvcm material of `m`: `VKVCM_materials_phong` if present, else for a
+    /// transmissive material that is not fully metallic glass of the material's roughness,
+    /// beside metallic/roughness lobes where it transmits partially
+    /// ([`Material::transmissive`]), else the metallic/roughness mapping; the base colour
+    /// may come from `baseColorTexture`, and on the metallic/roughness mapping metallic
+    /// and roughness may vary by `metallicRoughnessTexture`; plus emission (with `emissiveTexture`), alpha and the
     /// alpha mode. The other textures are reported as warnings (the constant factors are
     /// used).
     pub(super) fn convert_material(&mut self, m: &gltf::Material) -> Result<Material> {
@@ -60,7 +63,7 @@ impl Importer<'_> {
             if exponent < 0.0 {
                 bail!("{ctx}.exponent must not be negative");
             }
-            Material {
+            let phong = Material {
                 name: String::new(),
                 diffuse: c("diffuse")?,
                 phong: c("phong")?,
@@ -71,25 +74,39 @@ impl Importer<'_> {
                 glossy: Vec3::ZERO,
                 roughness: 1.0,
                 ..Material::default()
+            };
+            // SmallVCM's glass is a mirror and an IOR; lobes beside it would need a glass
+            // weight, which the extension does not have.
+            if phong.is_dielectric() && (phong.diffuse != Vec3::ZERO || phong.phong != Vec3::ZERO) {
+                self.warnings.warn(
+                    "the diffuse and phong lobes of a VKVCM_materials_phong dielectric (ior >= 0) are ignored",
+                    label.clone(),
+                );
             }
-        } else if let Some(t) = m.transmission().filter(|t| t.transmission_factor() > 0.0) {
-            // Glass of the material's roughness: smooth (delta) at roughness 0, else the
-            // rough dielectric (GGX alpha = roughness^2, glsl/bsdf.glsl). Its transmitted
-            // part is tinted by the base colour (KHR_materials_transmission: the BTDF is
-            // multiplied by baseColor; the reflection is not). Partial transmission is
-            // approximated by full transmission, with a warning.
-            if t.transmission_factor() < 1.0 {
-                self.warnings.warn("partial transmission is approximated by clear glass", label.clone());
-            }
+            phong
+        } else if let Some(t) = m.transmission().filter(|t| t.transmission_factor() > 0.0 && metallic < 1.0) {
+            // Glass of weight (1 - metallic) transmission beside the metallic/roughness
+            // lobes (Material::transmissive). Its transmitted part and the lobes are tinted
+            // by the base colour, and so by baseColorTexture where a triangle has its
+            // coordinates; its reflection is not.
             let ior = ior(m, &label)?.unwrap_or(1.5);
-            Material {
-                mirror: Vec3::ONE,
-                ior,
-                dielectric_roughness: roughness,
-                transmission: base,
-                ..Material::default()
+            let dielectric_f0 = self.dielectric_f0(m, &label)?;
+            let mut glass =
+                Material::transmissive(base, metallic, roughness, t.transmission_factor(), ior, dielectric_f0);
+            if let Some(info) = pbr.base_color_texture() {
+                glass.base_color_texture = self.base_color_texture(&info, &label)?;
+                base_texture_read = true;
             }
+            glass
         } else {
+            if m.transmission().is_some_and(|t| t.transmission_factor() > 0.0) {
+                // glTF: transmission replaces the dielectric part, which metallic 1 leaves none of.
+                self.warnings.warn(
+                    "KHR_materials_transmission on a fully metallic material (metallicFactor 1, glTF's default) \
+                     transmits nothing",
+                    label.clone(),
+                );
+            }
             let dielectric_f0 = self.dielectric_f0(m, &label)?;
             // glTF 2.0 section 3.9.2: roughness = roughnessFactor x G, metallic =
             // metallicFactor x B of the metallicRoughnessTexture (linear).
