@@ -1577,20 +1577,59 @@ fn triangles_without_texcoords_or_colours_have_no_attributes() {
     assert!(s.images.is_empty());
 }
 
+/// Morph targets displace TEXCOORD_0 and COLOR_0 (gltf-json drops them: read from the raw
+/// JSON) at the weights in force, like positions; a VEC3 colour displacement leaves alpha
+/// alone; TEXCOORD_2 displacements are named in a warning; a displacement accessor that
+/// does not exist is an error naming the target.
 #[test]
-fn morph_targets_of_texture_coordinates_are_not_applied() {
+fn morph_targets_of_texture_coordinates_and_colours() {
     let mut d = Doc::textured();
-    d.prim()["targets"] = json!([{"POSITION": 0, "TEXCOORD_0": 1}]);
-    let s = d.load().unwrap();
-    assert!(
-        s.report
-            .warnings
-            .iter()
-            .any(|w| w.contains("morph-target displacements of attributes other than POSITION and NORMAL")
-                && w.contains("targets[0].TEXCOORD_0")),
-        "{:?}",
-        s.report.warnings
+    let colours = [[1.0f32, 1.0, 1.0, 1.0], [1.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 1.0]];
+    let v = d.push_view(&f32_bytes(&colours.concat()), None);
+    let c = d.push_accessor(json!({"bufferView": v, "componentType": 5126, "count": 3, "type": "VEC4"}));
+    d.prim()["attributes"]["COLOR_0"] = json!(c);
+    let uv = d.push_view(&f32_bytes(&[0.5, 0.0, 0.0, 0.0, 0.0, 0.5]), None);
+    let duv = d.push_accessor(json!({"bufferView": uv, "componentType": 5126, "count": 3, "type": "VEC2"}));
+    // Signed normalized bytes: -127 is -1.
+    let dc = d.push_view(&[0i8, 0, 0, -127, 0, 0, 0, 0, 0].map(|b| b as u8), None);
+    let dcol = d.push_accessor(
+        json!({"bufferView": dc, "componentType": 5120, "normalized": true, "count": 3, "type": "VEC3"}),
     );
+    d.prim()["targets"] = json!([{"TEXCOORD_0": duv}, {"COLOR_0": dcol, "TEXCOORD_2": duv}]);
+    d.json["meshes"][0]["weights"] = json!([0.5, 0.25]);
+    let s = d.load().unwrap();
+    let a = s.triangles[0].attributes.as_ref().unwrap();
+    assert_eq!(a.uv[0], Some([Vec2::new(0.25, 0.0), Vec2::X, Vec2::new(0.0, 1.25)]));
+    assert_eq!(
+        a.color,
+        Some([Vec4::new(1.0, 1.0, 1.0, 1.0), Vec4::new(0.75, 0.0, 0.0, 1.0), Vec4::new(0.0, 1.0, 0.0, 1.0)])
+    );
+    let w = &s.report.warnings;
+    assert!(w.iter().any(|w| w.contains("morph-target displacements") && w.contains("targets[1].TEXCOORD_2")), "{w:?}");
+    assert!(!w.iter().any(|w| w.contains("TEXCOORD_0") || w.contains("COLOR_0")), "{w:?}");
+    // Without weights (all 0) nothing moves.
+    d.json["meshes"][0].as_object_mut().unwrap().remove("weights");
+    let s = d.load().unwrap();
+    assert_eq!(s.triangles[0].attributes.as_ref().unwrap().uv[0], Some([Vec2::ZERO, Vec2::X, Vec2::Y]));
+    d.prim()["targets"][0]["TEXCOORD_0"] = json!(99);
+    let e = err_of(d.load());
+    assert!(e.contains("targets[0].TEXCOORD_0 refers to accessor 99"), "{e}");
+}
+
+/// TANGENT displacements move the tangents' xyz (the bitangent sign stays).
+#[test]
+fn morph_targets_of_tangents() {
+    let mut d = normal_mapped();
+    let v = d.push_view(&f32_bytes(&[[0.0f32, 1.0, 0.0, -1.0]; 3].concat()), None);
+    let a = d.push_accessor(json!({"bufferView": v, "componentType": 5126, "count": 3, "type": "VEC4"}));
+    d.prim()["attributes"]["TANGENT"] = json!(a);
+    let dv = d.push_view(&f32_bytes(&[[1.0f32, -1.0, 0.0]; 3].concat()), None);
+    let dt = d.push_accessor(json!({"bufferView": dv, "componentType": 5126, "count": 3, "type": "VEC3"}));
+    d.prim()["targets"] = json!([{"TANGENT": dt}]);
+    d.json["meshes"][0]["weights"] = json!([1.0]);
+    let s = d.load().unwrap();
+    let t = s.triangles[0].attributes.as_ref().unwrap().tangent.unwrap();
+    assert_eq!(t, [glam::Vec4::new(1.0, 0.0, 0.0, -1.0); 3]);
 }
 
 #[test]

@@ -55,6 +55,20 @@ pub(super) const TEXCOORD_FORMATS: Formats = Formats {
     core: &[FLOAT, UBYTE_N, USHORT_N],
     quantized: &[FLOAT, BYTE, BYTE_N, UBYTE, UBYTE_N, SHORT, SHORT_N, USHORT, USHORT_N],
 };
+/// Morph-target TEXCOORD_n displacements (glTF 2.0 section 3.7.2.2: FLOAT and the signed
+/// and unsigned normalized BYTE and SHORT); KHR_mesh_quantization adds BYTE and SHORT.
+pub(super) const TEXCOORD_TARGET_FORMATS: Formats = Formats {
+    core: &[FLOAT, BYTE_N, SHORT_N, UBYTE_N, USHORT_N],
+    quantized: &[FLOAT, BYTE, BYTE_N, SHORT, SHORT_N, UBYTE_N, USHORT_N],
+};
+/// Morph-target COLOR_n displacements (glTF 2.0 section 3.7.2.2).
+pub(super) const COLOR_TARGET_FORMATS: Formats = Formats {
+    core: &[FLOAT, BYTE_N, SHORT_N, UBYTE_N, USHORT_N],
+    quantized: &[FLOAT, BYTE_N, SHORT_N, UBYTE_N, USHORT_N],
+};
+/// Morph-target TANGENT displacements (glTF 2.0 section 3.7.2.2: FLOAT VEC3);
+/// KHR_mesh_quantization adds BYTE and SHORT normalized.
+pub(super) const TANGENT_TARGET_FORMATS: Formats = NORMAL_FORMATS;
 /// TANGENT (glTF 2.0 section 3.7.2.1: FLOAT VEC4); KHR_mesh_quantization adds BYTE and
 /// SHORT normalized.
 pub(super) const TANGENT_FORMATS: Formats = Formats { core: &[FLOAT], quantized: &[FLOAT, BYTE_N, SHORT_N] };

@@ -2,7 +2,7 @@
 //! [`gltf::Document`] (which is then created without its own validation).
 
 use super::extensions::check_extensions;
-use super::sources::read_container;
+use super::sources::{read_container, MorphAttribute};
 use super::warnings::Warnings;
 use anyhow::{bail, Result};
 use gltf::json;
@@ -14,19 +14,44 @@ pub(super) struct Parsed {
     pub blob: Option<Vec<u8>>,
     /// The file uses `KHR_mesh_quantization` (integer vertex attributes are allowed).
     pub quantized: bool,
+    /// The morph-target displacements of texture coordinates and vertex colours that the
+    /// importer applies (TEXCOORD_0, TEXCOORD_1, COLOR_0), each with a valid accessor.
+    pub morph_attributes: Vec<MorphAttribute>,
+}
+
+/// The morph-target attributes beyond POSITION, NORMAL and TANGENT that are applied.
+pub(super) fn is_applied_morph_attribute(name: &str) -> bool {
+    matches!(name, "TEXCOORD_0" | "TEXCOORD_1" | "COLOR_0")
 }
 
 /// The validated JSON of `bytes` (`.gltf` or `.glb`) and the GLB binary chunk, if any.
 pub(super) fn parse_document(bytes: &[u8], warnings: &mut Warnings) -> Result<Parsed> {
-    let (mut root, blob, morph_attributes) = read_container(bytes)?;
-    for path in &morph_attributes {
-        warnings.warn("morph-target displacements of attributes other than POSITION and NORMAL are not applied", path);
-    }
+    let (mut root, blob, mut morph_attributes) = read_container(bytes)?;
     check_version(&root)?;
+    for a in &morph_attributes {
+        if !is_applied_morph_attribute(&a.name) {
+            warnings.warn(
+                "morph-target displacements of TEXCOORD_n (n > 1), COLOR_n (n > 0) and custom attributes are not applied",
+                a.path(),
+            );
+        }
+    }
+    morph_attributes.retain(|a| is_applied_morph_attribute(&a.name));
+    for a in &morph_attributes {
+        match a.accessor {
+            None => bail!("invalid glTF: {} must be an accessor index", a.path()),
+            Some(i) if i >= root.accessors.len() => bail!(
+                "invalid glTF: {} refers to accessor {i}, but there are {} accessors",
+                a.path(),
+                root.accessors.len()
+            ),
+            Some(_) => {}
+        }
+    }
     let quantized = check_extensions(&mut root, warnings)?;
     check_attribute_indices(&root)?;
     validate(&root, warnings)?;
-    Ok(Parsed { root, blob, quantized })
+    Ok(Parsed { root, blob, quantized, morph_attributes })
 }
 
 /// Refuses a file that is not glTF 2.x: glTF 1.0 is another format (materials as

@@ -2,8 +2,9 @@
 //! world-space triangles, and the spheres of vkvcm's `VKVCM_spheres` node extension.
 
 use super::accessors::{
-    read_color, read_indices, read_tangents, read_vec2, read_vec3, Formats, COLOR_FORMATS, NORMAL_FORMATS,
-    NORMAL_TARGET_FORMATS, POSITION_FORMATS, POSITION_TARGET_FORMATS, TANGENT_FORMATS, TEXCOORD_FORMATS,
+    read_color, read_indices, read_tangents, read_vec2, read_vec3, Formats, COLOR_FORMATS, COLOR_TARGET_FORMATS,
+    NORMAL_FORMATS, NORMAL_TARGET_FORMATS, POSITION_FORMATS, POSITION_TARGET_FORMATS, TANGENT_FORMATS,
+    TANGENT_TARGET_FORMATS, TEXCOORD_FORMATS, TEXCOORD_TARGET_FORMATS,
 };
 use super::extensions::{ext_vec3, EXT_SPHERES};
 use super::Importer;
@@ -84,7 +85,7 @@ impl Importer<'_> {
                 Some(i) => i as u32,
                 None => self.default_material(),
             };
-            let (uvs, colors) = self.vertex_attributes(&prim, positions.len(), &where_)?;
+            let (uvs, colors) = self.vertex_attributes(&prim, mi, weights, positions.len(), &where_)?;
             // A texture on texture coordinates the primitive lacks cannot apply: the kernels
             // find that set missing (NaN) and use the factors alone, while the material's
             // other textures on the set it has still apply.
@@ -131,8 +132,10 @@ impl Importer<'_> {
                             positions.len()
                         );
                     }
+                    let mut t = t;
+                    self.morph_tangents(&prim, weights, &mut t, &where_)?;
                     if let Some(i) = t.iter().position(|v| !v.is_finite()) {
-                        bail!("{where_}: TANGENT accessor {} element {i} is not finite", acc.index());
+                        bail!("{where_}: TANGENT accessor {} element {i} is not finite (after morphing)", acc.index());
                     }
                     Some(t)
                 }
@@ -252,13 +255,16 @@ impl Importer<'_> {
     }
 
     /// The TEXCOORD_0, TEXCOORD_1 and COLOR_0 of `prim` (`vertices` of them each, when
-    /// present), checked for count and finiteness; colours are clamped to [0, 1] (glTF:
-    /// COLOR_0 is within it) with a warning. Other TEXCOORD_n and COLOR_n are not read
-    /// (warning).
+    /// present), with their morph-target displacements at `weights` (glTF 2.0 section
+    /// 3.7.2.2, as positions), checked for count and finiteness; colours are clamped to
+    /// [0, 1] (glTF: COLOR_0 is within it) with a warning. Other TEXCOORD_n and COLOR_n are
+    /// not read (warning). `mesh`: the mesh's index.
     #[allow(clippy::type_complexity)]
     fn vertex_attributes(
         &mut self,
         prim: &gltf::Primitive,
+        mesh: usize,
+        weights: Option<&[f32]>,
         vertices: usize,
         where_: &str,
     ) -> Result<([Option<Vec<Vec2>>; 2], Option<Vec<Vec4>>)> {
@@ -279,8 +285,18 @@ impl Importer<'_> {
         for (k, slot) in uvs.iter_mut().enumerate() {
             let Some(acc) = prim.get(&Semantic::TexCoords(k as u32)) else { continue };
             let what = format!("TEXCOORD_{k}");
-            let uv = read_vec2(&self.buffers, &acc, &what, &TEXCOORD_FORMATS, q).with_context(|| where_.to_string())?;
+            let mut uv =
+                read_vec2(&self.buffers, &acc, &what, &TEXCOORD_FORMATS, q).with_context(|| where_.to_string())?;
             check_count(&acc, &what, uv.len())?;
+            for (target, w, target_acc) in self.morph_displacements(prim, mesh, weights, &what, where_)? {
+                let target_what = format!("morph target {target} {what}");
+                let d = read_vec2(&self.buffers, &target_acc, &target_what, &TEXCOORD_TARGET_FORMATS, q)
+                    .with_context(|| where_.to_string())?;
+                check_count(&target_acc, &target_what, d.len())?;
+                for (v, dv) in uv.iter_mut().zip(d) {
+                    *v += w * dv;
+                }
+            }
             if let Some(i) = uv.iter().position(|v| !v.is_finite()) {
                 return Err(not_finite(&acc, &what, i));
             }
@@ -289,9 +305,20 @@ impl Importer<'_> {
         let colors = match prim.get(&Semantic::Colors(0)) {
             None => None,
             Some(acc) => {
-                let c =
+                let mut c =
                     read_color(&self.buffers, &acc, "COLOR_0", &COLOR_FORMATS).with_context(|| where_.to_string())?;
                 check_count(&acc, "COLOR_0", c.len())?;
+                for (target, w, d) in self.morph_displacements(prim, mesh, weights, "COLOR_0", where_)? {
+                    let what = format!("morph target {target} COLOR_0");
+                    let vec3 = d.dimensions() == gltf::accessor::Dimensions::Vec3;
+                    let dc = read_color(&self.buffers, &d, &what, &COLOR_TARGET_FORMATS)
+                        .with_context(|| where_.to_string())?;
+                    check_count(&d, &what, dc.len())?;
+                    for (v, dv) in c.iter_mut().zip(dc) {
+                        // A VEC3 displacement leaves alpha alone (read_color gives it alpha 1).
+                        *v += w * if vec3 { dv.truncate().extend(0.0) } else { dv };
+                    }
+                }
                 if let Some(i) = c.iter().position(|v| !v.is_finite()) {
                     return Err(not_finite(&acc, "COLOR_0", i));
                 }
@@ -315,12 +342,71 @@ impl Importer<'_> {
         Ok((uvs, colors))
     }
 
+    /// The morph targets of `prim` (of mesh `mesh`) that displace `attribute` (TEXCOORD_0,
+    /// TEXCOORD_1 or COLOR_0, which gltf-json does not have: `Importer::morph_attributes`)
+    /// with a weight other than 0: (target index, weight, the displacements' accessor).
+    /// The weights are those of [`Importer::apply_morph_targets`], which has checked their
+    /// count.
+    fn morph_displacements<'a>(
+        &'a self,
+        prim: &gltf::Primitive,
+        mesh: usize,
+        weights: Option<&[f32]>,
+        attribute: &str,
+        where_: &str,
+    ) -> Result<Vec<(usize, f32, gltf::Accessor<'a>)>> {
+        let Some(weights) = weights else { return Ok(Vec::new()) };
+        let mut out = Vec::new();
+        for a in &self.morph_attributes {
+            if a.mesh != mesh || a.primitive != prim.index() || a.name != attribute {
+                continue;
+            }
+            let w = *weights.get(a.target).ok_or_else(|| anyhow!("{where_}: {} has no weight", a.path()))?;
+            let acc = a.accessor.and_then(|i| self.doc.accessors().nth(i));
+            let acc = acc.ok_or_else(|| anyhow!("{where_}: {} has no accessor", a.path()))?;
+            if w != 0.0 {
+                out.push((a.target, w, acc));
+            }
+        }
+        Ok(out)
+    }
+
+    /// Adds the morph targets' TANGENT displacements (xyz; the sign w stays) of `prim` at
+    /// `weights` to its `tangents`.
+    fn morph_tangents(
+        &self,
+        prim: &gltf::Primitive,
+        weights: Option<&[f32]>,
+        tangents: &mut [Vec4],
+        where_: &str,
+    ) -> Result<()> {
+        let Some(weights) = weights else { return Ok(()) };
+        for (ti, (target, &w)) in prim.morph_targets().zip(weights).enumerate() {
+            let (Some(acc), true) = (target.tangents(), w != 0.0) else { continue };
+            let what = format!("morph target {ti} TANGENT");
+            let d = read_vec3(&self.buffers, &acc, &what, &TANGENT_TARGET_FORMATS, self.quantized)
+                .with_context(|| where_.to_string())?;
+            if d.len() != tangents.len() {
+                bail!(
+                    "{where_}: {what} accessor {} has {} elements, the primitive has {} vertices",
+                    acc.index(),
+                    d.len(),
+                    tangents.len()
+                );
+            }
+            for (t, dt) in tangents.iter_mut().zip(d) {
+                *t += (w * dt).extend(0.0);
+            }
+        }
+        Ok(())
+    }
+
     /// Adds the morph-target displacements of `prim` to `positions` (and `normals`, when
     /// both the primitive and a target have them) at the `weights` in force (glTF 2.0
     /// section 3.7.2.2: p = p0 + sum_i w_i d_i; `None`: every weight is 0). A weight count
     /// other than the primitive's target count is an error, as is a target accessor whose
-    /// count differs from POSITION's. TANGENT displacements are not read (tangents are
-    /// not used).
+    /// count differs from POSITION's. TANGENT displacements are applied where tangents are
+    /// read (`morph_tangents`), TEXCOORD_0/1 and COLOR_0 ones in `vertex_attributes`.
     fn apply_morph_targets(
         &self,
         prim: &gltf::Primitive,

@@ -114,6 +114,7 @@ fn import_bytes(bytes: &[u8], base_dir: &Path, name: String, options: &LoadOptio
     let parsed = document::parse_document(bytes, &mut warnings)?;
     let doc = gltf::Document::from_json_without_validation(parsed.root);
     let buffers = sources::load_buffers(&doc, parsed.blob, base_dir)?;
+    let morph_attributes = parsed.morph_attributes;
     let mut importer = Importer {
         doc: &doc,
         base_dir,
@@ -145,6 +146,7 @@ fn import_bytes(bytes: &[u8], base_dir: &Path, name: String, options: &LoadOptio
         node_world: Vec::new(),
         rebase: DMat4::IDENTITY,
         instancing: Default::default(),
+        morph_attributes,
     };
     importer.run(options)?;
     let Importer { mut scene, mut warnings, .. } = importer;
@@ -187,6 +189,9 @@ struct Importer<'d> {
     rebase: DMat4,
     /// Which meshes are stored once, and their placements met so far.
     instancing: instancing::Instancing,
+    /// The TEXCOORD_0, TEXCOORD_1 and COLOR_0 morph-target displacements (gltf-json does
+    /// not have them), each with a valid accessor index.
+    morph_attributes: Vec<sources::MorphAttribute>,
 }
 
 impl<'d> Importer<'d> {

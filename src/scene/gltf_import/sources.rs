@@ -12,27 +12,45 @@ use std::path::{Component, Path};
 
 /// The glTF JSON of a `.gltf` file or of a `.glb` file's JSON chunk, the `.glb` binary
 /// chunk if there is one, and the morph-target attributes that [`json::Root`] drops
-/// ([`morph_target_attributes`]).
-pub(super) fn read_container(bytes: &[u8]) -> Result<(json::Root, Option<Vec<u8>>, Vec<String>)> {
+/// ([`extra_morph_attributes`]).
+pub(super) fn read_container(bytes: &[u8]) -> Result<(json::Root, Option<Vec<u8>>, Vec<MorphAttribute>)> {
     if bytes.starts_with(b"glTF") {
         check_glb_header(bytes)?;
         let glb = gltf::binary::Glb::from_slice(bytes).map_err(|e| anyhow!("invalid GLB container: {e}"))?;
         let root =
             serde_json::from_slice(&glb.json).map_err(|e| anyhow!("invalid glTF JSON in the GLB JSON chunk: {e}"))?;
-        let morph = morph_target_attributes(&glb.json);
+        let morph = extra_morph_attributes(&glb.json);
         Ok((root, glb.bin.map(|b| b.into_owned()), morph))
     } else {
         let root = serde_json::from_slice(bytes).map_err(|e| anyhow!("invalid glTF JSON: {e}"))?;
-        Ok((root, None, morph_target_attributes(bytes)))
+        Ok((root, None, extra_morph_attributes(bytes)))
     }
 }
 
-/// The morph-target attributes other than POSITION, NORMAL and TANGENT (TEXCOORD_n,
-/// COLOR_n, ...) in the glTF JSON `json`, as JSON paths: gltf-json's `MorphTarget` has no
-/// field for them, so they would be dropped without a word. Empty when `json` does not
-/// have the expected shape (the main parse reports that).
-fn morph_target_attributes(json: &[u8]) -> Vec<String> {
-    use serde::de::IgnoredAny;
+/// A morph-target attribute that gltf-json's `MorphTarget` has no field for (all but
+/// POSITION, NORMAL and TANGENT: TEXCOORD_n, COLOR_n, ...), found in the raw JSON.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct MorphAttribute {
+    pub mesh: usize,
+    pub primitive: usize,
+    pub target: usize,
+    /// The attribute's semantic, e.g. `TEXCOORD_0`.
+    pub name: String,
+    /// The accessor of its displacements; `None` when the JSON value is not an index.
+    pub accessor: Option<usize>,
+}
+
+impl MorphAttribute {
+    /// Its JSON path, for messages.
+    pub fn path(&self) -> String {
+        format!("meshes[{}].primitives[{}].targets[{}].{}", self.mesh, self.primitive, self.target, self.name)
+    }
+}
+
+/// The morph-target attributes other than POSITION, NORMAL and TANGENT in the glTF JSON
+/// `json`: gltf-json drops them, so they are read here to be applied or named. Empty when
+/// `json` does not have the expected shape (the main parse reports that).
+fn extra_morph_attributes(json: &[u8]) -> Vec<MorphAttribute> {
     use std::collections::BTreeMap;
     #[derive(serde::Deserialize)]
     struct Doc {
@@ -47,17 +65,19 @@ fn morph_target_attributes(json: &[u8]) -> Vec<String> {
     #[derive(serde::Deserialize)]
     struct Prim {
         #[serde(default)]
-        targets: Vec<BTreeMap<String, IgnoredAny>>,
+        targets: Vec<BTreeMap<String, serde_json::Value>>,
     }
     let Ok(doc) = serde_json::from_slice::<Doc>(json) else {
         return Vec::new();
     };
     let mut out = Vec::new();
-    for (mi, m) in doc.meshes.iter().enumerate() {
-        for (pi, p) in m.primitives.iter().enumerate() {
-            for (ti, t) in p.targets.iter().enumerate() {
-                for name in t.keys().filter(|k| !matches!(k.as_str(), "POSITION" | "NORMAL" | "TANGENT")) {
-                    out.push(format!("meshes[{mi}].primitives[{pi}].targets[{ti}].{name}"));
+    for (mesh, m) in doc.meshes.iter().enumerate() {
+        for (primitive, p) in m.primitives.iter().enumerate() {
+            for (target, t) in p.targets.iter().enumerate() {
+                for (name, value) in t.iter().filter(|(k, _)| !matches!(k.as_str(), "POSITION" | "NORMAL" | "TANGENT"))
+                {
+                    let accessor = value.as_u64().and_then(|i| usize::try_from(i).ok());
+                    out.push(MorphAttribute { mesh, primitive, target, name: name.clone(), accessor });
                 }
             }
         }
