@@ -11,8 +11,15 @@ mod common;
 use common::with_gpu;
 use vkvcm::render::{self, Algorithm, Budget, RenderSettings};
 
-const MODELS: [&str; 6] =
-    ["Box", "BoxTextured", "BoxVertexColors", "TextureCoordinateTest", "OrientationTest", "SimpleMeshes"];
+const MODELS: [&str; 7] = [
+    "Box",
+    "BoxTextured",
+    "BoxVertexColors",
+    "TextureCoordinateTest",
+    "OrientationTest",
+    "SimpleMeshes",
+    "TextureSettingsTest",
+];
 
 #[test]
 fn sample_models_render_with_the_defaults() {
@@ -42,7 +49,7 @@ fn sample_models_render_with_the_defaults() {
 fn textured_sample_models_show_their_textures() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/khronos");
     with_gpu(|gpu| {
-        for name in ["BoxTextured", "BoxVertexColors", "TextureCoordinateTest"] {
+        for name in ["BoxTextured", "BoxVertexColors", "TextureCoordinateTest", "TextureSettingsTest"] {
             let path = dir.join(format!("{name}.gltf"));
             let scene = vkvcm::scene::load_named_with(path.to_str().unwrap(), &Default::default()).unwrap();
             assert!(scene.triangles.iter().any(|t| t.attributes.is_some()), "{name}: no vertex attributes read");

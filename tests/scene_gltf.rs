@@ -1060,6 +1060,31 @@ fn morph_target_normals_and_sparse_targets() {
     assert_eq!(s.triangles[0].n.unwrap(), [Vec3::X; 3]);
 }
 
+/// Khronos TextureSettingsTest: each textured material's sampler wrap modes (REPEAT,
+/// MIRRORED_REPEAT, CLAMP_TO_EDGE in both directions), its three embedded PNGs, and
+/// doubleSided: only DoubleSidedMaterial is two-sided (glTF's default is one-sided).
+#[test]
+fn texture_settings_test_samplers_and_sides() {
+    let s = load(&khronos("TextureSettingsTest")).unwrap();
+    assert_eq!(s.images.len(), 3);
+    let by_name = |n: &str| s.materials.iter().find(|m| m.name == n).unwrap_or_else(|| panic!("no material {n}"));
+    let wrap = |n: &str| {
+        let t = by_name(n).base_color_texture.clone().unwrap_or_else(|| panic!("{n}: no texture"));
+        assert_eq!(t.filter, Filter::Linear, "{n}");
+        (t.wrap_s, t.wrap_t)
+    };
+    assert_eq!(wrap("TextureMirrorMaterialT"), (Wrap::Repeat, Wrap::MirroredRepeat));
+    assert_eq!(wrap("TextureMirrorMaterialS"), (Wrap::MirroredRepeat, Wrap::Repeat));
+    assert_eq!(wrap("TextureRepeatMaterialT"), (Wrap::ClampToEdge, Wrap::Repeat));
+    assert_eq!(wrap("TextureClampMaterialT"), (Wrap::Repeat, Wrap::ClampToEdge));
+    assert_eq!(wrap("DoubleSidedMaterial"), (Wrap::Repeat, Wrap::Repeat));
+    assert!(!by_name("DoubleSidedMaterial").one_sided);
+    assert!(by_name("SingleSidedMaterial").one_sided);
+    assert!(by_name("BackgroundMaterial").base_color_texture.is_none());
+    let w = &s.report.warnings;
+    assert!(!w.iter().any(|x| x.contains("texture") || x.contains("sampler")), "{w:?}");
+}
+
 /// Khronos SimpleSkin: its joints' node transforms are the bind pose (joint matrices =
 /// identity), so the skinned mesh is its stored geometry. With joint 1 (node 2) turned 90
 /// degrees about +Z the upper vertices bend around (0, 1, 0): J1 = T(0,1,0) R T(0,-1,0).
