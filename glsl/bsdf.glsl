@@ -67,15 +67,16 @@
 // Partial transmission (glTF KHR_materials_transmission with transmissionFactor t < 1, or
 // metallic m > 0): glTF's BSDF is linear in t and m, mix(mix(opaque dielectric, glass, t),
 // metal, m), so it is the glass with weight w = (1 - m) t plus, with weight 1 - w, the
-// metallic/roughness lobes of metallic m / (1 - w) (src/scene/gltf_import/materials.rs).
+// metallic/roughness lobes of metallic m / (1 - w) (`Material::transmissive`, src/scene/mod.rs).
 // A dielectric's glass weight w is transmission.w: its interface components (the
 // Fresnel-weighted mirror reflection and refraction of smooth glass, or the rough
 // dielectric) are weighted by w, and its diffuse, Phong and GGX lobes by 1 - w; the
 // component probabilities are proportional to the weighted albedos, so f, pdf and the
 // reverse pdf are those of the mixture. Each part conserves energy, so the mixture does.
 // The lobes reflect on both sides of the surface (wo outside or inside the dielectric,
-// `lobe_normal`). Clear glass has w = 1 and no other lobe (src/scene/validate.rs checks
-// it), so without HAS_PARTIAL_TRANSMISSION no weight is applied.
+// `lobe_side`). Clear glass has w = 1, and its other lobes, which then have no weight,
+// are uploaded black (src/render/scene_gpu.rs), so without HAS_PARTIAL_TRANSMISSION no
+// weight is applied.
 //
 // Components no material of the scene has are compiled out (HAS_DIFFUSE, HAS_PHONG,
 // HAS_GGX, HAS_MIRROR, HAS_DIELECTRIC, HAS_ROUGH_DIELECTRIC: glsl/features.glsl); the

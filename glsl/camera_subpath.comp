@@ -46,8 +46,9 @@ uvec4 grid_point_at(uint j) { return bucket_points[j]; }
 #endif
 
 vec3 direct_illumination(SubpathState st, Surface s, Bsdf b, inout uint rng) {
-    float pick = 1.0 / float(light_count());
-    LightSample ls = light_illuminate(pick_light(rng), s.p, rnd2(rng));
+    uint li = pick_light(rng);
+    float pick = light_pick_prob(li);
+    LightSample ls = light_illuminate(li, s.p, rnd2(rng));
     if (!ls.ok) return vec3(0.0);
     vec3 f;
     float cos_x;
@@ -167,7 +168,6 @@ void main() {
         for (; pixel < push.count; pixel += stride) splat_take(pixel);
         return;
     }
-    float pick = 1.0 / float(light_count());
     uint max_len = max_path_length();
     uint min_len = min_path_length();
     SubpathState st;
@@ -194,7 +194,7 @@ void main() {
             if (bg != NO_LIGHT && st.len >= min_len) {
                 float dpdf, epdf;
                 vec3 le = background_radiance(bg, st.d, dpdf, epdf);
-                L += st.thr * le * mis_weight_hit(st, dpdf, epdf, pick, USE_VC != 0);
+                L += st.thr * le * mis_weight_hit(st, dpdf, epdf, light_pick_prob(bg), USE_VC != 0);
             }
             continue;
         }
@@ -206,7 +206,9 @@ void main() {
         if (s.light != NO_LIGHT && st.len >= min_len) {
             float dpdf_a, epdf;
             vec3 le = area_light_radiance(s.light, h.u, h.v, st.d, dpdf_a, epdf);
-            if (max3(le) > 0.0) L += st.thr * le * mis_weight_hit(st, dpdf_a, epdf, pick, USE_VC != 0);
+            if (max3(le) > 0.0) {
+                L += st.thr * le * mis_weight_hit(st, dpdf_a, epdf, light_pick_prob(s.light), USE_VC != 0);
+            }
         }
         if (st.len >= max_len) continue;
         Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, false, s.tint);

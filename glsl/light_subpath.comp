@@ -27,7 +27,7 @@ bool start_path(uint path, out SubpathState st, out uint rng) {
     rng = rng_init(params.misc.x, push.iteration, path, 1u);
     uint nl = light_count();
     uint li = pick_light(rng);
-    float pick = 1.0 / float(nl);
+    float pick = light_pick_prob(li);
     vec2 u_pos = rnd2(rng);
     vec2 u_dir = rnd2(rng);
     LightEmission e = light_emit(li, u_pos, u_dir);

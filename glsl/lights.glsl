@@ -1,6 +1,8 @@
 // Light sources, written once for every estimator: direct-illumination sampling (next-
 // event estimation) and the pdfs of hitting an emitter, with the quantities the MIS of
-// docs/smallvcm.md 4.4 needs. Lights are picked uniformly (1 / #lights).
+// docs/smallvcm.md 4.4 needs. A light is picked by the selection table of
+// src/render/light_selection.rs (by power, or uniformly: --light-selection), and every
+// pdf that includes the pick uses `light_pick_prob` of the light picked or hit.
 //
 // Light kinds the scene lacks are compiled out (HAS_AREA_LIGHTS, HAS_POINT_LIGHTS,
 // HAS_SPOT_LIGHTS, HAS_DIRECTIONAL_LIGHTS, HAS_BACKGROUND: glsl/features.glsl): each kind
@@ -24,11 +26,20 @@ bool light_is_infinite(uint kind) { return kind == LIGHT_DIRECTIONAL || kind == 
 // The emitting side of an area light: its triangle's geometric normal (p1-p0)x(p2-p0).
 vec3 area_light_normal(GpuLight l) { return normalize(cross(l.b.xyz, l.c.xyz)); }
 
-// Picks a light uniformly (probability 1 / #lights, as SmallVCM).
+// Picks a light with probability light_pick_prob (Walker's alias method, one random
+// number: slot i = floor(u n); the fraction u n - i below the slot's threshold (d.y)
+// keeps light i, else its alias (d.z) is taken). Uniform selection's table keeps every
+// slot whole: min(floor(u n), n - 1), SmallVCM's draw.
 uint pick_light(inout uint rng) {
     uint n = params.dims.z;
-    return min(uint(rnd(rng) * float(n)), n - 1u);
+    float x = rnd(rng) * float(n);
+    uint i = min(uint(x), n - 1u);
+    GpuLight l = light_at(i);
+    return x - float(i) < l.d.y ? i : floatBitsToUint(l.d.z);
 }
+
+// The probability that pick_light picks light `index`.
+float light_pick_prob(uint index) { return light_at(index).d.x; }
 
 // Spot falloff between the outer and inner cone (smoothstep in cos, as glTF suggests).
 float spot_falloff(GpuLight l, vec3 dir_from_light) {

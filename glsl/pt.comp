@@ -33,7 +33,6 @@ void main() {
     uint stride = regen_stride(push.count, push.paths_per_invocation);
     uint pixel = invocation_index();
     if (pixel >= stride) return;
-    float pick = 1.0 / float(light_count());
     uint max_len = max_path_length();
     uint min_len = min_path_length();
     uint rng, len;
@@ -76,7 +75,7 @@ void main() {
             if (bg != NO_LIGHT && len >= min_len) {
                 float dpdf, epdf;
                 vec3 Le = background_radiance(bg, d, dpdf, epdf);
-                float wgt = (NEE == 0 || last_specular) ? 1.0 : balance(last_pdf, pick * dpdf);
+                float wgt = (NEE == 0 || last_specular) ? 1.0 : balance(last_pdf, light_pick_prob(bg) * dpdf);
                 L += thr * Le * wgt;
             }
             continue;
@@ -89,7 +88,8 @@ void main() {
             if (max3(Le) > 0.0) {
                 float cos_l = abs(dot(s.ng, d));
                 float dpdf_w = dpdf_a * h.t * h.t / cos_l;
-                float wgt = (NEE == 0 || last_specular) ? 1.0 : balance(last_pdf, pick * dpdf_w);
+                float wgt =
+                    (NEE == 0 || last_specular) ? 1.0 : balance(last_pdf, light_pick_prob(s.light) * dpdf_w);
                 L += thr * Le * wgt;
             }
         }
@@ -98,7 +98,9 @@ void main() {
         if (!b.valid) continue;
 #if NEE
         if (!b.delta && len + 1u >= min_len) {
-            LightSample ls = light_illuminate(pick_light(rng), s.p, rnd2(rng));
+            uint li = pick_light(rng);
+            float pick = light_pick_prob(li);
+            LightSample ls = light_illuminate(li, s.p, rnd2(rng));
             if (ls.ok) {
                 float pf, pr;
                 vec3 f = bsdf_eval(b, ls.wi, pf, pr);

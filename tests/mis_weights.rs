@@ -162,8 +162,14 @@ struct Bench {
 
 impl Bench {
     fn new(gpu: &Arc<Gpu>, scene: &Scene, seed: u32) -> Bench {
-        let frame =
-            FrameSettings { width: RES, height: RES, seed, max_path_length: MAX_PATH_LENGTH, min_path_length: 0 };
+        let frame = FrameSettings {
+            width: RES,
+            height: RES,
+            seed,
+            max_path_length: MAX_PATH_LENGTH,
+            min_path_length: 0,
+            light_selection: vkvcm::render::DEFAULT_LIGHT_SELECTION,
+        };
         let sg = SceneGpu::new(gpu, scene, &frame, Reads::resolve(gpu, None).unwrap()).unwrap();
         // The film, splats and light-vertex store are declared by light_vertex_store.glsl
         // but not used by the debug kernel.
@@ -206,8 +212,9 @@ impl Bench {
     }
 }
 
-/// glossy_floor_scene (GGX floor, GGX + diffuse wall, area light) plus a point light: two
-/// lights (pick probability 1/2), one of them delta.
+/// glossy_floor_scene (GGX floor, GGX + diffuse wall, area light) plus a point light:
+/// lights of both kinds, one of them delta, picked by power (the default), so the pick
+/// probabilities differ per light.
 fn ggx_scene() -> Scene {
     let metal = Material {
         name: "ggx metal".into(),

@@ -229,7 +229,14 @@ fn gpu_sampling_follows_the_pdf() {
     let n = 512u32;
     let count = n * n;
     let out: Vec<[f32; 4]> = with_gpu(|gpu| {
-        let frame = FrameSettings { width: 4, height: 4, seed: 3, max_path_length: 4, min_path_length: 0 };
+        let frame = FrameSettings {
+            width: 4,
+            height: 4,
+            seed: 3,
+            max_path_length: 4,
+            min_path_length: 0,
+            light_selection: vkvcm::render::DEFAULT_LIGHT_SELECTION,
+        };
         let sg = SceneGpu::new(gpu, &scene, &frame, Reads::resolve(gpu, None).unwrap()).unwrap();
         let results = gpu.buffer_zeroed::<[f32; 4]>("env_results", 4 * count as usize).unwrap();
         let mut binds = sg.binds();

@@ -97,13 +97,14 @@ void main() {
     uint s_gen = k == 1u ? 0u : min(uint(rnd(rng) * float(k + 1u)), k);
     write_out(base, 1u, float(k));
     write_out(base, 2u, float(s_gen));
-    float pick = 1.0 / float(light_count());
     for (uint i = 0u; i < MAXV; ++i) { vdelta[i] = false; vn[i] = vec3(0.0); vp[i] = vec3(0.0); vmat[i] = 0u; }
     infinite0 = false;
     dir0 = vec3(0.0);
 
     // ---- 1. Sample the path.
     uint li = pick_light(rng);
+    // Every technique of the path meets this one light.
+    float pick = light_pick_prob(li);
     vec2 u_pos = rnd2(rng);
     vec2 u_dir = rnd2(rng);
     if (s_gen >= 2u) {

@@ -38,6 +38,11 @@ pub struct RenderArgs {
     /// Longest path, in segments.
     #[arg(long, default_value_t = 10)]
     pub max_path_length: u32,
+    /// How next-event estimation and light subpaths pick a light: `power`, in proportion
+    /// to each light's emitted power (pbrt-v4's rule), or `uniform`, 1 / #lights
+    /// (SmallVCM's). Unbiased either way; docs/performance.md measures the difference.
+    #[arg(long, value_enum, default_value_t = vkvcm::render::DEFAULT_LIGHT_SELECTION)]
+    pub light_selection: vkvcm::render::LightSelection,
     /// Initial merge radius as a fraction of the scene's bounding-sphere radius.
     #[arg(long, default_value_t = vkvcm::render::radius::DEFAULT_RADIUS_FACTOR)]
     pub radius_factor: f32,
@@ -300,6 +305,7 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     let mut settings = RenderSettings::new(a.algo, a.width, a.height, budget);
     settings.frame.seed = a.seed;
     settings.frame.max_path_length = a.max_path_length;
+    settings.frame.light_selection = a.light_selection;
     settings.radius_factor = a.radius_factor;
     settings.alpha = a.alpha;
     settings.generic = a.generic;

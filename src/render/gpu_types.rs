@@ -70,7 +70,8 @@ pub struct GpuMaterial {
     pub medium: [f32; 4],
     /// rgb: the colour that multiplies a dielectric's transmitted part
     /// (`Material::transmission`; 1: clear); w: a dielectric's glass weight
-    /// (`Material::glass_weight`, clamped to [0, 1]; 1 on opaque materials, where it is unused).
+    /// (1 - `Material::lobes_weight`: the glass weight clamped to [0, 1]; 0 on opaque
+    /// materials, where it is unused).
     pub transmission: [f32; 4],
 }
 
@@ -133,7 +134,10 @@ pub struct GpuSphere {
 /// area: `a` = p0 (w: triangle index bits), `b` = edge p1-p0, `c` = edge p2-p0,
 /// `d.w` = area; point: `a` = position; spot: `a` = position, `b` = direction (w: cos
 /// inner), `c.w` = cos outer; directional: `b` = propagation direction; background:
-/// nothing. `radiance`: rgb radiance (area, background), intensity (point, spot) or
+/// nothing; environment map: `a.xy` = size (bits), `b.xy` = cos, sin of the rotation.
+/// Every kind: `d.x` = the probability of picking it, `d.y` and `d.z` (bits) its slot's
+/// threshold and alias in the selection table (src/render/light_selection.rs).
+/// `radiance`: rgb radiance (area, background), intensity (point, spot) or
 /// irradiance (directional); w: kind (bits).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

@@ -15,6 +15,7 @@ pub mod estimators;
 pub mod features;
 pub mod film;
 pub mod gpu_types;
+pub mod light_selection;
 pub mod output;
 pub mod passes;
 pub mod plan;
@@ -41,7 +42,10 @@ pub use film::Film;
 pub use output::{Progress, RenderOutput};
 use passes::light_subpaths::{grown_capacity, LightVertexSizing, StoreStatus};
 pub use scene_gpu::SceneGpu;
-pub use settings::{Algorithm, Budget, Connect, FrameSettings, RenderSettings, DEFAULT_CACHE_CONNECTIONS};
+pub use settings::{
+    Algorithm, Budget, Connect, FrameSettings, LightSelection, RenderSettings, DEFAULT_CACHE_CONNECTIONS,
+    DEFAULT_LIGHT_SELECTION,
+};
 
 /// Renders `scene`. `progress` is called after every batch of iterations; `cancel`
 /// stops the render after the current batch (the image so far is returned).

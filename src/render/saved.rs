@@ -60,6 +60,8 @@ pub struct SavedRender {
     pub height: u32,
     pub max_path_length: u32,
     pub min_path_length: u32,
+    /// `LightSelection::name` (renders saved before the option: "uniform").
+    pub light_selection: String,
     pub nee: bool,
     pub radius_factor: f32,
     pub alpha: f32,
@@ -90,6 +92,7 @@ pub fn render_metadata(out: &RenderOutput, s: &RenderSettings, p: &Provenance) -
         kv("seed", s.frame.seed.to_string()),
         kv("max_path_length", s.frame.max_path_length.to_string()),
         kv("min_path_length", s.frame.min_path_length.to_string()),
+        kv("light_selection", s.frame.light_selection.name().to_string()),
         kv("nee", s.nee.to_string()),
         // Rust prints the shortest string that parses back to the same f32.
         kv("radius_factor", s.radius_factor.to_string()),
@@ -157,6 +160,8 @@ pub fn read_render_exr(path: &Path) -> Result<SavedRender> {
         height: img.height,
         max_path_length: parse(&shown, "max_path_length", get("max_path_length")?)?,
         min_path_length: parse(&shown, "min_path_length", get("min_path_length")?)?,
+        // Renders saved before --light-selection existed picked lights uniformly.
+        light_selection: get("light_selection").unwrap_or("uniform").to_string(),
         nee: parse(&shown, "nee", get("nee")?)?,
         radius_factor: parse(&shown, "radius_factor", get("radius_factor")?)?,
         alpha: parse(&shown, "alpha", get("alpha")?)?,
@@ -204,6 +209,7 @@ impl SavedRender {
         diff("--seed", self.seed.to_string(), s.frame.seed.to_string())?;
         diff("--max-path-length", self.max_path_length.to_string(), s.frame.max_path_length.to_string())?;
         diff("min path length", self.min_path_length.to_string(), s.frame.min_path_length.to_string())?;
+        diff("--light-selection", self.light_selection.clone(), s.frame.light_selection.name().to_string())?;
         diff("next-event estimation", self.nee.to_string(), s.nee.to_string())?;
         diff("--radius-factor", self.radius_factor.to_string(), s.radius_factor.to_string())?;
         diff("--alpha", self.alpha.to_string(), s.alpha.to_string())?;

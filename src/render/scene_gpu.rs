@@ -12,8 +12,9 @@ use super::atomics::SplatAtomics;
 use super::environment::EnvironmentTables;
 use super::features::FeatureSet;
 use super::gpu_types::*;
+use super::light_selection::LightDistribution;
 use super::reads::Reads;
-use super::settings::FrameSettings;
+use super::settings::{FrameSettings, LightSelection};
 use super::sizes::{Access, BufferSize, SizeLimits};
 use super::variants::SceneVariant;
 use crate::bvh;
@@ -225,11 +226,13 @@ fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     Ok((refs, indices, texels))
 }
 
-/// The lights in GPU form, and the index of the background light (constant or
-/// environment map) if any.
-pub fn gpu_lights(scene: &Scene) -> Result<(Vec<GpuLight>, u32)> {
+/// The lights in GPU form, with their selection table (`d.xyz`: the probability of
+/// picking the light, its slot's threshold and alias, src/render/light_selection.rs), and
+/// the index of the background light (constant or environment map) if any.
+pub fn gpu_lights(scene: &Scene, selection: LightSelection) -> Result<(Vec<GpuLight>, u32)> {
     let mut out = Vec::with_capacity(scene.lights.len());
     let mut background = NO_LIGHT;
+    let table = LightDistribution::new(scene, selection);
     for (i, l) in scene.lights.iter().enumerate() {
         let g = match *l {
             Light::Area { triangle, radiance } => {
@@ -282,6 +285,10 @@ pub fn gpu_lights(scene: &Scene) -> Result<(Vec<GpuLight>, u32)> {
                 }
             }
         };
+        let mut g = g;
+        g.d[0] = table.prob[i];
+        g.d[1] = table.threshold[i];
+        g.d[2] = bits(table.alias[i]);
         out.push(g);
     }
     Ok((out, background))
@@ -341,7 +348,7 @@ impl SceneGpu {
         if gb.num_instances > 0 && !features.instances {
             bail!("internal error: the kernels of scene {:?} are compiled without instances", scene.name);
         }
-        let (lights, background) = gpu_lights(scene)?;
+        let (lights, background) = gpu_lights(scene, frame.light_selection)?;
         let params = gpu_params(scene, frame, background);
 
         let mut light_of_triangle = vec![NO_LIGHT; scene.triangles.len()];

@@ -39,6 +39,41 @@ pub struct FrameSettings {
     /// Longest path in segments (SmallVCM default 10).
     pub max_path_length: u32,
     pub min_path_length: u32,
+    /// How next-event estimation and light subpaths choose a light.
+    pub light_selection: LightSelection,
+}
+
+/// The default light selection: by power (docs/performance.md, "Light selection by
+/// power", measured against uniform).
+pub const DEFAULT_LIGHT_SELECTION: LightSelection = LightSelection::Power;
+
+/// How a light is chosen for next-event estimation and for a light subpath's start
+/// (src/render/light_selection.rs; every estimator's MIS uses the same probabilities).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+pub enum LightSelection {
+    /// In proportion to each light's emitted power (pbrt-v4's power light sampler).
+    Power,
+    /// Each light with probability 1 / #lights (SmallVCM).
+    Uniform,
+}
+
+impl LightSelection {
+    /// `power` or `uniform`, as the command line and saved renders name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            LightSelection::Power => "power",
+            LightSelection::Uniform => "uniform",
+        }
+    }
+
+    /// Parses [`LightSelection::name`]'s output.
+    pub fn parse(s: &str) -> Option<LightSelection> {
+        match s {
+            "power" => Some(LightSelection::Power),
+            "uniform" => Some(LightSelection::Uniform),
+            _ => None,
+        }
+    }
 }
 
 /// Where a camera vertex's vertex connections go (bpt, vcm). Every choice is unbiased

@@ -444,8 +444,8 @@ impl Material {
     }
 }
 
-/// Light sources. Lights are picked uniformly (probability 1/#lights) for emission and
-/// next-event estimation, as in SmallVCM.
+/// Light sources. Emission and next-event estimation pick a light by power, or uniformly
+/// as SmallVCM (`LightSelection`, src/render/light_selection.rs).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Light {
     /// One emitting triangle (index into `Scene::triangles`), Lambertian, one-sided: it

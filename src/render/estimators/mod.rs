@@ -197,7 +197,14 @@ impl RenderSettings {
     pub fn new(algorithm: Algorithm, width: u32, height: u32, budget: Budget) -> Self {
         RenderSettings {
             algorithm,
-            frame: FrameSettings { width, height, seed: 1234, max_path_length: 10, min_path_length: 0 },
+            frame: FrameSettings {
+                width,
+                height,
+                seed: 1234,
+                max_path_length: 10,
+                min_path_length: 0,
+                light_selection: super::settings::DEFAULT_LIGHT_SELECTION,
+            },
             budget,
             nee: true,
             radius_factor: radius::DEFAULT_RADIUS_FACTOR,
