@@ -51,8 +51,17 @@ fn textured_sample_models_show_their_textures() {
     with_gpu(|gpu| {
         for name in ["BoxTextured", "BoxVertexColors", "TextureCoordinateTest", "TextureSettingsTest"] {
             let path = dir.join(format!("{name}.gltf"));
-            let scene = vkvcm::scene::load_named_with(path.to_str().unwrap(), &Default::default()).unwrap();
+            let mut scene = vkvcm::scene::load_named_with(path.to_str().unwrap(), &Default::default()).unwrap();
             assert!(scene.triangles.iter().any(|t| t.attributes.is_some()), "{name}: no vertex attributes read");
+            if name == "TextureSettingsTest" {
+                // Its textured quads are one-sided and face -z, away from the default camera,
+                // which therefore sees only their untextured backdrop through them: look from
+                // the other side of the scene's centre.
+                let (centre, _) = scene.bounding_sphere();
+                let cam = &mut scene.camera;
+                cam.position = 2.0 * centre - cam.position;
+                cam.forward = -cam.forward;
+            }
             let mut plain = scene.clone();
             for t in &mut plain.triangles {
                 t.attributes = None;
