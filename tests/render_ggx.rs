@@ -13,7 +13,7 @@ mod common;
 use std::sync::Arc;
 
 use common::scenes::*;
-use common::{render_checked, render_stats, with_gpu};
+use common::{image_mean, render_checked, render_stats, with_gpu};
 use glam::Vec3;
 use vkvcm::gpu::Gpu;
 use vkvcm::image::stats::{welch_test, PixelStats};
@@ -48,10 +48,6 @@ fn ggx_floor() -> Scene {
         ..Default::default()
     };
     glossy_floor_scene(metal, plastic)
-}
-
-fn image_mean(s: &PixelStats) -> f64 {
-    s.mean.iter().map(|c| c[0] + c[1] + c[2]).sum::<f64>() / (3 * s.mean.len()) as f64
 }
 
 /// NEE + MIS uses bsdf_eval's f and pdf_fwd for light samples and bsdf_sample's

@@ -16,7 +16,7 @@ mod common;
 use std::sync::Arc;
 
 use common::scenes::*;
-use common::{render_checked, render_stats, with_gpu};
+use common::{image_mean, render_checked, render_stats, with_gpu};
 use glam::Vec3;
 use vkvcm::gpu::Gpu;
 use vkvcm::image::stats::{welch_test, PixelStats};
@@ -41,10 +41,6 @@ fn render(
     s.frame.max_path_length = 5;
     s.frame.light_selection = selection;
     render_checked(gpu, scene, &s)
-}
-
-fn image_mean(s: &PixelStats) -> f64 {
-    s.mean.iter().map(|c| c[0] + c[1] + c[2]).sum::<f64>() / (3 * s.mean.len()) as f64
 }
 
 /// The mean over pixels of the per-sample variance (all channels).

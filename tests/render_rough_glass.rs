@@ -14,7 +14,7 @@ mod common;
 use std::sync::Arc;
 
 use common::scenes::*;
-use common::{render_checked, render_stats, with_gpu};
+use common::{image_mean, render_checked, render_stats, with_gpu};
 use glam::Vec3;
 use vkvcm::gpu::Gpu;
 use vkvcm::image::stats::{welch_test, PixelStats};
@@ -42,10 +42,6 @@ fn render(
 
 fn stats(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, nee: bool, iterations: u64, seed: u32) -> PixelStats {
     render_stats(&render(gpu, scene, algo, nee, iterations, seed), None)
-}
-
-fn image_mean(s: &PixelStats) -> f64 {
-    s.mean.iter().map(|c| c[0] + c[1] + c[2]).sum::<f64>() / (3 * s.mean.len()) as f64
 }
 
 /// A rough dielectric of IOR `ior` and glTF roughness `roughness` (GGX alpha

@@ -12,7 +12,7 @@ mod common;
 use std::sync::Arc;
 
 use common::scenes::*;
-use common::{primary_hit_mask, render_checked, render_stats, with_gpu};
+use common::{image_mean, primary_hit_mask, render_checked, render_stats, with_gpu};
 use glam::Vec3;
 use vkvcm::gpu::Gpu;
 use vkvcm::image::stats::{inverse_normal_cdf, sidak, welch_test, PixelStats};
@@ -47,10 +47,6 @@ fn stats(
     seed: u32,
 ) -> PixelStats {
     render_stats(&render(gpu, scene, algo, nee, size, iterations, seed), None)
-}
-
-fn image_mean(s: &PixelStats) -> f64 {
-    s.mean.iter().map(|c| c[0] + c[1] + c[2]).sum::<f64>() / (3 * s.mean.len()) as f64
 }
 
 /// The attenuation coefficient of the analytic test's sphere (per unit length).

@@ -29,6 +29,11 @@ pub fn with_gpu_options<R>(opts: &GpuOptions, f: impl FnOnce(&Arc<Gpu>) -> R) ->
     r
 }
 
+/// The mean over pixels and channels of a render's per-pixel means.
+pub fn image_mean(s: &vkvcm::image::stats::PixelStats) -> f64 {
+    s.mean.iter().map(|c| c[0] + c[1] + c[2]).sum::<f64>() / (3 * s.mean.len()) as f64
+}
+
 /// Per-pixel statistics of one render, from its per-iteration sums (K = iterations).
 /// Pixels where `mask` is false are zeroed (equal means, zero variance: they pass).
 pub fn render_stats(out: &vkvcm::render::RenderOutput, mask: Option<&[bool]>) -> vkvcm::image::stats::PixelStats {
