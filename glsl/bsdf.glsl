@@ -322,12 +322,28 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint t
         albedo *= b.lobes_weight;
     }
 #endif
+#if HAS_ROUGH_DIELECTRIC
+    bool rough = ior >= 0.0 && m.emission.w > 0.0;
+#else
+    bool rough = false;
+#endif
+    // The rough dielectric beside partial transmission's lobes: a component of albedo 1
+    // times the glass weight (Fresnel draws the event within it); it has no mirror or
+    // refraction component of its own.
+    float a_rough = 0.0;
+#if HAS_ROUGH_DIELECTRIC && HAS_PARTIAL_TRANSMISSION
+    if (rough && b.lobes_weight > 0.0) a_rough = b.interface_weight;
+#endif
 #if HAS_MIRROR
     vec3 mirror = mirror_colour(m, tint.rgb);
     a_r = b.fresnel * luminance(mirror);
 #if HAS_PARTIAL_TRANSMISSION
     a_r *= b.interface_weight;
     mirror *= b.interface_weight;
+    if (a_rough > 0.0) {
+        a_r = 0.0;
+        mirror = vec3(0.0);
+    }
 #endif
     albedo += b.fresnel * mirror;
 #endif
@@ -335,32 +351,12 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint t
     a_t = ior < 0.0 ? 0.0 : 1.0 - b.fresnel;
 #if HAS_PARTIAL_TRANSMISSION
     a_t *= b.interface_weight;
+    if (a_rough > 0.0) a_t = 0.0;
 #endif
 #endif
     b.prob_rough = 0.0;
-#if HAS_ROUGH_DIELECTRIC
-#if HAS_PARTIAL_TRANSMISSION
-    if (ior >= 0.0 && m.emission.w > 0.0 && b.lobes_weight > 0.0) {
-        // The rough dielectric with weight w beside the lobes: its albedo, reflection plus
-        // transmission, is counted as 1 (the event within it is drawn by Fresnel).
-        float total = a_d + a_p + a_g + b.interface_weight;
-        if (total < 1e-9) {
-            b.valid = false;
-            total = 1.0;
-        }
-        b.prob_diffuse = a_d / total;
-        b.prob_phong = a_p / total;
-        b.prob_glossy = a_g / total;
-        b.prob_reflect = 0.0;
-        b.prob_refract = 0.0;
-        b.prob_rough = b.interface_weight / total;
-        b.cont_prob = clamp(max3(albedo) + b.interface_weight, 0.0, 1.0);
-        b.delta = false;
-        return b;
-    }
-#endif
-    if (ior >= 0.0 && m.emission.w > 0.0) {
-        // The rough dielectric: the material's only component (the header).
+    if (rough && a_rough == 0.0) {
+        // Clear rough glass: the material's only component (the header).
         b.prob_diffuse = 0.0;
         b.prob_phong = 0.0;
         b.prob_glossy = 0.0;
@@ -371,8 +367,10 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint t
         b.delta = false;
         return b;
     }
-#endif
     float total = a_d + a_p + a_g + a_r + a_t;
+#if HAS_PARTIAL_TRANSMISSION
+    total += a_rough;
+#endif
     if (total < 1e-9) {
         b.valid = false;
         total = 1.0;
@@ -383,11 +381,12 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint t
     b.prob_reflect = a_r / total;
     b.prob_refract = a_t / total;
 #if HAS_PARTIAL_TRANSMISSION
-    b.cont_prob = clamp(max3(albedo) + a_t, 0.0, 1.0);
+    b.prob_rough = a_rough / total;
+    b.cont_prob = clamp(max3(albedo) + a_t + a_rough, 0.0, 1.0);
 #else
     b.cont_prob = clamp(max3(albedo) + (1.0 - b.fresnel), 0.0, 1.0);
 #endif
-    b.delta = b.prob_diffuse == 0.0 && b.prob_phong == 0.0 && b.prob_glossy == 0.0;
+    b.delta = b.prob_diffuse == 0.0 && b.prob_phong == 0.0 && b.prob_glossy == 0.0 && b.prob_rough == 0.0;
     return b;
 }
 
