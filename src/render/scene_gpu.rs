@@ -234,7 +234,7 @@ pub fn gpu_lights(scene: &Scene, selection: LightSelection) -> Result<(Vec<GpuLi
     let mut background = NO_LIGHT;
     let table = LightDistribution::new(scene, selection);
     for (i, l) in scene.lights.iter().enumerate() {
-        let g = match *l {
+        let mut g = match *l {
             Light::Area { triangle, radiance } => {
                 let t = scene
                     .triangles
@@ -285,7 +285,6 @@ pub fn gpu_lights(scene: &Scene, selection: LightSelection) -> Result<(Vec<GpuLi
                 }
             }
         };
-        let mut g = g;
         g.d[0] = table.prob[i];
         g.d[1] = table.threshold[i];
         g.d[2] = bits(table.alias[i]);
