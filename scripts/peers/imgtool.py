@@ -7,6 +7,8 @@ one JSON object on stdout.
     imgtool.py reference OUT.exr IN...   reference image with per-pixel variance
     imgtool.py agree A.exr B.exr         do two references agree within their noise?
     imgtool.py relmse JOBS.json          relMSE of many images against references
+    imgtool.py means IN...               image means of independent renders, their mean and
+                                         its standard error from their spread
 
 Images: vkvcm EXRs (R, G, B, plus moment2.R/G/B = sum of squares / iterations and the
 vkvcm:iterations attribute), Mitsuba EXRs (R, G, B), SmallVCM's float32 .pfm (its driver
@@ -166,6 +168,18 @@ def cmd_relmse(jobs_path):
     return {"relmse": out}
 
 
+def cmd_means(inputs):
+    """The image mean (over pixels and R, G, B) of each input, and their mean with its
+    standard error from their spread. The inputs must be independent renders (different
+    seeds, separate processes): the pixels of one bpt or vcm render are correlated through
+    the light subpaths they share, so a standard error from one render's per-pixel variances
+    (cmd_agree's) is too small for them; the spread of whole renders has no such bias."""
+    means = [float(read_rgb(p).astype(np.float64).mean()) for p in inputs]
+    n = len(means)
+    se = float(np.std(means, ddof=1) / np.sqrt(n)) if n > 1 else None
+    return {"n": n, "mean": float(np.mean(means)), "se": se, "means": means}
+
+
 def main(argv):
     try:
         if len(argv) >= 3 and argv[0] == "reference":
@@ -174,6 +188,8 @@ def main(argv):
             result = cmd_agree(argv[1], argv[2])
         elif len(argv) == 2 and argv[0] == "relmse":
             result = cmd_relmse(argv[1])
+        elif len(argv) >= 2 and argv[0] == "means":
+            result = cmd_means(argv[1:])
         else:
             print(__doc__, file=sys.stderr)
             return 2
