@@ -50,6 +50,15 @@ SMALLVCM_ESTIMATORS = ("vcm", "bpt", "pt")
 MITSUBA_SCENE = "cornell_mg"
 MITSUBA_ESTIMATORS = ("pt", "bpt", "vcm")
 MITSUBA_VARIANT = "llvm_ad_rgb"
+# Estimators that cannot sample every path of a scene, and so converge to less than the
+# full solution there: pt and bpt under SmallVCM's delta lights (the sun of gbs_s, the
+# point light of gbs_p), whose light reaches the camera through specular surfaces on paths
+# that neither estimator samples (pt: light - specular - ...; bpt: light - specular -
+# diffuse - specular - camera, a caustic seen in the mirror). The two programs' estimators
+# share that definition, so their rows measure against a reference of the estimator itself
+# (`<scene>_<estimator>.exr`): the run's error is then its noise, not a missing part of the
+# image that no budget removes. Every other row measures against the scene's reference.
+OWN_REFERENCES = {"gbs_s": ("pt", "bpt"), "gbs_p": ("pt", "bpt")}
 
 # Seeds: runs use 1..N, references REF_SEED + k. SmallVCM is given 1000 x that (its thread
 # k adds k, so no two processes share a stream); Mitsuba derives its passes' seeds as
@@ -470,7 +479,8 @@ def cmd_reference(args):
     ref_cpu = args.cpu or budget["ref_cpu"]
     chunks = args.chunks or budget["ref_chunks"]
     out = Path(args.out)
-    make_references(Cache(args.cache), Path(args.vkvcm), out, ref_dir(out, args.quick), scenes_of(args), ref_cpu, chunks)
+    make_references(Cache(args.cache), Path(args.vkvcm), out, ref_dir(out, args.quick), scenes_of(args), ref_cpu, chunks,
+                    own_only=args.own_only)
 
 
 def ref_dir(out, quick):
@@ -486,7 +496,14 @@ def scenes_of(args):
     return chosen
 
 
-def make_references(cache, vkvcm_bin, out, refs, scenes, ref_cpu, chunks):
+def reference_name(scene, estimator):
+    """The reference (file stem in the references folder) that a row of `estimator`
+    (vkvcm's, e.g. `bpt:path`, or the peer's) on `scene` measures against."""
+    algo = estimator.split(":")[0]
+    return f"{scene}_{algo}" if algo in OWN_REFERENCES.get(scene, ()) else scene
+
+
+def make_references(cache, vkvcm_bin, out, refs, scenes, ref_cpu, chunks, own_only=False):
     """For each scene, the reference the run measures against (about ref_cpu CPU-seconds),
     and an agreement check of the two programs on it (ref_cpu / 2 each; printed and stored
     in <scene>.json):
@@ -498,6 +515,9 @@ def make_references(cache, vkvcm_bin, out, refs, scenes, ref_cpu, chunks):
       SmallVCM's can be run as independent chunks, whose spread gives its per-pixel noise).
     * The Mitsuba scene: the reference is Mitsuba's path tracer, in independent chunks;
       the check: vkvcm's pt, one process, against it.
+    * OWN_REFERENCES: a reference of the estimator itself (vkvcm, one process, ref_cpu / 2),
+      checked against SmallVCM's same estimator (chunks, ref_cpu / 4). `own_only` makes
+      only these.
     """
     vk = Vkvcm(vkvcm_bin, out)
     vk.check()
@@ -507,57 +527,107 @@ def make_references(cache, vkvcm_bin, out, refs, scenes, ref_cpu, chunks):
     work = refs / "work"
     work.mkdir(exist_ok=True)
     summary = []
-    check_cpu = ref_cpu / 2  # each side of the agreement check
     for scene in scenes:
-        t0 = time.monotonic()
-        log(f"reference {scene}: about {ref_cpu:.0f} CPU-s, then {check_cpu:.0f} CPU-s per program for the check ...")
-        if scene in SMALLVCM_SCENES:
-            sv = SmallVcm(cache)
-            sv.check()
-            # The reference: vkvcm vcm, one process.
-            ref_run = timed_vkvcm_long(vk, scene, "vcm", REF_SEED, ref_cpu, work / f"{scene}_ref_vkvcm_vcm", work)
-            ref = imgtool(cache, "reference", refs / f"{scene}.exr", ref_run["image"])
-            # The check: SmallVCM bpt in chunks against vkvcm bpt.
-            images, cpu, its = [], 0.0, 0
-            sv.warm_up(scene, "bpt", work)
-            for k in range(chunks):
-                n, c, img = sv.render(scene, "bpt", REF_SEED + k, check_cpu / chunks,
-                                      work / f"{scene}_check_smallvcm_bpt_{k}")
-                images.append(img)
-                cpu += c.cpu
-                its += n
-            imgtool(cache, "reference", work / f"{scene}_check_smallvcm_bpt.exr", *images)
-            mine = timed_vkvcm_long(vk, scene, "bpt", REF_SEED + 1, check_cpu, work / f"{scene}_check_vkvcm_bpt", work)
-            agree = imgtool(cache, "agree", mine["image"], work / f"{scene}_check_smallvcm_bpt.exr")
-            record = {"scene": scene, "reference": {"program": "vkvcm", "estimator": "vcm", "process": "one",
-                                                     "cpu_s": ref_run["cpu"], "iterations": ref_run["iterations"],
-                                                     "noise_floor_relmse": ref["noise_floor_relmse"]},
-                      "check": {"a": f"vkvcm bpt, one process, {mine['iterations']} iterations, {mine['cpu']:.0f} CPU-s",
-                                "b": f"SmallVCM bpt, {chunks} chunks, {its} iterations, {cpu:.0f} CPU-s", **agree}}
-        else:
-            mi = Mitsuba(cache, out)
-            mi.check()
-            mi.warm_up(scene, "path", work)
-            images, cpu, spp = [], 0.0, 0
-            for k in range(chunks):
-                n, c, img = mi.render(scene, "path", REF_SEED + k, ref_cpu / chunks, work / f"{scene}_ref_mitsuba_{k}")
-                images.append(img)
-                cpu += c.cpu
-                spp += n
-            ref = imgtool(cache, "reference", refs / f"{scene}.exr", *images)
-            mine = timed_vkvcm_long(vk, scene, "pt", REF_SEED + 1, check_cpu, work / f"{scene}_check_vkvcm_pt", work)
-            agree = imgtool(cache, "agree", mine["image"], refs / f"{scene}.exr")
-            record = {"scene": scene, "reference": {"program": "Mitsuba", "estimator": "path", "process": f"{chunks} chunks",
-                                                     "cpu_s": cpu, "iterations": spp,
-                                                     "noise_floor_relmse": ref["noise_floor_relmse"]},
-                      "check": {"a": f"vkvcm pt, one process, {mine['iterations']} iterations, {mine['cpu']:.0f} CPU-s",
-                                "b": f"Mitsuba path ({MITSUBA_VARIANT}), {chunks} chunks, {spp} spp, {cpu:.0f} CPU-s",
-                                **agree}}
-        record.update({"date": now(), "commit": git_commit(), "ref_cpu_budget": ref_cpu, "chunks": chunks})
-        (refs / f"{scene}.json").write_text(json.dumps(record, indent=1) + "\n")
-        summary.append(record)
-        log(f"  {agreement_line(record)} ({time.monotonic() - t0:.0f} s)")
+        if not own_only:
+            summary.append(make_scene_reference(vk, cache, out, refs, work, scene, ref_cpu, chunks))
+        # After the scene's reference, against which each own reference's missing light is measured.
+        for estimator in OWN_REFERENCES.get(scene, ()):
+            t0 = time.monotonic()
+            record = make_own_reference(vk, cache, refs, work, scene, estimator, ref_cpu / 2, ref_cpu / 4, chunks)
+            summary.append(record)
+            log(f"  {agreement_line(record)} ({time.monotonic() - t0:.0f} s)")
     print("\n".join(agreement_line(r) for r in summary))
+
+
+def make_scene_reference(vk, cache, out, refs, work, scene, ref_cpu, chunks):
+    """The scene's reference and its agreement check (make_references); returns the record."""
+    check_cpu = ref_cpu / 2  # each side of the agreement check
+    t0 = time.monotonic()
+    log(f"reference {scene}: about {ref_cpu:.0f} CPU-s, then {check_cpu:.0f} CPU-s per program for the check ...")
+    if scene in SMALLVCM_SCENES:
+        sv = SmallVcm(cache)
+        sv.check()
+        # The reference: vkvcm vcm, one process.
+        ref_run = timed_vkvcm_long(vk, scene, "vcm", REF_SEED, ref_cpu, work / f"{scene}_ref_vkvcm_vcm", work)
+        ref = imgtool(cache, "reference", refs / f"{scene}.exr", ref_run["image"])
+        # The check: SmallVCM bpt in chunks against vkvcm bpt.
+        images, cpu, its = [], 0.0, 0
+        sv.warm_up(scene, "bpt", work)
+        for k in range(chunks):
+            n, c, img = sv.render(scene, "bpt", REF_SEED + k, check_cpu / chunks,
+                                  work / f"{scene}_check_smallvcm_bpt_{k}")
+            images.append(img)
+            cpu += c.cpu
+            its += n
+        imgtool(cache, "reference", work / f"{scene}_check_smallvcm_bpt.exr", *images)
+        mine = timed_vkvcm_long(vk, scene, "bpt", REF_SEED + 1, check_cpu, work / f"{scene}_check_vkvcm_bpt", work)
+        agree = imgtool(cache, "agree", mine["image"], work / f"{scene}_check_smallvcm_bpt.exr")
+        record = {"scene": scene, "reference": {"program": "vkvcm", "estimator": "vcm", "process": "one",
+                                                 "cpu_s": ref_run["cpu"], "iterations": ref_run["iterations"],
+                                                 "noise_floor_relmse": ref["noise_floor_relmse"]},
+                  "check": {"a": f"vkvcm bpt, one process, {mine['iterations']} iterations, {mine['cpu']:.0f} CPU-s",
+                            "b": f"SmallVCM bpt, {chunks} chunks, {its} iterations, {cpu:.0f} CPU-s", **agree}}
+    else:
+        mi = Mitsuba(cache, out)
+        mi.check()
+        mi.warm_up(scene, "path", work)
+        images, cpu, spp = [], 0.0, 0
+        for k in range(chunks):
+            n, c, img = mi.render(scene, "path", REF_SEED + k, ref_cpu / chunks, work / f"{scene}_ref_mitsuba_{k}")
+            images.append(img)
+            cpu += c.cpu
+            spp += n
+        ref = imgtool(cache, "reference", refs / f"{scene}.exr", *images)
+        mine = timed_vkvcm_long(vk, scene, "pt", REF_SEED + 1, check_cpu, work / f"{scene}_check_vkvcm_pt", work)
+        agree = imgtool(cache, "agree", mine["image"], refs / f"{scene}.exr")
+        record = {"scene": scene, "reference": {"program": "Mitsuba", "estimator": "path", "process": f"{chunks} chunks",
+                                                 "cpu_s": cpu, "iterations": spp,
+                                                 "noise_floor_relmse": ref["noise_floor_relmse"]},
+                  "check": {"a": f"vkvcm pt, one process, {mine['iterations']} iterations, {mine['cpu']:.0f} CPU-s",
+                            "b": f"Mitsuba path ({MITSUBA_VARIANT}), {chunks} chunks, {spp} spp, {cpu:.0f} CPU-s",
+                            **agree}}
+    record.update({"date": now(), "commit": git_commit(), "ref_cpu_budget": ref_cpu, "chunks": chunks})
+    (refs / f"{scene}.json").write_text(json.dumps(record, indent=1) + "\n")
+    log(f"  {agreement_line(record)} ({time.monotonic() - t0:.0f} s)")
+    return record
+
+
+def make_own_reference(vk, cache, refs, work, scene, estimator, ref_cpu, check_cpu, chunks):
+    """`<scene>_<estimator>.exr`: vkvcm's estimator, one process of ref_cpu CPU-s (its
+    second moment gives the per-pixel noise), and the check: SmallVCM's same estimator in
+    chunks of check_cpu in all, against it."""
+    name = reference_name(scene, estimator)
+    log(f"reference {name}: about {ref_cpu:.0f} CPU-s, then {check_cpu:.0f} CPU-s of SmallVCM for the check ...")
+    ref_run = timed_vkvcm_long(vk, scene, estimator, REF_SEED + 2, ref_cpu, work / f"{name}_ref_vkvcm", work)
+    ref = imgtool(cache, "reference", refs / f"{name}.exr", ref_run["image"])
+    sv = SmallVcm(cache)
+    sv.check()
+    sv.warm_up(scene, estimator, work)
+    images, cpu, its = [], 0.0, 0
+    for k in range(chunks):
+        n, c, img = sv.render(scene, estimator, REF_SEED + 100 + k, check_cpu / chunks,
+                              work / f"{name}_check_smallvcm_{k}")
+        images.append(img)
+        cpu += c.cpu
+        its += n
+    imgtool(cache, "reference", work / f"{name}_check_smallvcm.exr", *images)
+    agree = imgtool(cache, "agree", refs / f"{name}.exr", work / f"{name}_check_smallvcm.exr")
+    # How far the estimator's expectation lies from the full image: its relMSE against the
+    # scene's reference (when there is one; both references' noise included).
+    missing = None
+    if (refs / f"{scene}.exr").exists():
+        jobs = work / f"{name}_vs_scene.json"
+        jobs.write_text(json.dumps([{"image": str(refs / f"{name}.exr"), "reference": str(refs / f"{scene}.exr")}]))
+        missing = imgtool(cache, "relmse", jobs)["relmse"][0]
+    record = {"scene": name, "reference": {"program": "vkvcm", "estimator": estimator, "process": "one",
+                                           "cpu_s": ref_run["cpu"], "iterations": ref_run["iterations"],
+                                           "noise_floor_relmse": ref["noise_floor_relmse"],
+                                           "relmse_vs_scene_reference": missing},
+              "check": {"a": f"the reference (vkvcm {estimator})",
+                        "b": f"SmallVCM {estimator}, {chunks} chunks, {its} iterations, {cpu:.0f} CPU-s", **agree},
+              "date": now(), "commit": git_commit(), "ref_cpu_budget": ref_cpu, "chunks": chunks}
+    (refs / f"{name}.json").write_text(json.dumps(record, indent=1) + "\n")
+    return record
 
 
 def timed_vkvcm_long(vk, scene, estimator, seed, cpu, out_base, work):
@@ -574,8 +644,10 @@ def agreement_line(r):
     c, ref = r["check"], r["reference"]
     sigmas = c.get("mean_diff_sigmas")
     sigmas = "" if sigmas is None else f" ({sigmas:+.1f} standard errors)"
+    against_scene = ref.get("relmse_vs_scene_reference")
+    against_scene = "" if against_scene is None else f", relMSE {against_scene:.2e} against the scene's reference"
     return (f"{r['scene']}: reference {ref['program']} {ref['estimator']} ({ref['iterations']} iterations, "
-            f"{ref['cpu_s']:.0f} CPU-s, noise floor relMSE {ref['noise_floor_relmse']:.2e}); "
+            f"{ref['cpu_s']:.0f} CPU-s, noise floor relMSE {ref['noise_floor_relmse']:.2e}{against_scene}); "
             f"check {c['a']} vs {c['b']}: mean relative difference {c['mean_rel_diff']:+.2e}{sigmas}, "
             f"relMSE between them {c['relmse_a_vs_b'] / c['relmse_expected_from_noise']:.3f} x what their noise "
             f"explains, per-pixel z std {c['z_std']:.3f} (mean {c['z_mean']:+.3f}, |z|>4: {c['z_abs_gt_4']} of "
@@ -605,7 +677,7 @@ def cmd_run(args):
     write_scenes(out)
 
     refs = Path(args.references) if args.references else ref_dir(out, args.quick)
-    missing = [s for s in scenes if not (refs / f"{s}.exr").exists()]
+    missing = [s for s in scenes if any(not (refs / f"{n}.exr").exists() for n in references_of(s))]
     if missing and args.quick and not args.references:
         log(f"no quick references for {', '.join(missing)} in {refs}: making them "
             f"({QUICK['ref_cpu']:.0f} CPU-s per program and scene)")
@@ -656,11 +728,7 @@ def cmd_run(args):
     header["load_after"] = os.getloadavg()
     header["elapsed_s"] = time.monotonic() - t_start
 
-    jobs = work / "relmse_jobs.json"
-    jobs.write_text(json.dumps([{"image": r["image"], "reference": str(refs / f"{r['scene']}.exr")} for r in rows]))
-    for r, e in zip(rows, imgtool(cache, "relmse", jobs)["relmse"]):
-        r["relmse"] = e
-    header["references"] = [json.loads((refs / f"{s}.json").read_text()) for s in scenes if (refs / f"{s}.json").exists()]
+    score(cache, header, rows, refs, scenes, work)
     (work / "results.json").write_text(json.dumps({"sitting": header, "cells": cells, "rows": rows}, indent=1) + "\n")
     table = render_table(header, rows, cells)
     (work / "table.md").write_text(table)
@@ -668,8 +736,40 @@ def cmd_run(args):
     log(f"results: {work}/results.json, table: {work}/table.md")
 
 
+def references_of(scene):
+    """The references (file stems) that a run on `scene` measures against."""
+    return [scene] + [reference_name(scene, e) for e in OWN_REFERENCES.get(scene, ())]
+
+
+def score(cache, header, rows, refs, scenes, work):
+    """Each row's relMSE against its reference (reference_name), less the reference's noise
+    floor, and the references' records into the header.
+
+    A render x and a reference independent of it: E[(x - ref)^2] = E[(x - truth)^2] +
+    var(ref), so the relMSE against the reference exceeds the one against the truth by the
+    reference's noise floor (mean of var / (ref^2 + eps), imgtool.noise_floor). Left in,
+    it adds the same amount to both programs' rows and pulls their ratio towards 1 (by up to
+    10% for pt on gbs_s, whose runs' error is about 10x that floor)."""
+    for r in rows:
+        r["reference"] = str(refs / f"{reference_name(r['scene'], r['estimator'])}.exr")
+    records = {n: json.loads((refs / f"{n}.json").read_text())
+               for s in scenes for n in references_of(s) if (refs / f"{n}.json").exists()}
+    jobs = work / "relmse_jobs.json"
+    jobs.write_text(json.dumps([{"image": r["image"], "reference": r["reference"]} for r in rows]))
+    for r, e in zip(rows, imgtool(cache, "relmse", jobs)["relmse"]):
+        record = records.get(Path(r["reference"]).stem)
+        if record is None:
+            raise HarnessError(f"no {Path(r['reference']).with_suffix('.json')}: the reference's noise floor is unknown")
+        r["relmse_against_reference"] = e
+        r["relmse"] = e - record["reference"]["noise_floor_relmse"]
+    header["relmse_less_noise_floor"] = True
+    header["references"] = list(records.values())
+
+
 def cmd_table(args):
-    """Prints the table of a finished run again (from its results.json)."""
+    """Prints the table of a finished run again (from its results.json); with --rescore,
+    first measures its images again against the references now in its references folder
+    (or --references), and writes results-rescored.json and table-rescored.md beside it."""
     path = Path(args.results)
     if path.is_dir():
         path = path / "results.json"
@@ -677,7 +777,26 @@ def cmd_table(args):
         data = json.loads(path.read_text())
     except (OSError, ValueError) as e:
         raise HarnessError(f"cannot read {path}: {e}")
-    print(render_table(data["sitting"], data["rows"], [tuple(c) for c in data["cells"]]), end="")
+    header, rows, cells = data["sitting"], data["rows"], [tuple(c) for c in data["cells"]]
+    if args.rescore:
+        cache = Cache(args.cache)
+        cache.require_venv()
+        refs = Path(args.references or header["references_dir"])
+        scenes = list(dict.fromkeys(r["scene"] for r in rows))
+        missing = [n for s in scenes for n in references_of(s) if not (refs / f"{n}.exr").exists()]
+        if missing:
+            raise HarnessError(f"no reference {', '.join(missing)} in {refs}: run `{sys.argv[0]} reference` "
+                               "(`--own-only` makes only the estimators' own references)")
+        score(cache, header, rows, refs, scenes, path.parent)
+        header["rescored"] = {"date": now(), "references_dir": str(refs),
+                              "command": " ".join([Path(sys.argv[0]).name] + sys.argv[1:])}
+        (path.parent / "results-rescored.json").write_text(
+            json.dumps({"sitting": header, "cells": cells, "rows": rows}, indent=1) + "\n")
+        table = render_table(header, rows, cells)
+        (path.parent / "table-rescored.md").write_text(table)
+        print(table, end="")
+        return
+    print(render_table(header, rows, cells), end="")
 
 
 def startup_of(program, scene, est):
@@ -735,8 +854,17 @@ def render_table(h, rows, cells):
         f"- budget: about {h['cpu_budget_s']:g} CPU-s per process (user + sys of the whole process, start-up included), "
         f"{h['seeds']} seeds per row, programs alternating; SmallVCM scenes {SMALLVCM_SIZE}x{SMALLVCM_SIZE}, "
         f"{MITSUBA_SCENE} {'x'.join(map(str, scene_desc.CORNELL['resolution']))}; max path length 10",
-        "- relMSE = mean over pixels and R, G, B of (x - ref)^2 / (ref^2 + 0.01); relMSE x CPU-s: lower is better; "
+        "- relMSE = mean over pixels and R, G, B of (x - ref)^2 / (ref^2 + 0.01)"
+        + (", less the reference's noise floor (the part its own noise adds; in the reference lines below)"
+           if h.get("relmse_less_noise_floor") else "")
+        + "; relMSE x CPU-s: lower is better; "
         "\"vs peer\" = the peer's median relMSE x CPU-s / this row's (above 1: vkvcm is more efficient)",
+        "- " + references_line(rows),
+    ]
+    if "rescored" in h:
+        lines.append(f"- rescored {h['rescored']['date']} against {h['rescored']['references_dir']}: "
+                     f"`{h['rescored']['command']}`")
+    lines += [
         "",
         "References and the agreement checks (`peers.py reference`):",
         "",
@@ -765,6 +893,17 @@ def render_table(h, rows, cells):
                 f"{sig(statistics.median(r['relmse'] for r in g))} | "
                 f"{median_range([r['relmse'] * r['cpu_s'] for r in g], sig)} | {ratio} |")
     return "\n".join(lines) + "\n"
+
+
+def references_line(rows):
+    """Which rows measure against which reference (runs before OWN_REFERENCES: all the scene's)."""
+    own = sorted({(r["scene"], Path(r["reference"]).stem) for r in rows
+                  if "reference" in r and Path(r["reference"]).stem != r["scene"]})
+    if not own:
+        return "every row measures against its scene's reference"
+    return ("rows measure against their scene's reference, except " +
+            ", ".join(f"{stem.removeprefix(scene + '_')} on {scene} against `{stem}` (the estimator's own)"
+                      for scene, stem in own))
 
 
 def fmt_load(l):
@@ -813,6 +952,9 @@ def main():
         s.add_argument("--cpu", type=float, help="CPU-seconds per process (run) or per program and scene (reference)")
         if name == "reference":
             s.add_argument("--chunks", type=int, help="independent chunks of a peer's reference")
+            s.add_argument("--own-only", action="store_true",
+                           help="only the references of estimators that converge to less than the full image "
+                                "(pt and bpt on gbs_s and gbs_p)")
             s.set_defaults(func=cmd_reference)
         else:
             s.add_argument("--seeds", type=int, help="runs per row, at least 3")
@@ -821,6 +963,9 @@ def main():
             s.set_defaults(func=cmd_run)
     s = sub.add_parser("table", help="print the table of a finished run again")
     s.add_argument("results", help="a run's folder (OUT/runs/STAMP) or its results.json")
+    s.add_argument("--rescore", action="store_true",
+                   help="measure the run's images again against the references there are now")
+    s.add_argument("--references", help="with --rescore: folder of references (default: the run's)")
     s.set_defaults(func=cmd_table)
     args = p.parse_args()
     try:
