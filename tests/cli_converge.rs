@@ -97,7 +97,22 @@ fn reference_then_converge() {
     let dir = tempfile::tempdir().unwrap();
     let (r, csv, png) = (dir.path().join("ref.exr"), dir.path().join("c.csv"), dir.path().join("c.png"));
     let out = ok(
-        &["reference", "glm_c", "--algo", "pt", "--iterations", "2048", "--width", "24", "--height", "24", "-o", s(&r)],
+        &[
+            "reference",
+            "glm_c",
+            "--algo",
+            "pt",
+            "--iterations",
+            "2048",
+            "--width",
+            "24",
+            "--height",
+            "24",
+            "--light-selection",
+            "uniform",
+            "-o",
+            s(&r),
+        ],
         true,
     );
     assert!(out.contains("its own error estimate"), "{out}");
@@ -106,6 +121,8 @@ fn reference_then_converge() {
     let get = |k: &str| meta.iter().find(|(key, _)| key == k).map(|(_, v)| v.clone()).unwrap_or_default();
     assert_eq!(get("vkvcm:iterations"), "2048");
     assert_eq!(get("vkvcm:estimator"), "pt");
+    // The settings the reference rendered with, as its metadata records them.
+    assert_eq!(get("vkvcm:light_selection"), "uniform");
     let ref_rmse: f64 = get("vkvcm:reference_rmse").parse().unwrap();
     assert!(ref_rmse > 0.0 && ref_rmse < 0.2, "reference's own RMSE {ref_rmse}");
 
@@ -118,6 +135,8 @@ fn reference_then_converge() {
             s(&r),
             "--algos",
             "pt,bpt@144",
+            "--light-selection",
+            "uniform",
             "--time",
             "0.8",
             "--checkpoints",

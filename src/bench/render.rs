@@ -80,6 +80,8 @@ pub struct Overrides {
     pub reads: Option<crate::render::reads::Reads>,
     /// How splats are summed (src/render/atomics.rs).
     pub atomics: Option<crate::render::atomics::SplatAtomics>,
+    /// How lights are picked (src/render/light_selection.rs).
+    pub light_selection: Option<crate::render::LightSelection>,
 }
 
 /// Renders `scene` with `variant` for 1 warm-up iteration, then `iterations` timed ones,
@@ -96,6 +98,9 @@ pub fn bench_one(
     warm.paths_per_invocation = overrides.paths_per_invocation;
     warm.reads = overrides.reads;
     warm.atomics = overrides.atomics;
+    if let Some(l) = overrides.light_selection {
+        warm.frame.light_selection = l;
+    }
     render(gpu, scene, &warm, None, &mut |_| {})?;
     let s = RenderSettings { budget: Budget::Iterations(iterations), ..warm };
     let cpu0 = process_cpu_seconds();

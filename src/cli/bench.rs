@@ -163,6 +163,9 @@ pub struct BenchRenderArgs {
     /// How splats are summed (`render --atomics`; default: chosen for the device).
     #[arg(long, value_enum)]
     pub atomics: Option<render::atomics::SplatAtomics>,
+    /// How lights are picked (`render --light-selection`; default: power).
+    #[arg(long, value_enum)]
+    pub light_selection: Option<render::LightSelection>,
     /// Also write the results as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -301,6 +304,7 @@ fn bench_render(a: BenchRenderArgs) -> Result<()> {
         paths_per_invocation: a.paths_per_invocation,
         reads: a.reads,
         atomics: a.atomics,
+        light_selection: a.light_selection,
     };
     let mut runs = Vec::new();
     for round in 1..=a.rounds {

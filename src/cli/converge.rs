@@ -42,6 +42,10 @@ pub struct ReferenceArgs {
     /// Longest path, in segments.
     #[arg(long, default_value_t = 10)]
     pub max_path_length: u32,
+    /// How next-event estimation and light subpaths pick a light (`render
+    /// --light-selection`): the image's expectation is the same either way, its noise not.
+    #[arg(long, value_enum, default_value_t = vkvcm::render::DEFAULT_LIGHT_SELECTION)]
+    pub light_selection: vkvcm::render::LightSelection,
     /// Also write a tone-mapped sRGB PNG of the reference.
     #[arg(long)]
     pub png: Option<PathBuf>,
@@ -88,6 +92,10 @@ pub struct ConvergeArgs {
     /// Longest path, in segments (default: the reference's vkvcm:max_path_length, else 10).
     #[arg(long)]
     pub max_path_length: Option<u32>,
+    /// How every estimator picks a light (`render --light-selection`); to compare the two
+    /// rules at equal time, run converge once with each.
+    #[arg(long, value_enum, default_value_t = vkvcm::render::DEFAULT_LIGHT_SELECTION)]
+    pub light_selection: vkvcm::render::LightSelection,
     #[command(flatten)]
     pub gpu: super::GpuArgs,
     /// The environment map of the reference, if it had one.
@@ -167,6 +175,7 @@ pub fn reference_cmd(a: ReferenceArgs) -> Result<()> {
     let mut settings = RenderSettings::new(a.algo, a.width, a.height, budget);
     settings.frame.seed = a.seed;
     settings.frame.max_path_length = a.max_path_length;
+    settings.frame.light_selection = a.light_selection;
 
     let gpu = open_gpu(&a.gpu)?;
     let mut last = -1.0;
@@ -278,6 +287,7 @@ pub fn converge_cmd(a: ConvergeArgs) -> Result<()> {
         let mut s = variant.settings(w, h, Budget::Seconds(a.time));
         s.frame.seed = a.seed;
         s.frame.max_path_length = max_path_length;
+        s.frame.light_selection = a.light_selection;
         let r = conv::converge_one(&gpu, &scene, &s, &target, &times, Some(&cancel), &mut |c| {
             let r = c.row;
             eprintln!(
