@@ -1,8 +1,9 @@
 //! `vkvcm bench render`: a fixed suite (scenes x estimators, fixed iterations) measuring
 //! samples per wall second and per CPU-second of the whole process (user + sys from
 //! getrusage; on lavapipe the GPU work is CPU work of this process), and GPU
-//! time per kernel stage. The first iteration of each render is not timed (it pays the
-//! driver's shader compilation).
+//! time per kernel stage. Each row first renders one untimed warm-up iteration (it pays
+//! the driver's shader compilation), then times only the iterations of its render: not
+//! the render's set-up (the scene's upload and BVH build, the kernels' creation).
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -11,7 +12,7 @@ use anyhow::Result;
 use serde::Serialize;
 
 use crate::gpu::{Gpu, KernelTime};
-use crate::render::{render, Algorithm, Budget, Connect, RenderSettings};
+use crate::render::{render, Algorithm, Budget, Connect, RenderSettings, Renderer};
 use crate::scene::Scene;
 
 #[derive(Clone, Debug, Serialize)]
@@ -85,7 +86,10 @@ pub struct Overrides {
 }
 
 /// Renders `scene` with `variant` for 1 warm-up iteration, then `iterations` timed ones,
-/// with `overrides` of the device's defaults.
+/// with `overrides` of the device's defaults. The timed render's set-up (uploading the
+/// scene, building its BVH, creating the kernels) happens before its clock starts: the
+/// row is the cost of the iterations, which a render's length multiplies (set-up and
+/// start-up are measured apart: docs/performance.md, "Scene size" and "Start-up").
 pub fn bench_one(
     gpu: &Arc<Gpu>,
     scene: &Scene,
@@ -103,14 +107,16 @@ pub fn bench_one(
     }
     render(gpu, scene, &warm, None, &mut |_| {})?;
     let s = RenderSettings { budget: Budget::Iterations(iterations), ..warm };
+    let mut renderer = Renderer::new(gpu, scene, &s)?;
     let cpu0 = process_cpu_seconds();
     let t0 = Instant::now();
-    let out = render(gpu, scene, &s, None, &mut |_| {})?;
+    renderer.run(s.budget, None, &mut |_| {})?;
     let wall = t0.elapsed().as_secs_f64();
     let cpu = match (cpu0, process_cpu_seconds()) {
         (Some(a), Some(b)) => Some(b - a),
         _ => None,
     };
+    let out = renderer.output()?;
     let samples = (width as u64 * height as u64 * out.iterations) as f64;
     Ok(BenchRow {
         scene: scene.name.clone(),
