@@ -43,6 +43,7 @@ variants=(
   "ppm|--algo ppm"
   "bpm|--algo bpm"
   "vcm|--algo vcm"
+  "vcm-path|--algo vcm --connect path"
   "vcm-cache2|--algo vcm --connect cache --cache-connections 2"
   "vcm-storage|--algo vcm --reads storage --paths-per-invocation 3"
 )

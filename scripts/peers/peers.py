@@ -42,8 +42,8 @@ SMALLVCM_SIZE = 256
 SMALLVCM_MAX_PATH_LENGTH = 10
 # Estimators compared with SmallVCM. vkvcm's --algo names equal SmallVCM's -a acronyms
 # (its config.hxx: pt = PathTracer, bpt = VertexCM kBpt, vcm = VertexCM kVcm).
-# `bpt:path` is vkvcm's bpt with SmallVCM's connections (--connect path); plain `bpt` is
-# vkvcm's default (the light-vertex cache for bpt).
+# `bpt:path` / `vcm:path` are vkvcm's bpt / vcm with SmallVCM's connections (--connect
+# path); plain `bpt` and `vcm` are vkvcm's defaults (the light-vertex cache).
 SMALLVCM_ESTIMATORS = ("vcm", "bpt", "pt")
 # The scene vkvcm and Mitsuba both describe (scene_desc.py), and the vkvcm estimators
 # run against Mitsuba's `path` integrator on it.

@@ -88,8 +88,8 @@ pub enum Connect {
     Cache(u32),
 }
 
-/// Default light vertices per camera vertex of `--connect cache`: 1 measured better at
-/// equal time than 2 and 4 (docs/estimators.md).
+/// Default light vertices per camera vertex of `--connect cache` (bpt's and vcm's
+/// default): 1 measured better for bpt at equal time than 2 and 4 (docs/estimators.md).
 pub const DEFAULT_CACHE_CONNECTIONS: u32 = 1;
 
 impl Connect {

@@ -55,7 +55,8 @@ pub fn render_stats(out: &vkvcm::render::RenderOutput, mask: Option<&[bool]>) ->
 /// every light-subpath and camera estimator on glm_c (area light: light tracing's emitter
 /// connections), bpt there with both connection strategies; lt, bpt and vcm on gbs_s
 /// (directional light); pt and vcm on gbs_b (camera paths that escape to the
-/// background). `(scene name, estimator, where bpt and vcm connect)`.
+/// background), vcm there with SmallVCM's connections (`path`; its default elsewhere).
+/// `(scene name, estimator, where bpt and vcm connect)`.
 pub fn invariance_cases() -> Vec<(&'static str, vkvcm::render::Algorithm, vkvcm::render::Connect)> {
     use vkvcm::render::Algorithm::*;
     use vkvcm::render::Connect;
@@ -72,7 +73,7 @@ pub fn invariance_cases() -> Vec<(&'static str, vkvcm::render::Algorithm, vkvcm:
         ("gbs_s", Bpt, d(Bpt)),
         ("gbs_s", Vcm, d(Vcm)),
         ("gbs_b", Pt, d(Pt)),
-        ("gbs_b", Vcm, d(Vcm)),
+        ("gbs_b", Vcm, Connect::Path),
     ]
 }
 
