@@ -212,12 +212,10 @@ class Vkvcm:
 
     def command(self, scene, estimator, seed, out_exr, budget):
         path, w, h, length = self.scene_args(scene)
-        algo, _, connect = estimator.partition(":")
+        algo, settings = split_estimator(estimator)
         cmd = [self.binary, "render", path, "--algo", algo, "--width", w, "--height", h, "--seed", seed,
                "--max-path-length", length, "-o", out_exr]
-        if connect:
-            cmd += ["--connect", connect]
-        return cmd + budget
+        return cmd + settings + budget
 
     def warm_up(self, scene, estimator, workdir):
         # Twice: the first run may compile the kernels into Mesa's shader cache; the
@@ -496,10 +494,28 @@ def scenes_of(args):
     return chosen
 
 
+def split_estimator(estimator):
+    """A vkvcm estimator as `--estimators` names it, `algo[:path|:cache[:N]][@N_L]` (the
+    names of `vkvcm bench --algos`), as (algo, its `vkvcm render` settings)."""
+    spec, at, light_paths = estimator.partition("@")
+    algo, _, connect = spec.partition(":")
+    settings = []
+    if connect:
+        kind, _, n = connect.partition(":")
+        if kind not in ("path", "cache") or (n and (kind != "cache" or not n.isdigit())):
+            raise HarnessError(f"estimator {estimator!r}: the connection strategy is `path`, `cache` or `cache:N`")
+        settings += ["--connect", kind] + (["--cache-connections", n] if n else [])
+    if at:
+        if not light_paths.isdigit():
+            raise HarnessError(f"estimator {estimator!r}: `@N` needs a number of light subpaths")
+        settings += ["--light-paths", light_paths]
+    return algo, settings
+
+
 def reference_name(scene, estimator):
     """The reference (file stem in the references folder) that a row of `estimator`
     (vkvcm's, e.g. `bpt:path`, or the peer's) on `scene` measures against."""
-    algo = estimator.split(":")[0]
+    algo = split_estimator(estimator)[0]
     return f"{scene}_{algo}" if algo in OWN_REFERENCES.get(scene, ()) else scene
 
 
@@ -691,7 +707,7 @@ def cmd_run(args):
     for scene in scenes:
         if scene in SMALLVCM_SCENES:
             for e in (args.estimators.split(",") if args.estimators else SMALLVCM_ESTIMATORS):
-                cells.append((scene, e, "SmallVCM", e.split(":")[0]))
+                cells.append((scene, e, "SmallVCM", split_estimator(e)[0]))
         else:
             for e in (args.estimators.split(",") if args.estimators else MITSUBA_ESTIMATORS):
                 cells.append((scene, e, "Mitsuba", "path"))
@@ -958,7 +974,8 @@ def main():
             s.set_defaults(func=cmd_reference)
         else:
             s.add_argument("--seeds", type=int, help="runs per row, at least 3")
-            s.add_argument("--estimators", help="vkvcm estimators, comma-separated (e.g. vcm,bpt,bpt:path,pt)")
+            s.add_argument("--estimators", help="vkvcm estimators, comma-separated, as `vkvcm bench --algos` names them "
+                                "(e.g. vcm,bpt,bpt:path,vcm:cache:2,vcm@32768,pt)")
             s.add_argument("--references", help="folder of references (default OUT/references, with --quick OUT/references-quick)")
             s.set_defaults(func=cmd_run)
     s = sub.add_parser("table", help="print the table of a finished run again")
