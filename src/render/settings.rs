@@ -89,7 +89,8 @@ pub enum Connect {
 }
 
 /// Default light vertices per camera vertex of `--connect cache` (bpt's and vcm's
-/// default): 1 measured better for bpt at equal time than 2 and 4 (docs/estimators.md).
+/// default): 1 measured better at equal time than 2 (bpt and vcm) and 4 (bpt;
+/// docs/estimators.md).
 pub const DEFAULT_CACHE_CONNECTIONS: u32 = 1;
 
 impl Connect {
