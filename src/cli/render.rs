@@ -58,7 +58,9 @@ pub struct RenderArgs {
     pub connect: Option<ConnectKind>,
     /// Light subpaths per iteration, N_L, for lt, bpt, ppm, bpm and vcm (default: one per
     /// pixel, SmallVCM's choice). Merging's normalisation and MIS follow it; fewer light
-    /// paths make an iteration cheaper and smaller in memory, and a large frame fit.
+    /// paths make an iteration cheaper and smaller in memory, and a large frame fit. At
+    /// equal time, fewer help vcm where connections carry the light and hurt it where
+    /// merging does (caustics): docs/estimators.md.
     #[arg(long, value_name = "N")]
     pub light_paths: Option<u32>,
     /// With --connect cache: light vertices connected to per camera vertex.
