@@ -55,7 +55,8 @@ pub fn render_stats(out: &vkvcm::render::RenderOutput, mask: Option<&[bool]>) ->
 /// every light-subpath and camera estimator on glm_c (area light: light tracing's emitter
 /// connections), bpt there with both connection strategies; lt, bpt and vcm on gbs_s
 /// (directional light); pt and vcm on gbs_b (camera paths that escape to the
-/// background), vcm there with SmallVCM's connections (`path`; its default elsewhere).
+/// background), vcm there with SmallVCM's connections (`path`) and elsewhere with its
+/// default (the light-vertex cache).
 /// `(scene name, estimator, where bpt and vcm connect)`.
 pub fn invariance_cases() -> Vec<(&'static str, vkvcm::render::Algorithm, vkvcm::render::Connect)> {
     use vkvcm::render::Algorithm::*;
