@@ -1,7 +1,9 @@
 // BVH traversal: closest hit and any hit over the BVH built by src/bvh (binned SAH, BVH2
 // nodes holding both children's boxes as in Aila & Laine, "Understanding the Efficiency
-// of Ray Traversal on GPUs", HPG 2009, quantised to 8 bits). Mirrored on the CPU by
-// src/bvh/traverse.rs; layout in src/bvh/layout.rs; measurements in docs/bvh.md.
+// of Ray Traversal on GPUs", HPG 2009, quantised to 8 bits), uploaded in its 4-wide form:
+// each node holds its grandchildren's boxes, so a visit tests up to four boxes and a ray
+// visits every other BVH2 level. Mirrored on the CPU by src/bvh/traverse.rs; layout in
+// src/bvh/layout.rs; measurements in docs/bvh.md.
 //
 // The two buffers are the bindings `bvh_nodes` and `bvh_prims` (bound by name,
 // src/gpu/reflect.rs). The including kernel provides them in one of two ways, before
@@ -28,12 +30,14 @@
 // Provides: struct Hit, trace_closest(o, d, tmin, tmax, out Hit), trace_any(o, d, tmin,
 // tmax), and the ray/primitive tests of intersect.glsl.
 //
-// Node i = elements 2i, 2i+1 (32 bytes): (grid.x, grid.y, grid.z, ref0) (q0, q1, q2,
-// ref1). Per axis a grid word holds an origin (the float with its low 8 bits cleared) and
-// a power-of-two step (biased exponent in the low 8 bits); q0..q2 hold the children's box
-// coordinates as bytes: (c0.lo.xyz, c1.lo.x) (c0.hi.xyz, c1.hi.x) (c1.lo.yz, c1.hi.yz),
-// each decoding to origin + q * step (the builder rounds them outwards). Child refs:
-// bit 31 clear = internal node index; bit 31 set = leaf (first prim << 3 | count).
+// Node i = elements 4i .. 4i+3 (64 bytes): two pairs of (box, child ref), children 0, 1
+// then 2, 3, each pair two elements (grid.x, grid.y, grid.z, ref0) (q0, q1, q2, ref1)
+// (GpuNode4 in src/bvh/layout.rs). Per axis a grid word holds an origin (the float with
+// its low 8 bits cleared) and a power-of-two step (biased exponent in the low 8 bits);
+// q0..q2 hold the pair's box coordinates as bytes: (c0.lo.xyz, c1.lo.x) (c0.hi.xyz,
+// c1.hi.x) (c1.lo.yz, c1.hi.yz), each decoding to origin + q * step (the builder rounds
+// them outwards). Child refs: bit 31 clear = internal node index; bit 31 set = leaf
+// (first prim << 3 | count); BVH_EMPTY (a leaf of no primitives) = no child.
 // Prim i = elements 3i .. 3i+2 (48 bytes), in leaf order:
 //   triangle: (v0, id) (v1, material) (v2, 0)
 //   sphere:   (center, id | BVH_SPHERE_FLAG) (radius, 0, 0, material) (0)
@@ -48,9 +52,10 @@
 // the ray into object space (the direction is not normalised, so t means the same in
 // both spaces) and descends from the mesh's root; popping the marker moves the ray back.
 //
-// Stack: BVH_STACK_SIZE entries; the traversal pushes at most one per internal level and
-// the builder guarantees at most MAX_DEPTH = 32 levels (src/bvh/layout.rs); with instances
-// a top-level path and a mesh path plus the two entries above (MAX_STACK_INSTANCED).
+// Stack: BVH_STACK_SIZE entries; the traversal pushes at most three per node visited,
+// and a path visits at most 16 nodes (the builder's BVH2 has at most MAX_DEPTH = 32
+// levels; MAX_STACK in src/bvh/layout.rs); with instances a top-level path and a mesh
+// path plus the two entries above (MAX_STACK_INSTANCED).
 // Ray/box test: Ize, "Robust BVH Ray Traversal", JCGT 2013 (exit distance widened), on
 // boxes the builder padded and quantised outwards.
 #ifndef VKVCM_BVH_GLSL
@@ -59,10 +64,11 @@
 #include "intersect.glsl"
 
 #ifdef BVH_INSTANCES
-#define BVH_STACK_SIZE 66
+#define BVH_STACK_SIZE 98
 #else
-#define BVH_STACK_SIZE 32
+#define BVH_STACK_SIZE 48
 #endif
+#define BVH_EMPTY 0x80000000u
 #define BVH_INSTANCE_FLAG 0x40000000u
 #define BVH_RETURN 0xfffffffeu
 #define BVH_NO_INSTANCE 0xffffffffu
@@ -193,11 +199,11 @@ bool bvh_ray_box(vec3 lo, vec3 hi, vec3 o, vec3 inv_d, float tmin, float tmax,
     return tn <= tf * BVH_ROBUST_SCALE;
 }
 
-// Decodes node n: both children's boxes and references.
-void bvh_load_node(uint n, out vec3 lo0, out vec3 hi0, out vec3 lo1, out vec3 hi1,
+// Decodes the pair of (box, child ref) at elements e, e + 1.
+void bvh_load_pair(uint e, out vec3 lo0, out vec3 hi0, out vec3 lo1, out vec3 hi1,
                    out uint c0, out uint c1) {
-    uvec4 a = bvh_node_elem(2u * n);
-    uvec4 b = bvh_node_elem(2u * n + 1u);
+    uvec4 a = bvh_node_elem(e);
+    uvec4 b = bvh_node_elem(e + 1u);
     vec3 o = uintBitsToFloat(a.xyz & 0xffffff00u);
     vec3 s = uintBitsToFloat((a.xyz & 0xffu) << 23);
     const uvec4 shifts = uvec4(0u, 8u, 16u, 24u);
@@ -241,10 +247,29 @@ void bvh_load_node(uint n, out vec3 lo0, out vec3 hi0, out vec3 lo1, out vec3 hi
         }                                        \
     }
 
+#define BVH_INF uintBitsToFloat(0x7f800000u)
+// Orders (ka, ca), (kb, cb) by key.
+#define BVH_SORT2(ka, ca, kb, cb)      \
+    {                                  \
+        bool sw = kb < ka;             \
+        float tk = ka;                 \
+        uint tc = ca;                  \
+        ka = sw ? kb : ka;             \
+        ca = sw ? cb : ca;             \
+        kb = sw ? tk : kb;             \
+        cb = sw ? tc : cb;             \
+    }
+#define BVH_PUSH(c, k)     \
+    {                      \
+        stack[sp] = c;     \
+        stack_t[sp] = k;   \
+        sp++;              \
+    }
+
 // Shared traversal. Returns the primitive slot of the closest hit (or of the first hit
 // found when `any_hit`), -1 for none; tmax becomes the hit distance, hrecord the record
 // slot of the instance hit (BVH_NO_INSTANCE for world-space primitives). Descends through
-// internal nodes (nearer child first, the farther one pushed with its entry distance)
+// internal nodes (nearest child first, the others pushed with their entry distances)
 // until a leaf, tests the leaf, and pops. The inner node loop runs until every lane of
 // a SIMD group has reached a leaf, so the leaf tests of the group run together.
 int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hit, bool cull_back_faces,
@@ -266,20 +291,29 @@ int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hi
     hv = 0.0;
     while (true) {
         while ((cur & BVH_LEAF_FLAG) == 0u) {
-            vec3 lo0, hi0, lo1, hi1;
-            uint c0, c1;
-            bvh_load_node(cur, lo0, hi0, lo1, hi1, c0, c1);
-            float tn0, tn1;
-            bool h0 = bvh_ray_box(lo0, hi0, o, inv_d, tmin, tmax, tn0);
-            bool h1 = bvh_ray_box(lo1, hi1, o, inv_d, tmin, tmax, tn1);
-            if (h0 && h1) {
-                bool swap = tn1 < tn0;
-                stack[sp] = swap ? c0 : c1;
-                stack_t[sp] = swap ? tn0 : tn1;
-                sp++;
-                cur = swap ? c1 : c0;
-            } else if (h0 || h1) {
-                cur = h0 ? c0 : c1;
+            vec3 lo0, hi0, lo1, hi1, lo2, hi2, lo3, hi3;
+            uint c0, c1, c2, c3;
+            bvh_load_pair(4u * cur, lo0, hi0, lo1, hi1, c0, c1);
+            bvh_load_pair(4u * cur + 2u, lo2, hi2, lo3, hi3, c2, c3);
+            // Entry distances, +inf for a child missed or absent.
+            float k0, k1, k2, k3;
+            k0 = bvh_ray_box(lo0, hi0, o, inv_d, tmin, tmax, k0) && c0 != BVH_EMPTY ? k0 : BVH_INF;
+            k1 = bvh_ray_box(lo1, hi1, o, inv_d, tmin, tmax, k1) && c1 != BVH_EMPTY ? k1 : BVH_INF;
+            k2 = bvh_ray_box(lo2, hi2, o, inv_d, tmin, tmax, k2) && c2 != BVH_EMPTY ? k2 : BVH_INF;
+            k3 = bvh_ray_box(lo3, hi3, o, inv_d, tmin, tmax, k3) && c3 != BVH_EMPTY ? k3 : BVH_INF;
+            // Sorted by entry distance (a 5-comparator network, misses last): the nearest
+            // next, the others pushed farthest first. Only the pushes branch: an
+            // unconditional write to the stack costs a scatter on lavapipe.
+            BVH_SORT2(k0, c0, k1, c1);
+            BVH_SORT2(k2, c2, k3, c3);
+            BVH_SORT2(k0, c0, k2, c2);
+            BVH_SORT2(k1, c1, k3, c3);
+            BVH_SORT2(k1, c1, k2, c2);
+            if (k3 < BVH_INF) BVH_PUSH(c3, k3);
+            if (k2 < BVH_INF) BVH_PUSH(c2, k2);
+            if (k1 < BVH_INF) BVH_PUSH(c1, k1);
+            if (k0 < BVH_INF) {
+                cur = c0;
             } else {
                 BVH_POP();
             }
@@ -294,14 +328,8 @@ int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hi
             uvec4 pa = bvh_prim_elem(3u * i);
 #ifdef BVH_INSTANCES
             if ((pa.w & (BVH_SPHERE_FLAG | BVH_INSTANCE_FLAG)) == BVH_INSTANCE_FLAG) {
-                if (i + 1u < end) {
-                    stack[sp] = BVH_LEAF_FLAG | ((i + 1u) << 3) | (end - i - 1u);
-                    stack_t[sp] = uintBitsToFloat(0xff800000u);  // -inf
-                    sp++;
-                }
-                stack[sp] = BVH_RETURN;
-                stack_t[sp] = uintBitsToFloat(0xff800000u);
-                sp++;
+                if (i + 1u < end) BVH_PUSH(BVH_LEAF_FLAG | ((i + 1u) << 3) | (end - i - 1u), -BVH_INF);
+                BVH_PUSH(BVH_RETURN, -BVH_INF);
                 record = pa.y;
                 o = bvh_apply_rows(3u * record, world_o, 1.0);
                 d = bvh_apply_rows(3u * record, world_d, 0.0);

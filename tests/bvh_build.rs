@@ -510,3 +510,96 @@ fn instanced_bvh_stores_each_mesh_once() {
     println!("instanced {instanced} bytes, flattened {flat} bytes: {ratio:.4} (1/64 = {:.4})", 1.0 / 64.0);
     assert!(ratio < 1.2 / 64.0, "instanced BVH is {ratio} of the flattened one");
 }
+
+/// The uploaded 4-wide form ([`vkvcm::bvh::layout::widen`]) against the BVH2 it is made
+/// from, both traversed on the CPU: the same hits at the same distances (another primitive
+/// only where two meet, within 1e-6: the two traversals test leaves in different orders) and the same any-hits, on trees of both leaf rules, a deep tree, tiny
+/// trees and a two-level tree; and no more wide nodes than `max_wide_nodes` allows for.
+#[test]
+fn wide_form_matches_bvh2() {
+    use vkvcm::bvh::layout::max_wide_nodes;
+    let check = |what: &str, bvh: &Bvh, rays: &[(Ray, f32, f32)], trees: u64| {
+        let gpu = bvh.to_gpu();
+        assert!(
+            gpu.nodes.len() as u64 <= max_wide_nodes(bvh.prims.len() as u64, trees),
+            "{what}: {} wide nodes",
+            gpu.nodes.len()
+        );
+        assert!(gpu.nodes.len() < bvh.nodes.len().max(2), "{what}: the wide form is not smaller");
+        let (mut hits, mut ties, mut visits, mut visits2) = (0, 0, 0u64, 0u64);
+        for (k, (ray, tmin, tmax)) in rays.iter().enumerate() {
+            let (got, c) = vkvcm::bvh::traverse::closest_hit_counted(&gpu.nodes[..], &gpu.prims, ray, *tmin, *tmax);
+            let (want, c2) = vkvcm::bvh::traverse::closest_hit_counted(&bvh.nodes[..], &bvh.prims, ray, *tmin, *tmax);
+            (visits, visits2) = (visits + c.nodes as u64, visits2 + c2.nodes as u64);
+            assert_eq!(gpu.any_hit(ray, *tmin, *tmax), bvh.any_hit(ray, *tmin, *tmax), "{what}: ray {k} any-hit");
+            match (got, want) {
+                (None, None) => {}
+                (Some(g), Some(w)) => {
+                    hits += 1;
+                    // Another primitive: where two meet (the test rays aim at shared edges and
+                    // vertices), each traversal may keep the one it tested first.
+                    let same = (g.prim, g.is_sphere, g.instance) == (w.prim, w.is_sphere, w.instance);
+                    let distance = (g.t - w.t).abs() * ray.d.length();
+                    assert!(if same { g.t == w.t } else { distance <= 1e-6 }, "{what}: ray {k}: {g:?} against {w:?}");
+                    ties += !same as usize;
+                }
+                (g, w) => panic!("{what}: ray {k}: {g:?} against {w:?}"),
+            }
+        }
+        println!(
+            "{what}: {} rays, {hits} hits ({ties} another primitive at the same distance), node visits 4-wide / BVH2 {:.3}",
+            rays.len(),
+            visits as f64 / visits2.max(1) as f64
+        );
+        hits
+    };
+    let s = test_scene(17, 20_000, 500);
+    let rays = test_rays(&s, 18, 20_000);
+    for leaf_rule in [LeafRule::Auto, LeafRule::Size] {
+        let bvh = build_with(&s.triangles, &s.spheres, &BuildOptions { leaf_rule, ..Default::default() });
+        assert!(check(&format!("{leaf_rule:?} leaves"), &bvh, &rays, 1) > rays.len() / 10);
+    }
+    let mut r = rng(19);
+    for nt in 0..7 {
+        let tris = triangle_soup(&mut r, nt);
+        let spheres = random_spheres(&mut r, 1);
+        // Random rays: few hit these few primitives, but the trees are only a node or two.
+        let rays: Vec<_> = (0..300)
+            .map(|_| (Ray { o: rand_vec(&mut r, -2.0, 2.0), d: rand_dir(&mut r) }, 0.0, f32::INFINITY))
+            .collect();
+        check(&format!("{nt} triangles and a sphere"), &build(&tris, &spheres), &rays, 1);
+    }
+    // A deep tree: small triangles at a geometric sequence of positions (as
+    // coincident_prims_and_depth_bound, but each triangle flat in its own z plane: that
+    // test's slivers, 1e-5 wide and 30 long, meet the triangle test's float rounding, which
+    // reports hits outside them, kept or culled depending on the traversal's order).
+    let tris: Vec<Triangle> = (0..20_000)
+        .map(|i| {
+            let x = 1.5f32.powi(i % 200) * 1e-20;
+            let s = x * 0.01;
+            let z = (i / 200) as f32;
+            Triangle {
+                p: [Vec3::new(x, 0.0, z), Vec3::new(x + s, 0.0, z), Vec3::new(x, s, z)],
+                n: None,
+                material: 0,
+                attributes: None,
+            }
+        })
+        .collect();
+    let deep = build(&tris, &[]);
+    println!("deep tree: {} levels", deep.stats.max_depth);
+    // Rays aimed at random triangles from ten times their size away.
+    let rays: Vec<_> = (0..5000)
+        .map(|_| {
+            let t = &tris[r.random_range(0..tris.len())];
+            let c = (t.p[0] + t.p[1] + t.p[2]) / 3.0;
+            let o = c + rand_dir(&mut r) * 10.0 * (t.p[1] - t.p[0]).length();
+            (Ray { o, d: c - o }, 0.0, f32::INFINITY)
+        })
+        .collect();
+    assert!(check("deep tree", &deep, &rays, 1) > rays.len() / 10);
+    let s = instanced_scene(41, 24);
+    let bvh = vkvcm::bvh::build_scene(&s, &BuildOptions::default());
+    let rays = instanced_rays(&s, 42, 20_000);
+    assert!(check("instances", &bvh, &rays, 1 + s.meshes.len() as u64) > rays.len() / 10);
+}

@@ -589,10 +589,10 @@ pub fn bench_traverse(gpu: &Arc<Gpu>, scene: &BenchScene, opts: &TraverseBenchOp
                 let (o, d) = rays[i];
                 let ray = Ray { o, d };
                 let (ok, c) = if mode == 0 {
-                    let (h, c) = closest_hit_counted(&g.nodes, &g.prims, &ray, 0.0, 1e30);
+                    let (h, c) = closest_hit_counted(&g.nodes[..], &g.prims, &ray, 0.0, 1e30);
                     (res[i] == h.map_or(u32::MAX, |h| h.prim), c)
                 } else {
-                    let (h, c) = any_hit_counted(&g.nodes, &g.prims, &ray, 0.0, 1e30);
+                    let (h, c) = any_hit_counted(&g.nodes[..], &g.prims, &ray, 0.0, 1e30);
                     ((res[i] != 0) == h, c)
                 };
                 mismatches += u32::from(!ok);

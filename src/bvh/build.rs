@@ -39,7 +39,9 @@ use rayon::prelude::*;
 
 use super::aabb::Aabb;
 use super::intersect::{sphere_is_finite, triangle_is_finite};
-use super::layout::{decode_ref, leaf_ref, GpuBvh, GpuNode, GpuPrim, MAX_DEPTH, MAX_IDS, MAX_LEAF_PRIMS, MAX_PRIMS};
+use super::layout::{
+    decode_ref, leaf_ref, widen, GpuBvh, GpuNode, GpuPrim, MAX_DEPTH, MAX_IDS, MAX_LEAF_PRIMS, MAX_PRIMS,
+};
 use crate::activity::Activity;
 use crate::scene::{Instance, Scene, SharedMesh, Sphere, Triangle};
 
@@ -135,19 +137,24 @@ pub struct Bvh {
 impl Bvh {
     /// The buffers to upload (a copy; see [`Bvh::into_gpu`]).
     pub fn to_gpu(&self) -> GpuBvh {
-        GpuBvh {
-            nodes: self.nodes.clone(),
-            prims: self.prims.clone(),
-            num_triangles: self.stats.triangles as u32,
-            num_spheres: self.stats.spheres as u32,
-            num_instances: self.stats.instances as u32,
-        }
+        self.clone().into_gpu()
     }
 
+    /// The buffers to upload: the nodes in their 4-wide form ([`widen`]), each instance
+    /// primitive pointed at its mesh's root in it.
     pub fn into_gpu(self) -> GpuBvh {
+        let n_prims = self.prims.len() - 2 * self.stats.instances;
+        let roots: Vec<u32> =
+            self.prims[..n_prims].iter().filter(|p| p.is_instance()).map(|p| p.instance_target().0).collect();
+        let (nodes, index) = widen(&self.nodes, &roots);
+        let mut prims = self.prims;
+        for p in prims[..n_prims].iter_mut().filter(|p| p.is_instance()) {
+            let (root, record) = p.instance_target();
+            *p = GpuPrim::instance(p.id(), index[root as usize], record);
+        }
         GpuBvh {
-            nodes: self.nodes,
-            prims: self.prims,
+            nodes,
+            prims,
             num_triangles: self.stats.triangles as u32,
             num_spheres: self.stats.spheres as u32,
             num_instances: self.stats.instances as u32,

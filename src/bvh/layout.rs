@@ -1,18 +1,21 @@
-//! GPU layout of the BVH: BVH2 nodes that hold both children's boxes (Aila & Laine,
-//! "Understanding the Efficiency of Ray Traversal on GPUs", HPG 2009), with the boxes
-//! quantised to 8 bits per coordinate on a per-node grid (32 bytes per node), and 48-byte
-//! primitives in leaf order. Mirrored by `glsl/bvh.glsl`.
+//! GPU layout of the BVH. The builder makes a BVH2 whose nodes hold both children's boxes
+//! (Aila & Laine, "Understanding the Efficiency of Ray Traversal on GPUs", HPG 2009),
+//! quantised to 8 bits per coordinate on a per-node grid (32 bytes per node,
+//! [`GpuNode`]); the GPU reads its 4-wide form ([`widen`], [`GpuNode4`], 64 bytes: a node
+//! and its grandchildren's boxes), and 48-byte primitives in leaf order. Mirrored by
+//! `glsl/bvh.glsl`.
 //!
 //! Both arrays are sequences of 16-byte elements (`uvec4`/`vec4`/`u64vec2` in GLSL,
 //! std430 stride 16); the Rust structs below are made of 4-word members only, so they
 //! have exactly the GLSL byte layout. docs/bvh.md compares this layout with a 64-byte node
-//! of float boxes on lavapipe.
+//! of float boxes and the 4-wide form with the BVH2 on lavapipe.
 //!
 //! Child references (`u32`):
-//! * bit 31 clear: index of an internal node in the node array;
+//! * bit 31 clear: index of an internal node in the node array (of the BVH2, or of the
+//!   4-wide array in a [`GpuNode4`]);
 //! * bit 31 set: a leaf, `LEAF_FLAG | first << 3 | count`, covering
 //!   `prims[first .. first + count]`, `count <= MAX_LEAF_PRIMS` (0 only for the empty
-//!   second child of a root over fewer than two primitives).
+//!   second child of a root over fewer than two primitives, and [`EMPTY_REF`]).
 //!
 //! Node 0 is the root. It is always an internal node.
 //!
@@ -37,9 +40,9 @@ pub const LEAF_FLAG: u32 = 0x8000_0000;
 pub const MAX_LEAF_PRIMS: usize = 4;
 /// Largest number of primitives a BVH can hold (28 bits of first-primitive index).
 pub const MAX_PRIMS: usize = 1 << 28;
-/// Largest number of internal-node levels on any root-to-leaf path (the root is level 1).
-/// The GLSL traversal stack (`BVH_STACK_SIZE` in glsl/bvh.glsl) has this many entries:
-/// it pushes at most one entry per internal level. The builder guarantees the bound.
+/// Largest number of internal-node levels on any root-to-leaf path of the BVH2 (the root
+/// is level 1). The builder guarantees the bound; the traversal stack's size follows from
+/// it ([`MAX_STACK`]).
 pub const MAX_DEPTH: u32 = 32;
 /// Bit 31 of a primitive's id word (`GpuPrim::a[3]` bits): the primitive is a sphere.
 pub const SPHERE_FLAG: u32 = 0x8000_0000;
@@ -49,10 +52,14 @@ pub const SPHERE_FLAG: u32 = 0x8000_0000;
 pub const INSTANCE_FLAG: u32 = 0x4000_0000;
 /// Largest number of instances (the id bits below [`INSTANCE_FLAG`]), and of triangles.
 pub const MAX_IDS: usize = INSTANCE_FLAG as usize;
-/// Traversal stack entries with instances: a top-level path and a mesh tree's path of
-/// [`MAX_DEPTH`] levels each, plus the rest of the instance's leaf and the marker that
-/// moves the ray back to world space (`BVH_STACK_SIZE` with `BVH_INSTANCES`).
-pub const MAX_STACK_INSTANCED: usize = 2 * MAX_DEPTH as usize + 2;
+/// Traversal stack entries for one tree: a visit of a [`GpuNode4`] pushes at most three
+/// of its four children, and a path has at most [`MAX_WIDE_DEPTH`] such visits
+/// (`BVH_STACK_SIZE` in glsl/bvh.glsl).
+pub const MAX_STACK: usize = 3 * MAX_DEPTH.div_ceil(2) as usize;
+/// Traversal stack entries with instances: a top-level path and a mesh tree's path,
+/// [`MAX_STACK`] each, plus the rest of the instance's leaf and the marker that moves the
+/// ray back to world space (`BVH_STACK_SIZE` with `BVH_INSTANCES`).
+pub const MAX_STACK_INSTANCED: usize = 2 * MAX_STACK + 2;
 
 /// Encodes a leaf child reference.
 pub fn leaf_ref(first: u32, count: u32) -> u32 {
@@ -110,6 +117,110 @@ impl GpuNode {
         self.a[3] = children[0];
         self.b[3] = children[1];
     }
+}
+
+/// The reference of an empty slot of a [`GpuNode4`]: a leaf of no primitives (the one
+/// leaf reference with first primitive 0 and count 0; the builder makes it only for the
+/// missing second child of a root over fewer than two primitives, which is empty too).
+pub const EMPTY_REF: u32 = LEAF_FLAG;
+
+/// One node of the uploaded 4-wide BVH, 64 bytes: two pairs of (box, child reference),
+/// each encoded as a [`GpuNode`] (its own grid, 8-bit boxes). Made by [`widen`] from a
+/// BVH2 node n: pair k is child k's own node (n's grandchildren) when child k is internal,
+/// else child k's box and [`EMPTY_REF`]. So a traversal visits every other BVH2 level and
+/// tests up to four boxes per visit.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct GpuNode4 {
+    pub pairs: [GpuNode; 2],
+}
+
+impl GpuNode4 {
+    /// The four decoded child boxes, exactly as the GPU decodes them.
+    pub fn boxes(&self) -> [Aabb; 4] {
+        let [a, b] = self.pairs[0].boxes();
+        let [c, d] = self.pairs[1].boxes();
+        [a, b, c, d]
+    }
+
+    /// Child reference `i` (0..4): an internal node's index in the 4-wide array, a leaf,
+    /// or [`EMPTY_REF`].
+    pub fn child(&self, i: usize) -> u32 {
+        self.pairs[i / 2].child(i % 2)
+    }
+}
+
+/// The 4-wide form of a flattened BVH2 (`nodes`, possibly several trees: the top-level
+/// tree at node 0 and, with instances, the mesh trees whose roots are `roots`): one
+/// [`GpuNode4`] per BVH2 node at an even depth of its tree (a tree's root at depth 0),
+/// numbered in depth-first order from node 0 then from each of `roots`. Returns the nodes
+/// and, for each BVH2 node, its index in them (`u32::MAX` for the odd depths).
+///
+/// Of a tree's internal nodes at even depth all but the root have an internal parent at
+/// odd depth, and that parent has at most two children, so a tree of I internal nodes
+/// gets at most (2 I + 1) / 3 wide nodes ([`max_wide_nodes`]). A BVH2 of depth at most
+/// [`MAX_DEPTH`] has at most [`MAX_WIDE_DEPTH`] levels of wide nodes.
+pub fn widen(nodes: &[GpuNode], roots: &[u32]) -> (Vec<GpuNode4>, Vec<u32>) {
+    let mut index = vec![u32::MAX; nodes.len()];
+    let mut order = Vec::new();
+    let mut stack = Vec::new();
+    for &root in std::iter::once(&0).chain(roots) {
+        if nodes.is_empty() || index[root as usize] != u32::MAX {
+            continue;
+        }
+        stack.push(root);
+        while let Some(n) = stack.pop() {
+            index[n as usize] = order.len() as u32;
+            order.push(n);
+            let node = &nodes[n as usize];
+            // Grandchildren in reverse, so they are numbered in child order.
+            for k in (0..2).rev() {
+                if let Ok(c) = decode_ref(node.child(k)) {
+                    let child = &nodes[c as usize];
+                    for j in (0..2).rev() {
+                        if let Ok(g) = decode_ref(child.child(j)) {
+                            stack.push(g);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let remap = |r: u32| match decode_ref(r) {
+        Ok(g) => index[g as usize],
+        Err(_) => r,
+    };
+    let wide = order
+        .iter()
+        .map(|&n| {
+            let node = &nodes[n as usize];
+            let pairs = [0, 1].map(|k| match decode_ref(node.child(k)) {
+                Ok(c) => {
+                    let mut pair = nodes[c as usize];
+                    pair.set_children([remap(pair.child(0)), remap(pair.child(1))]);
+                    pair
+                }
+                Err(_) => {
+                    let b = node.bounds(k);
+                    GpuNode::new([b, b], [node.child(k), EMPTY_REF])
+                }
+            });
+            GpuNode4 { pairs }
+        })
+        .collect();
+    (wide, index)
+}
+
+/// Most levels of [`GpuNode4`]s on a root-to-leaf path: the BVH2's even depths.
+pub const MAX_WIDE_DEPTH: u32 = MAX_DEPTH.div_ceil(2);
+
+/// An upper bound on the [`GpuNode4`]s of the BVH of `prims` primitive slots (triangles,
+/// spheres, and three per instance: its primitive and its two-slot record) over
+/// `trees` trees (1 + the number of shared meshes), known before the build: each tree
+/// over p primitives has at most max(p, 1) internal nodes, hence at most (2 max(p, 1) + 1)
+/// / 3 wide nodes ([`widen`]).
+pub fn max_wide_nodes(prims: u64, trees: u64) -> u64 {
+    (2 * (prims + trees) + trees).div_ceil(3)
 }
 
 /// Decoded value of grid coordinate `q`: `origin + q * step`. `step` is a power of two and
@@ -346,10 +457,11 @@ impl GpuPrim {
 }
 
 /// The flattened BVH as uploaded: bind `nodes` and `prims` as two storage buffers (see
-/// glsl/bvh.glsl for what the kernel declares).
+/// glsl/bvh.glsl for what the kernel declares). `nodes` is the 4-wide form of the build's
+/// BVH2 ([`widen`]); instance primitives name their mesh's root in it.
 #[derive(Clone, Debug, Default)]
 pub struct GpuBvh {
-    pub nodes: Vec<GpuNode>,
+    pub nodes: Vec<GpuNode4>,
     pub prims: Vec<GpuPrim>,
     /// Triangles and spheres of the input (including skipped ones).
     pub num_triangles: u32,

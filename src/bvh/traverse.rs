@@ -1,6 +1,8 @@
-//! CPU traversal of the flattened BVH: the same algorithm, order and float operations as
-//! `trace_closest` / `trace_any` in glsl/bvh.glsl, so it is the reference for the GPU
-//! tests and a debugging aid.
+//! CPU traversal of the flattened BVH: over the uploaded 4-wide nodes ([`GpuBvh`]) the
+//! same algorithm, order and float operations as `trace_closest` / `trace_any` in
+//! glsl/bvh.glsl, so it is the reference for the GPU tests and a debugging aid; over the
+//! builder's BVH2 ([`Bvh`]) the same loop with two children per node, a second traversal
+//! of the same tree that the tests compare with the first.
 //!
 //! Ray/box test: slabs with `t = (b - o) * (1/d)` and the far distance widened by
 //! [`BOX_ROBUST_SCALE`] (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013, uses
@@ -14,7 +16,9 @@ use glam::Vec3;
 
 use super::build::Bvh;
 use super::intersect::{intersect_sphere, intersect_triangle, Hit, Ray, RayShear};
-use super::layout::{decode_ref, leaf_ref, GpuBvh, GpuNode, GpuPrim, LEAF_FLAG, MAX_STACK_INSTANCED};
+use super::layout::{
+    decode_ref, leaf_ref, GpuBvh, GpuNode, GpuNode4, GpuPrim, EMPTY_REF, LEAF_FLAG, MAX_STACK_INSTANCED,
+};
 
 /// Factor applied to a box's exit distance (`BVH_ROBUST_SCALE` in glsl/bvh.glsl).
 pub const BOX_ROBUST_SCALE: f32 = 1.000002;
@@ -58,7 +62,7 @@ struct Best {
 /// Work done by one traversal (CPU mirror; the GPU does the same).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TraversalCounts {
-    /// Internal nodes visited (each tests two boxes).
+    /// Internal nodes visited (each tests two boxes in a BVH2, four in the 4-wide form).
     pub nodes: u32,
     /// Primitive tests.
     pub prims: u32,
@@ -105,7 +109,7 @@ fn pop(
 
 /// The ray a traversal is following: world space, or an instance's object space.
 #[derive(Clone, Copy)]
-struct TraversalRay {
+pub struct TraversalRay {
     o: Vec3,
     d: Vec3,
     inv_d: Vec3,
@@ -118,14 +122,88 @@ impl TraversalRay {
     }
 }
 
+/// The traversal stack: child references and their entry distances.
+pub struct Stack {
+    refs: [u32; MAX_STACK_INSTANCED],
+    t: [f32; MAX_STACK_INSTANCED],
+    sp: usize,
+}
+
+impl Stack {
+    fn push(&mut self, r: u32, t: f32) {
+        self.refs[self.sp] = r;
+        self.t[self.sp] = t;
+        self.sp += 1;
+    }
+}
+
+/// An array of internal nodes: the step of the traversal at one of them.
+pub trait NodeArray {
+    /// Tests node `n`'s child boxes; pushes the hit children but the nearest, which it
+    /// returns (`None`: no child hit).
+    fn visit(&self, n: u32, r: &TraversalRay, tmin: f32, tmax: f32, stack: &mut Stack) -> Option<u32>;
+}
+
+/// The builder's BVH2: the nearer hit child next, the farther one pushed.
+impl NodeArray for [GpuNode] {
+    fn visit(&self, n: u32, r: &TraversalRay, tmin: f32, tmax: f32, stack: &mut Stack) -> Option<u32> {
+        let n = &self[n as usize];
+        let [b0, b1] = n.boxes();
+        let h0 = ray_box(b0.min, b0.max, r.o, r.inv_d, tmin, tmax);
+        let h1 = ray_box(b1.min, b1.max, r.o, r.inv_d, tmin, tmax);
+        match (h0, h1) {
+            (Some(t0), Some(t1)) => {
+                let swap = t1 < t0;
+                stack.push(n.child(usize::from(!swap)), if swap { t0 } else { t1 });
+                Some(n.child(usize::from(swap)))
+            }
+            (Some(_), None) => Some(n.child(0)),
+            (None, Some(_)) => Some(n.child(1)),
+            (None, None) => None,
+        }
+    }
+}
+
+/// The uploaded 4-wide nodes, as glsl/bvh.glsl: the hit children sorted by entry
+/// distance (a 5-comparator network, misses last), the nearest next, the others pushed
+/// farthest first.
+impl NodeArray for [GpuNode4] {
+    fn visit(&self, n: u32, r: &TraversalRay, tmin: f32, tmax: f32, stack: &mut Stack) -> Option<u32> {
+        let n = &self[n as usize];
+        let boxes = n.boxes();
+        let mut k = [f32::INFINITY; 4];
+        let mut c = [0u32; 4];
+        for i in 0..4 {
+            c[i] = n.child(i);
+            if let Some(t) = ray_box(boxes[i].min, boxes[i].max, r.o, r.inv_d, tmin, tmax) {
+                if c[i] != EMPTY_REF {
+                    k[i] = t;
+                }
+            }
+        }
+        for (a, b) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+            if k[b] < k[a] {
+                k.swap(a, b);
+                c.swap(a, b);
+            }
+        }
+        for i in (1..4).rev() {
+            if k[i] < f32::INFINITY {
+                stack.push(c[i], k[i]);
+            }
+        }
+        (k[0] < f32::INFINITY).then_some(c[0])
+    }
+}
+
 /// The traversal of `bvh_traverse` in glsl/bvh.glsl: descend through internal nodes
 /// (nearer child first, the farther one pushed with its entry distance) until a leaf,
 /// test the leaf, pop the next entry whose entry distance is not beyond the closest hit.
 /// An instance primitive pushes the rest of its leaf and a [`RETURN`] marker, moves the
 /// ray into the instance's object space and descends into its mesh's tree; popping the
 /// marker moves the ray back.
-fn traverse(
-    nodes: &[GpuNode],
+fn traverse<N: NodeArray + ?Sized>(
+    nodes: &N,
     prims: &[GpuPrim],
     ray: &Ray,
     tmin: f32,
@@ -136,29 +214,15 @@ fn traverse(
     let world = TraversalRay::new(ray.o, ray.d);
     let mut r = TraversalRay::new(ray.o, ray.d);
     let mut instance: Option<u32> = None;
-    let mut stack = [0u32; MAX_STACK_INSTANCED];
-    let mut stack_t = [0f32; MAX_STACK_INSTANCED];
-    let mut sp = 0usize;
+    let mut stack = Stack { refs: [0; MAX_STACK_INSTANCED], t: [0.0; MAX_STACK_INSTANCED], sp: 0 };
     let mut cur = 0u32;
     let mut best = None;
     'outer: loop {
         while cur & LEAF_FLAG == 0 {
             counts.nodes += 1;
-            let n = &nodes[cur as usize];
-            let [b0, b1] = n.boxes();
-            let h0 = ray_box(b0.min, b0.max, r.o, r.inv_d, tmin, *tmax);
-            let h1 = ray_box(b1.min, b1.max, r.o, r.inv_d, tmin, *tmax);
-            cur = match (h0, h1) {
-                (Some(t0), Some(t1)) => {
-                    let swap = t1 < t0;
-                    stack[sp] = n.child(usize::from(!swap));
-                    stack_t[sp] = if swap { t0 } else { t1 };
-                    sp += 1;
-                    n.child(usize::from(swap))
-                }
-                (Some(_), None) => n.child(0),
-                (None, Some(_)) => n.child(1),
-                (None, None) => pop(&stack, &stack_t, &mut sp, *tmax, (&mut r, &world, &mut instance)),
+            cur = match nodes.visit(cur, &r, tmin, *tmax, &mut stack) {
+                Some(next) => next,
+                None => pop(&stack.refs, &stack.t, &mut stack.sp, *tmax, (&mut r, &world, &mut instance)),
             };
         }
         if cur == DONE {
@@ -170,13 +234,9 @@ fn traverse(
             if p.is_instance() {
                 let end = first + count;
                 if slot as u32 + 1 < end {
-                    stack[sp] = leaf_ref(slot as u32 + 1, end - slot as u32 - 1);
-                    stack_t[sp] = f32::NEG_INFINITY;
-                    sp += 1;
+                    stack.push(leaf_ref(slot as u32 + 1, end - slot as u32 - 1), f32::NEG_INFINITY);
                 }
-                stack[sp] = RETURN;
-                stack_t[sp] = f32::NEG_INFINITY;
-                sp += 1;
+                stack.push(RETURN, f32::NEG_INFINITY);
                 let (root, record) = p.instance_target();
                 let w2o = &prims[record as usize];
                 r = TraversalRay::new(apply_rows(w2o, world.o, 1.0), apply_rows(w2o, world.d, 0.0));
@@ -199,7 +259,7 @@ fn traverse(
                 }
             }
         }
-        cur = pop(&stack, &stack_t, &mut sp, *tmax, (&mut r, &world, &mut instance));
+        cur = pop(&stack.refs, &stack.t, &mut stack.sp, *tmax, (&mut r, &world, &mut instance));
         if cur == DONE {
             break;
         }
@@ -207,14 +267,21 @@ fn traverse(
     best
 }
 
-/// Closest hit in `[tmin, tmax]` over flattened BVH arrays.
-pub fn closest_hit(nodes: &[GpuNode], prims: &[GpuPrim], ray: &Ray, tmin: f32, tmax: f32) -> Option<Hit> {
+/// Closest hit in `[tmin, tmax]` over flattened BVH arrays (`nodes`: the BVH2's or the
+/// uploaded 4-wide ones).
+pub fn closest_hit<N: NodeArray + ?Sized>(
+    nodes: &N,
+    prims: &[GpuPrim],
+    ray: &Ray,
+    tmin: f32,
+    tmax: f32,
+) -> Option<Hit> {
     closest_hit_counted(nodes, prims, ray, tmin, tmax).0
 }
 
 /// [`closest_hit`] and the work it took.
-pub fn closest_hit_counted(
-    nodes: &[GpuNode],
+pub fn closest_hit_counted<N: NodeArray + ?Sized>(
+    nodes: &N,
     prims: &[GpuPrim],
     ray: &Ray,
     tmin: f32,
@@ -230,13 +297,13 @@ pub fn closest_hit_counted(
 }
 
 /// Whether anything is hit in `[tmin, tmax]` (shadow rays).
-pub fn any_hit(nodes: &[GpuNode], prims: &[GpuPrim], ray: &Ray, tmin: f32, tmax: f32) -> bool {
+pub fn any_hit<N: NodeArray + ?Sized>(nodes: &N, prims: &[GpuPrim], ray: &Ray, tmin: f32, tmax: f32) -> bool {
     any_hit_counted(nodes, prims, ray, tmin, tmax).0
 }
 
 /// [`any_hit`] and the work it took.
-pub fn any_hit_counted(
-    nodes: &[GpuNode],
+pub fn any_hit_counted<N: NodeArray + ?Sized>(
+    nodes: &N,
     prims: &[GpuPrim],
     ray: &Ray,
     tmin: f32,
@@ -251,22 +318,23 @@ pub fn any_hit_counted(
 impl GpuBvh {
     /// CPU mirror of `trace_closest` in glsl/bvh.glsl.
     pub fn closest_hit(&self, ray: &Ray, tmin: f32, tmax: f32) -> Option<Hit> {
-        closest_hit(&self.nodes, &self.prims, ray, tmin, tmax)
+        closest_hit(&self.nodes[..], &self.prims, ray, tmin, tmax)
     }
 
     /// CPU mirror of `trace_any` in glsl/bvh.glsl.
     pub fn any_hit(&self, ray: &Ray, tmin: f32, tmax: f32) -> bool {
-        any_hit(&self.nodes, &self.prims, ray, tmin, tmax)
+        any_hit(&self.nodes[..], &self.prims, ray, tmin, tmax)
     }
 }
 
 impl Bvh {
-    /// Same as [`GpuBvh::closest_hit`] (the arrays are the same).
+    /// Closest hit over the BVH2 (the same hits as [`GpuBvh::closest_hit`] over its
+    /// 4-wide form, possibly another primitive where two are hit at the same distance).
     pub fn closest_hit(&self, ray: &Ray, tmin: f32, tmax: f32) -> Option<Hit> {
-        closest_hit(&self.nodes, &self.prims, ray, tmin, tmax)
+        closest_hit(&self.nodes[..], &self.prims, ray, tmin, tmax)
     }
 
     pub fn any_hit(&self, ray: &Ray, tmin: f32, tmax: f32) -> bool {
-        any_hit(&self.nodes, &self.prims, ray, tmin, tmax)
+        any_hit(&self.nodes[..], &self.prims, ray, tmin, tmax)
     }
 }

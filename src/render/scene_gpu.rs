@@ -18,7 +18,7 @@ use super::settings::{FrameSettings, LightSelection};
 use super::sizes::{Access, BufferSize, SizeLimits};
 use super::variants::SceneVariant;
 use crate::bvh;
-use crate::bvh::layout::{GpuNode, GpuPrim};
+use crate::bvh::layout::{max_wide_nodes, GpuNode4, GpuPrim};
 use crate::gpu::{Bind, Buffer, Gpu, BUFFER_DEVICE_ADDRESS, SHADER_INT64};
 use crate::scene::{AlphaMode, EnvironmentMap, Filter, Light, Scene, VertexAttributes, Wrap};
 
@@ -73,8 +73,10 @@ impl ScenePlan {
         ScenePlan {
             buffers: [
                 BufferSize::new("scene_params", size::<GpuParams>(1)),
-                // A BVH2 over n primitives has at most n internal nodes (the root is always one).
-                texel(BufferSize::new("bvh_nodes", size::<GpuNode>(prims.max(1)))),
+                texel(BufferSize::new(
+                    "bvh_nodes",
+                    size::<GpuNode4>(max_wide_nodes(prims, 1 + scene.meshes.len() as u64)),
+                )),
                 texel(BufferSize::new("bvh_prims", size::<GpuPrim>(prims))),
                 texel(BufferSize::new("triangles", size::<GpuTriangle>(tris))),
                 texel(BufferSize::new("spheres", size::<GpuSphere>(scene.spheres.len() as u64))),
