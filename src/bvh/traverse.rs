@@ -81,32 +81,6 @@ fn apply_rows(rows: &GpuPrim, p: Vec3, w: f32) -> Vec3 {
     Vec3::new(r(rows.a), r(rows.b), r(rows.c))
 }
 
-/// Pops the next entry whose entry distance is not beyond `tmax` (`BVH_POP`); at a
-/// [`RETURN`] marker the ray goes back to world space (`space`: the current ray, the
-/// world ray, the current instance).
-#[inline]
-fn pop(
-    stack: &[u32],
-    stack_t: &[f32],
-    sp: &mut usize,
-    tmax: f32,
-    space: (&mut TraversalRay, &TraversalRay, &mut Option<u32>),
-) -> u32 {
-    let (r, world, instance) = space;
-    while *sp > 0 {
-        *sp -= 1;
-        if stack_t[*sp] <= tmax {
-            if stack[*sp] == RETURN {
-                *r = *world;
-                *instance = None;
-                continue;
-            }
-            return stack[*sp];
-        }
-    }
-    DONE
-}
-
 /// The ray a traversal is following: world space, or an instance's object space.
 #[derive(Clone, Copy)]
 pub struct TraversalRay {
@@ -130,10 +104,33 @@ pub struct Stack {
 }
 
 impl Stack {
+    fn new() -> Stack {
+        Stack { refs: [0; MAX_STACK_INSTANCED], t: [0.0; MAX_STACK_INSTANCED], sp: 0 }
+    }
+
     fn push(&mut self, r: u32, t: f32) {
         self.refs[self.sp] = r;
         self.t[self.sp] = t;
         self.sp += 1;
+    }
+
+    /// Pops the next entry whose entry distance is not beyond `tmax` (`BVH_POP`); at a
+    /// [`RETURN`] marker the ray goes back to world space (`space`: the current ray, the
+    /// world ray, the current instance).
+    fn pop(&mut self, tmax: f32, space: (&mut TraversalRay, &TraversalRay, &mut Option<u32>)) -> u32 {
+        let (r, world, instance) = space;
+        while self.sp > 0 {
+            self.sp -= 1;
+            if self.t[self.sp] <= tmax {
+                if self.refs[self.sp] == RETURN {
+                    *r = *world;
+                    *instance = None;
+                    continue;
+                }
+                return self.refs[self.sp];
+            }
+        }
+        DONE
     }
 }
 
@@ -197,7 +194,7 @@ impl NodeArray for [GpuNode4] {
 }
 
 /// The traversal of `bvh_traverse` in glsl/bvh.glsl: descend through internal nodes
-/// (nearer child first, the farther one pushed with its entry distance) until a leaf,
+/// (nearest hit child first, the others pushed with their entry distances) until a leaf,
 /// test the leaf, pop the next entry whose entry distance is not beyond the closest hit.
 /// An instance primitive pushes the rest of its leaf and a [`RETURN`] marker, moves the
 /// ray into the instance's object space and descends into its mesh's tree; popping the
@@ -214,7 +211,7 @@ fn traverse<N: NodeArray + ?Sized>(
     let world = TraversalRay::new(ray.o, ray.d);
     let mut r = TraversalRay::new(ray.o, ray.d);
     let mut instance: Option<u32> = None;
-    let mut stack = Stack { refs: [0; MAX_STACK_INSTANCED], t: [0.0; MAX_STACK_INSTANCED], sp: 0 };
+    let mut stack = Stack::new();
     let mut cur = 0u32;
     let mut best = None;
     'outer: loop {
@@ -222,7 +219,7 @@ fn traverse<N: NodeArray + ?Sized>(
             counts.nodes += 1;
             cur = match nodes.visit(cur, &r, tmin, *tmax, &mut stack) {
                 Some(next) => next,
-                None => pop(&stack.refs, &stack.t, &mut stack.sp, *tmax, (&mut r, &world, &mut instance)),
+                None => stack.pop(*tmax, (&mut r, &world, &mut instance)),
             };
         }
         if cur == DONE {
@@ -259,7 +256,7 @@ fn traverse<N: NodeArray + ?Sized>(
                 }
             }
         }
-        cur = pop(&stack.refs, &stack.t, &mut stack.sp, *tmax, (&mut r, &world, &mut instance));
+        cur = stack.pop(*tmax, (&mut r, &world, &mut instance));
         if cur == DONE {
             break;
         }
