@@ -513,8 +513,9 @@ fn instanced_bvh_stores_each_mesh_once() {
 
 /// The uploaded 4-wide form ([`vkvcm::bvh::layout::widen`]) against the BVH2 it is made
 /// from, both traversed on the CPU: the same hits at the same distances (another primitive
-/// only where two meet, within 1e-6: the two traversals test leaves in different orders) and the same any-hits, on trees of both leaf rules, a deep tree, tiny
-/// trees and a two-level tree; and no more wide nodes than `max_wide_nodes` allows for.
+/// only where two meet, within 1e-6: the two traversals test leaves in different orders)
+/// and the same any-hits, on trees of both leaf rules, a deep tree, tiny trees and a
+/// two-level tree; and no more wide nodes than `max_wide_nodes` allows for.
 #[test]
 fn wide_form_matches_bvh2() {
     use vkvcm::bvh::layout::max_wide_nodes;
@@ -602,4 +603,17 @@ fn wide_form_matches_bvh2() {
     let bvh = vkvcm::bvh::build_scene(&s, &BuildOptions::default());
     let rays = instanced_rays(&s, 42, 20_000);
     assert!(check("instances", &bvh, &rays, 1 + s.meshes.len() as u64) > rays.len() / 10);
+}
+
+/// glsl/bvh.glsl's traversal stack holds what src/bvh/layout.rs proves it needs.
+#[test]
+fn glsl_stack_size_is_the_layouts() {
+    use vkvcm::bvh::layout::{MAX_STACK, MAX_STACK_INSTANCED};
+    let src = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/glsl/bvh.glsl")).unwrap();
+    let sizes: Vec<usize> = src
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("#define BVH_STACK_SIZE "))
+        .map(|v| v.trim().parse().unwrap())
+        .collect();
+    assert_eq!(sizes, [MAX_STACK_INSTANCED, MAX_STACK], "BVH_STACK_SIZE with and without BVH_INSTANCES");
 }

@@ -55,7 +55,7 @@ pub const MAX_IDS: usize = INSTANCE_FLAG as usize;
 /// Traversal stack entries for one tree: a visit of a [`GpuNode4`] pushes at most three
 /// of its four children, and a path has at most [`MAX_WIDE_DEPTH`] such visits
 /// (`BVH_STACK_SIZE` in glsl/bvh.glsl).
-pub const MAX_STACK: usize = 3 * MAX_DEPTH.div_ceil(2) as usize;
+pub const MAX_STACK: usize = 3 * MAX_WIDE_DEPTH as usize;
 /// Traversal stack entries with instances: a top-level path and a mesh tree's path,
 /// [`MAX_STACK`] each, plus the rest of the instance's leaf and the marker that moves the
 /// ray back to world space (`BVH_STACK_SIZE` with `BVH_INSTANCES`).
@@ -165,7 +165,8 @@ pub fn widen(nodes: &[GpuNode], roots: &[u32]) -> (Vec<GpuNode4>, Vec<u32>) {
     let mut order = Vec::new();
     let mut stack = Vec::new();
     for &root in std::iter::once(&0).chain(roots) {
-        if nodes.is_empty() || index[root as usize] != u32::MAX {
+        // A mesh placed by several instances is one tree.
+        if index[root as usize] != u32::MAX {
             continue;
         }
         stack.push(root);
