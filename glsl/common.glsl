@@ -47,6 +47,65 @@ uint rnd_below(uint n, inout uint state) {
 
 vec2 rnd2(inout uint s) { float a = rnd(s); return vec2(a, rnd(s)); }
 
+// ---- Quasi-random numbers: Owen-scrambled Sobol points, padded (Burley, "Practical
+// Hash-based Owen Scrambling", JCGT 9(4), 2020; pbrt-v4's PaddedSobolSampler). Every
+// sample dimension `dim` of a sequence `key` (one per pixel) has its own shuffle of the
+// sample index and its own scrambles; a 2-D dimension takes Sobol's first two
+// dimensions, whose first 2^k points form a (0, k, 2)-net, so each pixel's first 2^k
+// samples stratify every such pair. Each point is uniform on [0, 1)^2 and different
+// dims are independent, so an estimator stays unbiased; the samples of one pixel are
+// not independent across iterations (they are stratified).
+
+// Laine & Karras' hash-based nested uniform scramble of the reversed bits, with
+// Burley's constants: flips each bit of `x` by a hash of the bits below it.
+uint lk_permutation(uint x, uint seed) {
+    x += seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return x;
+}
+
+// Owen scramble of a [0, 1) fixed-point value `x` (bit 31 = 1/2).
+uint owen_scramble(uint x, uint seed) { return bitfieldReverse(lk_permutation(bitfieldReverse(x), seed)); }
+
+// Sobol's dimension 1 in bit-reversed form: bit i (from the top of the result) is the
+// XOR of the index bits j whose positions contain i's (i AND j == i), the generator
+// matrix being Pascal's triangle mod 2.
+uint sobol1_reversed(uint index) {
+    uint x = index;
+    x ^= (x & 0xaaaaaaaau) >> 1;
+    x ^= (x & 0xccccccccu) >> 2;
+    x ^= (x & 0xf0f0f0f0u) >> 4;
+    x ^= (x & 0xff00ff00u) >> 8;
+    x ^= (x & 0xffff0000u) >> 16;
+    return x;
+}
+
+float fixed_to_unit(uint x) { return float(x >> 8) * (1.0 / 16777216.0); }
+
+// Point `index` of dimension pair `dim` of sequence `key`.
+vec2 sobol2(uint key, uint index, uint dim) {
+    uint seed = pcg_hash(key ^ pcg_hash(dim));
+    uint i = owen_scramble(index, seed);
+    uint s0 = pcg_hash(seed + 1u);
+    uint s1 = pcg_hash(seed + 2u);
+    // Sobol dimension 0 of i is bitfieldReverse(i); owen_scramble(bitfieldReverse(y), s)
+    // = bitfieldReverse(lk_permutation(y, s)).
+    return vec2(fixed_to_unit(bitfieldReverse(lk_permutation(i, s0))),
+                fixed_to_unit(bitfieldReverse(lk_permutation(sobol1_reversed(i), s1))));
+}
+
+// Point `index` of 1-D dimension `dim` of sequence `key` (scrambled van der Corput). Its
+// shuffle and scramble differ from those of 2-D dimension `dim` (two scrambles of the
+// same points would be correlated).
+float sobol1(uint key, uint index, uint dim) {
+    uint seed = pcg_hash(key ^ pcg_hash(~dim));
+    uint i = owen_scramble(index, seed);
+    return fixed_to_unit(bitfieldReverse(lk_permutation(i, pcg_hash(seed + 1u))));
+}
+
 // ---- Orthonormal basis around a unit vector (Duff et al., "Building an Orthonormal
 // Basis, Revisited", JCGT 2017).
 void make_frame(vec3 n, out vec3 t, out vec3 b) {

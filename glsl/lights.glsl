@@ -30,13 +30,15 @@ vec3 area_light_normal(GpuLight l) { return normalize(cross(l.b.xyz, l.c.xyz)); 
 // number: slot i = floor(u n); the fraction u n - i below the slot's threshold (d.y)
 // keeps light i, else its alias (d.z) is taken). Uniform selection's table keeps every
 // slot whole: min(floor(u n), n - 1), SmallVCM's draw.
-uint pick_light(inout uint rng) {
+uint pick_light_at(float u) {
     uint n = params.dims.z;
-    float x = rnd(rng) * float(n);
+    float x = u * float(n);
     uint i = min(uint(x), n - 1u);
     GpuLight l = light_at(i);
     return x - float(i) < l.d.y ? i : floatBitsToUint(l.d.z);
 }
+
+uint pick_light(inout uint rng) { return pick_light_at(rnd(rng)); }
 
 // The probability that pick_light picks light `index`.
 float light_pick_prob(uint index) { return light_at(index).d.x; }

@@ -11,11 +11,13 @@
 // Absorbing media (glsl/medium.glsl) multiply the throughput of every traced segment and
 // the contribution of every light sample by their transmittance; no pdf has it.
 // Variants (src/render/variants.rs, PtKernel): NEE=1 the estimator, NEE=0 pure BSDF
-// sampling (emitter hits only, weight 1), for tests.
+// sampling (emitter hits only, weight 1), for tests; SOBOL=1 draws the random numbers
+// from Owen-scrambled Sobol points (glsl/common.glsl; `--sampler sobol`, the default),
+// SOBOL=0 from a PCG stream per path.
 #extension GL_GOOGLE_include_directive : require
 
-#ifndef NEE
-#error "NEE must be defined (src/render/variants.rs)"
+#if !defined(NEE) || !defined(SOBOL)
+#error "NEE and SOBOL must be defined (src/render/variants.rs)"
 #endif
 
 layout(local_size_x = WORKGROUP_SIZE) in;
@@ -24,6 +26,29 @@ layout(local_size_x = WORKGROUP_SIZE) in;
 // (the camera's first hit has 1): measured against 2 (pbrt-v4's), 4 and 5 (Mitsuba 3's
 // rr_depth), docs/performance.md, "pt: variance per sample".
 const uint RR_MIN_LENGTH = 3u;
+
+#if SOBOL
+// Random numbers by sample dimension (glsl/common.glsl, sobol2 / sobol1): this pixel's
+// sequence, point push.iteration. The camera's pixel jitter is dimension 0; vertex `len`
+// (>= 1) has its light sample (2-D), BSDF direction (2-D), (light pick, BSDF lobe)
+// (2-D) and roulette (1-D), drawn whether used or not, so that a dimension serves the
+// same purpose in every iteration's path and its stratification carries to the
+// estimate.
+#define DIM_LIGHT(len) (4u * (len))
+#define DIM_BSDF(len) (4u * (len) + 1u)
+#define DIM_CHOICE(len) (4u * (len) + 2u)
+#define DIM_RR(len) (4u * (len) + 3u)
+#define U2(dim) sobol2(qkey, push.iteration, dim)
+#define U1(dim) sobol1(qkey, push.iteration, dim)
+#define U_PICK choice.x
+#define U_LOBE choice.y
+#else
+// The PCG stream, drawn in the order of the code.
+#define U2(dim) rnd2(rng)
+#define U1(dim) rnd(rng)
+#define U_PICK rnd(rng)
+#define U_LOBE rnd(rng)
+#endif
 
 #include "scene.glsl"
 #include "push.glsl"
@@ -35,7 +60,7 @@ void main() {
     if (pixel >= stride) return;
     uint max_len = max_path_length();
     uint min_len = min_path_length();
-    uint rng, len;
+    uint rng, len, qkey;
     vec3 o, d, thr, L;
     // The surface the current segment leaves (its material and geometric normal; the
     // camera: NO_MATERIAL), for the segment's transmittance (glsl/medium.glsl).
@@ -56,8 +81,9 @@ void main() {
             }
             started = true;
             rng = rng_init(params.misc.x, push.iteration, pixel, 0u);
+            qkey = rng_init(params.misc.x, 0u, pixel, 1u);
             o = params.cam_pos.xyz;
-            d = camera_sample(pixel, rng);
+            d = camera_sample_at(pixel, U2(0u));
             thr = vec3(1.0);
             L = vec3(0.0);
             last_pdf = 1.0;
@@ -96,11 +122,14 @@ void main() {
         if (len >= max_len) continue;
         Bsdf b = bsdf_init(s.material, s.ng, s.ns, -d, false, s.tint);
         if (!b.valid) continue;
+#if SOBOL
+        vec2 choice = U2(DIM_CHOICE(len));
+#endif
 #if NEE
         if (!b.delta && len + 1u >= min_len) {
-            uint li = pick_light(rng);
+            uint li = pick_light_at(U_PICK);
             float pick = light_pick_prob(li);
-            LightSample ls = light_illuminate(li, s.p, rnd2(rng));
+            LightSample ls = light_illuminate(li, s.p, U2(DIM_LIGHT(len)));
             if (ls.ok) {
                 float pf, pr;
                 vec3 f = bsdf_eval(b, ls.wi, pf, pr);
@@ -115,7 +144,7 @@ void main() {
             }
         }
 #endif
-        BsdfSample bs = bsdf_sample(b, vec3(rnd2(rng), rnd(rng)));
+        BsdfSample bs = bsdf_sample(b, vec3(U2(DIM_BSDF(len)), U_LOBE));
         if (!bs.ok) continue;
         thr *= bs.weight;
         // Refraction scales radiance by eta_ratio^2 (bsdf.glsl); the roulette undoes it.
@@ -129,7 +158,7 @@ void main() {
         if (len >= RR_MIN_LENGTH) {
             float p = max3(thr) * eta_scale;
             if (p < 1.0) {
-                if (rnd(rng) >= p) continue;
+                if (U1(DIM_RR(len)) >= p) continue;
                 thr /= p;
             }
         }

@@ -215,10 +215,11 @@ vec3 camera_direction(vec2 raster) {
 }
 
 // The primary ray of this iteration's sample of `pixel`, jittered uniformly inside it.
-vec3 camera_sample(uint pixel, inout uint rng) {
+vec3 camera_sample_at(uint pixel, vec2 u) {
     uint w = image_width();
-    return camera_direction(vec2(float(pixel % w), float(pixel / w)) + rnd2(rng));
+    return camera_direction(vec2(float(pixel % w), float(pixel / w)) + u);
 }
+vec3 camera_sample(uint pixel, inout uint rng) { return camera_sample_at(pixel, rnd2(rng)); }
 
 // Solid-angle pdf of the camera generating direction `d` (pixel area 1): dist^2 / cos^3.
 float camera_pdf_w(vec3 d) {

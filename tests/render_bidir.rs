@@ -16,7 +16,9 @@
 //!
 //! Statistics: one render per estimator; its iterations are independent samples, so the
 //! film's per-pixel sums of values and squares give mean and variance with K =
-//! iterations. Per-pixel Welch test (t converted to z), Šidák-corrected so that each
+//! iterations. (pt's default Sobol sampler stratifies its iterations instead: its
+//! variance estimate then overstates its error, which makes the test conservative on
+//! pt's side; tests/sampler.rs.) Per-pixel Welch test (t converted to z), Šidák-corrected so that each
 //! comparison has false-failure probability ALPHA.
 //!
 //! The test is only valid where each estimator's per-pixel variance estimate is, i.e.

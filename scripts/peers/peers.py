@@ -495,12 +495,15 @@ def scenes_of(args):
 
 
 def split_estimator(estimator):
-    """A vkvcm estimator as `--estimators` names it, `algo[:path|:cache[:N]][@N_L]` (the
-    names of `vkvcm bench --algos`), as (algo, its `vkvcm render` settings)."""
+    """A vkvcm estimator as `--estimators` names it, `algo[:path|:cache[:N]|:sobol|
+    :independent][@N_L]` (the names of `vkvcm bench --algos`), as (algo, its `vkvcm
+    render` settings)."""
     spec, at, light_paths = estimator.partition("@")
     algo, _, connect = spec.partition(":")
     settings = []
-    if connect:
+    if connect in ("sobol", "independent"):
+        settings += ["--sampler", connect]
+    elif connect:
         kind, _, n = connect.partition(":")
         if kind not in ("path", "cache") or (n and (kind != "cache" or not n.isdigit())):
             raise HarnessError(f"estimator {estimator!r}: the connection strategy is `path`, `cache` or `cache:N`")
@@ -975,7 +978,7 @@ def main():
         else:
             s.add_argument("--seeds", type=int, help="runs per row, at least 3")
             s.add_argument("--estimators", help="vkvcm estimators, comma-separated, as `vkvcm bench --algos` names them "
-                                "(e.g. vcm,bpt,bpt:path,vcm:cache:2,vcm@32768,pt)")
+                                "(e.g. vcm,bpt,bpt:path,vcm:cache:2,vcm@32768,pt,pt:independent)")
             s.add_argument("--references", help="folder of references (default OUT/references, with --quick OUT/references-quick)")
             s.set_defaults(func=cmd_run)
     s = sub.add_parser("table", help="print the table of a finished run again")

@@ -12,7 +12,7 @@ use anyhow::Result;
 use serde::Serialize;
 
 use crate::gpu::{Gpu, KernelTime};
-use crate::render::{render, Algorithm, Budget, Connect, RenderSettings, Renderer};
+use crate::render::{render, Algorithm, Budget, Connect, RenderSettings, Renderer, Sampler};
 use crate::scene::Scene;
 
 #[derive(Clone, Debug, Serialize)]
@@ -167,14 +167,16 @@ pub fn table(rows: &[BenchRow]) -> String {
     s
 }
 
-/// An estimator with its connection strategy and its light subpaths per iteration, named
-/// `algo` (its default strategy) or `algo:path` / `algo:cache:N` (bpt, vcm), followed by
-/// `@N` for N light subpaths per iteration (`render --light-paths`; the light-subpath
-/// estimators), e.g. `bpt:cache:2` or `vcm@65536`.
+/// An estimator with its connection strategy, sampler and light subpaths per iteration,
+/// named `algo` (its defaults) or `algo:path` / `algo:cache:N` (bpt, vcm) or
+/// `algo:independent` / `algo:sobol` (`render --sampler`; pt), followed by `@N` for N
+/// light subpaths per iteration (`render --light-paths`; the light-subpath estimators),
+/// e.g. `bpt:cache:2`, `pt:independent` or `vcm@65536`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Variant {
     pub algorithm: Algorithm,
     pub connect: Connect,
+    pub sampler: Sampler,
     /// `None`: one per pixel.
     pub light_paths: Option<u32>,
 }
@@ -194,14 +196,17 @@ impl Variant {
         };
         let algorithm = Algorithm::from_name(&a.to_ascii_lowercase())
             .ok_or_else(|| anyhow::anyhow!("{s:?}: unknown estimator {a:?}"))?;
+        let sampler = c.and_then(|c| <Sampler as clap::ValueEnum>::from_str(c, false).ok());
         let requested = match c {
             None => None,
-            Some(c) => {
-                Some(Connect::parse(c).ok_or_else(|| anyhow::anyhow!("{s:?}: {c:?} is not path or cache:N (N >= 1)"))?)
-            }
+            Some(_) if sampler.is_some() => None,
+            Some(c) => Some(Connect::parse(c).ok_or_else(|| {
+                anyhow::anyhow!("{s:?}: {c:?} is not path or cache:N (N >= 1), nor sobol or independent")
+            })?),
         };
         let connect = algorithm.info().connect(requested).map_err(|e| anyhow::anyhow!("{s:?}: {e}"))?;
-        let v = Variant { algorithm, connect, light_paths };
+        let sampler = sampler.unwrap_or(algorithm.info().default_sampler);
+        let v = Variant { algorithm, connect, sampler, light_paths };
         // The estimator's own check of the light-path count (a 1x1 frame: sizes do not matter).
         algorithm.info().check(&v.settings(1, 1, Budget::Iterations(1))).map_err(|e| anyhow::anyhow!("{s:?}: {e}"))?;
         Ok(v)
@@ -210,10 +215,12 @@ impl Variant {
     /// `algo` for its default strategy, else `algo:path` / `algo:cache:N`; then `@N` with
     /// a light-path count.
     pub fn name(&self) -> String {
-        let mut name = if self.connect == self.algorithm.default_connect() {
-            self.algorithm.name().to_string()
-        } else {
+        let mut name = if self.connect != self.algorithm.default_connect() {
             format!("{}:{}", self.algorithm.name(), self.connect.name())
+        } else if self.sampler != self.algorithm.info().default_sampler {
+            format!("{}:{}", self.algorithm.name(), self.sampler.name())
+        } else {
+            self.algorithm.name().to_string()
         };
         if let Some(n) = self.light_paths {
             name += &format!("@{n}");
@@ -226,6 +233,7 @@ impl Variant {
     pub fn settings(&self, width: u32, height: u32, budget: Budget) -> RenderSettings {
         let mut s = RenderSettings::new(self.algorithm, width, height, budget);
         s.connect = self.connect;
+        s.sampler = self.sampler;
         s.light_paths = self.light_paths;
         s
     }

@@ -43,6 +43,12 @@ pub struct RenderArgs {
     /// (SmallVCM's). Unbiased either way; docs/performance.md measures the difference.
     #[arg(long, value_enum, default_value_t = vkvcm::render::DEFAULT_LIGHT_SELECTION)]
     pub light_selection: vkvcm::render::LightSelection,
+    /// Where the kernels' random numbers come from: `sobol`, Owen-scrambled Sobol points
+    /// that stratify each pixel's samples across iterations (pt's default, pt only), or
+    /// `independent` pseudo-random numbers (every other estimator's). Unbiased either way;
+    /// docs/estimators.md, "Samplers".
+    #[arg(long, value_enum)]
+    pub sampler: Option<vkvcm::render::Sampler>,
     /// Initial merge radius as a fraction of the scene's bounding-sphere radius.
     #[arg(long, default_value_t = vkvcm::render::radius::DEFAULT_RADIUS_FACTOR)]
     pub radius_factor: f32,
@@ -308,6 +314,9 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     settings.frame.seed = a.seed;
     settings.frame.max_path_length = a.max_path_length;
     settings.frame.light_selection = a.light_selection;
+    if let Some(sampler) = a.sampler {
+        settings.sampler = sampler;
+    }
     settings.radius_factor = a.radius_factor;
     settings.alpha = a.alpha;
     settings.generic = a.generic;

@@ -43,7 +43,7 @@ pub use output::{Progress, RenderOutput};
 use passes::light_subpaths::{grown_capacity, LightVertexSizing, StoreStatus};
 pub use scene_gpu::SceneGpu;
 pub use settings::{
-    Algorithm, Budget, Connect, FrameSettings, LightSelection, RenderSettings, DEFAULT_CACHE_CONNECTIONS,
+    Algorithm, Budget, Connect, FrameSettings, LightSelection, RenderSettings, Sampler, DEFAULT_CACHE_CONNECTIONS,
     DEFAULT_LIGHT_SELECTION,
 };
 

@@ -63,6 +63,8 @@ pub struct SavedRender {
     /// `LightSelection::name` (renders saved before the option: "uniform").
     pub light_selection: String,
     pub nee: bool,
+    /// `Sampler::name` (renders saved before the option: "independent").
+    pub sampler: String,
     pub radius_factor: f32,
     pub alpha: f32,
     /// bpt, vcm: `Connect::name` (renders saved before the option: "path").
@@ -94,6 +96,7 @@ pub fn render_metadata(out: &RenderOutput, s: &RenderSettings, p: &Provenance) -
         kv("min_path_length", s.frame.min_path_length.to_string()),
         kv("light_selection", s.frame.light_selection.name().to_string()),
         kv("nee", s.nee.to_string()),
+        kv("sampler", s.sampler.name().to_string()),
         // Rust prints the shortest string that parses back to the same f32.
         kv("radius_factor", s.radius_factor.to_string()),
         kv("alpha", s.alpha.to_string()),
@@ -163,6 +166,8 @@ pub fn read_render_exr(path: &Path) -> Result<SavedRender> {
         // Renders saved before --light-selection existed picked lights uniformly.
         light_selection: get("light_selection").unwrap_or("uniform").to_string(),
         nee: parse(&shown, "nee", get("nee")?)?,
+        // Renders saved before --sampler existed drew independent random numbers.
+        sampler: get("sampler").unwrap_or("independent").to_string(),
         radius_factor: parse(&shown, "radius_factor", get("radius_factor")?)?,
         alpha: parse(&shown, "alpha", get("alpha")?)?,
         // Renders saved before --connect existed connected to the matching light subpath.
@@ -211,6 +216,7 @@ impl SavedRender {
         diff("min path length", self.min_path_length.to_string(), s.frame.min_path_length.to_string())?;
         diff("--light-selection", self.light_selection.clone(), s.frame.light_selection.name().to_string())?;
         diff("next-event estimation", self.nee.to_string(), s.nee.to_string())?;
+        diff("--sampler", self.sampler.clone(), s.sampler.name().to_string())?;
         diff("--radius-factor", self.radius_factor.to_string(), s.radius_factor.to_string())?;
         diff("--alpha", self.alpha.to_string(), s.alpha.to_string())?;
         diff("--connect", self.connect.clone(), s.connect.name())?;

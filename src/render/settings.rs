@@ -76,6 +76,27 @@ impl LightSelection {
     }
 }
 
+/// Where a kernel's random numbers come from (glsl/common.glsl, "Quasi-random numbers").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+pub enum Sampler {
+    /// Owen-scrambled Sobol points per pixel, each sample dimension with its own
+    /// scramble (Burley 2020; pbrt-v4's padded Sobol sampler): a pixel's samples are
+    /// stratified across iterations. pt only; its default.
+    Sobol,
+    /// Independent pseudo-random numbers (a PCG stream per path and iteration).
+    Independent,
+}
+
+impl Sampler {
+    /// `sobol` or `independent`, as the command line and saved renders name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Sampler::Sobol => "sobol",
+            Sampler::Independent => "independent",
+        }
+    }
+}
+
 /// Where a camera vertex's vertex connections go (bpt, vcm). Every choice is unbiased
 /// with the same MIS weights: see glsl/camera_subpath.comp and docs/estimators.md.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -118,6 +139,8 @@ pub struct RenderSettings {
     pub budget: Budget,
     /// Path tracing only: `false` disables next-event estimation (BSDF sampling only).
     pub nee: bool,
+    /// Where the kernels' random numbers come from; `Sampler::Sobol` for pt only.
+    pub sampler: Sampler,
     /// Initial merge radius as a fraction of the scene's bounding-sphere radius.
     pub radius_factor: f32,
     /// Radius reduction exponent alpha of r_i = r_0 (i+1)^((alpha-1)/2).

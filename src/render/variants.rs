@@ -138,10 +138,12 @@ impl CameraKernel {
 pub struct PtKernel {
     /// NEE: next-event estimation with MIS (0: BSDF sampling only).
     pub nee: bool,
+    /// SOBOL: Owen-scrambled Sobol samples (0: independent random numbers).
+    pub sobol: bool,
 }
 
 impl PtKernel {
     pub fn defines(&self) -> Defines {
-        Defines::new().flag("NEE", self.nee)
+        Defines::new().flag("NEE", self.nee).flag("SOBOL", self.sobol)
     }
 }

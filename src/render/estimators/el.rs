@@ -10,6 +10,7 @@ use crate::gpu::{Batch, Buffer};
 use crate::render::gpu_types::GpuPush;
 use crate::render::passes::camera_subpaths::CameraSubpaths;
 use crate::render::passes::PassInfo;
+use crate::render::settings::Sampler;
 
 pub const INFO: EstimatorInfo = EstimatorInfo {
     algorithm: Algorithm::El,
@@ -20,6 +21,7 @@ pub const INFO: EstimatorInfo = EstimatorInfo {
     consistent_only: false,
     default_connect: None,
     regenerates_paths: false,
+    default_sampler: Sampler::Independent,
     build,
 };
 

@@ -27,7 +27,7 @@ use super::plan::FramePlan;
 use super::radius;
 use super::scene_gpu::SceneGpu;
 pub use super::settings::{Algorithm, ALGORITHMS};
-use super::settings::{Budget, Connect, FrameSettings, RenderSettings};
+use super::settings::{Budget, Connect, FrameSettings, RenderSettings, Sampler};
 pub use super::techniques::Techniques;
 use crate::gpu::{Batch, Buffer, Gpu};
 
@@ -90,6 +90,9 @@ pub struct EstimatorInfo {
     pub default_connect: Option<Connect>,
     /// Its kernels trace several paths per invocation (path regeneration).
     pub regenerates_paths: bool,
+    /// Where its random numbers come from unless `--sampler` says otherwise; an estimator
+    /// whose default is `Independent` has no other.
+    pub default_sampler: Sampler,
     /// Builds its passes for a render.
     pub build: fn(&Build) -> Result<Box<dyn Estimator>>,
 }
@@ -114,6 +117,7 @@ impl EstimatorInfo {
             consistent_only: techniques.vertex_merging,
             default_connect,
             regenerates_paths: true,
+            default_sampler: Sampler::Independent,
             build: bidirectional::build,
         }
     }
@@ -142,6 +146,13 @@ impl EstimatorInfo {
 
     /// Checks the settings that only concern this estimator.
     pub fn check(&self, s: &RenderSettings) -> Result<()> {
+        if s.sampler != self.default_sampler && self.default_sampler == Sampler::Independent {
+            bail!(
+                "--sampler {}: {} draws independent random numbers only (sobol is pt's)",
+                s.sampler.name(),
+                self.name
+            );
+        }
         // Settings always hold a strategy: `Path` means none to the estimators without
         // vertex connections.
         if self.default_connect.is_some() || s.connect != Connect::Path {
@@ -207,6 +218,7 @@ impl RenderSettings {
             },
             budget,
             nee: true,
+            sampler: algorithm.info().default_sampler,
             radius_factor: radius::DEFAULT_RADIUS_FACTOR,
             alpha: radius::DEFAULT_ALPHA,
             generic: false,

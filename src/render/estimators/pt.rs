@@ -10,6 +10,7 @@ use crate::gpu::{Batch, Buffer};
 use crate::render::gpu_types::GpuPush;
 use crate::render::passes::camera_subpaths::CameraSubpaths;
 use crate::render::passes::PassInfo;
+use crate::render::settings::Sampler;
 use crate::render::variants::PtKernel;
 
 pub const INFO: EstimatorInfo = EstimatorInfo {
@@ -21,6 +22,7 @@ pub const INFO: EstimatorInfo = EstimatorInfo {
     consistent_only: false,
     default_connect: None,
     regenerates_paths: true,
+    default_sampler: Sampler::Sobol,
     build,
 };
 
@@ -30,7 +32,10 @@ struct PathTracer {
 }
 
 fn build(b: &Build) -> Result<Box<dyn Estimator>> {
-    let camera = CameraSubpaths::path_tracer(&b.passes(), PtKernel { nee: b.settings.nee })?;
+    let camera = CameraSubpaths::path_tracer(
+        &b.passes(),
+        PtKernel { nee: b.settings.nee, sobol: b.settings.sampler == Sampler::Sobol },
+    )?;
     Ok(Box::new(PathTracer { camera, paths_per_invocation: b.plan.paths_per_invocation }))
 }
 

@@ -1,0 +1,17 @@
+#version 460
+// Test kernel: point `index` of sequence `key`, dimension `dim`, as 24-bit fixed point,
+// from sobol2 (x, y) and sobol1 (z) of common.glsl, for each request (key, dim, index).
+#extension GL_GOOGLE_include_directive : require
+layout(local_size_x = 64) in;
+layout(std430) readonly buffer requests { uvec4 req[]; };
+layout(std430) writeonly buffer points { uvec4 pts[]; };
+layout(push_constant) uniform Push { uint n; } pc;
+#include "common.glsl"
+void main() {
+    uint i = invocation_index();
+    if (i >= pc.n) return;
+    uvec4 r = req[i];
+    vec2 p = sobol2(r.x, r.z, r.y);
+    float q = sobol1(r.x, r.z, r.y);
+    pts[i] = uvec4(uvec2(p * 16777216.0), uint(q * 16777216.0), 0u);
+}
