@@ -135,7 +135,7 @@ fn sobol_pt_is_unbiased_with_less_error() {
         for sampler in [Sampler::Sobol, Sampler::Independent] {
             for seed in [1, 2] {
                 let mut s = RenderSettings::new(Algorithm::Pt, 48, 48, Budget::Iterations(256));
-                s.sampler = sampler;
+                s.sampler = Some(sampler);
                 s.frame.seed = seed;
                 outs.push(render_checked(gpu, &scene, &s));
             }

@@ -233,7 +233,7 @@ impl Variant {
     pub fn settings(&self, width: u32, height: u32, budget: Budget) -> RenderSettings {
         let mut s = RenderSettings::new(self.algorithm, width, height, budget);
         s.connect = self.connect;
-        s.sampler = self.sampler;
+        s.sampler = Some(self.sampler);
         s.light_paths = self.light_paths;
         s
     }

@@ -314,9 +314,7 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     settings.frame.seed = a.seed;
     settings.frame.max_path_length = a.max_path_length;
     settings.frame.light_selection = a.light_selection;
-    if let Some(sampler) = a.sampler {
-        settings.sampler = sampler;
-    }
+    settings.sampler = a.sampler;
     settings.radius_factor = a.radius_factor;
     settings.alpha = a.alpha;
     settings.generic = a.generic;

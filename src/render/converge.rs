@@ -68,7 +68,7 @@ impl Reference {
             kv("seed_b", self.seeds[1].to_string()),
             kv("max_path_length", settings.frame.max_path_length.to_string()),
             kv("light_selection", settings.frame.light_selection.name().to_string()),
-            kv("sampler", settings.sampler.name().to_string()),
+            kv("sampler", settings.sampler().name().to_string()),
             kv("radius_factor", settings.radius_factor.to_string()),
             kv("alpha", settings.alpha.to_string()),
             kv("rejected_samples", self.rejected_samples.to_string()),

@@ -96,7 +96,7 @@ pub fn render_metadata(out: &RenderOutput, s: &RenderSettings, p: &Provenance) -
         kv("min_path_length", s.frame.min_path_length.to_string()),
         kv("light_selection", s.frame.light_selection.name().to_string()),
         kv("nee", s.nee.to_string()),
-        kv("sampler", s.sampler.name().to_string()),
+        kv("sampler", s.sampler().name().to_string()),
         // Rust prints the shortest string that parses back to the same f32.
         kv("radius_factor", s.radius_factor.to_string()),
         kv("alpha", s.alpha.to_string()),
@@ -216,7 +216,7 @@ impl SavedRender {
         diff("min path length", self.min_path_length.to_string(), s.frame.min_path_length.to_string())?;
         diff("--light-selection", self.light_selection.clone(), s.frame.light_selection.name().to_string())?;
         diff("next-event estimation", self.nee.to_string(), s.nee.to_string())?;
-        diff("--sampler", self.sampler.clone(), s.sampler.name().to_string())?;
+        diff("--sampler", self.sampler.clone(), s.sampler().name().to_string())?;
         diff("--radius-factor", self.radius_factor.to_string(), s.radius_factor.to_string())?;
         diff("--alpha", self.alpha.to_string(), s.alpha.to_string())?;
         diff("--connect", self.connect.clone(), s.connect.name())?;

@@ -139,8 +139,9 @@ pub struct RenderSettings {
     pub budget: Budget,
     /// Path tracing only: `false` disables next-event estimation (BSDF sampling only).
     pub nee: bool,
-    /// Where the kernels' random numbers come from; `Sampler::Sobol` for pt only.
-    pub sampler: Sampler,
+    /// Where the kernels' random numbers come from; `None`: the estimator's default
+    /// ([`RenderSettings::sampler`]). `Sampler::Sobol` is for pt only.
+    pub sampler: Option<Sampler>,
     /// Initial merge radius as a fraction of the scene's bounding-sphere radius.
     pub radius_factor: f32,
     /// Radius reduction exponent alpha of r_i = r_0 (i+1)^((alpha-1)/2).

@@ -146,10 +146,10 @@ impl EstimatorInfo {
 
     /// Checks the settings that only concern this estimator.
     pub fn check(&self, s: &RenderSettings) -> Result<()> {
-        if s.sampler != self.default_sampler && self.default_sampler == Sampler::Independent {
+        if s.sampler() != self.default_sampler && self.default_sampler == Sampler::Independent {
             bail!(
                 "--sampler {}: {} draws independent random numbers only (sobol is pt's)",
-                s.sampler.name(),
+                s.sampler().name(),
                 self.name
             );
         }
@@ -218,7 +218,7 @@ impl RenderSettings {
             },
             budget,
             nee: true,
-            sampler: algorithm.info().default_sampler,
+            sampler: None,
             radius_factor: radius::DEFAULT_RADIUS_FACTOR,
             alpha: radius::DEFAULT_ALPHA,
             generic: false,
@@ -231,6 +231,12 @@ impl RenderSettings {
             light_chunk_paths: None,
             light_vertex_capacity: None,
         }
+    }
+
+    /// Where the kernels' random numbers come from: as set (`--sampler`), or the
+    /// estimator's default.
+    pub fn sampler(&self) -> Sampler {
+        self.sampler.unwrap_or(self.algorithm.info().default_sampler)
     }
 
     /// Light subpaths per iteration, N_L: as set (`--light-paths`), or one per pixel.

@@ -34,7 +34,7 @@ struct PathTracer {
 fn build(b: &Build) -> Result<Box<dyn Estimator>> {
     let camera = CameraSubpaths::path_tracer(
         &b.passes(),
-        PtKernel { nee: b.settings.nee, sobol: b.settings.sampler == Sampler::Sobol },
+        PtKernel { nee: b.settings.nee, sobol: b.settings.sampler() == Sampler::Sobol },
     )?;
     Ok(Box::new(PathTracer { camera, paths_per_invocation: b.plan.paths_per_invocation }))
 }
