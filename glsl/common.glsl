@@ -30,8 +30,11 @@ uint rnd_u32(inout uint state) {
     return word;
 }
 
+// The top 24 bits of `x` as a float in [0, 1) (exact).
+float fixed_to_unit(uint x) { return float(x >> 8) * (1.0 / 16777216.0); }
+
 // Uniform in [0, 1) with 24 random bits.
-float rnd(inout uint state) { return float(rnd_u32(state) >> 8) * (1.0 / 16777216.0); }
+float rnd(inout uint state) { return fixed_to_unit(rnd_u32(state)); }
 
 // Uniform integer in [0, n), n >= 1, exactly: multiply-shift with rejection (Lemire,
 // "Fast Random Integer Generation in an Interval", ACM TOMACS 2019). Rejects with
@@ -82,8 +85,6 @@ uint sobol1_reversed(uint index) {
     x ^= (x & 0xffff0000u) >> 16;
     return x;
 }
-
-float fixed_to_unit(uint x) { return float(x >> 8) * (1.0 / 16777216.0); }
 
 // Point `index` of dimension pair `dim` of sequence `key`.
 vec2 sobol2(uint key, uint index, uint dim) {

@@ -8,8 +8,7 @@ mod common;
 
 use std::process::Command;
 
-use common::{invariance_cases, with_gpu};
-use vkvcm::gpu::Bind;
+use common::{invariance_cases, run_test_kernel, with_gpu};
 use vkvcm::render::atomics::SplatAtomics;
 use vkvcm::render::{self, Algorithm, Budget, Connect, RenderOutput, RenderSettings};
 use vkvcm::scene::{Light, Scene};
@@ -109,14 +108,7 @@ fn word_pairs_round_like_the_64_bit_conversion() {
     }
     with_gpu(|gpu| {
         let words: Vec<[u32; 2]> = values.iter().map(|&v| [v as u32, (v >> 32) as u32]).collect();
-        let input = gpu.buffer_from_slice("values", &words).unwrap();
-        let out = gpu.buffer_zeroed::<[u32; 2]>("results", words.len()).unwrap();
-        let k = gpu.kernel("tests/u64_to_float.comp", &[], &[Bind::own(&input), Bind::own(&out)]).unwrap();
-        let n = words.len() as u32;
-        let mut batch = gpu.batch().unwrap();
-        batch.dispatch(&k, k.groups_for(n), bytemuck::bytes_of(&n)).unwrap();
-        batch.submit_wait(None).unwrap();
-        let got: Vec<[u32; 2]> = out.read().unwrap();
+        let got: Vec<[u32; 2]> = run_test_kernel(gpu, "tests/u64_to_float.comp", &words);
         for (v, [want, words]) in values.iter().zip(got) {
             assert_eq!(want, words, "{v:#x}: 64-bit conversion {want:#x}, from the words {words:#x}");
             // Independent of the GPU: Rust's u64 -> f32 conversion rounds to nearest even too.

@@ -9,24 +9,14 @@
 
 mod common;
 
-use common::{image_mean, render_checked, render_stats, with_gpu};
-use vkvcm::gpu::Bind;
+use common::{image_mean, render_checked, render_stats, run_test_kernel, with_gpu};
 use vkvcm::image::stats::welch_test;
 use vkvcm::render::{Algorithm, Budget, RenderSettings, Sampler};
 
 /// (x, y, z) in 24-bit fixed point for each (key, dim, index): sobol2's point and
 /// sobol1's value.
 fn points(requests: &[[u32; 4]]) -> Vec<[u32; 4]> {
-    with_gpu(|gpu| {
-        let input = gpu.buffer_from_slice("requests", requests).unwrap();
-        let out = gpu.buffer_zeroed::<[u32; 4]>("points", requests.len()).unwrap();
-        let k = gpu.kernel("tests/sobol.comp", &[], &[Bind::own(&input), Bind::own(&out)]).unwrap();
-        let n = requests.len() as u32;
-        let mut batch = gpu.batch().unwrap();
-        batch.dispatch(&k, k.groups_for(n), bytemuck::bytes_of(&n)).unwrap();
-        batch.submit_wait(None).unwrap();
-        out.read().unwrap()
-    })
+    with_gpu(|gpu| run_test_kernel(gpu, "tests/sobol.comp", requests))
 }
 
 const KEYS: [u32; 3] = [1, 0xdead_beef, 2_891_336_453];

@@ -3,8 +3,8 @@
 // from sobol2 (x, y) and sobol1 (z) of common.glsl, for each request (key, dim, index).
 #extension GL_GOOGLE_include_directive : require
 layout(local_size_x = 64) in;
-layout(std430) readonly buffer requests { uvec4 req[]; };
-layout(std430) writeonly buffer points { uvec4 pts[]; };
+layout(std430) readonly buffer test_input { uvec4 req[]; };
+layout(std430) writeonly buffer test_output { uvec4 pts[]; };
 layout(push_constant) uniform Push { uint n; } pc;
 #include "common.glsl"
 void main() {

@@ -4,8 +4,8 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 layout(local_size_x = 64) in;
-layout(std430) readonly buffer values { uvec2 words[]; };
-layout(std430) writeonly buffer results { uvec2 floats[]; };
+layout(std430) readonly buffer test_input { uvec2 words[]; };
+layout(std430) writeonly buffer test_output { uvec2 floats[]; };
 layout(push_constant) uniform Push { uint n; } pc;
 #include "common.glsl"
 void main() {

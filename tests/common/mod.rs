@@ -29,6 +29,19 @@ pub fn with_gpu_options<R>(opts: &GpuOptions, f: impl FnOnce(&Arc<Gpu>) -> R) ->
     r
 }
 
+/// Runs test kernel `path` (glsl/; its bindings named `test_input`, read, and `test_output`, one `O`
+/// written per input element; push constant: the element count) over `input`.
+pub fn run_test_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(gpu: &Arc<Gpu>, path: &str, input: &[I]) -> Vec<O> {
+    let inp = gpu.buffer_from_slice("test_input", input).unwrap();
+    let out = gpu.buffer_zeroed::<O>("test_output", input.len()).unwrap();
+    let k = gpu.kernel(path, &[], &[vkvcm::gpu::Bind::own(&inp), vkvcm::gpu::Bind::own(&out)]).unwrap();
+    let n = input.len() as u32;
+    let mut batch = gpu.batch().unwrap();
+    batch.dispatch(&k, k.groups_for(n), bytemuck::bytes_of(&n)).unwrap();
+    batch.submit_wait(None).unwrap();
+    out.read().unwrap()
+}
+
 /// The mean over pixels and channels of a render's per-pixel means.
 pub fn image_mean(s: &vkvcm::image::stats::PixelStats) -> f64 {
     s.mean.iter().map(|c| c[0] + c[1] + c[2]).sum::<f64>() / (3 * s.mean.len()) as f64
