@@ -13,14 +13,15 @@
 // side (src/render/variants.rs, CameraKernel).
 #extension GL_GOOGLE_include_directive : require
 
-#if !defined(USE_VC) || !defined(USE_VM) || !defined(PPM)
-#error "USE_VC, USE_VM and PPM must be defined (src/render/variants.rs)"
+#if !defined(USE_VC) || !defined(USE_VM) || !defined(PPM) || !defined(SOBOL)
+#error "USE_VC, USE_VM, PPM and SOBOL must be defined (src/render/variants.rs)"
 #endif
 
 layout(local_size_x = WORKGROUP_SIZE) in;
 #include "scene.glsl"
 #define LV_SCRATCH 0
 #include "light_vertex_store.glsl"
+#include "path_sampler.glsl"
 
 // Set by light_vertex_compact.comp (layout there): the earliest iteration of the batch
 // whose light vertices did not fit the store.
@@ -45,10 +46,10 @@ uvec4 grid_point_at(uint j) { return bucket_points[j]; }
 #include "hash_grid.glsl"
 #endif
 
-vec3 direct_illumination(SubpathState st, Surface s, Bsdf b, inout uint rng) {
-    uint li = pick_light(rng);
+vec3 direct_illumination(SubpathState st, Surface s, Bsdf b, inout PathSampler ps) {
+    uint li = pick_light_at(sample_1d(ps, DIM1_PICK(st.len)));
     float pick = light_pick_prob(li);
-    LightSample ls = light_illuminate(li, s.p, rnd2(rng));
+    LightSample ls = light_illuminate(li, s.p, sample_2d(ps, DIM2_LIGHT(st.len)));
     if (!ls.ok) return vec3(0.0);
     vec3 f;
     float cos_x;
@@ -86,11 +87,11 @@ vec3 connect_vertices(SubpathState st, Surface s, Bsdf b, LightVertex v) {
 // also count the cache's connections in the weights; measured, that changes the error by
 // -1.6% to +4%, so they are SmallVCM's: docs/estimators.md.) Drawing uniformly over vertices (not a path, then one of its
 // vertices) keeps the weight M / (N_L n_c) the same for every vertex. Deterministic: the
-// store holds the vertices in path order and the draws use this pixel's random sequence.
+// store holds the vertices in path order and the draws use this pixel's PCG stream.
 
 // The connections of camera vertex `s` to the cache, times light throughput and weight
 // (the caller multiplies by the camera throughput).
-vec3 connect_cache(SubpathState st, Surface s, Bsdf b, inout uint rng) {
+vec3 connect_cache(SubpathState st, Surface s, Bsdf b, inout PathSampler ps) {
     uint max_len = max_path_length();
     uint min_len = min_path_length();
     // Light vertices have len >= 1: no path of this camera vertex fits (no draws).
@@ -99,7 +100,7 @@ vec3 connect_cache(SubpathState st, Surface s, Bsdf b, inout uint rng) {
     if (total == 0u) return vec3(0.0);
     vec3 sum = vec3(0.0);
     for (uint k = 0u; k < uint(LV_CACHE_CONNECTIONS); ++k) {
-        LightVertex v = lv_load(rnd_below(total, rng));
+        LightVertex v = lv_load(rnd_below(total, ps.rng));
         uint len = v.len + 1u + st.len;
         if (len < min_len || len > max_len) continue;  // a draw that contributes 0
         sum += v.thr * connect_vertices(st, s, b, v);
@@ -145,10 +146,10 @@ vec3 merge(SubpathState st, Surface s, Bsdf b) {
 #endif
 
 // Starts the camera subpath of `pixel`.
-void start_path(uint pixel, out SubpathState st, out uint rng) {
-    rng = rng_init(params.misc.x, push.iteration, pixel, 0u);
+void start_path(uint pixel, out SubpathState st, out PathSampler ps) {
+    ps = path_sampler(pixel);
     st.o = params.cam_pos.xyz;
-    st.d = camera_sample(pixel, rng);
+    st.d = camera_sample_at(pixel, sample_2d(ps, DIM2_PIXEL));
     st.thr = vec3(1.0);
     st.len = 1u;
     st.specular = true;
@@ -171,8 +172,8 @@ void main() {
     uint max_len = max_path_length();
     uint min_len = min_path_length();
     SubpathState st;
-    uint rng;
-    start_path(pixel, st, rng);
+    PathSampler ps;
+    start_path(pixel, st, ps);
     vec3 L = vec3(0.0);
     bool alive = true;
     // One loop iteration = one vertex of the current subpath; a subpath that ends adds
@@ -183,7 +184,7 @@ void main() {
             film_add(pixel, L + splat_take(pixel));
             pixel += stride;
             if (pixel >= push.count) break;
-            start_path(pixel, st, rng);
+            start_path(pixel, st, ps);
             L = vec3(0.0);
         }
         alive = false;
@@ -215,9 +216,9 @@ void main() {
         if (!b.valid) continue;
 #if USE_VC
         if (!b.delta) {
-            if (st.len + 1u >= min_len) L += st.thr * direct_illumination(st, s, b, rng);
+            if (st.len + 1u >= min_len) L += st.thr * direct_illumination(st, s, b, ps);
 #if LV_CACHE
-            L += st.thr * connect_cache(st, s, b, rng);
+            L += st.thr * connect_cache(st, s, b, ps);
 #else
             // Light subpath p = this pixel (SmallVCM), modulo N_L when --light-paths
             // asks for fewer light subpaths than pixels.
@@ -240,7 +241,8 @@ void main() {
             if (PPM != 0) continue;
         }
 #endif
-        if (!scatter(st, b, s.p, s.ng, rng)) continue;
+        vec3 u_bsdf = sample_bsdf_at(ps, st.len);
+        if (!scatter(st, b, s.p, s.ng, u_bsdf, sample_1d(ps, DIM1_ROULETTE(st.len)))) continue;
         st.len++;
         alive = true;
     }

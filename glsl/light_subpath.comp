@@ -5,8 +5,11 @@
 // regen_stride). Samples an emitter, traces, stores every non-delta vertex in the chunk's
 // scratch slots (STORE_VERTICES; light_vertex_compact.comp then moves them into the
 // light-vertex store) and connects it to the camera (CONNECT_CAMERA), as SmallVCM's
-// VertexCM light pass. A light subpath's random numbers depend on its index only, so the
-// image does not depend on the chunks. LIGHT_TRACE_ONLY: pure light
+// VertexCM light pass. A light subpath's random numbers are a PCG stream that depends on
+// its index and the iteration only, so the image does not depend on the chunks. (Not a
+// Sobol sequence per light subpath as the camera's per pixel: a pixel receives light
+// subpaths' contributions from different subpaths in every iteration, so stratifying
+// each subpath's iterations did not lower the error: docs/performance.md.) LIGHT_TRACE_ONLY: pure light
 // tracing (weight 1), which also connects the emitting point of area lights to the
 // camera so that directly visible emitters are rendered. The variant is always set by
 // the Rust side (src/render/variants.rs, LightKernel).
@@ -124,7 +127,8 @@ void main() {
 #endif
         }
         if (st.len + 2u > max_len) continue;
-        if (!scatter(st, b, s.p, s.ng, rng)) continue;
+        vec3 u_bsdf = vec3(rnd2(rng), rnd(rng));
+        if (!scatter(st, b, s.p, s.ng, u_bsdf, rnd(rng))) continue;
         st.len++;
         alive = true;
     }

@@ -11,9 +11,8 @@
 // Absorbing media (glsl/medium.glsl) multiply the throughput of every traced segment and
 // the contribution of every light sample by their transmittance; no pdf has it.
 // Variants (src/render/variants.rs, PtKernel): NEE=1 the estimator, NEE=0 pure BSDF
-// sampling (emitter hits only, weight 1), for tests; SOBOL=1 draws the random numbers
-// from Owen-scrambled Sobol points (glsl/common.glsl; `--sampler sobol`, the default),
-// SOBOL=0 from a PCG stream per path.
+// sampling (emitter hits only, weight 1), for tests; SOBOL: where the random numbers come
+// from (glsl/path_sampler.glsl; `--sampler`).
 #extension GL_GOOGLE_include_directive : require
 
 #if !defined(NEE) || !defined(SOBOL)
@@ -27,32 +26,10 @@ layout(local_size_x = WORKGROUP_SIZE) in;
 // rr_depth), docs/performance.md, "pt: variance per sample".
 const uint RR_MIN_LENGTH = 3u;
 
-#if SOBOL
-// Random numbers by sample dimension (glsl/common.glsl, sobol2 / sobol1): this pixel's
-// sequence, point push.iteration. The camera's pixel jitter is dimension 0; vertex `len`
-// (>= 1) has its light sample (2-D), BSDF direction (2-D), (light pick, BSDF lobe)
-// (2-D) and roulette (1-D), drawn whether used or not, so that a dimension serves the
-// same purpose in every iteration's path and its stratification carries to the
-// estimate.
-#define DIM_LIGHT(len) (4u * (len))
-#define DIM_BSDF(len) (4u * (len) + 1u)
-#define DIM_CHOICE(len) (4u * (len) + 2u)
-#define DIM_RR(len) (4u * (len) + 3u)
-#define U2(dim) sobol2(qkey, push.iteration, dim)
-#define U1(dim) sobol1(qkey, push.iteration, dim)
-#define U_PICK choice.x
-#define U_LOBE choice.y
-#else
-// The PCG stream, drawn in the order of the code.
-#define U2(dim) rnd2(rng)
-#define U1(dim) rnd(rng)
-#define U_PICK rnd(rng)
-#define U_LOBE rnd(rng)
-#endif
-
 #include "scene.glsl"
 #include "push.glsl"
 #include "film.glsl"
+#include "path_sampler.glsl"
 
 void main() {
     uint stride = regen_stride(push.count, push.paths_per_invocation);
@@ -60,7 +37,8 @@ void main() {
     if (pixel >= stride) return;
     uint max_len = max_path_length();
     uint min_len = min_path_length();
-    uint rng, len, qkey;
+    PathSampler ps;
+    uint len;
     vec3 o, d, thr, L;
     // The surface the current segment leaves (its material and geometric normal; the
     // camera: NO_MATERIAL), for the segment's transmittance (glsl/medium.glsl).
@@ -80,10 +58,9 @@ void main() {
                 if (pixel >= push.count) break;
             }
             started = true;
-            rng = rng_init(params.misc.x, push.iteration, pixel, 0u);
-            qkey = rng_init(params.misc.x, 0u, pixel, 1u);
+            ps = path_sampler(pixel);
             o = params.cam_pos.xyz;
-            d = camera_sample_at(pixel, U2(0u));
+            d = camera_sample_at(pixel, sample_2d(ps, DIM2_PIXEL));
             thr = vec3(1.0);
             L = vec3(0.0);
             last_pdf = 1.0;
@@ -122,14 +99,11 @@ void main() {
         if (len >= max_len) continue;
         Bsdf b = bsdf_init(s.material, s.ng, s.ns, -d, false, s.tint);
         if (!b.valid) continue;
-#if SOBOL
-        vec2 choice = U2(DIM_CHOICE(len));
-#endif
 #if NEE
         if (!b.delta && len + 1u >= min_len) {
-            uint li = pick_light_at(U_PICK);
+            uint li = pick_light_at(sample_1d(ps, DIM1_PICK(len)));
             float pick = light_pick_prob(li);
-            LightSample ls = light_illuminate(li, s.p, U2(DIM_LIGHT(len)));
+            LightSample ls = light_illuminate(li, s.p, sample_2d(ps, DIM2_LIGHT(len)));
             if (ls.ok) {
                 float pf, pr;
                 vec3 f = bsdf_eval(b, ls.wi, pf, pr);
@@ -144,7 +118,7 @@ void main() {
             }
         }
 #endif
-        BsdfSample bs = bsdf_sample(b, vec3(U2(DIM_BSDF(len)), U_LOBE));
+        BsdfSample bs = bsdf_sample(b, sample_bsdf_at(ps, len));
         if (!bs.ok) continue;
         thr *= bs.weight;
         // Refraction scales radiance by eta_ratio^2 (bsdf.glsl); the roulette undoes it.
@@ -158,7 +132,7 @@ void main() {
         if (len >= RR_MIN_LENGTH) {
             float p = max3(thr) * eta_scale;
             if (p < 1.0) {
-                if (U1(DIM_RR(len)) >= p) continue;
+                if (sample_1d(ps, DIM1_ROULETTE(len)) >= p) continue;
                 thr /= p;
             }
         }

@@ -242,13 +242,14 @@ vec3 merge_eval(SubpathState st, Bsdf b, LightVertex v, out float w) {
     return f;
 }
 
-// Samples the continuation at a vertex: Russian roulette, throughput and MIS update.
-// `ng` is the vertex's geometric normal as the surface gives it (not turned to wo).
-// Returns false when the subpath ends.
-bool scatter(inout SubpathState st, Bsdf b, vec3 p, vec3 ng, inout uint rng) {
-    BsdfSample bs = bsdf_sample(b, vec3(rnd2(rng), rnd(rng)));
+// Samples the continuation at a vertex from `u_bsdf` (bsdf_sample's direction and lobe)
+// and `u_roulette`: Russian roulette, throughput and MIS update. `ng` is the vertex's
+// geometric normal as the surface gives it (not turned to wo). Returns false when the
+// subpath ends.
+bool scatter(inout SubpathState st, Bsdf b, vec3 p, vec3 ng, vec3 u_bsdf, float u_roulette) {
+    BsdfSample bs = bsdf_sample(b, u_bsdf);
     if (!bs.ok) return false;
-    if (rnd(rng) >= b.cont_prob) return false;
+    if (u_roulette >= b.cont_prob) return false;
     mis_on_scatter(st, bs.pdf * b.cont_prob, bs.pdf_rev * b.cont_prob, bs.cos_wi, bs.specular);
     st.thr *= bs.weight / b.cont_prob;
     st.o = offset_ray(p, ng, bs.wi, scene_radius());

@@ -126,7 +126,7 @@ void main() {
             Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, true, s.tint);
             if (!b.valid) return;
             vp[i] = s.p; vn[i] = s.ng; vns[i] = s.ns; vtint[i] = s.tint; vmat[i] = s.material; vdelta[i] = b.delta;
-            if (i + 1u < s_gen && !scatter(st, b, s.p, s.ng, rng)) return;
+            if (i + 1u < s_gen && !scatter(st, b, s.p, s.ng, vec3(rnd2(rng), rnd(rng)), rnd(rng))) return;
         }
     }
     vp[k] = params.cam_pos.xyz;
@@ -164,7 +164,7 @@ void main() {
             Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, false, s.tint);
             if (!b.valid) return;
             vp[i] = s.p; vn[i] = s.ng; vns[i] = s.ns; vtint[i] = s.tint; vmat[i] = s.material; vdelta[i] = b.delta;
-            if (j < k - s_gen && !scatter(st, b, s.p, s.ng, rng)) return;
+            if (j < k - s_gen && !scatter(st, b, s.p, s.ng, vec3(rnd2(rng), rnd(rng)), rnd(rng))) return;
         }
     }
     // Join.

@@ -495,15 +495,17 @@ def scenes_of(args):
 
 
 def split_estimator(estimator):
-    """A vkvcm estimator as `--estimators` names it, `algo[:path|:cache[:N]|:sobol|
+    """A vkvcm estimator as `--estimators` names it, `algo[:path|:cache[:N]][:sobol|
     :independent][@N_L]` (the names of `vkvcm bench --algos`), as (algo, its `vkvcm
     render` settings)."""
     spec, at, light_paths = estimator.partition("@")
-    algo, _, connect = spec.partition(":")
     settings = []
-    if connect in ("sobol", "independent"):
-        settings += ["--sampler", connect]
-    elif connect:
+    rest, _, last = spec.rpartition(":")
+    if rest and last in ("sobol", "independent"):
+        settings += ["--sampler", last]
+        spec = rest
+    algo, _, connect = spec.partition(":")
+    if connect:
         kind, _, n = connect.partition(":")
         if kind not in ("path", "cache") or (n and (kind != "cache" or not n.isdigit())):
             raise HarnessError(f"estimator {estimator!r}: the connection strategy is `path`, `cache` or `cache:N`")

@@ -168,10 +168,10 @@ pub fn table(rows: &[BenchRow]) -> String {
 }
 
 /// An estimator with its connection strategy, sampler and light subpaths per iteration,
-/// named `algo` (its defaults) or `algo:path` / `algo:cache:N` (bpt, vcm) or
-/// `algo:independent` / `algo:sobol` (`render --sampler`; pt), followed by `@N` for N
-/// light subpaths per iteration (`render --light-paths`; the light-subpath estimators),
-/// e.g. `bpt:cache:2`, `pt:independent` or `vcm@65536`.
+/// named `algo` (its defaults), then `:path` / `:cache:N` (`render --connect`; bpt, vcm),
+/// then `:independent` / `:sobol` (`render --sampler`), then `@N` for N light subpaths per
+/// iteration (`render --light-paths`; the light-subpath estimators), e.g. `bpt:cache:2`,
+/// `pt:independent`, `vcm:path:sobol` or `vcm@65536`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Variant {
     pub algorithm: Algorithm,
@@ -190,38 +190,45 @@ impl Variant {
             }
             None => (s, None),
         };
-        let (a, c) = match name.split_once(':') {
-            Some((a, c)) => (a, Some(c)),
+        // algo[:connection strategy][:sampler]: a sampler is the last part.
+        let (rest, sampler) = match name.rsplit_once(':') {
+            Some((rest, c)) => match <Sampler as clap::ValueEnum>::from_str(c, false) {
+                Ok(sampler) => (rest, Some(sampler)),
+                Err(_) => (name, None),
+            },
             None => (name, None),
+        };
+        let (a, c) = match rest.split_once(':') {
+            Some((a, c)) => (a, Some(c)),
+            None => (rest, None),
         };
         let algorithm = Algorithm::from_name(&a.to_ascii_lowercase())
             .ok_or_else(|| anyhow::anyhow!("{s:?}: unknown estimator {a:?}"))?;
-        let sampler = c.and_then(|c| <Sampler as clap::ValueEnum>::from_str(c, false).ok());
         let requested = match c {
             None => None,
-            Some(_) if sampler.is_some() => None,
             Some(c) => Some(Connect::parse(c).ok_or_else(|| {
                 anyhow::anyhow!("{s:?}: {c:?} is not path or cache:N (N >= 1), nor sobol or independent")
             })?),
         };
         let connect = algorithm.info().connect(requested).map_err(|e| anyhow::anyhow!("{s:?}: {e}"))?;
-        let sampler = sampler.unwrap_or(algorithm.info().default_sampler);
+        let sampler = sampler.unwrap_or(algorithm.info().sampler(None));
         let v = Variant { algorithm, connect, sampler, light_paths };
         // The estimator's own check of the light-path count (a 1x1 frame: sizes do not matter).
         algorithm.info().check(&v.settings(1, 1, Budget::Iterations(1))).map_err(|e| anyhow::anyhow!("{s:?}: {e}"))?;
         Ok(v)
     }
 
-    /// `algo` for its default strategy, else `algo:path` / `algo:cache:N`; then `@N` with
-    /// a light-path count.
+    /// `algo`, then `:path` / `:cache:N` for a strategy other than its default, then
+    /// `:sobol` / `:independent` for a sampler other than its default, then `@N` with a
+    /// light-path count.
     pub fn name(&self) -> String {
-        let mut name = if self.connect != self.algorithm.default_connect() {
-            format!("{}:{}", self.algorithm.name(), self.connect.name())
-        } else if self.sampler != self.algorithm.info().default_sampler {
-            format!("{}:{}", self.algorithm.name(), self.sampler.name())
-        } else {
-            self.algorithm.name().to_string()
-        };
+        let mut name = self.algorithm.name().to_string();
+        if self.connect != self.algorithm.default_connect() {
+            name += &format!(":{}", self.connect.name());
+        }
+        if self.sampler != self.algorithm.info().sampler(None) {
+            name += &format!(":{}", self.sampler.name());
+        }
         if let Some(n) = self.light_paths {
             name += &format!("@{n}");
         }
@@ -642,16 +649,41 @@ mod tests {
 
     #[test]
     fn variant_names_parse_back() {
-        for s in ["pt", "vcm", "bpt:path", "bpt:cache:1", "vcm:cache:4", "vcm@65536", "bpt:cache:2@100"] {
+        for s in [
+            "pt",
+            "vcm",
+            "bpt:path",
+            "bpt:cache:1",
+            "vcm:cache:4",
+            "vcm@65536",
+            "bpt:cache:2@100",
+            "pt:independent",
+            "vcm:path:independent",
+            "bpt:cache:2:independent@100",
+        ] {
             let v = Variant::parse(s).unwrap();
             assert_eq!(Variant::parse(&v.name()).unwrap(), v, "{s}");
         }
         assert_eq!(Variant::parse("bpt:cache:3").unwrap().connect, Connect::Cache(3));
         assert_eq!(Variant::parse("bpt").unwrap().connect, Algorithm::Bpt.default_connect());
         assert_eq!(Variant::parse("lt@1000").unwrap().light_paths, Some(1000));
-        for bad in
-            ["xyz", "pt:cache:1", "bpt:cache:0", "bpt:cache", "bpt:cache:x", "bpt:other", "pt@100", "vcm@0", "vcm@x"]
-        {
+        let v = Variant::parse("vcm:path:independent").unwrap();
+        assert_eq!((v.connect, v.sampler), (Connect::Path, Sampler::Independent));
+        assert_eq!(Variant::parse("vcm:sobol").unwrap().name(), "vcm", "sobol is vcm's default");
+        for bad in [
+            "xyz",
+            "pt:cache:1",
+            "bpt:cache:0",
+            "bpt:cache",
+            "bpt:cache:x",
+            "bpt:other",
+            "pt@100",
+            "vcm@0",
+            "vcm@x",
+            "lt:sobol",
+            "el:sobol",
+            "pt:sobol:path",
+        ] {
             assert!(Variant::parse(bad).is_err(), "{bad} accepted");
         }
     }

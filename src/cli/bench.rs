@@ -65,8 +65,10 @@ pub struct BenchEqualTimeArgs {
     #[arg(long, value_delimiter = ',', default_value = "gbs_s,glm_c,gbs_p,gbs_b")]
     pub scenes: Vec<String>,
     /// Estimators, each `algo` or, for bpt and vcm, `algo:path` / `algo:cache:N` (the
-    /// connection strategy, `render --connect`), e.g. bpt:path,bpt:cache:1; `@N` after
-    /// a light-subpath estimator sets N light subpaths per iteration (`render
+    /// connection strategy, `render --connect`), e.g. bpt:path,bpt:cache:1; then
+    /// `:independent` / `:sobol` for a sampler other than the default (`render
+    /// --sampler`), e.g. pt:independent, vcm:path:independent; `@N` after a
+    /// light-subpath estimator sets N light subpaths per iteration (`render
     /// --light-paths`), e.g. vcm@16384.
     #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm", value_parser = vkvcm::bench::render::Variant::parse)]
     pub algos: Vec<vkvcm::bench::render::Variant>,
@@ -137,9 +139,10 @@ pub struct BenchRenderArgs {
     #[arg(long, value_delimiter = ',', default_value = "gbs_s,glm_c,gbs_p,gbs_b")]
     pub scenes: Vec<String>,
     /// Estimators, comma-separated, each `algo` or, for bpt and vcm, `algo:path` /
-    /// `algo:cache:N` (the connection strategy, `render --connect`), e.g. bpt:path; `@N`
-    /// after a light-subpath estimator sets N light subpaths per iteration (`render
-    /// --light-paths`), e.g. vcm@16384.
+    /// `algo:cache:N` (the connection strategy, `render --connect`), e.g. bpt:path; then
+    /// `:independent` / `:sobol` for a sampler other than the default (`render
+    /// --sampler`), e.g. vcm:independent; `@N` after a light-subpath estimator sets N
+    /// light subpaths per iteration (`render --light-paths`), e.g. vcm@16384.
     #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm", value_parser = vkvcm::bench::render::Variant::parse)]
     pub algos: Vec<vkvcm::bench::render::Variant>,
     /// Image width and height.

@@ -64,9 +64,11 @@ pub struct ConvergeArgs {
     #[arg(long, short = 'r')]
     pub reference: PathBuf,
     /// Estimators, comma-separated, each `algo` or, for bpt and vcm, `algo:path` /
-    /// `algo:cache:N` (the connection strategy, `render --connect`); `@N` after a
+    /// `algo:cache:N` (the connection strategy, `render --connect`); then `:independent`
+    /// / `:sobol` for a sampler other than the default (`render --sampler`); `@N` after a
     /// light-subpath estimator sets N light subpaths per iteration (`render
-    /// --light-paths`), e.g. vcm,vcm@65536. Rows and plot series carry these names.
+    /// --light-paths`), e.g. vcm,vcm:independent,vcm@65536. Rows and plot series carry
+    /// these names.
     #[arg(long, value_delimiter = ',', default_value = "pt,bpt,vcm", value_parser = Variant::parse)]
     pub algos: Vec<Variant>,
     /// Render seconds per estimator (read-backs and error measurement not counted).

@@ -43,9 +43,10 @@ pub struct RenderArgs {
     /// (SmallVCM's). Unbiased either way; docs/performance.md measures the difference.
     #[arg(long, value_enum, default_value_t = vkvcm::render::DEFAULT_LIGHT_SELECTION)]
     pub light_selection: vkvcm::render::LightSelection,
-    /// Where the kernels' random numbers come from: `sobol`, Owen-scrambled Sobol points
-    /// that stratify each pixel's samples across iterations (pt's default, pt only), or
-    /// `independent` pseudo-random numbers (every other estimator's). Unbiased either way;
+    /// Where the camera paths' random numbers come from: `sobol`, Owen-scrambled Sobol
+    /// points that stratify each pixel's samples across iterations (the default of every
+    /// estimator with camera paths: all but lt and el), or `independent` pseudo-random
+    /// numbers. Light subpaths always draw independent numbers. Unbiased either way;
     /// docs/estimators.md, "Samplers".
     #[arg(long, value_enum)]
     pub sampler: Option<vkvcm::render::Sampler>,

@@ -76,12 +76,13 @@ impl LightSelection {
     }
 }
 
-/// Where a kernel's random numbers come from (glsl/common.glsl, "Quasi-random numbers").
+/// Where the camera paths' random numbers come from (glsl/path_sampler.glsl).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
 pub enum Sampler {
     /// Owen-scrambled Sobol points per pixel, each sample dimension with its own
     /// scramble (Burley 2020; pbrt-v4's padded Sobol sampler): a pixel's samples are
-    /// stratified across iterations. pt only; its default.
+    /// stratified across iterations. The default of every estimator with camera paths
+    /// (pt, bpt, ppm, bpm, vcm).
     Sobol,
     /// Independent pseudo-random numbers (a PCG stream per path and iteration).
     Independent,
@@ -140,7 +141,7 @@ pub struct RenderSettings {
     /// Path tracing only: `false` disables next-event estimation (BSDF sampling only).
     pub nee: bool,
     /// Where the kernels' random numbers come from; `None`: the estimator's default
-    /// ([`RenderSettings::sampler`]). `Sampler::Sobol` is for pt only.
+    /// ([`RenderSettings::sampler`]). lt and el take `Independent` only.
     pub sampler: Option<Sampler>,
     /// Initial merge radius as a fraction of the scene's bounding-sphere radius.
     pub radius_factor: f32,

@@ -107,16 +107,19 @@ pub struct CameraKernel {
     pub connect: Connect,
     /// LV_TEXEL: the light vertices, grid and cache index are read as texel buffers.
     pub texel_reads: bool,
+    /// SOBOL: Owen-scrambled Sobol samples (0: independent random numbers).
+    pub sobol: bool,
 }
 
 impl CameraKernel {
-    pub fn new(t: Techniques, connect: Connect, reads: Reads) -> CameraKernel {
+    pub fn new(t: Techniques, connect: Connect, reads: Reads, sobol: bool) -> CameraKernel {
         CameraKernel {
             vertex_connection: t.vertex_connection,
             vertex_merging: t.vertex_merging,
             merge_first_vertex_only: t.merge_first_vertex_only,
             connect,
             texel_reads: reads == Reads::Texel,
+            sobol,
         }
     }
 
@@ -125,7 +128,8 @@ impl CameraKernel {
             .flag("USE_VC", self.vertex_connection)
             .flag("USE_VM", self.vertex_merging)
             .flag("PPM", self.merge_first_vertex_only)
-            .flag("LV_TEXEL", self.texel_reads);
+            .flag("LV_TEXEL", self.texel_reads)
+            .flag("SOBOL", self.sobol);
         match self.connect {
             Connect::Path => d.flag("LV_CACHE", false),
             Connect::Cache(n) => d.flag("LV_CACHE", true).value("LV_CACHE_CONNECTIONS", n),

@@ -26,6 +26,7 @@ use crate::render::passes::hash_grid::HashGrid;
 use crate::render::passes::light_subpaths::{LightSubpaths, LightVertexStore, StoreStatus};
 use crate::render::passes::PassInfo;
 use crate::render::radius::RadiusSchedule;
+use crate::render::settings::Sampler;
 use crate::render::variants::{CameraKernel, LightKernel};
 
 /// The pass that takes the splats (and, with a camera pass, the camera subpaths' values)
@@ -67,11 +68,12 @@ impl LightSubpathEstimator {
         };
         let pass = b.passes();
         let connect = b.settings.connect;
+        let sobol = b.settings.sampler() == Sampler::Sobol;
         let light = LightSubpaths::new(&pass, &store, lv, LightKernel::new(techniques))?;
         let film_pass = if techniques.light_trace_only {
             FilmPass::Accumulate(Accumulate::new(&pass, &store)?)
         } else {
-            let camera_kernel = CameraKernel::new(techniques, connect, b.scene.reads());
+            let camera_kernel = CameraKernel::new(techniques, connect, b.scene.reads(), sobol);
             FilmPass::Camera(CameraSubpaths::bidirectional(&pass, &store, grid.as_ref(), camera_kernel)?)
         };
         let s = b.scene.params.scene_sphere;

@@ -10,7 +10,6 @@ use crate::gpu::{Batch, Buffer};
 use crate::render::gpu_types::GpuPush;
 use crate::render::passes::camera_subpaths::CameraSubpaths;
 use crate::render::passes::PassInfo;
-use crate::render::settings::Sampler;
 
 pub const INFO: EstimatorInfo = EstimatorInfo {
     algorithm: Algorithm::El,
@@ -21,7 +20,7 @@ pub const INFO: EstimatorInfo = EstimatorInfo {
     consistent_only: false,
     default_connect: None,
     regenerates_paths: false,
-    default_sampler: Sampler::Independent,
+    default_sampler: None,
     build,
 };
 

@@ -90,9 +90,9 @@ pub struct EstimatorInfo {
     pub default_connect: Option<Connect>,
     /// Its kernels trace several paths per invocation (path regeneration).
     pub regenerates_paths: bool,
-    /// Where its random numbers come from unless `--sampler` says otherwise; an estimator
-    /// whose default is `Independent` has no other.
-    pub default_sampler: Sampler,
+    /// Where its random numbers come from unless `--sampler` says otherwise (None: its
+    /// kernel draws independent random numbers only).
+    pub default_sampler: Option<Sampler>,
     /// Builds its passes for a render.
     pub build: fn(&Build) -> Result<Box<dyn Estimator>>,
 }
@@ -100,7 +100,8 @@ pub struct EstimatorInfo {
 impl EstimatorInfo {
     /// A light-subpath estimator (lt, bpt, ppm, bpm, vcm): its value is radiance, it is
     /// consistent only when it merges, its kernels regenerate paths and shade with
-    /// geometric normals, and its passes are [`bidirectional`]'s for `techniques`.
+    /// geometric normals, its camera subpaths draw Sobol samples by default, and its
+    /// passes are [`bidirectional`]'s for `techniques`.
     pub const fn light_subpath(
         algorithm: Algorithm,
         name: &'static str,
@@ -117,7 +118,8 @@ impl EstimatorInfo {
             consistent_only: techniques.vertex_merging,
             default_connect,
             regenerates_paths: true,
-            default_sampler: Sampler::Independent,
+            // The camera subpaths draw the Sobol samples; lt has none.
+            default_sampler: if techniques.light_trace_only { None } else { Some(Sampler::Sobol) },
             build: bidirectional::build,
         }
     }
@@ -144,14 +146,16 @@ impl EstimatorInfo {
         Ok(connect)
     }
 
+    /// Its sampler when `requested` (`None`: its default). A request it cannot honour is
+    /// returned as is, for [`EstimatorInfo::check`] to refuse.
+    pub fn sampler(&self, requested: Option<Sampler>) -> Sampler {
+        requested.or(self.default_sampler).unwrap_or(Sampler::Independent)
+    }
+
     /// Checks the settings that only concern this estimator.
     pub fn check(&self, s: &RenderSettings) -> Result<()> {
-        if s.sampler() != self.default_sampler && self.default_sampler == Sampler::Independent {
-            bail!(
-                "--sampler {}: {} draws independent random numbers only (sobol is pt's)",
-                s.sampler().name(),
-                self.name
-            );
+        if self.default_sampler.is_none() && s.sampler() != Sampler::Independent {
+            bail!("--sampler {}: {} draws independent random numbers only", s.sampler().name(), self.name);
         }
         // Settings always hold a strategy: `Path` means none to the estimators without
         // vertex connections.
@@ -236,7 +240,7 @@ impl RenderSettings {
     /// Where the kernels' random numbers come from: as set (`--sampler`), or the
     /// estimator's default.
     pub fn sampler(&self) -> Sampler {
-        self.sampler.unwrap_or(self.algorithm.info().default_sampler)
+        self.algorithm.info().sampler(self.sampler)
     }
 
     /// Light subpaths per iteration, N_L: as set (`--light-paths`), or one per pixel.

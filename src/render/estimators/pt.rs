@@ -22,7 +22,7 @@ pub const INFO: EstimatorInfo = EstimatorInfo {
     consistent_only: false,
     default_connect: None,
     regenerates_paths: true,
-    default_sampler: Sampler::Sobol,
+    default_sampler: Some(Sampler::Sobol),
     build,
 };
 
