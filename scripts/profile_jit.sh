@@ -11,7 +11,7 @@
 #   e.g. scripts/profile_jit.sh 4 target/peers/scenes/cornell_mg.gltf -a pt --width 128 --height 128
 # Environment: VKVCM (default target/release/vkvcm), WARMUP seconds before sampling
 # (default 4: kernel compilation and the first iterations).
-set -euo pipefail
+set -u
 if [ $# -lt 2 ]; then
     sed -n '2,14p' "$0"
     exit 2
@@ -19,7 +19,9 @@ fi
 seconds=$1
 shift
 work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+pid=
+# The render runs until this script ends, however it ends.
+trap '[ -n "$pid" ] && kill "$pid" 2>/dev/null; rm -rf "$work"' EXIT
 "${VKVCM:-target/release/vkvcm}" render "$@" --iterations 1000000 -o "$work/out.exr" >"$work/render.log" 2>&1 &
 pid=$!
 sleep "${WARMUP:-4}"
@@ -33,6 +35,5 @@ perf report -i "$work/perf.data" --sort sym --stdio 2>/dev/null | grep -v '^#' |
          END { for (p in s) printf "%7.2f%% %s000\n", s[p], p }' | sort -rn | head -12 | tee "$work/pages"
 hot=$(awk 'NR == 1 { print $2 }' "$work/pages")
 echo "## the hottest page, $hot (up to its first ret)"
-gdb -p "$pid" -batch -ex "x/120i $hot" 2>/dev/null | grep '^ *0x' | awk '{ print } /\tret/ { exit }'
-kill "$pid" 2>/dev/null || true
-wait "$pid" 2>/dev/null || true
+gdb -p "$pid" -batch -ex "x/120i $hot" 2>/dev/null >"$work/disassembly" || true
+grep '^ *0x' "$work/disassembly" | awk '{ print } /\tret/ { exit }'
