@@ -111,8 +111,10 @@ fn dimensions_and_pixels_are_decorrelated() {
 ///
 /// Unbiased: every pixel agrees with the independent sampler's by a Welch test at false-
 /// failure probability 1e-3 per comparison (Sidak-corrected over pixels). The Sobol side's
-/// per-pixel variance comes from iterations that are stratified, not independent, so it
-/// overstates that render's error: the test is conservative on that side, valid still.
+/// per-pixel variance comes from iterations that are stratified, not independent: it
+/// overstates the error where a pixel's integrand is smooth, and may understate it
+/// where a feature covers less than 1/256 of a pixel's samples; gbs_b at 48x48 has none
+/// that the test meets. The image means and the spread do not rely on it.
 /// vcm's merging is biased, but by the radius only, which does not depend on the sampler:
 /// both renders estimate the same value.
 ///
