@@ -34,6 +34,9 @@ fn render(
     s.frame.seed = seed;
     s.frame.max_path_length = 6;
     s.nee = nee;
+    // Independent iterations, which the Welch tests assume (tests/common
+    // assert_matches_mitsuba says why the Sobol sampler's do not do).
+    s.sampler = Some(vkvcm::render::Sampler::Independent);
     render_checked(gpu, scene, &s)
 }
 
