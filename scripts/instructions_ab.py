@@ -1,0 +1,100 @@
+#!/usr/bin/env python3
+"""Instructions per sample of kernel variants, counted by valgrind: a noise-free A/B.
+
+Timing A/Bs on a shared 2-core VM spread by 15-25% per run (docs/performance.md), so a
+change worth a few percent needs dozens of rounds to see. The number of instructions
+the CPU executes for a render does not spread: valgrind (callgrind) counts every
+instruction of the process, lavapipe's JIT-compiled kernels included, the same to 0.01%
+from run to run. This script counts them for `vkvcm render` at 1 and at 1 + N iterations
+and reports the difference per sample (one sample = one pixel's path per iteration), so
+start-up, kernel compilation and the first iteration's set-up cancel.
+
+Instructions are not time: a change that trades instructions for memory traffic or
+cache misses can count fewer and run slower. Use it to see small changes in work (fewer
+texel fetches, less arithmetic), then time what it finds with scripts/ab_bench.sh.
+
+Each variant is NAME=GLSL_DIR (shaders compiled at run time through VKVCM_GLSL_DIR, one
+binary) optionally followed by |ARGS (extra `vkvcm render` arguments):
+
+    python3 scripts/instructions_ab.py --scenes gbs_s,glm_c --algos pt,bpt,vcm \\
+        --variant base=/tmp/base_glsl --variant exp=$PWD/glsl
+
+Needs valgrind (apt-get install valgrind); lavapipe as the Vulkan driver (the kernels
+must run on the CPU for valgrind to count them).
+"""
+
+import argparse
+import os
+import re
+import shlex
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def count_instructions(binary, glsl_dir, scene, algo, size, iterations, extra, out_dir):
+    """Instructions valgrind counts for one `vkvcm render` of `iterations` iterations."""
+    out = os.path.join(out_dir, "callgrind.out")
+    cmd = [
+        "valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
+        binary, "render", scene, "-a", algo, "-i", str(iterations),
+        "--width", str(size), "--height", str(size),
+        "-o", os.path.join(out_dir, "image.exr"),
+    ] + extra
+    env = dict(os.environ, VKVCM_GLSL_DIR=glsl_dir)
+    r = subprocess.run(cmd, env=env, capture_output=True, text=True)
+    m = re.search(r"Collected : (\d+)", r.stderr)
+    if r.returncode != 0 or not m:
+        sys.exit(f"valgrind run failed ({' '.join(cmd)}):\n{r.stderr[-2000:]}")
+    return int(m.group(1))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--scenes", default="gbs_s")
+    ap.add_argument("--algos", default="pt")
+    ap.add_argument("--variant", action="append", required=True,
+                    help="NAME=GLSL_DIR[|render args]; the first is the base")
+    ap.add_argument("--size", type=int, default=64, help="frame width and height")
+    ap.add_argument("--iterations", type=int, default=4,
+                    help="iterations counted (beyond the first)")
+    ap.add_argument("--binary", default=os.path.join(ROOT, "target/release/vkvcm"))
+    args = ap.parse_args()
+
+    variants = []
+    for v in args.variant:
+        name, _, rest = v.partition("=")
+        glsl, _, extra = rest.partition("|")
+        variants.append((name, os.path.abspath(glsl), shlex.split(extra)))
+
+    print(f"# instructions per sample, {args.size}x{args.size}, {args.iterations} iterations "
+          f"counted; ratio against {variants[0][0]}")
+    with tempfile.TemporaryDirectory() as tmp:
+        for scene in args.scenes.split(","):
+            for algo in args.algos.split(","):
+                base = None
+                for name, glsl, extra in variants:
+                    # A run under valgrind (which shows lavapipe another CPU than the
+                    # machine's, so its JIT cache differs) first fills the caches, so
+                    # both counted runs load the same compiled kernels.
+                    subprocess.run(
+                        ["valgrind", "--tool=none", args.binary, "render", scene, "-a", algo, "-i", "1", "--width",
+                         str(args.size), "--height", str(args.size), "-o",
+                         os.path.join(tmp, "warm.exr")] + extra,
+                        env=dict(os.environ, VKVCM_GLSL_DIR=glsl), check=True,
+                        capture_output=True)
+                    one = count_instructions(args.binary, glsl, scene, algo, args.size, 1,
+                                             extra, tmp)
+                    more = count_instructions(args.binary, glsl, scene, algo, args.size,
+                                              1 + args.iterations, extra, tmp)
+                    per_sample = (more - one) / (args.iterations * args.size * args.size)
+                    if base is None:
+                        base = per_sample
+                    print(f"{scene} {algo} {name}: {per_sample:.0f} instructions/sample, "
+                          f"ratio {per_sample / base:.4f}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
