@@ -652,7 +652,12 @@ def make_own_reference(vk, cache, refs, work, scene, estimator, ref_cpu, check_c
 
 
 def timed_vkvcm_long(vk, scene, estimator, seed, cpu, out_base, work):
-    """One vkvcm process of about `cpu` CPU-seconds."""
+    """One vkvcm process of about `cpu` CPU-seconds (a reference, or a side of an agreement
+    check), drawing independent samples: its per-pixel second moment is its noise estimate
+    (the noise floor, the checks' z-tests), and the per-pixel variance of a render of Sobol
+    samples, vkvcm's default for camera subpaths, is no error estimate (docs/estimators.md,
+    "Samplers")."""
+    estimator = f"{estimator}:independent"
     vk.warm_up(scene, estimator, work)
     # A short run first (a tenth of the budget, 1-3 s wall), to learn the CPU an iteration costs.
     vk.render(scene, estimator, seed, 0.0, out_base.with_name(out_base.name + "_probe"),
