@@ -11,8 +11,8 @@
 // subpaths' contributions from different subpaths in every iteration, so stratifying
 // each subpath's iterations did not lower the error: docs/performance.md.)
 // LIGHT_TRACE_ONLY: pure light tracing (weight 1), which also connects the emitting
-// point of area lights to the camera so that directly visible emitters are rendered. The variant is always set by
-// the Rust side (src/render/variants.rs, LightKernel).
+// point of area lights to the camera so that directly visible emitters are rendered.
+// The variant is always set by the Rust side (src/render/variants.rs, LightKernel).
 #extension GL_GOOGLE_include_directive : require
 
 #if !defined(STORE_VERTICES) || !defined(CONNECT_CAMERA) || !defined(LIGHT_TRACE_ONLY)
