@@ -5,6 +5,7 @@
     peers.py scenes                        write the peer scene (glTF + Mitsuba XML)
     peers.py reference [--quick]           reference images (once per machine/commit)
     peers.py run [--quick]                 the alternating comparison; prints the table
+    peers.py per-sample                    error per sample: every program the same iterations
 
 See scripts/peers/README.md for what is measured and how to read the table. This driver
 uses only the standard library (the system python3); numpy, OpenEXR and Mitsuba run in
@@ -16,6 +17,7 @@ import datetime
 import hashlib
 import json
 import os
+import random
 import re
 import resource
 import shutil
@@ -657,7 +659,12 @@ def timed_vkvcm_long(vk, scene, estimator, seed, cpu, out_base, work):
     (the noise floor, the checks' z-tests), and the per-pixel variance of a render of Sobol
     samples, vkvcm's default for camera subpaths, is no error estimate (docs/estimators.md,
     "Samplers")."""
-    estimator = f"{estimator}:independent"
+    settings = split_estimator(estimator)[1]
+    if "--sampler" not in settings:
+        spec, at, light_paths = estimator.partition("@")
+        estimator = f"{spec}:independent{at}{light_paths}"
+    elif settings[settings.index("--sampler") + 1] != "independent":
+        raise HarnessError(f"{estimator}: a reference or check renders independent samples (its noise estimate)")
     vk.warm_up(scene, estimator, work)
     # A short run first (a tenth of the budget, 1-3 s wall), to learn the CPU an iteration costs.
     vk.render(scene, estimator, seed, 0.0, out_base.with_name(out_base.name + "_probe"),
@@ -737,19 +744,20 @@ def cmd_run(args):
 
     rows = []
     total = len(cells) * seeds * 2
+    repeats = peer_repeats(cells)
     for i in range(1, seeds + 1):
-        for scene, e, peer, pe in cells:
+        for (scene, e, peer, pe), k in zip(cells, repeats):
             # Alternate: vkvcm then the peer in odd rounds, the peer first in even ones.
-            order = [("vkvcm", e), (peer, pe)]
+            order = [("vkvcm", e, i), (peer, pe, i + PEER_SEED_STRIDE * k)]
             if i % 2 == 0:
                 order.reverse()
-            for prog, est in order:
-                base = work / f"{scene}_{est.replace(':', '-')}_{prog}_{i}"
-                iterations, c, img = programs[prog].render(scene, est, i, cpu, base)
-                rows.append({"scene": scene, "estimator": est, "program": prog, "seed": i, "iterations": iterations,
+            for prog, est, seed in order:
+                base = work / f"{scene}_{est.replace(':', '-')}_{prog}_{seed}"
+                iterations, c, img = programs[prog].render(scene, est, seed, cpu, base)
+                rows.append({"scene": scene, "estimator": est, "program": prog, "seed": seed, "iterations": iterations,
                              "cpu_s": c.cpu, "wall_s": c.wall, "image": str(img),
                              "startup_cpu_s": startup_of(programs[prog], scene, est)})
-                log(f"[{len(rows)}/{total}] {scene} {est} {prog} seed {i}: {iterations} iterations, "
+                log(f"[{len(rows)}/{total}] {scene} {est} {prog} seed {seed}: {iterations} iterations, "
                     f"{c.cpu:.2f} CPU-s, {c.wall:.2f} s")
     header["load_after"] = os.getloadavg()
     header["elapsed_s"] = time.monotonic() - t_start
@@ -760,6 +768,23 @@ def cmd_run(args):
     (work / "table.md").write_text(table)
     print(table)
     log(f"results: {work}/results.json, table: {work}/table.md")
+
+
+# A peer's row can serve several vkvcm cells (SmallVCM's bpt against both `bpt` and
+# `bpt:path`, Mitsuba's path against pt, bpt and vcm): its k-th cell renders seed
+# i + PEER_SEED_STRIDE k, so that each of its runs is an independent render of its own.
+PEER_SEED_STRIDE = 100
+
+
+def peer_repeats(cells):
+    """For each cell, how many earlier cells share its peer row: k above."""
+    seen = {}
+    repeats = []
+    for scene, _, peer, pe in cells:
+        key = (scene, pe, peer)
+        repeats.append(seen.get(key, 0))
+        seen[key] = repeats[-1] + 1
+    return repeats
 
 
 def references_of(scene):
@@ -804,6 +829,7 @@ def cmd_table(args):
     except (OSError, ValueError) as e:
         raise HarnessError(f"cannot read {path}: {e}")
     header, rows, cells = data["sitting"], data["rows"], [tuple(c) for c in data["cells"]]
+    render = render_table if per_sample_iterations(header) is None else render_per_sample_table
     if args.rescore:
         cache = Cache(args.cache)
         cache.require_venv()
@@ -818,11 +844,126 @@ def cmd_table(args):
                               "command": " ".join([Path(sys.argv[0]).name] + sys.argv[1:])}
         (path.parent / "results-rescored.json").write_text(
             json.dumps({"sitting": header, "cells": cells, "rows": rows}, indent=1) + "\n")
-        table = render_table(header, rows, cells)
+        table = render(header, rows, cells)
         (path.parent / "table-rescored.md").write_text(table)
         print(table, end="")
         return
-    print(render_table(header, rows, cells), end="")
+    print(render(header, rows, cells), end="")
+
+
+# ---------------------------------------------------------------------------------------
+# per-sample
+
+
+def cmd_per_sample(args):
+    """Error per sample, apart from speed: each program renders the same number of
+    iterations (SmallVCM's iterations, Mitsuba's spp: one sample per pixel each) for each
+    seed, and the table gives relMSE x iterations, which a program with a 1/N error keeps
+    constant. The run's relMSE x CPU-s ratio is this ratio times the ratio of iterations
+    per CPU-second; a difference in the run that this does not show is speed."""
+    if args.seeds < 3:
+        raise HarnessError("--seeds must be at least 3 (one run's relMSE is dominated by fireflies)")
+    if args.iterations < 1:
+        raise HarnessError("--iterations must be at least 1")
+    out = Path(args.out)
+    cache = Cache(args.cache)
+    vk = Vkvcm(args.vkvcm, out)
+    vk.check()
+    cache.require_venv()
+    scenes = scenes_of(args)
+    programs = {"vkvcm": vk, "SmallVCM": SmallVcm(cache), "Mitsuba": Mitsuba(cache, out)}
+    if any(s in SMALLVCM_SCENES for s in scenes):
+        programs["SmallVCM"].check()
+    if MITSUBA_SCENE in scenes:
+        programs["Mitsuba"].check()
+    write_scenes(out)
+    refs = Path(args.references) if args.references else ref_dir(out, False)
+    missing = [s for s in scenes if any(not (refs / f"{n}.exr").exists() for n in references_of(s))]
+    if missing:
+        raise HarnessError(f"no reference for {', '.join(missing)} in {refs}: run `{sys.argv[0]} reference` first "
+                           "(or --references DIR)")
+    cells = []
+    for scene in scenes:
+        default = SMALLVCM_ESTIMATORS if scene in SMALLVCM_SCENES else MITSUBA_ESTIMATORS
+        for e in (args.estimators.split(",") if args.estimators else default):
+            cells.append((scene, e, "SmallVCM", split_estimator(e)[0]) if scene in SMALLVCM_SCENES
+                         else (scene, e, "Mitsuba", "path"))
+    work = out / "per-sample" / datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
+    work.mkdir(parents=True)
+    header = describe_sitting(cache, vk, programs, None, args.seeds, False, refs)
+    header["per_sample_iterations"] = args.iterations
+    header["load_before"] = os.getloadavg()
+    t_start = time.monotonic()
+    n = str(args.iterations)
+    rows = []
+    total = len(cells) * args.seeds * 2
+    repeats = peer_repeats(cells)
+    for i in range(1, args.seeds + 1):
+        for (scene, e, peer, pe), k in zip(cells, repeats):
+            order = [("vkvcm", e, i), (peer, pe, i + PEER_SEED_STRIDE * k)]
+            if i % 2 == 0:
+                order.reverse()
+            for prog, est, seed in order:
+                base = work / f"{scene}_{est.replace(':', '-')}_{prog}_{seed}"
+                if prog == "vkvcm":
+                    img = base.with_suffix(".exr")
+                    c = run_charged(vk.command(scene, est, seed, img, ["--iterations", n]), base.with_suffix(".log"))
+                elif prog == "SmallVCM":
+                    sv = programs["SmallVCM"]
+                    c = run_charged(sv.command(scene, est, 1000 * seed, base.with_suffix(".hdr"), ["-i", n]),
+                                    base.with_suffix(".log"))
+                    img = base.with_suffix(".pfm")
+                else:
+                    _, c, img = programs["Mitsuba"].render(scene, est, seed, None, base, spp=args.iterations)
+                rows.append({"scene": scene, "estimator": est, "program": prog, "seed": seed,
+                             "iterations": args.iterations, "cpu_s": c.cpu, "wall_s": c.wall, "image": str(img)})
+                log(f"[{len(rows)}/{total}] {scene} {est} {prog} seed {seed}: {c.cpu:.2f} CPU-s")
+    header["load_after"] = os.getloadavg()
+    header["elapsed_s"] = time.monotonic() - t_start
+    score(cache, header, rows, refs, scenes, work)
+    (work / "results.json").write_text(json.dumps({"sitting": header, "cells": cells, "rows": rows}, indent=1) + "\n")
+    table = render_per_sample_table(header, rows, cells)
+    (work / "table.md").write_text(table)
+    print(table)
+    log(f"results: {work}/results.json, table: {work}/table.md")
+
+
+def per_sample_iterations(h):
+    """The iteration count of a `per-sample` sitting's header (None for a `run`'s)."""
+    return h.get("per_sample_iterations")
+
+
+def render_per_sample_table(h, rows, cells):
+    groups = rows_by_program(rows)
+    lines = [
+        "# vkvcm side by side: error per sample",
+        "",
+        f"- date: {h['date']}; command: `{h['command']}` ({h['elapsed_s'] / 60:.1f} min)",
+        f"- machine: {h['machine']}; CPU: {h['cpu_model']}, {h['cores']} cores",
+        f"- vkvcm: repository commit {h['commit']}; binary {h['vkvcm']['binary']} ({h['vkvcm']['version']}, "
+        f"sha256 {h['vkvcm']['sha256']}); device {h['vkvcm']['driver']}",
+        f"- every render {per_sample_iterations(h)} iterations (one sample per pixel each; Mitsuba: spp), {h['seeds']} seeds "
+        "per row, programs alternating",
+        "- relMSE as in the run's table (less the reference's noise floor); relMSE x iterations: lower is better, "
+        "constant in the iteration count for an error falling as 1/N; \"vs peer\" = the peer's median / this row's "
+        "(above 1: vkvcm has less error per sample), in brackets its 90% bootstrap interval over the seeds",
+        "- " + references_line(rows),
+        "",
+        "| scene | estimator | program | runs | relMSE x iterations: median (min-max) | mean | vs peer |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    seen = set()
+    for scene, e, peer, pe in cells:
+        for key in ((scene, e, "vkvcm"), (scene, pe, peer)):
+            if key in seen or key not in groups:
+                continue
+            seen.add(key)
+            g = groups[key]
+            err = [error_per_sample(r) for r in g]
+            ratio = "" if key[2] != "vkvcm" else ratio_with_interval(groups[(scene, pe, peer)], g, error_per_sample)
+            lines.append(f"| {scene} | {key[1]} | {key[2]} | {len(g)} | {median_range(err, sig)} | "
+                         f"{sig(statistics.mean(err))} | {ratio} |")
+    return "\n".join(lines) + "\n"
 
 
 def startup_of(program, scene, est):
@@ -858,11 +999,63 @@ def sig(x):
     return f"{x:.3g}"
 
 
-def render_table(h, rows, cells):
-    groups = {}
+# Resamples of the bootstrap interval of a ratio of medians; its generator's seed is
+# fixed, so a table printed again shows the same interval.
+BOOTSTRAP_ROUNDS = 4000
+
+
+def median_ratio_interval(peer, ours, level=0.9):
+    """The percentile bootstrap interval (Efron & Tibshirani, "An Introduction to the
+    Bootstrap", 1993, ch. 13) of median(peer) / median(ours), each list of values resampled
+    with replacement on its own. With five heavy-tailed runs per row (fireflies) the ratio
+    of two medians moves by tens of percent from one set of seeds to the next; the
+    interval says how far. Returns (low, high)."""
+    rng = random.Random(20261205)
+    ratios = sorted(statistics.median(rng.choices(peer, k=len(peer))) /
+                    statistics.median(rng.choices(ours, k=len(ours))) for _ in range(BOOTSTRAP_ROUNDS))
+    cut = int(round((1 - level) / 2 * BOOTSTRAP_ROUNDS))
+    return ratios[cut], ratios[BOOTSTRAP_ROUNDS - 1 - cut]
+
+
+def ratio_with_interval(peer_group, our_group, value):
+    """The peer's median `value` over ours, with its bootstrap interval."""
+    peer = [value(r) for r in peer_group]
+    ours = [value(r) for r in our_group]
+    lo, hi = median_ratio_interval(peer, ours)
+    return f"{statistics.median(peer) / statistics.median(ours):.2f} ({lo:.2f}-{hi:.2f})"
+
+
+def rows_by_program(rows):
+    """The runs of each (scene, estimator, program), each image once: in runs made before
+    PEER_SEED_STRIDE, a peer row serving several cells rendered the same seed into the same
+    file for each, so the file holds the last of those renders, and results.json lists it
+    once per cell; the last entry is the one whose CPU time belongs to the image."""
+    last = {}
     for r in rows:
+        last[(r["scene"], r["estimator"], r["program"], r["image"])] = r
+    groups = {}
+    for r in last.values():
         groups.setdefault((r["scene"], r["estimator"], r["program"]), []).append(r)
-    eff = {k: statistics.median(r["relmse"] * r["cpu_s"] for r in g) for k, g in groups.items()}
+    return groups
+
+
+def speed(r):
+    """Iterations per CPU-s of a run (higher is better)."""
+    return r["iterations"] / r["cpu_s"]
+
+
+def efficiency(r):
+    """relMSE x CPU-s of a run (lower is better)."""
+    return r["relmse"] * r["cpu_s"]
+
+
+def error_per_sample(r):
+    """relMSE x iterations of a run (lower is better)."""
+    return r["relmse"] * r["iterations"]
+
+
+def render_table(h, rows, cells):
+    groups = rows_by_program(rows)
     vk = h["vkvcm"]
     lines = [
         f"# vkvcm side by side: {'QUICK (smoke test, not for figures)' if h['quick'] else 'full run'}",
@@ -884,7 +1077,10 @@ def render_table(h, rows, cells):
         + (", less the reference's noise floor (the part its own noise adds; in the reference lines below)"
            if h.get("relmse_less_noise_floor") else "")
         + "; relMSE x CPU-s: lower is better; "
-        "\"vs peer\" = the peer's median relMSE x CPU-s / this row's (above 1: vkvcm is more efficient)",
+        "\"vs peer\" = the peer's median relMSE x CPU-s / this row's (above 1: vkvcm is more efficient), in "
+        "brackets its 90% bootstrap interval over the seeds (how much the ratio of medians moves with the seeds); "
+        "\"speed vs peer\" = this row's median iterations per CPU-s / the peer's, likewise (vs peer = speed vs peer x "
+        "the peer's error per sample / this row's, which `peers.py per-sample` measures)",
         "- " + references_line(rows),
     ]
     if "rescored" in h:
@@ -900,8 +1096,8 @@ def render_table(h, rows, cells):
     lines += [
         "",
         "| scene | estimator | program | runs | CPU-s per run (median) | start-up CPU-s | iterations per CPU-s: median (min-max) "
-        "| relMSE: median | relMSE x CPU-s: median (min-max) | vs peer |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| speed vs peer | relMSE: median | relMSE x CPU-s: median (min-max) | vs peer |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     seen = set()
     for scene, e, peer, pe in cells:
@@ -910,14 +1106,17 @@ def render_table(h, rows, cells):
                 continue
             seen.add(key)
             g = groups[key]
-            ratio = "" if key[2] != "vkvcm" else f"{eff[(scene, pe, peer)] / eff[key]:.2f}"
+            ratio = speed_ratio = ""
+            if key[2] == "vkvcm":
+                ratio = ratio_with_interval(groups[(scene, pe, peer)], g, efficiency)
+                speed_ratio = ratio_with_interval(g, groups[(scene, pe, peer)], speed)
             startup = g[0]["startup_cpu_s"]
             lines.append(
                 f"| {scene} | {key[1]} | {key[2]} | {len(g)} | {statistics.median(r['cpu_s'] for r in g):.2f} | "
                 f"{'' if startup is None else f'{startup:.2f}'} | "
-                f"{median_range([r['iterations'] / r['cpu_s'] for r in g], sig)} | "
+                f"{median_range([speed(r) for r in g], sig)} | {speed_ratio} | "
                 f"{sig(statistics.median(r['relmse'] for r in g))} | "
-                f"{median_range([r['relmse'] * r['cpu_s'] for r in g], sig)} | {ratio} |")
+                f"{median_range([efficiency(r) for r in g], sig)} | {ratio} |")
     return "\n".join(lines) + "\n"
 
 
@@ -988,8 +1187,15 @@ def main():
                                 "(e.g. vcm,bpt,bpt:path,vcm:cache:2,vcm@32768,pt,pt:independent)")
             s.add_argument("--references", help="folder of references (default OUT/references, with --quick OUT/references-quick)")
             s.set_defaults(func=cmd_run)
-    s = sub.add_parser("table", help="print the table of a finished run again")
-    s.add_argument("results", help="a run's folder (OUT/runs/STAMP) or its results.json")
+    s = sub.add_parser("per-sample", help="error per sample: every program renders the same iteration count")
+    s.add_argument("--scenes", help=f"comma-separated (default all: {', '.join(list(SMALLVCM_SCENES) + [MITSUBA_SCENE])})")
+    s.add_argument("--estimators", help="vkvcm estimators, comma-separated, as for `run`")
+    s.add_argument("--iterations", type=int, default=64, help="iterations (samples per pixel) of every render (default 64)")
+    s.add_argument("--seeds", type=int, default=8, help="renders per row, at least 3 (default 8)")
+    s.add_argument("--references", help="folder of references (default OUT/references)")
+    s.set_defaults(func=cmd_per_sample)
+    s = sub.add_parser("table", help="print the table of a finished run (or per-sample) again")
+    s.add_argument("results", help="a run's folder (OUT/runs/STAMP, OUT/per-sample/STAMP) or its results.json")
     s.add_argument("--rescore", action="store_true",
                    help="measure the run's images again against the references there are now")
     s.add_argument("--references", help="with --rescore: folder of references (default: the run's)")
