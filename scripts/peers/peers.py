@@ -697,17 +697,8 @@ def cmd_run(args):
     seeds = args.seeds or budget["seeds"]
     if seeds < 3:
         raise HarnessError("--seeds must be at least 3 (one run's relMSE is dominated by fireflies)")
-    out = Path(args.out)
-    cache = Cache(args.cache)
-    vk = Vkvcm(args.vkvcm, out)
-    vk.check()
-    cache.require_venv()
-    scenes = scenes_of(args)
-    if any(s in SMALLVCM_SCENES for s in scenes):
-        SmallVcm(cache).check()
-    if MITSUBA_SCENE in scenes:
-        Mitsuba(cache, out).check()
-    write_scenes(out)
+    out, cache, programs, scenes = sitting_programs(args)
+    vk = programs["vkvcm"]
 
     refs = Path(args.references) if args.references else ref_dir(out, args.quick)
     missing = [s for s in scenes if any(not (refs / f"{n}.exr").exists() for n in references_of(s))]
@@ -719,19 +710,10 @@ def cmd_run(args):
         raise HarnessError(f"no reference for {', '.join(missing)} in {refs}: run `{sys.argv[0]} reference` first "
                            "(or --references DIR)")
 
-    # Cells: pairs (vkvcm estimator, peer) in the order they run within a round.
-    cells = []
-    for scene in scenes:
-        if scene in SMALLVCM_SCENES:
-            for e in (args.estimators.split(",") if args.estimators else SMALLVCM_ESTIMATORS):
-                cells.append((scene, e, "SmallVCM", split_estimator(e)[0]))
-        else:
-            for e in (args.estimators.split(",") if args.estimators else MITSUBA_ESTIMATORS):
-                cells.append((scene, e, "Mitsuba", "path"))
+    cells = cells_of(scenes, args.estimators)
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
     work = out / "runs" / stamp
     work.mkdir(parents=True)
-    programs = {"vkvcm": vk, "SmallVCM": SmallVcm(cache), "Mitsuba": Mitsuba(cache, out)}
 
     header = describe_sitting(cache, vk, programs, cpu, seeds, args.quick, refs)
     header["load_before"] = os.getloadavg()
@@ -744,27 +726,57 @@ def cmd_run(args):
 
     rows = []
     total = len(cells) * seeds * 2
-    repeats = peer_repeats(cells)
-    for i in range(1, seeds + 1):
-        for (scene, e, peer, pe), k in zip(cells, repeats):
-            # Alternate: vkvcm then the peer in odd rounds, the peer first in even ones.
-            order = [("vkvcm", e, i), (peer, pe, i + PEER_SEED_STRIDE * k)]
-            if i % 2 == 0:
-                order.reverse()
-            for prog, est, seed in order:
-                base = work / f"{scene}_{est.replace(':', '-')}_{prog}_{seed}"
-                iterations, c, img = programs[prog].render(scene, est, seed, cpu, base)
-                rows.append({"scene": scene, "estimator": est, "program": prog, "seed": seed, "iterations": iterations,
-                             "cpu_s": c.cpu, "wall_s": c.wall, "image": str(img),
-                             "startup_cpu_s": startup_of(programs[prog], scene, est)})
-                log(f"[{len(rows)}/{total}] {scene} {est} {prog} seed {seed}: {iterations} iterations, "
-                    f"{c.cpu:.2f} CPU-s, {c.wall:.2f} s")
+    for scene, prog, est, seed in alternating_runs(cells, seeds):
+        base = work / f"{scene}_{est.replace(':', '-')}_{prog}_{seed}"
+        iterations, c, img = programs[prog].render(scene, est, seed, cpu, base)
+        rows.append({"scene": scene, "estimator": est, "program": prog, "seed": seed, "iterations": iterations,
+                     "cpu_s": c.cpu, "wall_s": c.wall, "image": str(img),
+                     "startup_cpu_s": startup_of(programs[prog], scene, est)})
+        log(f"[{len(rows)}/{total}] {scene} {est} {prog} seed {seed}: {iterations} iterations, "
+            f"{c.cpu:.2f} CPU-s, {c.wall:.2f} s")
+    finish_sitting(cache, header, t_start, rows, cells, refs, scenes, work, render_table)
+
+
+def sitting_programs(args):
+    """What a sitting needs: (out folder, cache, {program name: program}, scenes), the
+    programs its scenes use checked and the peer scenes written."""
+    out = Path(args.out)
+    cache = Cache(args.cache)
+    programs = {"vkvcm": Vkvcm(args.vkvcm, out), "SmallVCM": SmallVcm(cache), "Mitsuba": Mitsuba(cache, out)}
+    programs["vkvcm"].check()
+    cache.require_venv()
+    scenes = scenes_of(args)
+    if any(s in SMALLVCM_SCENES for s in scenes):
+        programs["SmallVCM"].check()
+    if MITSUBA_SCENE in scenes:
+        programs["Mitsuba"].check()
+    write_scenes(out)
+    return out, cache, programs, scenes
+
+
+def cells_of(scenes, estimators):
+    """The cells of a sitting, (scene, vkvcm estimator, peer, the peer's estimator), in the
+    order they run within a round; `estimators`: the vkvcm estimators, comma-separated, or
+    None for each peer's defaults."""
+    cells = []
+    for scene in scenes:
+        if scene in SMALLVCM_SCENES:
+            for e in (estimators.split(",") if estimators else SMALLVCM_ESTIMATORS):
+                cells.append((scene, e, "SmallVCM", split_estimator(e)[0]))
+        else:
+            for e in (estimators.split(",") if estimators else MITSUBA_ESTIMATORS):
+                cells.append((scene, e, "Mitsuba", "path"))
+    return cells
+
+
+def finish_sitting(cache, header, t_start, rows, cells, refs, scenes, work, render):
+    """Scores a sitting's renders, writes results.json and table.md (`render`'s table) into
+    `work` and prints the table."""
     header["load_after"] = os.getloadavg()
     header["elapsed_s"] = time.monotonic() - t_start
-
     score(cache, header, rows, refs, scenes, work)
     (work / "results.json").write_text(json.dumps({"sitting": header, "cells": cells, "rows": rows}, indent=1) + "\n")
-    table = render_table(header, rows, cells)
+    table = render(header, rows, cells)
     (work / "table.md").write_text(table)
     print(table)
     log(f"results: {work}/results.json, table: {work}/table.md")
@@ -785,6 +797,20 @@ def peer_repeats(cells):
         repeats.append(seen.get(key, 0))
         seen[key] = repeats[-1] + 1
     return repeats
+
+
+def alternating_runs(cells, seeds):
+    """The renders of a sitting in order, as (scene, program, estimator, seed): round i
+    runs every cell, vkvcm then its peer in odd rounds, the peer first in even ones; vkvcm
+    renders seed i, the peer i + PEER_SEED_STRIDE k in its k-th cell."""
+    repeats = peer_repeats(cells)
+    for i in range(1, seeds + 1):
+        for (scene, e, peer, pe), k in zip(cells, repeats):
+            order = [("vkvcm", e, i), (peer, pe, i + PEER_SEED_STRIDE * k)]
+            if i % 2 == 0:
+                order.reverse()
+            for prog, est, seed in order:
+                yield scene, prog, est, seed
 
 
 def references_of(scene):
@@ -865,29 +891,14 @@ def cmd_per_sample(args):
         raise HarnessError("--seeds must be at least 3 (one run's relMSE is dominated by fireflies)")
     if args.iterations < 1:
         raise HarnessError("--iterations must be at least 1")
-    out = Path(args.out)
-    cache = Cache(args.cache)
-    vk = Vkvcm(args.vkvcm, out)
-    vk.check()
-    cache.require_venv()
-    scenes = scenes_of(args)
-    programs = {"vkvcm": vk, "SmallVCM": SmallVcm(cache), "Mitsuba": Mitsuba(cache, out)}
-    if any(s in SMALLVCM_SCENES for s in scenes):
-        programs["SmallVCM"].check()
-    if MITSUBA_SCENE in scenes:
-        programs["Mitsuba"].check()
-    write_scenes(out)
+    out, cache, programs, scenes = sitting_programs(args)
+    vk = programs["vkvcm"]
     refs = Path(args.references) if args.references else ref_dir(out, False)
     missing = [s for s in scenes if any(not (refs / f"{n}.exr").exists() for n in references_of(s))]
     if missing:
         raise HarnessError(f"no reference for {', '.join(missing)} in {refs}: run `{sys.argv[0]} reference` first "
                            "(or --references DIR)")
-    cells = []
-    for scene in scenes:
-        default = SMALLVCM_ESTIMATORS if scene in SMALLVCM_SCENES else MITSUBA_ESTIMATORS
-        for e in (args.estimators.split(",") if args.estimators else default):
-            cells.append((scene, e, "SmallVCM", split_estimator(e)[0]) if scene in SMALLVCM_SCENES
-                         else (scene, e, "Mitsuba", "path"))
+    cells = cells_of(scenes, args.estimators)
     work = out / "per-sample" / datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
     work.mkdir(parents=True)
     header = describe_sitting(cache, vk, programs, None, args.seeds, False, refs)
@@ -897,35 +908,22 @@ def cmd_per_sample(args):
     n = str(args.iterations)
     rows = []
     total = len(cells) * args.seeds * 2
-    repeats = peer_repeats(cells)
-    for i in range(1, args.seeds + 1):
-        for (scene, e, peer, pe), k in zip(cells, repeats):
-            order = [("vkvcm", e, i), (peer, pe, i + PEER_SEED_STRIDE * k)]
-            if i % 2 == 0:
-                order.reverse()
-            for prog, est, seed in order:
-                base = work / f"{scene}_{est.replace(':', '-')}_{prog}_{seed}"
-                if prog == "vkvcm":
-                    img = base.with_suffix(".exr")
-                    c = run_charged(vk.command(scene, est, seed, img, ["--iterations", n]), base.with_suffix(".log"))
-                elif prog == "SmallVCM":
-                    sv = programs["SmallVCM"]
-                    c = run_charged(sv.command(scene, est, 1000 * seed, base.with_suffix(".hdr"), ["-i", n]),
-                                    base.with_suffix(".log"))
-                    img = base.with_suffix(".pfm")
-                else:
-                    _, c, img = programs["Mitsuba"].render(scene, est, seed, None, base, spp=args.iterations)
-                rows.append({"scene": scene, "estimator": est, "program": prog, "seed": seed,
-                             "iterations": args.iterations, "cpu_s": c.cpu, "wall_s": c.wall, "image": str(img)})
-                log(f"[{len(rows)}/{total}] {scene} {est} {prog} seed {seed}: {c.cpu:.2f} CPU-s")
-    header["load_after"] = os.getloadavg()
-    header["elapsed_s"] = time.monotonic() - t_start
-    score(cache, header, rows, refs, scenes, work)
-    (work / "results.json").write_text(json.dumps({"sitting": header, "cells": cells, "rows": rows}, indent=1) + "\n")
-    table = render_per_sample_table(header, rows, cells)
-    (work / "table.md").write_text(table)
-    print(table)
-    log(f"results: {work}/results.json, table: {work}/table.md")
+    for scene, prog, est, seed in alternating_runs(cells, args.seeds):
+        base = work / f"{scene}_{est.replace(':', '-')}_{prog}_{seed}"
+        if prog == "vkvcm":
+            img = base.with_suffix(".exr")
+            c = run_charged(vk.command(scene, est, seed, img, ["--iterations", n]), base.with_suffix(".log"))
+        elif prog == "SmallVCM":
+            sv = programs["SmallVCM"]
+            c = run_charged(sv.command(scene, est, 1000 * seed, base.with_suffix(".hdr"), ["-i", n]),
+                            base.with_suffix(".log"))
+            img = base.with_suffix(".pfm")
+        else:
+            _, c, img = programs["Mitsuba"].render(scene, est, seed, None, base, spp=args.iterations)
+        rows.append({"scene": scene, "estimator": est, "program": prog, "seed": seed,
+                     "iterations": args.iterations, "cpu_s": c.cpu, "wall_s": c.wall, "image": str(img)})
+        log(f"[{len(rows)}/{total}] {scene} {est} {prog} seed {seed}: {c.cpu:.2f} CPU-s")
+    finish_sitting(cache, header, t_start, rows, cells, refs, scenes, work, render_per_sample_table)
 
 
 def per_sample_iterations(h):
@@ -952,17 +950,11 @@ def render_per_sample_table(h, rows, cells):
         "| scene | estimator | program | runs | relMSE x iterations: median (min-max) | mean | vs peer |",
         "|---|---|---|---|---|---|---|",
     ]
-    seen = set()
-    for scene, e, peer, pe in cells:
-        for key in ((scene, e, "vkvcm"), (scene, pe, peer)):
-            if key in seen or key not in groups:
-                continue
-            seen.add(key)
-            g = groups[key]
-            err = [error_per_sample(r) for r in g]
-            ratio = "" if key[2] != "vkvcm" else ratio_with_interval(groups[(scene, pe, peer)], g, error_per_sample)
-            lines.append(f"| {scene} | {key[1]} | {key[2]} | {len(g)} | {median_range(err, sig)} | "
-                         f"{sig(statistics.mean(err))} | {ratio} |")
+    for (scene, est, prog), g, peer_g in table_rows(cells, groups):
+        err = [error_per_sample(r) for r in g]
+        ratio = "" if peer_g is None else ratio_with_interval(peer_g, g, error_per_sample)
+        lines.append(f"| {scene} | {est} | {prog} | {len(g)} | {median_range(err, sig)} | "
+                     f"{sig(statistics.mean(err))} | {ratio} |")
     return "\n".join(lines) + "\n"
 
 
@@ -1039,6 +1031,18 @@ def rows_by_program(rows):
     return groups
 
 
+def table_rows(cells, groups):
+    """The rows of a table in the cells' order, each once: ((scene, estimator, program),
+    its runs, and for a vkvcm row the runs of its peer's row, else None)."""
+    seen = set()
+    for scene, e, peer, pe in cells:
+        for key in ((scene, e, "vkvcm"), (scene, pe, peer)):
+            if key in seen or key not in groups:
+                continue
+            seen.add(key)
+            yield key, groups[key], groups.get((scene, pe, peer)) if key[2] == "vkvcm" else None
+
+
 def speed(r):
     """Iterations per CPU-s of a run (higher is better)."""
     return r["iterations"] / r["cpu_s"]
@@ -1099,24 +1103,18 @@ def render_table(h, rows, cells):
         "| speed vs peer | relMSE: median | relMSE x CPU-s: median (min-max) | vs peer |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    seen = set()
-    for scene, e, peer, pe in cells:
-        for key in ((scene, e, "vkvcm"), (scene, pe, peer)):
-            if key in seen or key not in groups:
-                continue
-            seen.add(key)
-            g = groups[key]
-            ratio = speed_ratio = ""
-            if key[2] == "vkvcm":
-                ratio = ratio_with_interval(groups[(scene, pe, peer)], g, efficiency)
-                speed_ratio = ratio_with_interval(g, groups[(scene, pe, peer)], speed)
-            startup = g[0]["startup_cpu_s"]
-            lines.append(
-                f"| {scene} | {key[1]} | {key[2]} | {len(g)} | {statistics.median(r['cpu_s'] for r in g):.2f} | "
-                f"{'' if startup is None else f'{startup:.2f}'} | "
-                f"{median_range([speed(r) for r in g], sig)} | {speed_ratio} | "
-                f"{sig(statistics.median(r['relmse'] for r in g))} | "
-                f"{median_range([efficiency(r) for r in g], sig)} | {ratio} |")
+    for (scene, est, prog), g, peer_g in table_rows(cells, groups):
+        ratio = speed_ratio = ""
+        if peer_g is not None:
+            ratio = ratio_with_interval(peer_g, g, efficiency)
+            speed_ratio = ratio_with_interval(g, peer_g, speed)
+        startup = g[0]["startup_cpu_s"]
+        lines.append(
+            f"| {scene} | {est} | {prog} | {len(g)} | {statistics.median(r['cpu_s'] for r in g):.2f} | "
+            f"{'' if startup is None else f'{startup:.2f}'} | "
+            f"{median_range([speed(r) for r in g], sig)} | {speed_ratio} | "
+            f"{sig(statistics.median(r['relmse'] for r in g))} | "
+            f"{median_range([efficiency(r) for r in g], sig)} | {ratio} |")
     return "\n".join(lines) + "\n"
 
 
