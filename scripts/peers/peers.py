@@ -69,6 +69,9 @@ REF_SEED = 50000
 
 QUICK = {"cpu": 3.0, "seeds": 3, "ref_cpu": 16.0, "ref_chunks": 8}
 FULL = {"cpu": 20.0, "seeds": 5, "ref_cpu": 600.0, "ref_chunks": 16}
+# `per-sample`'s iterations per render and seeds per row.
+PER_SAMPLE_QUICK = {"iterations": 8, "seeds": 3}
+PER_SAMPLE_FULL = {"iterations": 64, "seeds": 8}
 
 
 class HarnessError(Exception):
@@ -700,15 +703,7 @@ def cmd_run(args):
     out, cache, programs, scenes = sitting_programs(args)
     vk = programs["vkvcm"]
 
-    refs = Path(args.references) if args.references else ref_dir(out, args.quick)
-    missing = [s for s in scenes if any(not (refs / f"{n}.exr").exists() for n in references_of(s))]
-    if missing and args.quick and not args.references:
-        log(f"no quick references for {', '.join(missing)} in {refs}: making them "
-            f"({QUICK['ref_cpu']:.0f} CPU-s per program and scene)")
-        make_references(cache, Path(args.vkvcm), out, refs, missing, QUICK["ref_cpu"], QUICK["ref_chunks"])
-    elif missing:
-        raise HarnessError(f"no reference for {', '.join(missing)} in {refs}: run `{sys.argv[0]} reference` first "
-                           "(or --references DIR)")
+    refs = sitting_references(args, out, cache, scenes)
 
     cells = cells_of(scenes, args.estimators)
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
@@ -752,6 +747,21 @@ def sitting_programs(args):
         programs["Mitsuba"].check()
     write_scenes(out)
     return out, cache, programs, scenes
+
+
+def sitting_references(args, out, cache, scenes):
+    """The references folder of a sitting: --references, else the full or (--quick) the
+    quick one, whose missing references a quick sitting makes itself."""
+    refs = Path(args.references) if args.references else ref_dir(out, args.quick)
+    missing = [s for s in scenes if any(not (refs / f"{n}.exr").exists() for n in references_of(s))]
+    if missing and args.quick and not args.references:
+        log(f"no quick references for {', '.join(missing)} in {refs}: making them "
+            f"({QUICK['ref_cpu']:.0f} CPU-s per program and scene)")
+        make_references(cache, Path(args.vkvcm), out, refs, missing, QUICK["ref_cpu"], QUICK["ref_chunks"])
+    elif missing:
+        raise HarnessError(f"no reference for {', '.join(missing)} in {refs}: run `{sys.argv[0]} reference` first "
+                           "(or --references DIR)")
+    return refs
 
 
 def cells_of(scenes, estimators):
@@ -887,28 +897,27 @@ def cmd_per_sample(args):
     seed, and the table gives relMSE x iterations, which a program with a 1/N error keeps
     constant. The run's relMSE x CPU-s ratio is this ratio times the ratio of iterations
     per CPU-second; a difference in the run that this does not show is speed."""
-    if args.seeds < 3:
+    budget = PER_SAMPLE_QUICK if args.quick else PER_SAMPLE_FULL
+    iterations = args.iterations or budget["iterations"]
+    seeds = args.seeds or budget["seeds"]
+    if seeds < 3:
         raise HarnessError("--seeds must be at least 3 (one run's relMSE is dominated by fireflies)")
-    if args.iterations < 1:
+    if iterations < 1:
         raise HarnessError("--iterations must be at least 1")
     out, cache, programs, scenes = sitting_programs(args)
     vk = programs["vkvcm"]
-    refs = Path(args.references) if args.references else ref_dir(out, False)
-    missing = [s for s in scenes if any(not (refs / f"{n}.exr").exists() for n in references_of(s))]
-    if missing:
-        raise HarnessError(f"no reference for {', '.join(missing)} in {refs}: run `{sys.argv[0]} reference` first "
-                           "(or --references DIR)")
+    refs = sitting_references(args, out, cache, scenes)
     cells = cells_of(scenes, args.estimators)
     work = out / "per-sample" / datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
     work.mkdir(parents=True)
-    header = describe_sitting(cache, vk, programs, None, args.seeds, False, refs)
-    header["per_sample_iterations"] = args.iterations
+    header = describe_sitting(cache, vk, programs, None, seeds, args.quick, refs)
+    header["per_sample_iterations"] = iterations
     header["load_before"] = os.getloadavg()
     t_start = time.monotonic()
-    n = str(args.iterations)
+    n = str(iterations)
     rows = []
-    total = len(cells) * args.seeds * 2
-    for scene, prog, est, seed in alternating_runs(cells, args.seeds):
+    total = len(cells) * seeds * 2
+    for scene, prog, est, seed in alternating_runs(cells, seeds):
         base = work / f"{scene}_{est.replace(':', '-')}_{prog}_{seed}"
         if prog == "vkvcm":
             img = base.with_suffix(".exr")
@@ -919,9 +928,9 @@ def cmd_per_sample(args):
                             base.with_suffix(".log"))
             img = base.with_suffix(".pfm")
         else:
-            _, c, img = programs["Mitsuba"].render(scene, est, seed, None, base, spp=args.iterations)
+            _, c, img = programs["Mitsuba"].render(scene, est, seed, None, base, spp=iterations)
         rows.append({"scene": scene, "estimator": est, "program": prog, "seed": seed,
-                     "iterations": args.iterations, "cpu_s": c.cpu, "wall_s": c.wall, "image": str(img)})
+                     "iterations": iterations, "cpu_s": c.cpu, "wall_s": c.wall, "image": str(img)})
         log(f"[{len(rows)}/{total}] {scene} {est} {prog} seed {seed}: {c.cpu:.2f} CPU-s")
     finish_sitting(cache, header, t_start, rows, cells, refs, scenes, work, render_per_sample_table)
 
@@ -934,7 +943,7 @@ def per_sample_iterations(h):
 def render_per_sample_table(h, rows, cells):
     groups = rows_by_program(rows)
     lines = [
-        "# vkvcm side by side: error per sample",
+        f"# vkvcm side by side: error per sample{' (QUICK: smoke test, not for figures)' if h['quick'] else ''}",
         "",
         f"- date: {h['date']}; command: `{h['command']}` ({h['elapsed_s'] / 60:.1f} min)",
         f"- machine: {h['machine']}; CPU: {h['cpu_model']}, {h['cores']} cores",
@@ -1188,9 +1197,11 @@ def main():
     s = sub.add_parser("per-sample", help="error per sample: every program renders the same iteration count")
     s.add_argument("--scenes", help=f"comma-separated (default all: {', '.join(list(SMALLVCM_SCENES) + [MITSUBA_SCENE])})")
     s.add_argument("--estimators", help="vkvcm estimators, comma-separated, as for `run`")
-    s.add_argument("--iterations", type=int, default=64, help="iterations (samples per pixel) of every render (default 64)")
-    s.add_argument("--seeds", type=int, default=8, help="renders per row, at least 3 (default 8)")
-    s.add_argument("--references", help="folder of references (default OUT/references)")
+    s.add_argument("--quick", action="store_true",
+                   help="8 iterations, 3 seeds, the quick references (made if missing): a smoke test, not figures")
+    s.add_argument("--iterations", type=int, help="iterations (samples per pixel) of every render (default 64)")
+    s.add_argument("--seeds", type=int, help="renders per row, at least 3 (default 8)")
+    s.add_argument("--references", help="folder of references (default OUT/references, with --quick OUT/references-quick)")
     s.set_defaults(func=cmd_per_sample)
     s = sub.add_parser("table", help="print the table of a finished run (or per-sample) again")
     s.add_argument("results", help="a run's folder (OUT/runs/STAMP, OUT/per-sample/STAMP) or its results.json")
