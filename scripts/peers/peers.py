@@ -697,18 +697,9 @@ def agreement_line(r):
 def cmd_run(args):
     budget = QUICK if args.quick else FULL
     cpu = args.cpu or budget["cpu"]
-    seeds = args.seeds or budget["seeds"]
-    if seeds < 3:
-        raise HarnessError("--seeds must be at least 3 (one run's relMSE is dominated by fireflies)")
-    out, cache, programs, scenes = sitting_programs(args)
+    seeds = seeds_of(args, budget)
+    out, cache, programs, scenes, refs, cells, work = open_sitting(args, "runs")
     vk = programs["vkvcm"]
-
-    refs = sitting_references(args, out, cache, scenes)
-
-    cells = cells_of(scenes, args.estimators)
-    stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
-    work = out / "runs" / stamp
-    work.mkdir(parents=True)
 
     header = describe_sitting(cache, vk, programs, cpu, seeds, args.quick, refs)
     header["load_before"] = os.getloadavg()
@@ -732,9 +723,27 @@ def cmd_run(args):
     finish_sitting(cache, header, t_start, rows, cells, refs, scenes, work, render_table)
 
 
+def seeds_of(args, budget):
+    """--seeds, else the budget's; at least 3."""
+    seeds = args.seeds or budget["seeds"]
+    if seeds < 3:
+        raise HarnessError("--seeds must be at least 3 (one run's relMSE is dominated by fireflies)")
+    return seeds
+
+
+def open_sitting(args, kind):
+    """What a sitting (`run`, `per-sample`) needs: (out folder, cache, {program name:
+    program}, scenes, references folder, cells, its new folder OUT/kind/STAMP)."""
+    out, cache, programs, scenes = sitting_programs(args)
+    refs = sitting_references(args, out, cache, scenes)
+    work = out / kind / datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
+    work.mkdir(parents=True)
+    return out, cache, programs, scenes, refs, cells_of(scenes, args.estimators), work
+
+
 def sitting_programs(args):
-    """What a sitting needs: (out folder, cache, {program name: program}, scenes), the
-    programs its scenes use checked and the peer scenes written."""
+    """The programs of a sitting, checked, and the peer scenes written: (out folder,
+    cache, {program name: program}, scenes)."""
     out = Path(args.out)
     cache = Cache(args.cache)
     programs = {"vkvcm": Vkvcm(args.vkvcm, out), "SmallVCM": SmallVcm(cache), "Mitsuba": Mitsuba(cache, out)}
@@ -899,17 +908,11 @@ def cmd_per_sample(args):
     per CPU-second; a difference in the run that this does not show is speed."""
     budget = PER_SAMPLE_QUICK if args.quick else PER_SAMPLE_FULL
     iterations = args.iterations or budget["iterations"]
-    seeds = args.seeds or budget["seeds"]
-    if seeds < 3:
-        raise HarnessError("--seeds must be at least 3 (one run's relMSE is dominated by fireflies)")
+    seeds = seeds_of(args, budget)
     if iterations < 1:
         raise HarnessError("--iterations must be at least 1")
-    out, cache, programs, scenes = sitting_programs(args)
+    out, cache, programs, scenes, refs, cells, work = open_sitting(args, "per-sample")
     vk = programs["vkvcm"]
-    refs = sitting_references(args, out, cache, scenes)
-    cells = cells_of(scenes, args.estimators)
-    work = out / "per-sample" / datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
-    work.mkdir(parents=True)
     header = describe_sitting(cache, vk, programs, None, seeds, args.quick, refs)
     header["per_sample_iterations"] = iterations
     header["load_before"] = os.getloadavg()
