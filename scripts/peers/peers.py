@@ -252,6 +252,13 @@ class Vkvcm:
             self.cpu_per_iteration[key] = (c.cpu - startup) / (iterations - 1)
         return iterations, c, exr
 
+    def render_iterations(self, scene, estimator, seed, iterations, out_base, env=None):
+        """Exactly `iterations` iterations: (Charged, image)."""
+        exr = out_base.with_suffix(".exr")
+        c = run_charged(self.command(scene, estimator, seed, exr, ["--iterations", str(iterations)]),
+                        out_base.with_suffix(".log"), env=env)
+        return c, exr
+
     def describe(self):
         version = capture([self.binary, "--version"]).strip()
         devices = capture([self.binary, "devices"])
@@ -265,8 +272,10 @@ class Vkvcm:
 class SmallVcm:
     name = "SmallVCM"
 
-    def __init__(self, cache):
+    def __init__(self, cache, binary=None):
         self.cache = cache
+        # Another build of SmallVCM than the harness's (strategy_diag.py's variants).
+        self.binary = binary
         self.startup = {}  # (scene, estimator) -> CPU-s of a 1-iteration run
         self.overhead = {}  # (scene, estimator) -> CPU-s of a run outside its timed loop
 
@@ -274,8 +283,8 @@ class SmallVcm:
         self.cache.require_smallvcm()
 
     def command(self, scene, estimator, seed, out_hdr, budget):
-        return [self.cache.smallvcm, "-s", SMALLVCM_SCENES[scene], "-a", estimator, "-r", SMALLVCM_SIZE,
-                "-seed", seed, "-o", out_hdr] + budget
+        return [self.binary or self.cache.smallvcm, "-s", SMALLVCM_SCENES[scene], "-a", estimator, "-r",
+                SMALLVCM_SIZE, "-seed", seed, "-o", out_hdr] + budget
 
     def warm_up(self, scene, estimator, workdir):
         c = run_charged(self.command(scene, estimator, 0, workdir / "warmup.hdr", ["-i", "1"]), workdir / "warmup.log")
@@ -288,11 +297,22 @@ class SmallVcm:
         # SmallVCM's -t is CPU time (clock(), all threads) of its render loop; it stops
         # after the iteration that crosses it (each thread finishes its own).
         seconds = max(0.1, cpu - self.overhead.get((scene, estimator), 0.0))
-        hdr = out_base.with_suffix(".hdr")
-        c = run_charged(self.command(scene, estimator, 1000 * seed, hdr, ["-t", f"{seconds:.3f}"]),
-                        out_base.with_suffix(".log"))
+        c = self._run(scene, estimator, seed, ["-t", f"{seconds:.3f}"], out_base)
         iterations = int(parse(r"Iterations total: (\d+)", c.output, "SmallVCM's iteration count").group(1))
         return iterations, c, out_base.with_suffix(".pfm")
+
+    def render_iterations(self, scene, estimator, seed, iterations, out_base):
+        """Exactly `iterations` iterations (summed over its threads): (Charged, image)."""
+        c = self._run(scene, estimator, seed, ["-i", str(iterations)], out_base)
+        done = int(parse(r"Iterations total: (\d+)", c.output, "SmallVCM's iteration count").group(1))
+        if done != iterations:
+            raise HarnessError(f"SmallVCM ran {done} iterations, not {iterations} (log {out_base.with_suffix('.log')})")
+        return c, out_base.with_suffix(".pfm")
+
+    def _run(self, scene, estimator, seed, budget, out_base):
+        # Seed 1000 x seed: its thread k adds k.
+        return run_charged(self.command(scene, estimator, 1000 * seed, out_base.with_suffix(".hdr"), budget),
+                           out_base.with_suffix(".log"))
 
     def describe(self):
         info = self.cache.info().get("smallvcm", {})
@@ -343,6 +363,11 @@ class Mitsuba:
         if c.cpu > startup:
             self.cpu_per_spp[scene] = max(1e-4, (c.cpu - startup) / spp)
         return spp, c, exr
+
+    def render_iterations(self, scene, estimator, seed, iterations, out_base):
+        """Exactly `iterations` samples per pixel: (Charged, image)."""
+        _, c, exr = self.render(scene, estimator, seed, None, out_base, spp=iterations)
+        return c, exr
 
     def describe(self):
         info = self.cache.info().get("venv", {})
@@ -917,21 +942,11 @@ def cmd_per_sample(args):
     header["per_sample_iterations"] = iterations
     header["load_before"] = os.getloadavg()
     t_start = time.monotonic()
-    n = str(iterations)
     rows = []
     total = len(cells) * seeds * 2
     for scene, prog, est, seed in alternating_runs(cells, seeds):
         base = work / f"{scene}_{est.replace(':', '-')}_{prog}_{seed}"
-        if prog == "vkvcm":
-            img = base.with_suffix(".exr")
-            c = run_charged(vk.command(scene, est, seed, img, ["--iterations", n]), base.with_suffix(".log"))
-        elif prog == "SmallVCM":
-            sv = programs["SmallVCM"]
-            c = run_charged(sv.command(scene, est, 1000 * seed, base.with_suffix(".hdr"), ["-i", n]),
-                            base.with_suffix(".log"))
-            img = base.with_suffix(".pfm")
-        else:
-            _, c, img = programs["Mitsuba"].render(scene, est, seed, None, base, spp=iterations)
+        c, img = programs[prog].render_iterations(scene, est, seed, iterations, base)
         rows.append({"scene": scene, "estimator": est, "program": prog, "seed": seed,
                      "iterations": iterations, "cpu_s": c.cpu, "wall_s": c.wall, "image": str(img)})
         log(f"[{len(rows)}/{total}] {scene} {est} {prog} seed {seed}: {c.cpu:.2f} CPU-s")

@@ -23,7 +23,6 @@ Not a timing: the renders may share the machine with anything.
 
 import argparse
 import os
-import re
 import shutil
 import subprocess
 import sys
@@ -81,6 +80,13 @@ def smallvcm_build(tmp, cache, strategy):
 
 
 def main():
+    try:
+        diagnose()
+    except peers.HarnessError as e:
+        sys.exit(f"strategy_diag: {e}")
+
+
+def diagnose():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--scene", default="gbs_s", choices=sorted(peers.SMALLVCM_SCENES))
     ap.add_argument("--iterations", type=int, default=64)
@@ -100,34 +106,26 @@ def main():
         sys.exit(f"strategy_diag: no reference of {a.scene} in {refs}: run `peers.py reference` first")
     ref = imgtool.read_rgb(weights_from).astype(np.float64)
     weights = 1.0 / (ref ** 2 + imgtool.REL_MSE_EPSILON)
-    size = str(peers.SMALLVCM_SIZE)
-    lavapipe = "/usr/share/vulkan/icd.d/lvp_icd.json"
-    env = {**os.environ, "VK_ICD_FILENAMES": lavapipe, "VK_DRIVER_FILES": lavapipe}
+    size = peers.SMALLVCM_SIZE
     print(f"# bpt on {a.scene}, {a.iterations} iterations at {size}x{size}, seeds 1-{a.seeds}; "
           f"relMSE weights from {weights_from.name}")
     with tempfile.TemporaryDirectory(prefix="vkvcm-strategy-diag-") as t:
         tmp = Path(t)
+        vkvcm = peers.Vkvcm(a.vkvcm, tmp)
+        vkvcm.check()
         for strategy in a.strategies.split(","):
             if strategy != "full" and strategy not in STRATEGIES:
                 sys.exit(f"strategy_diag: unknown strategy {strategy!r} (full, {', '.join(STRATEGIES)})")
-            glsl = vkvcm_glsl(tmp, strategy)
-            smallvcm = smallvcm_build(tmp, cache, strategy)
+            env = {**os.environ, "VKVCM_GLSL_DIR": str(vkvcm_glsl(tmp, strategy))}
+            smallvcm = peers.SmallVcm(cache, smallvcm_build(tmp, cache, strategy))
             images = {"vkvcm": [], "SmallVCM": []}
             for seed in range(1, a.seeds + 1):
-                exr = tmp / f"vk_{strategy}_{seed}.exr"
-                subprocess.run([a.vkvcm, "render", a.scene, "-a", "bpt", "--connect", "path", "--sampler", "independent",
-                                "--width", size, "--height", size, "--max-path-length", str(peers.SMALLVCM_MAX_PATH_LENGTH),
-                                "--seed", str(seed), "-i", str(a.iterations), "-o", str(exr)],
-                               env={**env, "VKVCM_GLSL_DIR": str(glsl)},
-                               check=True, capture_output=True)
+                # vkvcm like SmallVCM: its connections (`path`) and independent samples.
+                _, exr = vkvcm.render_iterations(a.scene, "bpt:path:independent", seed, a.iterations,
+                                                 tmp / f"vk_{strategy}_{seed}", env=env)
                 images["vkvcm"].append(imgtool.read_rgb(exr).astype(np.float64))
-                hdr = tmp / f"sv_{strategy}_{seed}.hdr"
-                out = subprocess.run([smallvcm, "-s", str(peers.SMALLVCM_SCENES[a.scene]), "-a", "bpt", "-r", size,
-                                      "-i", str(a.iterations), "-seed", str(1000 * seed), "-o", str(hdr)],
-                                     check=True, capture_output=True, text=True).stdout
-                if not re.search(rf"Iterations total: {a.iterations}\b", out):
-                    sys.exit(f"strategy_diag: SmallVCM did not run {a.iterations} iterations:\n{out}")
-                images["SmallVCM"].append(imgtool.read_pfm(hdr.with_suffix(".pfm")).astype(np.float64))
+                _, pfm = smallvcm.render_iterations(a.scene, "bpt", seed, a.iterations, tmp / f"sv_{strategy}_{seed}")
+                images["SmallVCM"].append(imgtool.read_rgb(pfm).astype(np.float64))
             every = images["vkvcm"] + images["SmallVCM"]
             total = np.sum(every, axis=0)
             means = {prog: np.mean([x.mean() for x in xs]) for prog, xs in images.items()}
