@@ -13,11 +13,13 @@ Instructions are not time: a change that trades instructions for memory traffic 
 cache misses can count fewer and run slower. Use it to see small changes in work (fewer
 texel fetches, less arithmetic), then time what it finds with scripts/ab_bench.sh.
 
-Each variant is NAME=GLSL_DIR (shaders compiled at run time through VKVCM_GLSL_DIR, one
-binary) optionally followed by |ARGS (extra `vkvcm render` arguments):
+Each variant is NAME=GLSL_DIR[@BINARY][|ARGS] (scripts/ab_variants.py; BINARY defaults to
+--binary):
 
     python3 scripts/instructions_ab.py --scenes gbs_s,glm_c --algos pt,bpt,vcm \\
         --variant base=/tmp/base_glsl --variant exp=$PWD/glsl
+    python3 scripts/instructions_ab.py --algos bpt \\
+        --variant base=/tmp/base/glsl@/tmp/base/target/release/vkvcm --variant exp=$PWD/glsl
 
 Needs valgrind (apt-get install valgrind); lavapipe as the Vulkan driver (the kernels
 must run on the CPU for valgrind to count them).
@@ -26,25 +28,25 @@ must run on the CPU for valgrind to count them).
 import argparse
 import os
 import re
-import shlex
 import subprocess
 import sys
 import tempfile
 
+from ab_variants import HELP, parse_variant, variant_env
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
-def count_instructions(binary, glsl_dir, scene, algo, size, iterations, extra, out_dir):
+def count_instructions(variant, scene, algo, size, iterations, out_dir):
     """Instructions valgrind counts for one `vkvcm render` of `iterations` iterations."""
     out = os.path.join(out_dir, "callgrind.out")
     cmd = [
         "valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
-        binary, "render", scene, "-a", algo, "-i", str(iterations),
+        variant.binary, "render", scene, "-a", algo, "-i", str(iterations),
         "--width", str(size), "--height", str(size),
         "-o", os.path.join(out_dir, "image.exr"),
-    ] + extra
-    env = dict(os.environ, VKVCM_GLSL_DIR=glsl_dir)
-    r = subprocess.run(cmd, env=env, capture_output=True, text=True)
+    ] + variant.extra
+    r = subprocess.run(cmd, env=variant_env(variant), capture_output=True, text=True)
     m = re.search(r"Collected : (\d+)", r.stderr)
     if r.returncode != 0 or not m:
         sys.exit(f"valgrind run failed ({' '.join(cmd)}):\n{r.stderr[-2000:]}")
@@ -55,44 +57,36 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--scenes", default="gbs_s")
     ap.add_argument("--algos", default="pt")
-    ap.add_argument("--variant", action="append", required=True,
-                    help="NAME=GLSL_DIR[|render args]; the first is the base")
+    ap.add_argument("--variant", action="append", required=True, help=HELP)
     ap.add_argument("--size", type=int, default=64, help="frame width and height")
     ap.add_argument("--iterations", type=int, default=4,
                     help="iterations counted (beyond the first)")
     ap.add_argument("--binary", default=os.path.join(ROOT, "target/release/vkvcm"))
     args = ap.parse_args()
 
-    variants = []
-    for v in args.variant:
-        name, _, rest = v.partition("=")
-        glsl, _, extra = rest.partition("|")
-        variants.append((name, os.path.abspath(glsl), shlex.split(extra)))
+    variants = [parse_variant(v, args.binary) for v in args.variant]
 
     print(f"# instructions per sample, {args.size}x{args.size}, {args.iterations} iterations "
-          f"counted; ratio against {variants[0][0]}")
+          f"counted; ratio against {variants[0].name}")
     with tempfile.TemporaryDirectory() as tmp:
         for scene in args.scenes.split(","):
             for algo in args.algos.split(","):
                 base = None
-                for name, glsl, extra in variants:
+                for v in variants:
                     # A run under valgrind (which shows lavapipe another CPU than the
                     # machine's, so its JIT cache differs) first fills the caches, so
                     # both counted runs load the same compiled kernels.
                     subprocess.run(
-                        ["valgrind", "--tool=none", args.binary, "render", scene, "-a", algo, "-i", "1", "--width",
+                        ["valgrind", "--tool=none", v.binary, "render", scene, "-a", algo, "-i", "1", "--width",
                          str(args.size), "--height", str(args.size), "-o",
-                         os.path.join(tmp, "warm.exr")] + extra,
-                        env=dict(os.environ, VKVCM_GLSL_DIR=glsl), check=True,
-                        capture_output=True)
-                    one = count_instructions(args.binary, glsl, scene, algo, args.size, 1,
-                                             extra, tmp)
-                    more = count_instructions(args.binary, glsl, scene, algo, args.size,
-                                              1 + args.iterations, extra, tmp)
+                         os.path.join(tmp, "warm.exr")] + v.extra,
+                        env=variant_env(v), check=True, capture_output=True)
+                    one = count_instructions(v, scene, algo, args.size, 1, tmp)
+                    more = count_instructions(v, scene, algo, args.size, 1 + args.iterations, tmp)
                     per_sample = (more - one) / (args.iterations * args.size * args.size)
                     if base is None:
                         base = per_sample
-                    print(f"{scene} {algo} {name}: {per_sample:.0f} instructions/sample, "
+                    print(f"{scene} {algo} {v.name}: {per_sample:.0f} instructions/sample, "
                           f"ratio {per_sample / base:.4f}", flush=True)
 
 
