@@ -17,9 +17,15 @@ render: build
 	mkdir -p out
 	./target/release/vkvcm render --width 512 --height 512 --iterations 16 -o out/default.exr --png out/default.png
 
-# Tests force lavapipe so results do not depend on the machine's GPU.
+# Tests force lavapipe so results do not depend on the machine's GPU. The suite shares a
+# kernel cache of its own, emptied first, so each kernel variant is compiled once per run
+# (GpuOptions::for_tests).
+TEST_KERNEL_CACHE := $(CURDIR)/target/test-kernel-cache
+
 test: setup
-	VK_DRIVER_FILES=$(LVP_ICD) VK_ICD_FILENAMES=$(LVP_ICD) cargo test -- --test-threads=2
+	rm -rf $(TEST_KERNEL_CACHE)
+	VK_DRIVER_FILES=$(LVP_ICD) VK_ICD_FILENAMES=$(LVP_ICD) VKVCM_TEST_KERNEL_CACHE=$(TEST_KERNEL_CACHE) \
+		cargo test -- --test-threads=2
 
 clippy:
 	cargo clippy --all-targets -- -D warnings

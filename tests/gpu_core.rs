@@ -3,9 +3,9 @@
 
 mod common;
 
-use common::with_gpu;
+use common::{with_gpu, with_gpu_options};
 use rand::{Rng, SeedableRng};
-use vkvcm::gpu::{self, groups_for, shader, Bind, Profile};
+use vkvcm::gpu::{self, groups_for, shader, Bind, GpuOptions, Profile};
 
 #[test]
 fn roundtrip_matches_cpu_on_random_data() {
@@ -111,7 +111,9 @@ fn timestamps_are_monotonic_and_profiled() {
 
 #[test]
 fn kernels_are_compiled_once_per_variant() {
-    with_gpu(|gpu| {
+    // No disk cache (`make test` gives the suite one), which could hold the variants.
+    let opts = GpuOptions { kernel_cache: None, ..GpuOptions::for_tests() };
+    with_gpu_options(&opts, |gpu| {
         let a = gpu.buffer_zeroed::<f32>("a", 64).unwrap();
         let before = shader::compile_count();
         let _k1 = gpu.kernel("tests/roundtrip.comp", &[("SCALE", "5")], &roundtrip(&a, &a, &a)).unwrap();

@@ -42,13 +42,17 @@ impl GpuOptions {
         GpuOptions { device, validation, kernel_cache: kernel_cache::default_dir(), device_addresses }
     }
 
-    /// Tests always run with validation and without a kernel cache (they neither depend
-    /// on nor write the user's); `VKVCM_TEST_DEVICE` may choose the device.
+    /// Tests always run with validation and never with the user's kernel cache (they
+    /// neither depend on nor write it): with none, or with the folder
+    /// `VKVCM_TEST_KERNEL_CACHE` names when it is an absolute path (`make test` gives the
+    /// suite one in target/, so that a kernel variant is compiled once per run rather than
+    /// once per renderer); `VKVCM_TEST_DEVICE` may choose the device.
     pub fn for_tests() -> Self {
+        let kernel_cache = std::env::var_os("VKVCM_TEST_KERNEL_CACHE").map(PathBuf::from).filter(|p| p.is_absolute());
         GpuOptions {
             device: std::env::var("VKVCM_TEST_DEVICE").ok(),
             validation: true,
-            kernel_cache: None,
+            kernel_cache,
             device_addresses: true,
         }
     }

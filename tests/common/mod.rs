@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use vkvcm::gpu::{Gpu, GpuOptions};
 
-/// Runs `f` with a validation-enabled GPU without a kernel cache
+/// Runs `f` with a validation-enabled GPU with the test suite's kernel cache or none
 /// ([`GpuOptions::for_tests`]); fails if the layer said anything, including at device
 /// destruction (leaked objects).
 pub fn with_gpu<R>(f: impl FnOnce(&Arc<Gpu>) -> R) -> R {
