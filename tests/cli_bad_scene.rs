@@ -14,7 +14,7 @@ use common::corpus::malformed_cases;
 fn render(scene: &Path, out: &Path) -> Output {
     let mut c = Command::new(env!("CARGO_BIN_EXE_vkvcm"));
     c.env("VKVCM_VALIDATION", "1").env_remove("VKVCM_TEST_FAIL_AFTER_BATCHES");
-    c.env("VKVCM_CACHE_DIR", ""); // no kernel cache
+    c.env("VKVCM_CACHE_DIR", common::cli_cache_dir("")); // the suite's kernel cache or none
     if std::env::var_os("VK_DRIVER_FILES").is_none() {
         c.env("VK_DRIVER_FILES", "/usr/share/vulkan/icd.d/lvp_icd.json");
     }

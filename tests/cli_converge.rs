@@ -7,9 +7,12 @@ use std::process::{Command, Output};
 
 use vkvcm::image::{read_exr, write_exr, Image};
 
+mod common;
+
 fn vkvcm(args: &[&str], gpu: bool) -> Output {
     let mut c = Command::new(env!("CARGO_BIN_EXE_vkvcm"));
-    c.args(args).env("VKVCM_VALIDATION", "1").env("VKVCM_CACHE_DIR", ""); // no kernel cache
+    // The suite's kernel cache or none.
+    c.args(args).env("VKVCM_VALIDATION", "1").env("VKVCM_CACHE_DIR", common::cli_cache_dir(""));
     if std::env::var_os("VK_DRIVER_FILES").is_none() {
         let lvp = ["/usr/share/vulkan/icd.d/lvp_icd.x86_64.json", "/usr/share/vulkan/icd.d/lvp_icd.json"]
             .into_iter()

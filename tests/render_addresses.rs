@@ -72,7 +72,9 @@ fn images_do_not_depend_on_device_addresses() {
 
 fn vkvcm(dir: &Path) -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_vkvcm"));
-    c.current_dir(dir).env("VKVCM_VALIDATION", "1").env("VKVCM_CACHE_DIR", dir.join("kernel-cache"));
+    c.current_dir(dir)
+        .env("VKVCM_VALIDATION", "1")
+        .env("VKVCM_CACHE_DIR", common::cli_cache_dir(dir.join("kernel-cache")));
     c.env_remove("VKVCM_TEST_MAX_BINDING_BYTES").env_remove("VKVCM_DEVICE_ADDRESSES");
     c.env_remove("VKVCM_TEST_SCENE_CHUNK_BYTES");
     if std::env::var_os("VK_DRIVER_FILES").is_none() {

@@ -120,7 +120,7 @@ fn word_pairs_round_like_the_64_bit_conversion() {
 fn vkvcm(args: &[&str], without_int64: bool) -> std::process::Output {
     let mut c = Command::new(env!("CARGO_BIN_EXE_vkvcm"));
     c.args(args).env("VKVCM_VALIDATION", "1").env_remove("VKVCM_TEST_FAIL_AFTER_BATCHES");
-    c.env("VKVCM_CACHE_DIR", ""); // no kernel cache
+    c.env("VKVCM_CACHE_DIR", common::cli_cache_dir("")); // the suite's kernel cache or none
     if without_int64 {
         c.env("VKVCM_TEST_WITHOUT_INT64", "1");
     } else {

@@ -183,7 +183,7 @@ fn profile_json_has_the_stages_and_rays() {
             .arg("-o")
             .arg(dir.path().join(format!("{algo}.exr")))
             .env("VKVCM_VALIDATION", "1")
-            .env("VKVCM_CACHE_DIR", "") // no kernel cache
+            .env("VKVCM_CACHE_DIR", common::cli_cache_dir("")) // the suite's kernel cache or none
             .output()
             .unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);

@@ -140,7 +140,7 @@ fn a_store_the_device_cannot_hold_is_refused_with_what_to_lower() {
     let dir = tempfile::tempdir().unwrap();
     let run = |cap: &str| {
         let mut c = Command::new(env!("CARGO_BIN_EXE_vkvcm"));
-        c.current_dir(dir.path()).env("VKVCM_VALIDATION", "1").env("VKVCM_CACHE_DIR", "");
+        c.current_dir(dir.path()).env("VKVCM_VALIDATION", "1").env("VKVCM_CACHE_DIR", common::cli_cache_dir(""));
         c.env("VKVCM_TEST_MAX_BINDING_BYTES", cap).env("VKVCM_DEVICE_ADDRESSES", "0");
         if std::env::var_os("VK_DRIVER_FILES").is_none() {
             c.env("VK_DRIVER_FILES", "/usr/share/vulkan/icd.d/lvp_icd.json");

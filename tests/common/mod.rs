@@ -29,6 +29,17 @@ pub fn with_gpu_options<R>(opts: &GpuOptions, f: impl FnOnce(&Arc<Gpu>) -> R) ->
     r
 }
 
+/// `VKVCM_CACHE_DIR` for a test's `vkvcm` process: the suite's kernel cache
+/// (`VKVCM_TEST_KERNEL_CACHE`, an absolute path, which `make test` sets: see
+/// [`GpuOptions::for_tests`]) when there is one, else `own` (a folder of the test's, or ""
+/// for none). Never the user's cache.
+pub fn cli_cache_dir(own: impl AsRef<std::ffi::OsStr>) -> std::ffi::OsString {
+    match std::env::var_os("VKVCM_TEST_KERNEL_CACHE").filter(|p| std::path::Path::new(p).is_absolute()) {
+        Some(suite) => suite,
+        None => own.as_ref().to_os_string(),
+    }
+}
+
 /// Runs test kernel `path` (glsl/; its bindings named `test_input`, read, and `test_output`, one `O`
 /// written per input element; push constant: the element count) over `input`.
 pub fn run_test_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(gpu: &Arc<Gpu>, path: &str, input: &[I]) -> Vec<O> {
