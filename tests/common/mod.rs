@@ -34,8 +34,8 @@ pub fn with_gpu_options<R>(opts: &GpuOptions, f: impl FnOnce(&Arc<Gpu>) -> R) ->
 /// [`GpuOptions::for_tests`]) when there is one, else `own` (a folder of the test's, or ""
 /// for none). Never the user's cache.
 pub fn cli_cache_dir(own: impl AsRef<std::ffi::OsStr>) -> std::ffi::OsString {
-    match std::env::var_os("VKVCM_TEST_KERNEL_CACHE").filter(|p| std::path::Path::new(p).is_absolute()) {
-        Some(suite) => suite,
+    match GpuOptions::for_tests().kernel_cache {
+        Some(suite) => suite.into_os_string(),
         None => own.as_ref().to_os_string(),
     }
 }
