@@ -33,9 +33,14 @@ REL_MSE_EPSILON = 1e-2
 Z_ROUNDING = 1e-6
 
 
+def rel_mse_weights(ref):
+    """Each value's weight in the relMSE: 1 / (ref^2 + REL_MSE_EPSILON)."""
+    return 1.0 / (ref.astype(np.float64) ** 2 + REL_MSE_EPSILON)
+
+
 def rel_mse(image, ref):
     d = image.astype(np.float64) - ref.astype(np.float64)
-    return float(np.mean(d * d / (ref.astype(np.float64) ** 2 + REL_MSE_EPSILON)))
+    return float(np.mean(d * d * rel_mse_weights(ref)))
 
 
 class ImageError(Exception):
@@ -101,7 +106,7 @@ def write_reference(path, mean, var, attributes):
 
 def noise_floor(mean, var):
     """Expected relMSE of the reference itself against the truth, from its noise."""
-    return float(np.mean(var.astype(np.float64) / (mean.astype(np.float64) ** 2 + REL_MSE_EPSILON)))
+    return float(np.mean(var.astype(np.float64) * rel_mse_weights(mean)))
 
 
 def cmd_reference(out, inputs):
@@ -146,7 +151,7 @@ def cmd_agree(a_path, b_path):
         "mean_diff_sigmas": float((a.mean() - b.mean()) / mean_se),
         "z_std": float(z.std()), "z_mean": float(z.mean()),
         "z_abs_gt_4": int(np.sum(np.abs(z) > 4)), "values": int(z.size), "values_without_variance": int((~used).sum()),
-        "relmse_a_vs_b": rel_mse(a, b), "relmse_expected_from_noise": float(np.mean(s / (b * b + REL_MSE_EPSILON))),
+        "relmse_a_vs_b": rel_mse(a, b), "relmse_expected_from_noise": float(np.mean(s * rel_mse_weights(b))),
         "variance_a": sa, "variance_b": sb,
     }
 

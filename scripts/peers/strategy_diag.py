@@ -104,8 +104,7 @@ def diagnose():
     weights_from = next((p for p in (refs / f"{a.scene}_bpt.exr", refs / f"{a.scene}.exr") if p.exists()), None)
     if weights_from is None:
         sys.exit(f"strategy_diag: no reference of {a.scene} in {refs}: run `peers.py reference` first")
-    ref = imgtool.read_rgb(weights_from).astype(np.float64)
-    weights = 1.0 / (ref ** 2 + imgtool.REL_MSE_EPSILON)
+    weights = imgtool.rel_mse_weights(imgtool.read_rgb(weights_from))
     size = peers.SMALLVCM_SIZE
     print(f"# bpt on {a.scene}, {a.iterations} iterations at {size}x{size}, seeds 1-{a.seeds}; "
           f"relMSE weights from {weights_from.name}")
