@@ -189,7 +189,7 @@ void main() {
         }
         alive = false;
         Hit h;
-        if (!(st.len == 1u ? trace_camera_segment(st.o, st.d, h) : trace_closest(st.o, st.d, 0.0, 1e30, h))) {
+        if (!trace_path_segment(st.o, st.d, st.len == 1u, h)) {
             st.thr *= segment_transmittance(st.from_material, st.from_ng, NO_MATERIAL, vec3(0.0), st.d, 1e30);
             uint bg = background_light();
             if (bg != NO_LIGHT && st.len >= min_len) {

@@ -72,7 +72,7 @@ void main() {
         }
         alive = false;
         Hit h;
-        if (!(len == 1u ? trace_camera_segment(o, d, h) : trace_closest(o, d, 0.0, 1e30, h))) {
+        if (!trace_path_segment(o, d, len == 1u, h)) {
             thr *= segment_transmittance(from_material, from_ng, NO_MATERIAL, vec3(0.0), d, 1e30);
             uint bg = background_light();
             if (bg != NO_LIGHT && len >= min_len) {

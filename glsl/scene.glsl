@@ -367,6 +367,16 @@ bool visible(vec3 a, vec3 na, vec3 b, vec3 nb) {
 bool trace_camera_segment(vec3 o, vec3 d, out Hit h) {
     return trace_closest_culling(o, d, 0.0, 1e30, HAS_ONE_SIDED != 0, h);
 }
+// The closest hit along a path's next segment from o: trace_camera_segment's rule when
+// the segment starts at the camera, trace_closest's otherwise. One traversal for both:
+// a SIMD group whose lanes hold new paths (camera segments) and continuing ones traces
+// all of them at once, where `from_camera ? trace_camera_segment(..) : trace_closest(..)`
+// would run two traversals, each with only part of the lanes active (on lavapipe a
+// traversal costs the same for 8 lanes as for 1; docs/performance.md, "One traversal
+// per path segment").
+bool trace_path_segment(vec3 o, vec3 d, bool from_camera, out Hit h) {
+    return trace_closest_culling(o, d, 0.0, 1e30, from_camera && HAS_ONE_SIDED != 0, h);
+}
 // Whether nothing the camera sees lies between it and point p (normal ng, p offset off
 // its surface along it): the segment traced from the camera.
 bool camera_segment_clear(vec3 p, vec3 ng) {
