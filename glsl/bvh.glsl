@@ -268,10 +268,24 @@ void bvh_load_pair(uint e, out vec3 lo0, out vec3 hi0, out vec3 lo1, out vec3 hi
 
 // Shared traversal. Returns the primitive slot of the closest hit (or of the first hit
 // found when `any_hit`), -1 for none; tmax becomes the hit distance, hrecord the record
-// slot of the instance hit (BVH_NO_INSTANCE for world-space primitives). Descends through
-// internal nodes (nearest child first, the others pushed with their entry distances)
-// until a leaf, tests the leaf, and pops. The inner node loop runs until every lane of
-// a SIMD group has reached a leaf, so the leaf tests of the group run together.
+// slot of the instance hit (BVH_NO_INSTANCE for world-space primitives).
+//
+// While-while with one postponed leaf (Aila & Laine, "Understanding the Efficiency of Ray
+// Traversal on GPUs", HPG 2009, speculative traversal, without their subgroup vote): the
+// node loop descends through internal nodes (nearest child first, the others pushed with
+// their entry distances); a lane that reaches a leaf sets it aside and descends on to
+// the next leaf, and the loop ends for a lane holding two leaves (or none left). The
+// leaf loop then tests the set-aside leaf and, if cur is a leaf, that one too. The node
+// loop runs until every lane of a SIMD group holds its leaves, so lanes that would wait
+// for the group's slowest descent find their next leaf meanwhile (docs/bvh.md,
+// "Traversal and robustness"). A leaf is set aside only in world space: a pop may pass
+// an instance's BVH_RETURN marker, after which an object-space leaf would be tested
+// with the world-space ray.
+#ifdef BVH_INSTANCES
+#define BVH_MAY_POSTPONE (record == BVH_NO_INSTANCE)
+#else
+#define BVH_MAY_POSTPONE true
+#endif
 int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hit, bool cull_back_faces,
                  out float hu, out float hv, out uint hrecord) {
     vec3 inv_d = bvh_safe_inv(d);
@@ -286,11 +300,18 @@ int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hi
     float stack_t[BVH_STACK_SIZE];
     uint sp = 0u;
     uint cur = 0u;
+    uint postponed = BVH_DONE;  // the leaf set aside, else BVH_DONE
     int best = -1;
     hu = 0.0;
     hv = 0.0;
     while (true) {
-        while ((cur & BVH_LEAF_FLAG) == 0u) {
+        while (true) {
+            if ((cur & BVH_LEAF_FLAG) != 0u) {  // a leaf, or BVH_DONE
+                if (cur == BVH_DONE || postponed != BVH_DONE || !BVH_MAY_POSTPONE) break;
+                postponed = cur;
+                BVH_POP();
+                continue;
+            }
             vec3 lo0, hi0, lo1, hi1, lo2, hi2, lo3, hi3;
             uint c0, c1, c2, c3;
             bvh_load_pair(4u * cur, lo0, hi0, lo1, hi1, c0, c1);
@@ -318,70 +339,89 @@ int bvh_traverse(vec3 o, vec3 d, float tmin, inout float tmax, const bool any_hi
                 BVH_POP();
             }
         }
-        if (cur == BVH_DONE) {
+        if (postponed == BVH_DONE && cur == BVH_DONE) {
             break;
         }
-        uint first = (cur & ~BVH_LEAF_FLAG) >> 3;
-        uint end = first + (cur & 7u);
+        // The set-aside leaf, then cur while it is a leaf (cur is popped after its test).
         bool entered = false;
-        for (uint i = first; i < end; i++) {
-            uvec4 pa = bvh_prim_elem(3u * i);
-#ifdef BVH_INSTANCES
-            if ((pa.w & (BVH_SPHERE_FLAG | BVH_INSTANCE_FLAG)) == BVH_INSTANCE_FLAG) {
-                if (i + 1u < end) BVH_PUSH(BVH_LEAF_FLAG | ((i + 1u) << 3) | (end - i - 1u), -BVH_INF);
-                BVH_PUSH(BVH_RETURN, -BVH_INF);
-                record = pa.y;
-                o = bvh_apply_rows(3u * record, world_o, 1.0);
-                d = bvh_apply_rows(3u * record, world_d, 0.0);
-                inv_d = bvh_safe_inv(d);
-                sh = ray_shear(d);
-                cur = pa.x;
-                entered = true;
+        while (true) {
+            uint leaf;
+            if (postponed != BVH_DONE) {
+                leaf = postponed;
+                postponed = BVH_DONE;
+            } else if (cur != BVH_DONE && (cur & BVH_LEAF_FLAG) != 0u) {
+                leaf = cur;
+                cur = BVH_DONE;
+            } else {
                 break;
             }
-#endif
-            uvec4 pb = bvh_prim_elem(3u * i + 1u);
-            float t, u, v;
-            bool hit;
-#ifndef BVH_NO_SPHERES
-            if ((pa.w & BVH_SPHERE_FLAG) != 0u) {
-                hit = intersect_sphere(o, d, uintBitsToFloat(pa.xyz), uintBitsToFloat(pb.x),
-                                       tmin, tmax, t);
-                u = 0.0;
-                v = 0.0;
-            } else
-#endif
-            {
-                vec3 v0 = uintBitsToFloat(pa.xyz);
-                vec3 v1 = uintBitsToFloat(pb.xyz);
-                vec3 v2 = uintBitsToFloat(bvh_prim_elem(3u * i + 2u).xyz);
-                hit = intersect_triangle(o, sh, v0, v1, v2, tmin, tmax, t, u, v);
-#ifdef BVH_FACE_TEST
-                if (cull_back_faces && hit && dot(d, cross(v1 - v0, v2 - v0)) > 0.0 && !back_face_visible(pb.w))
-                    hit = false;
-#endif
-            }
-#ifdef BVH_ALPHA_TEST
-            if (hit && !alpha_visible(pa.w, pb.w, u, v, t)) hit = false;
-#endif
-            if (hit) {
-                tmax = t;
-                best = int(i);
-                hu = u;
-                hv = v;
+            uint first = (leaf & ~BVH_LEAF_FLAG) >> 3;
+            uint end = first + (leaf & 7u);
+            for (uint i = first; i < end; i++) {
+                uvec4 pa = bvh_prim_elem(3u * i);
 #ifdef BVH_INSTANCES
-                hrecord = record;
+                if ((pa.w & (BVH_SPHERE_FLAG | BVH_INSTANCE_FLAG)) == BVH_INSTANCE_FLAG) {
+                    // Entered from world space only (no nesting). What is still to visit
+                    // there goes under the return marker: cur (when this leaf was set
+                    // aside; never culled), then the rest of this leaf.
+                    if (cur != BVH_DONE) BVH_PUSH(cur, -BVH_INF);
+                    if (i + 1u < end) BVH_PUSH(BVH_LEAF_FLAG | ((i + 1u) << 3) | (end - i - 1u), -BVH_INF);
+                    BVH_PUSH(BVH_RETURN, -BVH_INF);
+                    record = pa.y;
+                    o = bvh_apply_rows(3u * record, world_o, 1.0);
+                    d = bvh_apply_rows(3u * record, world_d, 0.0);
+                    inv_d = bvh_safe_inv(d);
+                    sh = ray_shear(d);
+                    cur = pa.x;
+                    entered = true;
+                    break;
+                }
 #endif
-                if (any_hit) {
-                    return best;
+                uvec4 pb = bvh_prim_elem(3u * i + 1u);
+                float t, u, v;
+                bool hit;
+#ifndef BVH_NO_SPHERES
+                if ((pa.w & BVH_SPHERE_FLAG) != 0u) {
+                    hit = intersect_sphere(o, d, uintBitsToFloat(pa.xyz), uintBitsToFloat(pb.x),
+                                           tmin, tmax, t);
+                    u = 0.0;
+                    v = 0.0;
+                } else
+#endif
+                {
+                    vec3 v0 = uintBitsToFloat(pa.xyz);
+                    vec3 v1 = uintBitsToFloat(pb.xyz);
+                    vec3 v2 = uintBitsToFloat(bvh_prim_elem(3u * i + 2u).xyz);
+                    hit = intersect_triangle(o, sh, v0, v1, v2, tmin, tmax, t, u, v);
+#ifdef BVH_FACE_TEST
+                    if (cull_back_faces && hit && dot(d, cross(v1 - v0, v2 - v0)) > 0.0 && !back_face_visible(pb.w))
+                        hit = false;
+#endif
+                }
+#ifdef BVH_ALPHA_TEST
+                if (hit && !alpha_visible(pa.w, pb.w, u, v, t)) hit = false;
+#endif
+                if (hit) {
+                    tmax = t;
+                    best = int(i);
+                    hu = u;
+                    hv = v;
+#ifdef BVH_INSTANCES
+                    hrecord = record;
+#endif
+                    if (any_hit) {
+                        return best;
+                    }
                 }
             }
+            if (entered) {
+                break;
+            }
+            if (cur == BVH_DONE) {
+                BVH_POP();
+            }
         }
-        if (entered) {
-            continue;
-        }
-        BVH_POP();
-        if (cur == BVH_DONE) {
+        if (!entered && cur == BVH_DONE) {
             break;
         }
     }

@@ -194,11 +194,14 @@ impl NodeArray for [GpuNode4] {
 }
 
 /// The traversal of `bvh_traverse` in glsl/bvh.glsl: descend through internal nodes
-/// (nearest hit child first, the others pushed with their entry distances) until a leaf,
-/// test the leaf, pop the next entry whose entry distance is not beyond the closest hit.
-/// An instance primitive pushes the rest of its leaf and a [`RETURN`] marker, moves the
-/// ray into the instance's object space and descends into its mesh's tree; popping the
-/// marker moves the ray back.
+/// (nearest hit child first, the others pushed with their entry distances); the first
+/// leaf reached is set aside (in world space only) and the descent goes on to the next
+/// leaf; then the set-aside leaf is tested, and each leaf popped after it, and the next
+/// entry is popped whose entry distance is not beyond the closest hit. An instance
+/// primitive pushes what was still to visit in world space (the leaf after a set-aside
+/// one, the rest of its own leaf) and a [`RETURN`] marker, moves the ray into the
+/// instance's object space and descends into its mesh's tree; popping the marker moves
+/// the ray back.
 fn traverse<N: NodeArray + ?Sized>(
     nodes: &N,
     prims: &[GpuPrim],
@@ -213,50 +216,73 @@ fn traverse<N: NodeArray + ?Sized>(
     let mut instance: Option<u32> = None;
     let mut stack = Stack::new();
     let mut cur = 0u32;
+    let mut postponed = DONE;
     let mut best = None;
     'outer: loop {
-        while cur & LEAF_FLAG == 0 {
+        loop {
+            if cur & LEAF_FLAG != 0 {
+                if cur == DONE || postponed != DONE || instance.is_some() {
+                    break;
+                }
+                postponed = cur;
+                cur = stack.pop(*tmax, (&mut r, &world, &mut instance));
+                continue;
+            }
             counts.nodes += 1;
             cur = match nodes.visit(cur, &r, tmin, *tmax, &mut stack) {
                 Some(next) => next,
                 None => stack.pop(*tmax, (&mut r, &world, &mut instance)),
             };
         }
-        if cur == DONE {
+        if postponed == DONE && cur == DONE {
             break;
         }
-        let Err((first, count)) = decode_ref(cur) else { unreachable!() };
-        for slot in first as usize..(first + count) as usize {
-            let p = &prims[slot];
-            if p.is_instance() {
-                let end = first + count;
-                if slot as u32 + 1 < end {
-                    stack.push(leaf_ref(slot as u32 + 1, end - slot as u32 - 1), f32::NEG_INFINITY);
-                }
-                stack.push(RETURN, f32::NEG_INFINITY);
-                let (root, record) = p.instance_target();
-                let w2o = &prims[record as usize];
-                r = TraversalRay::new(apply_rows(w2o, world.o, 1.0), apply_rows(w2o, world.d, 0.0));
-                instance = Some(p.id());
-                cur = root;
-                continue 'outer;
-            }
-            counts.prims += 1;
-            let hit = if p.is_sphere() {
-                let c = Vec3::new(p.a[0], p.a[1], p.a[2]);
-                intersect_sphere(r.o, r.d, c, p.b[0], tmin, *tmax).map(|t| (t, 0.0, 0.0))
+        loop {
+            let leaf = if postponed != DONE {
+                std::mem::replace(&mut postponed, DONE)
+            } else if cur != DONE && cur & LEAF_FLAG != 0 {
+                std::mem::replace(&mut cur, DONE)
             } else {
-                intersect_triangle(r.o, &r.sh, &p.vertices(), tmin, *tmax)
+                break;
             };
-            if let Some((t, u, v)) = hit {
-                *tmax = t;
-                best = Some(Best { slot, u, v, instance });
-                if any {
-                    return best;
+            let Err((first, count)) = decode_ref(leaf) else { unreachable!() };
+            for slot in first as usize..(first + count) as usize {
+                let p = &prims[slot];
+                if p.is_instance() {
+                    if cur != DONE {
+                        stack.push(cur, f32::NEG_INFINITY);
+                    }
+                    let end = first + count;
+                    if slot as u32 + 1 < end {
+                        stack.push(leaf_ref(slot as u32 + 1, end - slot as u32 - 1), f32::NEG_INFINITY);
+                    }
+                    stack.push(RETURN, f32::NEG_INFINITY);
+                    let (root, record) = p.instance_target();
+                    let w2o = &prims[record as usize];
+                    r = TraversalRay::new(apply_rows(w2o, world.o, 1.0), apply_rows(w2o, world.d, 0.0));
+                    instance = Some(p.id());
+                    cur = root;
+                    continue 'outer;
                 }
+                counts.prims += 1;
+                let hit = if p.is_sphere() {
+                    let c = Vec3::new(p.a[0], p.a[1], p.a[2]);
+                    intersect_sphere(r.o, r.d, c, p.b[0], tmin, *tmax).map(|t| (t, 0.0, 0.0))
+                } else {
+                    intersect_triangle(r.o, &r.sh, &p.vertices(), tmin, *tmax)
+                };
+                if let Some((t, u, v)) = hit {
+                    *tmax = t;
+                    best = Some(Best { slot, u, v, instance });
+                    if any {
+                        return best;
+                    }
+                }
+            }
+            if cur == DONE {
+                cur = stack.pop(*tmax, (&mut r, &world, &mut instance));
             }
         }
-        cur = stack.pop(*tmax, (&mut r, &world, &mut instance));
         if cur == DONE {
             break;
         }
