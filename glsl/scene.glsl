@@ -372,8 +372,8 @@ bool trace_camera_segment(vec3 o, vec3 d, out Hit h) {
 // a SIMD group whose lanes hold new paths (camera segments) and continuing ones traces
 // all of them at once, where `from_camera ? trace_camera_segment(..) : trace_closest(..)`
 // would run two traversals, each with only part of the lanes active (on lavapipe a
-// traversal costs the same for 8 lanes as for 1; docs/performance.md, "One traversal
-// per path segment").
+// SIMD group's pass through a traversal costs about as much with one lane active as with
+// eight; docs/performance.md, "One traversal per path segment").
 bool trace_path_segment(vec3 o, vec3 d, bool from_camera, out Hit h) {
     return trace_closest_culling(o, d, 0.0, 1e30, from_camera && HAS_ONE_SIDED != 0, h);
 }
