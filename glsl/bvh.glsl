@@ -55,7 +55,8 @@
 // Stack: BVH_STACK_SIZE entries; the traversal pushes at most three per node visited,
 // and a path visits at most 16 nodes (the builder's BVH2 has at most MAX_DEPTH = 32
 // levels; MAX_STACK in src/bvh/layout.rs); with instances a top-level path and a mesh
-// path plus the two entries above (MAX_STACK_INSTANCED).
+// path plus the three entries entering an instance pushes (bvh_traverse;
+// MAX_STACK_INSTANCED).
 // Ray/box test: Ize, "Robust BVH Ray Traversal", JCGT 2013 (exit distance widened), on
 // boxes the builder padded and quantised outwards.
 #ifndef VKVCM_BVH_GLSL
@@ -64,7 +65,7 @@
 #include "intersect.glsl"
 
 #ifdef BVH_INSTANCES
-#define BVH_STACK_SIZE 98
+#define BVH_STACK_SIZE 99
 #else
 #define BVH_STACK_SIZE 48
 #endif

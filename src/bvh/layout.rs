@@ -57,9 +57,10 @@ pub const MAX_IDS: usize = INSTANCE_FLAG as usize;
 /// (`BVH_STACK_SIZE` in glsl/bvh.glsl).
 pub const MAX_STACK: usize = 3 * MAX_WIDE_DEPTH as usize;
 /// Traversal stack entries with instances: a top-level path and a mesh tree's path,
-/// [`MAX_STACK`] each, plus the rest of the instance's leaf and the marker that moves the
-/// ray back to world space (`BVH_STACK_SIZE` with `BVH_INSTANCES`).
-pub const MAX_STACK_INSTANCED: usize = 2 * MAX_STACK + 2;
+/// [`MAX_STACK`] each, plus what entering the instance pushes: the leaf the lane went on
+/// to when the instance's leaf was set aside, the rest of the instance's leaf and the
+/// marker that moves the ray back to world space (`BVH_STACK_SIZE` with `BVH_INSTANCES`).
+pub const MAX_STACK_INSTANCED: usize = 2 * MAX_STACK + 3;
 
 /// Encodes a leaf child reference.
 pub fn leaf_ref(first: u32, count: u32) -> u32 {
