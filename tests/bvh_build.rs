@@ -541,8 +541,8 @@ fn wide_form_matches_bvh2() {
                     // Another primitive: where two meet (the test rays aim at shared edges and
                     // vertices), each traversal may keep the one it tested first. "Meet" is
                     // within float precision, which is relative: 1e-6 of the hit's distance
-                    // from the origin (the deep tree's triangles lie 10^10 from it, where
-                    // two rows 8 apart coincide in f32).
+                    // along the ray (the deep tree's triangles span sizes from 1e-22 to 1e13,
+                    // its rays ten triangle sizes long).
                     let same = (g.prim, g.is_sphere, g.instance) == (w.prim, w.is_sphere, w.instance);
                     let distance = (g.t - w.t).abs() * ray.d.length();
                     let scale = 1.0 + g.t.max(w.t) * ray.d.length();
