@@ -1,34 +1,41 @@
 #version 460
-// The camera-subpaths pass of bpt, ppm, bpm and vcm (docs/design.md;
-// src/render/passes/camera_subpaths.rs): push.paths_per_invocation pixel samples per
-// invocation (path regeneration, common.glsl regen_stride). Traces a camera subpath; at each vertex
-// adds emitter hits, next-event estimation and connections to the vertices of light
-// subpath p = this pixel, or with LV_CACHE to vertices drawn from all light subpaths
-// (USE_VC), and merges with the light vertices within the radius found in the hash grid
-// (USE_VM), each weighted by the
-// recursive MIS of docs/smallvcm.md. Then takes this pixel's splats (light-to-camera
-// connections of the light-subpaths pass) and adds the sum to the film.
-// USE_VC=1 USE_VM=0: bpt; 0 1: bpm; 1 1: vcm; PPM=1 (with USE_VM=1, USE_VC=0): merge at
-// the first non-specular vertex only, without MIS. The variant is always set by the Rust
-// side (src/render/variants.rs, CameraKernel).
+// The camera-subpaths pass of bpt, ppm, bpm and vcm (src/render/passes/camera_subpaths.rs),
+// SmallVCM's VertexCM camera pass: push.paths_per_invocation pixel samples per invocation
+// (path regeneration, common.glsl regen_stride). Traces a camera subpath; at each vertex
+// adds emitter hits, connections to the lights (next-event estimation) and to light
+// vertices (VERTEX_CONNECTION: to those of light subpath p = this pixel, or with
+// CACHE_CONNECTIONS > 0 to that many drawn from all light subpaths), and merges with the
+// light vertices within the radius found in the hash grid (VERTEX_MERGING), each
+// weighted by the recursive MIS of glsl/subpath.glsl and glsl/mis_weights.glsl. Then
+// takes this pixel's splats (the light subpaths' connections to the camera) and adds the
+// sum to the film.
+// bpt: VERTEX_CONNECTION; bpm: VERTEX_MERGING; vcm: both; ppm: VERTEX_MERGING with
+// MERGE_FIRST_VERTEX_ONLY (merging at the first non-specular vertex, without MIS). The
+// switches are the fields of CameraKernel (src/render/passes/camera_subpaths.rs).
 #extension GL_GOOGLE_include_directive : require
 
-#if !defined(USE_VC) || !defined(USE_VM) || !defined(PPM) || !defined(SOBOL)
-#error "USE_VC, USE_VM, PPM and SOBOL must be defined (src/render/variants.rs)"
+#if !defined(VERTEX_CONNECTION) || !defined(VERTEX_MERGING) || !defined(MERGE_FIRST_VERTEX_ONLY) || \
+    !defined(CACHE_CONNECTIONS) || !defined(STORE_TEXEL_READS) || !defined(SOBOL)
+#error "the switches of CameraKernel (src/render/passes/camera_subpaths.rs) must be defined"
 #endif
 
 layout(local_size_x = WORKGROUP_SIZE) in;
 #include "scene.glsl"
+#define HAS_SPLAT 1
+#include "push.glsl"
+#include "film.glsl"
 #define LV_SCRATCH 0
 #include "light_vertex_store.glsl"
+#include "subpath.glsl"
+#include "mis_weights.glsl"
 #include "path_sampler.glsl"
 
 // Set by light_vertex_compact.comp (layout there): the earliest iteration of the batch
 // whose light vertices did not fit the store.
 layout(std430) readonly buffer light_vertex_status { uint lv_first_overflow; uint lv_most_vertices; };
 
-#if USE_VM
-#if LV_TEXEL
+#if VERTEX_MERGING
+#if STORE_TEXEL_READS
 uniform utextureBuffer grid_start;
 uniform utextureBuffer grid_points;
 uint grid_start_at(uint b) { return texelFetch(grid_start, int(b)).x; }
@@ -46,7 +53,9 @@ uvec4 grid_point_at(uint j) { return bucket_points[j]; }
 #include "hash_grid.glsl"
 #endif
 
-vec3 direct_illumination(SubpathState st, Surface s, Bsdf b, inout PathSampler ps) {
+// Next-event estimation: one light sample, weighted against reaching the light by BSDF
+// sampling and by the light subpaths (eq. 44-45).
+vec3 connect_to_lights(SubpathState st, Surface s, Bsdf b, inout PathSampler ps) {
     uint li = pick_light_at(sample_1d(ps, DIM1_PICK(st.len)));
     float pick = light_pick_prob(li);
     LightSample ls = light_illuminate(li, s.p, sample_2d(ps, DIM2_LIGHT(st.len)));
@@ -60,6 +69,7 @@ vec3 direct_illumination(SubpathState st, Surface s, Bsdf b, inout PathSampler p
     return (w * cos_x / (pick * ls.pdf_w)) * tr * ls.radiance * f;
 }
 
+// One vertex connection, unweighted by the light vertex's throughput (eq. 40-41).
 vec3 connect_vertices(SubpathState st, Surface s, Bsdf b, LightVertex v) {
     vec3 fc, fl;
     float g;
@@ -72,11 +82,11 @@ vec3 connect_vertices(SubpathState st, Surface s, Bsdf b, LightVertex v) {
     return (w * g) * tr * fc * fl;
 }
 
-#if LV_CACHE
+#if CACHE_CONNECTIONS > 0
 // Light-vertex cache (Davidovic et al. 2014, "Progressive Light Transport Simulation on
 // the GPU: Survey and Improvements", sec. on the connection strategy): instead of the M_p
 // stored vertices of light subpath p = this pixel, each non-delta camera vertex connects
-// to n_c = LV_CACHE_CONNECTIONS vertices drawn uniformly from all M = sum_q M_q stored
+// to n_c = CACHE_CONNECTIONS vertices drawn uniformly from all M = sum_q M_q stored
 // vertices of the iteration, each contribution weighted by M / (N_L n_c). Unbiased: with
 // C(v) the (MIS-weighted) connection contribution, E[(M / N_L) C(v_i)] over uniform i is
 // (1 / N_L) sum_q sum_k C(v_qk), the mean over the N_L independent, identically
@@ -99,17 +109,17 @@ vec3 connect_cache(SubpathState st, Surface s, Bsdf b, inout PathSampler ps) {
     uint total = lv_offset_at(push.light_paths);
     if (total == 0u) return vec3(0.0);
     vec3 sum = vec3(0.0);
-    for (uint k = 0u; k < uint(LV_CACHE_CONNECTIONS); ++k) {
+    for (uint k = 0u; k < uint(CACHE_CONNECTIONS); ++k) {
         LightVertex v = lv_load(rnd_below(total, ps.rng));
         uint len = v.len + 1u + st.len;
         if (len < min_len || len > max_len) continue;  // a draw that contributes 0
         sum += v.thr * connect_vertices(st, s, b, v);
     }
-    return sum * (float(total) / (float(push.light_paths) * float(LV_CACHE_CONNECTIONS)));
+    return sum * (float(total) / (float(push.light_paths) * float(CACHE_CONNECTIONS)));
 }
 #endif
 
-#if USE_VM
+#if VERTEX_MERGING
 // Merging (vertex merging / photon density estimation) at camera vertex `s` with every
 // light vertex within the radius: sum of w * f_camera * throughput_light; the caller
 // scales by 1 / (pi r^2 N_L). Buckets are visited once each and hold ascending slot
@@ -137,7 +147,7 @@ vec3 merge(SubpathState st, Surface s, Bsdf b) {
             float w;
             vec3 f = merge_eval(st, b, v, w);
             if (max3(f) <= 0.0) continue;
-            if (PPM != 0) w = 1.0;
+            if (MERGE_FIRST_VERTEX_ONLY != 0) w = 1.0;
             sum += w * f * v.thr;
         }
     }
@@ -159,18 +169,97 @@ void start_path(uint pixel, out SubpathState st, out PathSampler ps) {
     mis_camera_start(st, st.d);
 }
 
+// ---- The stages of a camera vertex, in the order main() runs them.
+
+// The subpath left the scene: the segment's transmittance and the background's emission
+// (eq. 42-43).
+void add_background(inout SubpathState st, inout vec3 L) {
+    st.thr *= segment_transmittance(st.from_material, st.from_ng, NO_MATERIAL, vec3(0.0), st.d, 1e30);
+    uint bg = background_light();
+    if (bg != NO_LIGHT && st.len >= min_path_length()) {
+        float dpdf, epdf;
+        vec3 le = background_radiance(bg, st.d, dpdf, epdf);
+        L += st.thr * le * mis_weight_hit(st, dpdf, epdf, light_pick_prob(bg), VERTEX_CONNECTION != 0);
+    }
+}
+
+// The subpath reached surface `s` of hit `h`: the segment's transmittance
+// (glsl/medium.glsl) and the MIS update of the new vertex (eq. 31-36), which the
+// emission, connections and merges at `s` use.
+void reach_surface(inout SubpathState st, Hit h, Surface s) {
+    st.thr *= segment_transmittance(st.from_material, st.from_ng, s.material, s.ng, st.d, h.t);
+    mis_on_hit(st, h.t, abs(dot(s.ng, st.d)), false);
+}
+
+// The subpath hit an emitter (eq. 42-43).
+void add_emission(SubpathState st, Hit h, Surface s, inout vec3 L) {
+    if (s.light != NO_LIGHT && st.len >= min_path_length()) {
+        float dpdf_a, epdf;
+        vec3 le = area_light_radiance(s.light, h.u, h.v, st.d, dpdf_a, epdf);
+        if (max3(le) > 0.0) {
+            L += st.thr * le * mis_weight_hit(st, dpdf_a, epdf, light_pick_prob(s.light), VERTEX_CONNECTION != 0);
+        }
+    }
+}
+
+#if VERTEX_CONNECTION
+// Vertex connection at a non-delta vertex: next-event estimation, then the connections
+// to light vertices.
+void add_connections(SubpathState st, Surface s, Bsdf b, uint pixel, inout PathSampler ps, inout vec3 L) {
+    if (st.len + 1u >= min_path_length()) L += st.thr * connect_to_lights(st, s, b, ps);
+#if CACHE_CONNECTIONS > 0
+    L += st.thr * connect_cache(st, s, b, ps);
+#else
+    // Light subpath p = this pixel (SmallVCM), modulo N_L when --light-paths asks for
+    // fewer light subpaths than pixels.
+    uint max_len = max_path_length();
+    uint min_len = min_path_length();
+    uint p = pixel % push.light_paths;
+    uint end = lv_offset_at(p + 1u);
+    for (uint i = lv_offset_at(p); i < end; ++i) {
+        LightVertex v = lv_load(i);
+        uint total = v.len + 1u + st.len;
+        if (total < min_len) continue;
+        if (total > max_len) break;
+        L += st.thr * v.thr * connect_vertices(st, s, b, v);
+    }
+#endif
+}
+#endif
+
+#if VERTEX_MERGING
+// Vertex merging at a non-delta vertex: the light vertices within the radius, as a
+// density estimate over pi r^2 N_L.
+void add_merges(SubpathState st, Surface s, Bsdf b, inout vec3 L) {
+    float norm = 1.0 / (PI * push.radius * push.radius * float(push.light_paths));
+    L += st.thr * merge(st, s, b) * norm;
+}
+#endif
+
+// Samples the next direction (Russian roulette, throughput and MIS update); false when
+// the subpath ends.
+bool continue_path(inout SubpathState st, Bsdf b, Surface s, inout PathSampler ps) {
+    vec3 u_bsdf = sample_bsdf_at(ps, st.len);
+    if (!scatter(st, b, s.p, s.ng, u_bsdf, sample_1d(ps, DIM1_ROULETTE(st.len)))) return false;
+    st.len++;
+    return true;
+}
+
+// This iteration's light vertices did not all fit the store: it is rendered again once
+// the store has grown, so nothing of it may reach the film, splats included.
+void leave_iteration_out(uint pixel, uint stride) {
+    for (; pixel < push.count; pixel += stride) splat_take(pixel);
+}
+
 void main() {
     uint stride = regen_stride(push.count, push.paths_per_invocation);
     uint pixel = invocation_index();
     if (pixel >= stride) return;
     if (lv_first_overflow <= push.iteration) {
-        // This iteration's light vertices did not all fit the store: it is rendered again
-        // once the store has grown, so nothing of it may reach the film, splats included.
-        for (; pixel < push.count; pixel += stride) splat_take(pixel);
+        leave_iteration_out(pixel, stride);
         return;
     }
     uint max_len = max_path_length();
-    uint min_len = min_path_length();
     SubpathState st;
     PathSampler ps;
     start_path(pixel, st, ps);
@@ -190,61 +279,25 @@ void main() {
         alive = false;
         Hit h;
         if (!trace_path_segment(st.o, st.d, st.len == 1u, h)) {
-            st.thr *= segment_transmittance(st.from_material, st.from_ng, NO_MATERIAL, vec3(0.0), st.d, 1e30);
-            uint bg = background_light();
-            if (bg != NO_LIGHT && st.len >= min_len) {
-                float dpdf, epdf;
-                vec3 le = background_radiance(bg, st.d, dpdf, epdf);
-                L += st.thr * le * mis_weight_hit(st, dpdf, epdf, light_pick_prob(bg), USE_VC != 0);
-            }
+            add_background(st, L);
             continue;
         }
         Surface s = surface_at(h, st.o, st.d);
-        // The segment's transmittance (glsl/medium.glsl), before emission, connections and
-        // merges use the throughput.
-        st.thr *= segment_transmittance(st.from_material, st.from_ng, s.material, s.ng, st.d, h.t);
-        mis_on_hit(st, h.t, abs(dot(s.ng, st.d)), false);
-        if (s.light != NO_LIGHT && st.len >= min_len) {
-            float dpdf_a, epdf;
-            vec3 le = area_light_radiance(s.light, h.u, h.v, st.d, dpdf_a, epdf);
-            if (max3(le) > 0.0) {
-                L += st.thr * le * mis_weight_hit(st, dpdf_a, epdf, light_pick_prob(s.light), USE_VC != 0);
-            }
-        }
+        reach_surface(st, h, s);
+        add_emission(st, h, s, L);
         if (st.len >= max_len) continue;
         Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, false, s.tint);
         if (!b.valid) continue;
-#if USE_VC
-        if (!b.delta) {
-            if (st.len + 1u >= min_len) L += st.thr * direct_illumination(st, s, b, ps);
-#if LV_CACHE
-            L += st.thr * connect_cache(st, s, b, ps);
-#else
-            // Light subpath p = this pixel (SmallVCM), modulo N_L when --light-paths
-            // asks for fewer light subpaths than pixels.
-            uint p = pixel % push.light_paths;
-            uint end = lv_offset_at(p + 1u);
-            for (uint i = lv_offset_at(p); i < end; ++i) {
-                LightVertex v = lv_load(i);
-                uint total = v.len + 1u + st.len;
-                if (total < min_len) continue;
-                if (total > max_len) break;
-                L += st.thr * v.thr * connect_vertices(st, s, b, v);
-            }
+#if VERTEX_CONNECTION
+        if (!b.delta) add_connections(st, s, b, pixel, ps, L);
 #endif
+#if VERTEX_MERGING
+        if (!b.delta) {
+            add_merges(st, s, b, L);
+            if (MERGE_FIRST_VERTEX_ONLY != 0) continue;
         }
 #endif
-#if USE_VM
-        if (!b.delta) {
-            float norm = 1.0 / (PI * push.radius * push.radius * float(push.light_paths));
-            L += st.thr * merge(st, s, b) * norm;
-            if (PPM != 0) continue;
-        }
-#endif
-        vec3 u_bsdf = sample_bsdf_at(ps, st.len);
-        if (!scatter(st, b, s.p, s.ng, u_bsdf, sample_1d(ps, DIM1_ROULETTE(st.len)))) continue;
-        st.len++;
-        alive = true;
+        alive = continue_path(st, b, s, ps);
     }
     COUNT_RAYS_FLUSH();
 }

@@ -193,7 +193,7 @@ float u64_words_to_float(uint lo, uint hi) {
 
 // Balance-heuristic weight (Veach 1997, sec. 9.2) of a technique with pdf a against one
 // with pdf b. The VCM family weighs its techniques through the recursive quantities of
-// vcm.glsl instead (docs/smallvcm.md); path tracing uses this directly.
+// glsl/subpath.glsl instead; path tracing uses this directly.
 float balance(float a, float b) { return a / (a + b); }
 
 bool finite3(vec3 v) { return !any(isnan(v)) && !any(isinf(v)); }

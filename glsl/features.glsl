@@ -98,7 +98,7 @@
 #endif
 // Materials whose metallic and roughness a metallicRoughnessTexture varies per point
 // (glsl/textures.glsl `surface_tint`, glsl/bsdf.glsl `point_material`; light vertices
-// carry the point's values, glsl/vcm.glsl).
+// carry the point's values, glsl/light_vertex_store.glsl).
 #ifndef HAS_METALLIC_ROUGHNESS_TEXTURES
 #define HAS_METALLIC_ROUGHNESS_TEXTURES 1
 #endif

@@ -1,28 +1,36 @@
 #version 460
-// The light-subpaths pass (docs/design.md; src/render/passes/light_subpaths.rs), one
-// dispatch per chunk of push.count light subpaths from push.first_path on,
+// The light-subpaths pass (src/render/passes/light_subpaths.rs), SmallVCM's VertexCM light
+// pass: one dispatch per chunk of push.count light subpaths from push.first_path on,
 // push.paths_per_invocation per invocation (path regeneration, common.glsl
-// regen_stride). Samples an emitter, traces, stores every non-delta vertex in the chunk's
-// scratch slots (STORE_VERTICES; light_vertex_compact.comp then moves them into the
-// light-vertex store) and connects it to the camera (CONNECT_CAMERA), as SmallVCM's
-// VertexCM light pass. A light subpath's random numbers are a PCG stream that depends on
-// its index and the iteration only, so the image does not depend on the chunks. (Not a
-// Sobol sequence per light subpath as the camera's per pixel: a pixel receives light
-// subpaths' contributions from different subpaths in every iteration, so stratifying
-// each subpath's iterations did not lower the error: docs/performance.md.)
-// LIGHT_TRACE_ONLY: pure light tracing (weight 1), which also connects the emitting
-// point of area lights to the camera so that directly visible emitters are rendered.
-// The variant is always set by the Rust side (src/render/variants.rs, LightKernel).
+// regen_stride). Samples an emitter and traces; at every non-delta vertex stores the
+// vertex in the chunk's scratch slots (STORE_VERTICES; light_vertex_compact.comp then
+// moves them into the light-vertex store) and connects it to the camera
+// (CONNECT_TO_CAMERA, a splat). LIGHT_TRACE_ONLY: pure light tracing (weight 1), which
+// also connects the emitting point of area lights to the camera so that directly
+// visible emitters are rendered. The switches are the fields of LightKernel
+// (src/render/passes/light_subpaths.rs).
+// A light subpath's random numbers are a PCG stream that depends on its index and the
+// iteration only, so the image does not depend on the chunks. (Not a Sobol sequence per
+// light subpath as the camera's per pixel: a pixel receives different light subpaths'
+// contributions in every iteration, so stratifying a light subpath over iterations does
+// not stratify a pixel's estimate.)
 #extension GL_GOOGLE_include_directive : require
 
-#if !defined(STORE_VERTICES) || !defined(CONNECT_CAMERA) || !defined(LIGHT_TRACE_ONLY)
-#error "STORE_VERTICES, CONNECT_CAMERA and LIGHT_TRACE_ONLY must be defined (src/render/variants.rs)"
+#if !defined(STORE_VERTICES) || !defined(CONNECT_TO_CAMERA) || !defined(LIGHT_TRACE_ONLY)
+#error "the switches of LightKernel (src/render/passes/light_subpaths.rs) must be defined"
 #endif
 
 layout(local_size_x = WORKGROUP_SIZE) in;
 #include "scene.glsl"
+#define HAS_SPLAT 1
+#include "push.glsl"
+#include "film.glsl"
+// The light kernel writes the store's scratch slots and reads nothing of the store.
+#define STORE_TEXEL_READS 0
 #define LV_SCRATCH STORE_VERTICES
 #include "light_vertex_store.glsl"
+#include "subpath.glsl"
+#include "mis_weights.glsl"
 
 // Starts light subpath `path`: samples its emitter (and with LIGHT_TRACE_ONLY connects
 // the emitting point to the camera); false when it has nothing to trace.
@@ -71,6 +79,48 @@ bool start_path(uint path, out SubpathState st, out uint rng) {
     return true;
 }
 
+// ---- The stages of a light vertex, in the order main() runs them.
+
+#if STORE_VERTICES
+// Writes the subpath's vertex at surface `s` to scratch slot `slot`.
+void store_vertex(uint slot, SubpathState st, Surface s) {
+    LightVertex v;
+    v.p = s.p; v.thr = st.thr; v.wo = -st.d; v.n = s.ng; v.ns = s.ns; v.tint = s.tint;
+    v.material = s.material; v.len = st.len;
+    v.dvcm = st.dvcm; v.dvc = st.dvc; v.dvm = st.dvm;
+    lv_store(slot, v);
+}
+#endif
+
+// Connects a light-subpath surface vertex to the camera and splats the contribution,
+// weighted by eq. 46-47 (docs/smallvcm.md 4.4.10). `weight_one` disables MIS (pure light
+// tracing).
+// p lies on a sphere when `sphere`, else on a triangle of winding normal ng.
+void connect_to_camera(SubpathState st, vec3 p, vec3 ng, bool sphere, Bsdf b, bool weight_one) {
+    float w, camera_pdf_a, importance;
+    vec3 f;
+    vec2 raster;
+    if (!camera_connection_eval(st, p, b, weight_one, w, f, camera_pdf_a, importance, raster)) return;
+    if (max3(f) <= 0.0) return;
+    vec3 to_cam = params.cam_pos.xyz - p;
+    float dist = length(to_cam);
+    vec3 tr = segment_transmittance(b.material, ng, NO_MATERIAL, vec3(0.0), to_cam / dist, dist);
+    vec3 contrib = (w / float(push.light_paths)) * st.thr * tr * f * importance;
+    if (max3(contrib) <= 0.0) return;
+    if (!visible_to_camera(p, ng, b.material, sphere)) return;
+    uint pixel = uint(raster.y) * image_width() + uint(raster.x);
+    splat_add(pixel, contrib);
+}
+
+// Samples the next direction (Russian roulette, throughput and MIS update); false when
+// the subpath ends.
+bool continue_path(inout SubpathState st, Bsdf b, Surface s, inout uint rng) {
+    vec3 u_bsdf = vec3(rnd2(rng), rnd(rng));
+    if (!scatter(st, b, s.p, s.ng, u_bsdf, rnd(rng))) return false;
+    st.len++;
+    return true;
+}
+
 // Ends the chunk's light subpath `q` with `stored` vertices in its scratch slots.
 void finish_path(uint q, uint stored) {
 #if STORE_VERTICES
@@ -114,23 +164,16 @@ void main() {
         mis_on_hit(st, h.t, abs(dot(s.ng, st.d)), st.len == 1u && !st.finite_light);
         if (!b.delta) {
 #if STORE_VERTICES
-            LightVertex v;
-            v.p = s.p; v.thr = st.thr; v.wo = -st.d; v.n = s.ng; v.ns = s.ns; v.tint = s.tint;
-            v.material = s.material; v.len = st.len;
-            v.dvcm = st.dvcm; v.dvc = st.dvc; v.dvm = st.dvm;
-            lv_store(q * lv_slots() + stored, v);
+            store_vertex(q * lv_slots() + stored, st, s);
             stored += 1u;
 #endif
-#if CONNECT_CAMERA
+#if CONNECT_TO_CAMERA
             if (st.len + 1u >= min_path_length())
                 connect_to_camera(st, s.p, s.ng, h.is_sphere, b, LIGHT_TRACE_ONLY != 0);
 #endif
         }
         if (st.len + 2u > max_len) continue;
-        vec3 u_bsdf = vec3(rnd2(rng), rnd(rng));
-        if (!scatter(st, b, s.p, s.ng, u_bsdf, rnd(rng))) continue;
-        st.len++;
-        alive = true;
+        alive = continue_path(st, b, s, rng);
     }
     COUNT_RAYS_FLUSH();
 }

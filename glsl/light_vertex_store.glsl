@@ -1,32 +1,24 @@
-// What the light-subpath kernels share (light_subpath.comp, camera_subpath.comp and the
-// debug kernel tests/mis_weights.comp): the push constants, the film with its splat sums,
-// the light-vertex store and the transport state of vcm.glsl.
+// The light-vertex store: an iteration's light vertices, written by the light-subpaths
+// pass and read by the camera-subpaths pass (src/render/light_vertex_store.rs has the
+// Rust side: its sizes, buffers, status and growth).
 //
-// The store (src/render/passes/light_subpaths.rs) holds an iteration's light vertices
-// compacted in path order: light subpath p's vertices are the store's vertices
-// lv_offset_at(p) .. lv_offset_at(p + 1) - 1, and lv_offset_at(N_L) is the iteration's
-// total. Vertex i is two vec4 of light_vertices_a and LV_B_STRIDE vec4 of
-// light_vertices_b (glsl/vcm.glsl, lv_load), read through lv_a_at / lv_b_at.
-// LV_TEXEL 1 (the camera kernel with texel reads, src/render/reads.rs): the store and the
-// offsets as uniform texel buffers (uvec4 texels, uint texels for the offsets); LV_TEXEL 0:
+// The store holds the vertices compacted in path order: light subpath p's vertices are
+// the store's vertices lv_offset_at(p) .. lv_offset_at(p + 1) - 1, and lv_offset_at(N_L)
+// is the iteration's total. The camera kernel reads it as uniform texel buffers with
+// STORE_TEXEL_READS (uvec4 texels, uint texels for the offsets; src/render/reads.rs), else
 // by device address (DEVICE_ADDRESSES, glsl/addresses.glsl) or as storage buffers.
 //
-// LV_SCRATCH 1 (the light kernel when it stores vertices): the light subpaths of one
-// chunk write their vertices to fixed scratch slots, light subpath first_path + q to
-// slots [q S, q S + S) with S = lv_slots() (lv_store), and their vertex counts to
-// light_vertex_chunk_counts[q]; light_vertex_compact.comp then moves them into the store.
-// LV_CACHE 1: the camera kernel connects to vertices drawn from the whole store
-// (camera_subpath.comp). The Rust side sets LV_TEXEL and LV_CACHE
-// (src/render/variants.rs); each kernel sets LV_SCRATCH before including this file.
+// With LV_SCRATCH (set by the light kernel when it stores vertices) the light subpaths of
+// one chunk write their vertices to fixed scratch slots instead, light subpath
+// first_path + q to slots [q S, q S + S) with S = lv_slots() (lv_store), and their vertex
+// counts to light_vertex_chunk_counts[q]; light_vertex_compact.comp then moves them into
+// the store.
 #ifndef LIGHT_VERTEX_STORE_GLSL
 #define LIGHT_VERTEX_STORE_GLSL
-#if !defined(LV_TEXEL) || !defined(LV_CACHE) || !defined(LV_SCRATCH)
-#error "LV_TEXEL and LV_CACHE (src/render/variants.rs) and LV_SCRATCH (the kernel) must be defined"
+#if !defined(STORE_TEXEL_READS) || !defined(LV_SCRATCH)
+#error "STORE_TEXEL_READS (src/render/passes/camera_subpaths.rs) and LV_SCRATCH (the kernel) must be defined"
 #endif
-#define HAS_SPLAT 1
-#include "push.glsl"
-#include "film.glsl"
-#if LV_TEXEL
+#if STORE_TEXEL_READS
 #extension GL_EXT_samplerless_texture_functions : require
 uniform utextureBuffer light_vertices_a;
 uniform utextureBuffer light_vertices_b;
@@ -58,5 +50,79 @@ layout(std430) writeonly buffer light_vertex_scratch_b { vec4 lv_scratch_b[]; };
 #endif
 layout(std430) writeonly buffer light_vertex_chunk_counts { uint lv_chunk_count[]; };
 #endif
-#include "vcm.glsl"
+
+// A light vertex's layout (the same in the scratch slots the light kernel writes and in
+// the compacted store), vertex i:
+//   a[2i] = (position, dVCM)      a[2i+1] = (throughput, dVC)
+//   b[Bi] = (wo, dVM)             b[Bi+1] = (normal, material | length << 24)
+//   with HAS_SHADING_NORMALS or HAS_METALLIC_ROUGHNESS_TEXTURES:
+//                                 b[Bi+2] = (shading normal, tint.metallic)
+//   with HAS_VERTEX_ATTRIBUTES:   b[Bi+LV_TINT] = (tint.rgb, tint.roughness)
+// B = 2 + the two (src/render/light_vertex_store.rs, LightVertexPlan, sizes the store
+// the same way; light_vertex_compact.comp copies B vec4 per vertex). The point's metallic
+// and roughness (a metallic-roughness texture's texel) fill the two vec4s' spare w, so a
+// scene with that texture needs the normal slot even without shading normals.
+#define LV_NORMAL_SLOTS ((HAS_SHADING_NORMALS != 0 || HAS_METALLIC_ROUGHNESS_TEXTURES != 0) ? 1u : 0u)
+#define LV_TINT (2u + LV_NORMAL_SLOTS)
+#define LV_B_STRIDE (LV_TINT + (HAS_VERTEX_ATTRIBUTES != 0 ? 1u : 0u))
+struct LightVertex {
+    vec3 p;
+    vec3 thr;
+    vec3 wo;   // direction towards the previous vertex
+    vec3 n;    // geometric normal
+    vec3 ns;   // shading normal (== n for flat shading)
+    Tint tint; // the point's tint (1 without attributes)
+    uint material;
+    uint len;        // segments from the light
+    float dvcm, dvc, dvm;
+};
+
+// Scratch slots per light subpath: a light subpath stores at most max path length - 1
+// vertices.
+uint lv_slots() { return max_path_length() - 1u; }
+
+#if LV_SCRATCH
+// Writes `v` to scratch slot `slot` (the light kernel).
+void lv_store(uint slot, LightVertex v) {
+    lv_scratch_a[2u * slot] = vec4(v.p, v.dvcm);
+    lv_scratch_a[2u * slot + 1u] = vec4(v.thr, v.dvc);
+    lv_scratch_b[LV_B_STRIDE * slot] = vec4(v.wo, v.dvm);
+    lv_scratch_b[LV_B_STRIDE * slot + 1u] = vec4(v.n, uintBitsToFloat(v.material | (v.len << 24)));
+#if HAS_SHADING_NORMALS || HAS_METALLIC_ROUGHNESS_TEXTURES
+    lv_scratch_b[LV_B_STRIDE * slot + 2u] = vec4(v.ns, v.tint.metallic);
+#endif
+#if HAS_VERTEX_ATTRIBUTES
+    lv_scratch_b[LV_B_STRIDE * slot + LV_TINT] = vec4(v.tint.rgb, v.tint.roughness);
+#endif
+}
+#endif
+
+// Vertex `slot` of the compacted store.
+LightVertex lv_load(uint slot) {
+    LightVertex v;
+    vec4 a0 = lv_a_at(2u * slot), a1 = lv_a_at(2u * slot + 1u);
+    vec4 b0 = lv_b_at(LV_B_STRIDE * slot), b1 = lv_b_at(LV_B_STRIDE * slot + 1u);
+    v.p = a0.xyz; v.dvcm = a0.w;
+    v.thr = a1.xyz; v.dvc = a1.w;
+    v.wo = b0.xyz; v.dvm = b0.w;
+    v.n = b1.xyz;
+#if HAS_SHADING_NORMALS
+    v.ns = lv_b_at(LV_B_STRIDE * slot + 2u).xyz;
+#else
+    v.ns = v.n;
+#endif
+    v.tint = no_tint();
+#if HAS_VERTEX_ATTRIBUTES
+    v.tint.rgb = lv_b_at(LV_B_STRIDE * slot + LV_TINT).xyz;
+#endif
+#if HAS_METALLIC_ROUGHNESS_TEXTURES
+    v.tint.roughness = lv_b_at(LV_B_STRIDE * slot + LV_TINT).w;
+    v.tint.metallic = lv_b_at(LV_B_STRIDE * slot + 2u).w;
+#endif
+    uint info = floatBitsToUint(b1.w);
+    v.material = info & 0xffffffu;
+    v.len = info >> 24;
+    return v;
+}
+
 #endif

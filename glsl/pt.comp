@@ -10,13 +10,13 @@
 // undoing the eta^2 radiance scaling of refraction.
 // Absorbing media (glsl/medium.glsl) multiply the throughput of every traced segment and
 // the contribution of every light sample by their transmittance; no pdf has it.
-// Variants (src/render/variants.rs, PtKernel): NEE=1 the estimator, NEE=0 pure BSDF
+// Variants (PtKernel, src/render/passes/camera_subpaths.rs): NEE=1 the estimator, NEE=0 pure BSDF
 // sampling (emitter hits only, weight 1), for tests; SOBOL: where the random numbers come
 // from (glsl/path_sampler.glsl; `--sampler`).
 #extension GL_GOOGLE_include_directive : require
 
 #if !defined(NEE) || !defined(SOBOL)
-#error "NEE and SOBOL must be defined (src/render/variants.rs)"
+#error "NEE and SOBOL must be defined (PtKernel, src/render/passes/camera_subpaths.rs)"
 #endif
 
 layout(local_size_x = WORKGROUP_SIZE) in;

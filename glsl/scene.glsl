@@ -227,6 +227,18 @@ float camera_pdf_w(vec3 d) {
     return params.cam_pos.w * params.cam_pos.w / (c * c * c);
 }
 
+// The inverse of camera_direction, for connections to the camera.
+// Raster position of world point x, false when behind the camera or off the image.
+bool camera_raster(vec3 x, out vec2 raster) {
+    vec3 d = x - params.cam_pos.xyz;
+    float z = dot(d, params.cam_forward.xyz);
+    if (z <= 0.0) return false;
+    vec3 q = d * (params.cam_pos.w / z);
+    raster = vec2(dot(q, params.cam_right.xyz) + 0.5 * float(image_width()),
+                  0.5 * float(image_height()) - dot(q, params.cam_up.xyz));
+    return raster.x >= 0.0 && raster.y >= 0.0 && raster.x < float(image_width()) && raster.y < float(image_height());
+}
+
 // ---- Shading point of a hit.
 struct Surface {
     vec3 p;

@@ -146,7 +146,7 @@ bool triangle_attributes(uint tri, out GpuVertexAttributes a0, out GpuVertexAttr
 // roughness and metallic: the roughness and metallic factors (the metallicRoughnessTexture
 // texel's linear G and B, glTF 2.0 section 3.9.2). All 1 where the point has none, and
 // then the material is its own, bit for bit (glsl/bsdf.glsl). Surfaces and light vertices
-// carry it (glsl/scene.glsl, glsl/vcm.glsl).
+// carry it (glsl/scene.glsl, glsl/light_vertex_store.glsl).
 struct Tint {
     vec3 rgb;
     float roughness;

@@ -4,7 +4,7 @@
 //! with an area and a point light, the same with shading normals tilted off every
 //! triangle and a smooth-shaded sphere mesh (the MIS quantities use geometric cosines,
 //! glsl/bsdf.glsl), the GGX scene with rough glass spheres, and an environment map, in bpt, bpm and vcm modes. The kernel evaluates every
-//! weight with the production functions of glsl/vcm.glsl (docs/estimators.md, "MIS
+//! weight with the production functions of glsl/subpath.glsl and glsl/mis_weights.glsl (docs/estimators.md, "MIS
 //! weights sum to one: the debug kernel"). Lavapipe, validation on.
 
 mod common;
@@ -171,7 +171,7 @@ impl Bench {
             light_selection: vkvcm::render::DEFAULT_LIGHT_SELECTION,
         };
         let sg = SceneGpu::new(gpu, scene, &frame, Reads::resolve(gpu, None).unwrap()).unwrap();
-        // The film, splats and light-vertex store are declared by light_vertex_store.glsl
+        // The film, splats and light-vertex store are declared by the includes of the kernels
         // but not used by the debug kernel.
         let names = [
             "film",

@@ -728,7 +728,7 @@ fn metallic_roughness_image() -> TextureImage {
 /// Sabotaged, it fails (pixels failed of 576, worst |t| against a threshold near 5):
 /// * roughness read from R instead of G: every estimator (126-138 pixels, |t| 50-112);
 /// * the texels sRGB-decoded: every estimator (124-140 pixels, |t| 47-78);
-/// * the light vertices' metallic and roughness not loaded (glsl/vcm.glsl, lv_load: the
+/// * the light vertices' metallic and roughness not loaded (glsl/light_vertex_store.glsl, lv_load: the
 ///   factors alone at stored light vertices): bpt (138 pixels, |z| 16.5) and vcm (136,
 ///   17.1); pt and lt, which store none, pass;
 /// * bsdf_sample's GGX width the material's, not the point's (its pdf no longer the one

@@ -7,7 +7,7 @@
 //     (s = 1), a vertex connection (2 <= s < k) or a connection to the camera (t = 1).
 //     Joins that would contribute nothing (zero BSDF, occluded, off the image) reject the
 //     path.
-//  2. Re-run the production MIS recursion (glsl/vcm.glsl: mis_light_start,
+//  2. Re-run the production MIS recursion (glsl/subpath.glsl: mis_light_start,
 //     mis_camera_start, mis_on_hit, mis_on_scatter) along the fixed vertex sequence from
 //     both ends, with the pdfs evaluated for the path's own directions.
 //  3. Evaluate the weight of every technique that can sample the path with the production
@@ -22,10 +22,14 @@
 
 layout(local_size_x = 64) in;
 #include "scene.glsl"
-#define LV_TEXEL 0
-#define LV_CACHE 0
+#define HAS_SPLAT 1
+#include "push.glsl"
+#include "film.glsl"
+#define STORE_TEXEL_READS 0
 #define LV_SCRATCH 0
 #include "light_vertex_store.glsl"
+#include "subpath.glsl"
+#include "mis_weights.glsl"
 
 // Per path: [0] 1 if a path was built, else 0; [1] k (segments); [2] generating s;
 // [3] number of techniques that can sample the path; [4] sum of their weights;

@@ -42,9 +42,9 @@ import peers  # noqa: E402
 STRATEGIES = {
     "lt": (("light_subpath.comp", "connect_to_camera(st, s.p, s.ng, h.is_sphere, b, LIGHT_TRACE_ONLY != 0);"),
            "if(!bsdf.IsDelta() && (mUseVC || mLightTraceOnly))"),
-    "nee": (("camera_subpath.comp", "if (st.len + 1u >= min_len) L += st.thr * direct_illumination(st, s, b, ps);"),
+    "nee": (("camera_subpath.comp", "if (st.len + 1u >= min_path_length()) L += st.thr * connect_to_lights(st, s, b, ps);"),
             "if(!bsdf.IsDelta() && mUseVC)\n                {\n                    if(cameraState.mPathLength + 1>= mMinPathLength)"),
-    "conn": (("camera_subpath.comp", "L += st.thr * v.thr * connect_vertices(st, s, b, v);\n            }\n#endif"),
+    "conn": (("camera_subpath.comp", "L += st.thr * v.thr * connect_vertices(st, s, b, v);\n    }\n#endif"),
              "if(!bsdf.IsDelta() && mUseVC)\n                {\n                    // For VC, each light sub-path"),
 }
 

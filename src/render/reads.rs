@@ -7,7 +7,8 @@
 //! * [`Reads::Texel`]: as uniform texel buffers of `uvec4` (or `uint`) texels
 //!   (`utextureBuffer`, `texelFetch`).
 //!
-//! The kernels declare either kind (TEXEL_READS, LV_TEXEL: src/render/variants.rs) and
+//! The kernels declare either kind (TEXEL_READS for the scene, src/render/variants.rs;
+//! STORE_TEXEL_READS for the light-vertex store and the hash grid, `CameraKernel`) and
 //! are bound by name, so the Rust side only chooses the variant. Both read the same
 //! bytes, so the image is bit-identical (tests/render_reads.rs). On lavapipe a load from
 //! a storage buffer at an address that differs between the lanes of a SIMD group is

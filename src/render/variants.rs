@@ -4,15 +4,58 @@
 //!
 //! Every render kernel gets the scene's part ([`SceneVariant`]: the feature set of
 //! src/render/features.rs, how it reads its buffers, the workgroup size); the light,
-//! camera and path-tracing kernels add their own ([`LightKernel`], [`CameraKernel`],
-//! [`PtKernel`]).
+//! camera and path-tracing kernels add their own switches, declared with
+//! [`kernel_switches!`] next to the pass that compiles them (`LightKernel`,
+//! `CameraKernel`, `PtKernel` in src/render/passes/), so that each switch has one name
+//! from Rust to GLSL.
 
 use super::atomics::SplatAtomics;
 use super::features::FeatureSet;
 use super::reads::Reads;
-use super::settings::Connect;
-use super::techniques::Techniques;
 use crate::gpu::Defines;
+
+/// Declares a struct of kernel switches with `defines()`: each field becomes the
+/// `#define` of its own name in upper case (a `bool` as 1 or 0, a `u32` as its value),
+/// so that a switch cannot be called one thing in Rust and another in GLSL.
+macro_rules! kernel_switches {
+    ($(#[$meta:meta])* pub struct $name:ident { $($(#[$fmeta:meta])* pub $field:ident: $ty:ty,)* }) => {
+        $(#[$meta])*
+        pub struct $name {
+            $($(#[$fmeta])* pub $field: $ty,)*
+        }
+
+        impl $name {
+            /// Each field as the `#define` of its name in upper case.
+            pub fn defines(&self) -> $crate::gpu::Defines {
+                let d = $crate::gpu::Defines::new();
+                $(let d = $crate::render::variants::KernelSwitch::define(
+                    &self.$field,
+                    &stringify!($field).to_uppercase(),
+                    d,
+                );)*
+                d
+            }
+        }
+    };
+}
+pub(crate) use kernel_switches;
+
+/// A value a kernel switch can hold, and how it becomes a `#define`.
+pub trait KernelSwitch {
+    fn define(&self, name: &str, defines: Defines) -> Defines;
+}
+
+impl KernelSwitch for bool {
+    fn define(&self, name: &str, defines: Defines) -> Defines {
+        defines.flag(name, *self)
+    }
+}
+
+impl KernelSwitch for u32 {
+    fn define(&self, name: &str, defines: Defines) -> Defines {
+        defines.value(name, *self)
+    }
+}
 
 /// Invocations per workgroup of every render kernel (their GLSL's `WORKGROUP_SIZE`);
 /// dispatches read it back from each kernel's SPIR-V (`Kernel::groups_for`).
@@ -61,93 +104,5 @@ impl SceneVariant {
         Defines::new()
             .flag("SPLAT_ATOMICS_64", self.atomics == SplatAtomics::Bits64)
             .flag("DEVICE_ADDRESSES", self.device_addresses)
-    }
-}
-
-/// glsl/light_subpath.comp.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct LightKernel {
-    /// STORE_VERTICES: non-delta vertices go to the light-vertex store.
-    pub store_vertices: bool,
-    /// CONNECT_CAMERA: vertices connect to the camera (splats).
-    pub connect_camera: bool,
-    /// LIGHT_TRACE_ONLY: weight 1, emitters seen directly are splatted too (lt).
-    pub light_trace_only: bool,
-}
-
-impl LightKernel {
-    pub fn new(t: Techniques) -> LightKernel {
-        LightKernel {
-            store_vertices: t.store_vertices,
-            connect_camera: t.connect_to_camera,
-            light_trace_only: t.light_trace_only,
-        }
-    }
-
-    pub fn defines(&self) -> Defines {
-        Defines::new()
-            .flag("STORE_VERTICES", self.store_vertices)
-            .flag("LIGHT_TRACE_ONLY", self.light_trace_only)
-            .flag("CONNECT_CAMERA", self.connect_camera)
-            .flag("LV_TEXEL", false)
-            .flag("LV_CACHE", false)
-    }
-}
-
-/// glsl/camera_subpath.comp.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct CameraKernel {
-    /// USE_VC: next-event estimation and vertex connections, with MIS.
-    pub vertex_connection: bool,
-    /// USE_VM: merging with the light vertices in the radius.
-    pub vertex_merging: bool,
-    /// PPM: merging at the first non-specular vertex only, weight 1.
-    pub merge_first_vertex_only: bool,
-    /// Where the vertex connections go (LV_CACHE, LV_CACHE_CONNECTIONS).
-    pub connect: Connect,
-    /// LV_TEXEL: the light vertices, grid and cache index are read as texel buffers.
-    pub texel_reads: bool,
-    /// SOBOL: Owen-scrambled Sobol samples (0: independent random numbers).
-    pub sobol: bool,
-}
-
-impl CameraKernel {
-    pub fn new(t: Techniques, connect: Connect, reads: Reads, sobol: bool) -> CameraKernel {
-        CameraKernel {
-            vertex_connection: t.vertex_connection,
-            vertex_merging: t.vertex_merging,
-            merge_first_vertex_only: t.merge_first_vertex_only,
-            connect,
-            texel_reads: reads == Reads::Texel,
-            sobol,
-        }
-    }
-
-    pub fn defines(&self) -> Defines {
-        let d = Defines::new()
-            .flag("USE_VC", self.vertex_connection)
-            .flag("USE_VM", self.vertex_merging)
-            .flag("PPM", self.merge_first_vertex_only)
-            .flag("LV_TEXEL", self.texel_reads)
-            .flag("SOBOL", self.sobol);
-        match self.connect {
-            Connect::Path => d.flag("LV_CACHE", false),
-            Connect::Cache(n) => d.flag("LV_CACHE", true).value("LV_CACHE_CONNECTIONS", n),
-        }
-    }
-}
-
-/// glsl/pt.comp.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct PtKernel {
-    /// NEE: next-event estimation with MIS (0: BSDF sampling only).
-    pub nee: bool,
-    /// SOBOL: Owen-scrambled Sobol samples (0: independent random numbers).
-    pub sobol: bool,
-}
-
-impl PtKernel {
-    pub fn defines(&self) -> Defines {
-        Defines::new().flag("NEE", self.nee).flag("SOBOL", self.sobol)
     }
 }

@@ -21,13 +21,12 @@ use super::{Build, Estimator, Techniques};
 use crate::gpu::{Batch, Buffer};
 use crate::render::gpu_types::GpuPush;
 use crate::render::passes::accumulate::Accumulate;
-use crate::render::passes::camera_subpaths::CameraSubpaths;
+use crate::render::passes::camera_subpaths::{CameraKernel, CameraSubpaths};
 use crate::render::passes::hash_grid::HashGrid;
-use crate::render::passes::light_subpaths::{LightSubpaths, LightVertexStore, StoreStatus};
+use crate::render::passes::light_subpaths::{LightKernel, LightSubpaths, LightVertexStore, StoreStatus};
 use crate::render::passes::PassInfo;
 use crate::render::radius::RadiusSchedule;
 use crate::render::settings::Sampler;
-use crate::render::variants::{CameraKernel, LightKernel};
 
 /// The pass that takes the splats (and, with a camera pass, the camera subpaths' values)
 /// into the film.

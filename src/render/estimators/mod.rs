@@ -162,7 +162,7 @@ impl EstimatorInfo {
         if self.default_connect.is_some() || s.connect != Connect::Path {
             self.connect(Some(s.connect))?;
         }
-        // Light vertices keep their path length in 8 bits (glsl/vcm.glsl); lt, which
+        // Light vertices keep their path length in 8 bits (glsl/light_vertex_store.glsl); lt, which
         // stores none, keeps the same limit as the other light-subpath estimators.
         if self.techniques.light_subpaths && s.frame.max_path_length > 256 {
             bail!("max path length {} is more than the light-vertex store's 256", s.frame.max_path_length);

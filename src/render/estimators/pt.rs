@@ -9,9 +9,9 @@ use super::{Algorithm, Build, Estimator, EstimatorInfo, Techniques};
 use crate::gpu::{Batch, Buffer};
 use crate::render::gpu_types::GpuPush;
 use crate::render::passes::camera_subpaths::CameraSubpaths;
+use crate::render::passes::camera_subpaths::PtKernel;
 use crate::render::passes::PassInfo;
 use crate::render::settings::Sampler;
-use crate::render::variants::PtKernel;
 
 pub const INFO: EstimatorInfo = EstimatorInfo {
     algorithm: Algorithm::Pt,

@@ -13,12 +13,62 @@ use super::light_subpaths::LightVertexStore;
 use super::{PassContext, PassInfo};
 use crate::gpu::{Batch, Bind, Defines, Kernel};
 use crate::render::gpu_types::GpuPush;
+use crate::render::reads::Reads;
 use crate::render::regen;
 use crate::render::settings::Connect;
-use crate::render::variants::{CameraKernel, PtKernel};
+use crate::render::techniques::Techniques;
+use crate::render::variants::kernel_switches;
 
 /// The name profiles report.
 pub const NAME: &str = "camera subpaths";
+
+kernel_switches! {
+    /// What glsl/camera_subpath.comp is compiled with: the camera side of the estimator's
+    /// [`Techniques`] under the same names, where its connections go and how it reads.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub struct CameraKernel {
+        /// Next-event estimation and vertex connections, with MIS.
+        pub vertex_connection: bool,
+        /// Merging with the light vertices in the radius.
+        pub vertex_merging: bool,
+        /// Merging at the first non-specular vertex only, weight 1 (ppm).
+        pub merge_first_vertex_only: bool,
+        /// Light vertices each camera vertex connects to, drawn from all light subpaths
+        /// (`--connect cache`); 0: to those of light subpath p = this pixel (`--connect path`).
+        pub cache_connections: u32,
+        /// The light-vertex store and the hash grid are read as texel buffers.
+        pub store_texel_reads: bool,
+        /// Owen-scrambled Sobol samples (else independent random numbers).
+        pub sobol: bool,
+    }
+}
+
+impl CameraKernel {
+    pub fn new(t: Techniques, connect: Connect, reads: Reads, sobol: bool) -> CameraKernel {
+        CameraKernel {
+            vertex_connection: t.vertex_connection,
+            vertex_merging: t.vertex_merging,
+            merge_first_vertex_only: t.merge_first_vertex_only,
+            cache_connections: match connect {
+                Connect::Path => 0,
+                Connect::Cache(n) => n,
+            },
+            store_texel_reads: reads == Reads::Texel,
+            sobol,
+        }
+    }
+}
+
+kernel_switches! {
+    /// What glsl/pt.comp is compiled with.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub struct PtKernel {
+        /// Next-event estimation with MIS (else BSDF sampling only).
+        pub nee: bool,
+        /// Owen-scrambled Sobol samples (else independent random numbers).
+        pub sobol: bool,
+    }
+}
 
 /// The pass.
 pub struct CameraSubpaths {
@@ -101,9 +151,9 @@ impl CameraSubpaths {
 fn describe(v: CameraKernel) -> String {
     let mut parts = Vec::new();
     if v.vertex_connection {
-        parts.push(match v.connect {
-            Connect::Path => "NEE + connections to light subpath p = this pixel".to_string(),
-            Connect::Cache(n) => format!("NEE + {n} connection(s) per vertex to the light-vertex cache"),
+        parts.push(match v.cache_connections {
+            0 => "NEE + connections to light subpath p = this pixel".to_string(),
+            n => format!("NEE + {n} connection(s) per vertex to the light-vertex cache"),
         });
     }
     if v.merge_first_vertex_only {

@@ -42,10 +42,35 @@ use crate::render::features::FeatureSet;
 use crate::render::gpu_types::GpuPush;
 use crate::render::regen;
 use crate::render::sizes::{Access, BufferSize};
-use crate::render::variants::{workgroup_defines, LightKernel};
+use crate::render::techniques::Techniques;
+use crate::render::variants::{kernel_switches, workgroup_defines};
 
 /// The name profiles report.
 pub const NAME: &str = "light subpaths";
+
+kernel_switches! {
+    /// What glsl/light_subpath.comp is compiled with: the light side of the estimator's
+    /// [`Techniques`], under the same names.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub struct LightKernel {
+        /// Non-delta vertices go to the light-vertex store.
+        pub store_vertices: bool,
+        /// Vertices connect to the camera (splats).
+        pub connect_to_camera: bool,
+        /// Weight 1, and emitters seen directly are splatted too (lt).
+        pub light_trace_only: bool,
+    }
+}
+
+impl LightKernel {
+    pub fn new(t: Techniques) -> LightKernel {
+        LightKernel {
+            store_vertices: t.store_vertices,
+            connect_to_camera: t.connect_to_camera,
+            light_trace_only: t.light_trace_only,
+        }
+    }
+}
 
 /// Bytes of one light vertex in `light_vertices_a` (position, throughput and two MIS
 /// quantities: two vec4).
@@ -54,7 +79,7 @@ pub const LIGHT_VERTEX_A_BYTES: u64 = 32;
 /// Bytes of one light vertex in `light_vertices_b` for kernels compiled with `features`:
 /// (wo, dVM) and (normal, material and length), with shading normals or
 /// metallic-roughness textures a vec4 holding the shading normal and the point's metallic,
-/// with vertex attributes one holding the tint and its roughness (glsl/vcm.glsl,
+/// with vertex attributes one holding the tint and its roughness (glsl/light_vertex_store.glsl,
 /// LV_B_STRIDE).
 pub fn light_vertex_b_bytes(features: &FeatureSet) -> u64 {
     let normal_slot = features.shading_normals || features.metallic_roughness_textures;
@@ -407,7 +432,7 @@ impl LightSubpaths {
 
     pub fn info(&self) -> PassInfo {
         let v = self.variant;
-        let what = match (v.store_vertices, v.connect_camera) {
+        let what = match (v.store_vertices, v.connect_to_camera) {
             (true, true) => "store vertices, connect to the camera",
             (true, false) => "store vertices",
             (false, true) => "connect to the camera (splats), no vertex store",

@@ -1,0 +1,107 @@
+// The state of a subpath being traced, camera or light, with the recursive MIS
+// quantities of Georgiev, "Implementing Vertex Connection and Merging" (2012), as
+// SmallVCM's vertexcm.hxx keeps them; "eq. N" is equation N of that report.
+//
+// dvcm, dvc, dvm are partial sums over the subpath's earlier vertices of how much more
+// likely the other techniques are to sample the path than this one: the weights of
+// glsl/mis_weights.glsl finish them at the vertex where a path is completed (eq. 37:
+// w = 1 / (w_light + 1 + w_camera)). Per iteration the kernels take push.mis_vm =
+// eta = pi r^2 N_L when merging is on (else 0) and push.mis_vc = 1 / eta when vertex
+// connections are on (else 0): each technique's count of samples in the balance
+// heuristic (src/render/radius.rs).
+//
+// Used by light_subpath.comp, camera_subpath.comp and the debug kernel
+// tests/mis_weights.comp, which include scene.glsl and push.glsl first.
+#ifndef SUBPATH_GLSL
+#define SUBPATH_GLSL
+
+struct SubpathState {
+    vec3 o;            // ray origin (already offset) and direction
+    vec3 d;
+    vec3 thr;          // path throughput
+    uint len;          // segments so far
+    float dvcm, dvc, dvm;
+    bool specular;     // all scattering events so far were specular (camera: since the eye)
+    bool finite_light; // light subpaths: started on a finite light
+    // The surface the current segment leaves (material, geometric normal; NO_MATERIAL at
+    // the camera and at a light), for the segment's transmittance (glsl/medium.glsl).
+    uint from_material;
+    vec3 from_ng;
+};
+
+// Light subpath start (eq. 31-33; delta lights eq. 48-50; docs/smallvcm.md 4.4.2).
+// `emission_pdf` and `direct_pdf` include the light-pick probability.
+void mis_light_start(inout SubpathState st, float emission_pdf, float direct_pdf, float cos_light, bool delta,
+                     bool finite) {
+    st.dvcm = direct_pdf / emission_pdf;
+    st.dvc = delta ? 0.0 : (finite ? cos_light : 1.0) / emission_pdf;
+    st.dvm = st.dvc * push.mis_vc;
+}
+
+// Camera subpath start along the primary direction `d` (eq. 31-33; docs/smallvcm.md 4.4.3).
+void mis_camera_start(inout SubpathState st, vec3 d) {
+    st.dvcm = float(push.light_paths) / camera_pdf_w(d);
+    st.dvc = 0.0;
+    st.dvm = 0.0;
+}
+
+// MIS update on reaching a new vertex at distance `dist` with |cos| `cos_fix` there: the
+// part of eq. 31-33 and 34-36 that needs the new vertex (docs/smallvcm.md 4.4.4).
+void mis_on_hit(inout SubpathState st, float dist, float cos_fix, bool first_from_infinite) {
+    if (!first_from_infinite) st.dvcm *= dist * dist;
+    float inv = 1.0 / max(cos_fix, 1e-30);
+    st.dvcm *= inv;
+    st.dvc *= inv;
+    st.dvm *= inv;
+}
+
+// MIS update after scattering into a direction with |cos| `cos_wi` (non-specular: eq.
+// 34-36; specular: eq. 53-55; docs/smallvcm.md 4.4.5-4.4.6): `pdf` and `pdf_rev` are the
+// solid-angle pdfs of that direction and of the reverse one, both times the
+// Russian-roulette continuation probability.
+void mis_on_scatter(inout SubpathState st, float pdf, float pdf_rev, float cos_wi, bool specular) {
+    if (specular) {
+        st.dvcm = 0.0;
+        st.dvc *= cos_wi;
+        st.dvm *= cos_wi;
+    } else {
+        float k = cos_wi / pdf;
+        st.dvc = k * (st.dvc * pdf_rev + st.dvcm + push.mis_vm);
+        st.dvm = k * (st.dvm * pdf_rev + st.dvcm * push.mis_vc + 1.0);
+        st.dvcm = 1.0 / pdf;
+        st.specular = false;
+    }
+}
+
+// The same update for a given direction `wi` out of a vertex with BSDF `b` (the pdfs are
+// evaluated instead of sampled): for the debug kernel, which follows a fixed path. For a
+// delta BSDF `wi` must be its specular direction.
+void mis_on_scatter_to(inout SubpathState st, Bsdf b, vec3 wi) {
+    float cos_wi = bsdf_cos_geometric(b, wi);
+    if (b.delta) {
+        mis_on_scatter(st, 0.0, 0.0, cos_wi, true);
+        return;
+    }
+    float pf, pr;
+    bsdf_eval(b, wi, pf, pr);
+    mis_on_scatter(st, pf * b.cont_prob, pr * b.cont_prob, cos_wi, false);
+}
+
+// Samples the continuation at a vertex from `u_bsdf` (bsdf_sample's direction and lobe)
+// and `u_roulette`: Russian roulette, throughput and MIS update. `ng` is the vertex's
+// geometric normal as the surface gives it (not turned to wo). Returns false when the
+// subpath ends.
+bool scatter(inout SubpathState st, Bsdf b, vec3 p, vec3 ng, vec3 u_bsdf, float u_roulette) {
+    BsdfSample bs = bsdf_sample(b, u_bsdf);
+    if (!bs.ok) return false;
+    if (u_roulette >= b.cont_prob) return false;
+    mis_on_scatter(st, bs.pdf * b.cont_prob, bs.pdf_rev * b.cont_prob, bs.cos_wi, bs.specular);
+    st.thr *= bs.weight / b.cont_prob;
+    st.o = offset_ray(p, ng, bs.wi, scene_radius());
+    st.d = bs.wi;
+    st.from_material = b.material;
+    st.from_ng = ng;
+    return max3(st.thr) > 0.0;
+}
+
+#endif
