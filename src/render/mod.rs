@@ -16,6 +16,7 @@ pub mod features;
 pub mod film;
 pub mod gpu_types;
 pub mod light_selection;
+pub mod light_vertex_store;
 pub mod output;
 pub mod passes;
 pub mod plan;
@@ -37,10 +38,11 @@ use anyhow::{bail, Context, Result};
 
 use crate::gpu::{Batch, Gpu, Profile};
 use crate::scene::Scene;
-pub use estimators::Estimator;
+pub use estimators::{BatchEnd, Estimator};
 pub use film::Film;
+use light_vertex_store::LightVertexSizing;
+pub use light_vertex_store::StoreUse;
 pub use output::{Progress, RenderOutput};
-use passes::light_subpaths::{grown_capacity, LightVertexSizing, StoreStatus};
 pub use scene_gpu::SceneGpu;
 pub use settings::{
     Algorithm, Budget, Connect, FrameSettings, LightSelection, RenderSettings, Sampler, DEFAULT_CACHE_CONNECTIONS,
@@ -61,46 +63,19 @@ pub fn render(
     r.output()
 }
 
-/// How a render used its light-vertex store (`vkvcm render --verbose`,
-/// docs/performance.md).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct StoreUse {
-    pub light_paths: u32,
-    /// The scratch slots per light subpath (the most it can store).
-    pub slots_per_path: u32,
-    /// Vertices the store holds now.
-    pub capacity: u64,
-    /// The most vertices one iteration stored.
-    pub most_vertices: u64,
-    /// How often the store grew, and the iterations rendered again because of it.
-    pub grown: u32,
-    pub iterations_redone: u64,
-}
-
-/// The counters of [`StoreUse`].
-#[derive(Clone, Copy, Debug, Default)]
-struct StoreCounters {
-    most_vertices: u64,
-    grown: u32,
-    iterations_redone: u64,
-}
-
 /// A render in progress: the pipelines, scene buffers and film of one scene and setting,
 /// kept between calls to [`Renderer::run`] so that a render can be continued, sampled at
 /// checkpoints (`vkvcm converge`) or resumed from saved sums.
 pub struct Renderer {
     settings: RenderSettings,
     // Field order is drop order: the estimator's kernels before the buffers they bind.
-    /// None only while the light-vertex store is being grown (`grow_light_vertex_store`).
-    est: Option<Box<dyn Estimator>>,
+    est: Box<dyn Estimator>,
     film: Film,
     scene_gpu: SceneGpu,
     plan: plan::FramePlan,
     batch: Batch,
     gpu: Arc<Gpu>,
     profile: Profile,
-    /// What the light-vertex store has seen so far ([`StoreUse`] without what the plan says).
-    store_counters: StoreCounters,
     /// Iterations accumulated in the film (including resumed ones).
     done: u64,
     /// Iterations per submit, adapted to about a quarter second and kept between runs.
@@ -117,7 +92,6 @@ impl Renderer {
     /// and builds the estimator's passes; `settings.budget` is only checked here (each
     /// [`Renderer::run`] call takes its own budget).
     pub fn new(gpu: &Arc<Gpu>, scene: &Scene, settings: &RenderSettings) -> Result<Renderer> {
-        let info = settings.algorithm.info();
         let frame = &settings.frame;
         let plan = Self::plan_for(gpu, scene, settings)?;
         let features = features::FeatureSet::new(scene, settings.generic).with_count_rays(settings.count_rays);
@@ -125,20 +99,25 @@ impl Renderer {
         let atomics = atomics::SplatAtomics::resolve(gpu, settings.atomics)?;
         let scene_gpu = SceneGpu::with_features(gpu, scene, frame, &features, reads, atomics, plan.scene.chunk_bytes)?;
         let film = Film::new(gpu, &plan.film)?;
-        let est = (info.build)(&estimators::Build { gpu, scene: &scene_gpu, film: &film, settings, plan: &plan })?;
+        let est = settings.algorithm.build(&estimators::Build {
+            gpu,
+            scene: &scene_gpu,
+            film: &film,
+            settings,
+            plan: &plan,
+        })?;
         // Every kernel of the render exists now: keep their pipelines for later processes
         // even if this one does not end normally.
         gpu.save_pipeline_cache();
         Ok(Renderer {
             settings: settings.clone(),
-            est: Some(est),
+            est,
             film,
             scene_gpu,
             plan,
             batch: gpu.batch()?,
             gpu: gpu.clone(),
             profile: Profile::default(),
-            store_counters: StoreCounters::default(),
             done: 0,
             per_batch: 1,
             prior_rejected: (0, 0),
@@ -214,29 +193,15 @@ impl Renderer {
         &self.scene_gpu.variant.features
     }
 
-    /// The estimator (always there between calls).
-    fn est(&self) -> &dyn Estimator {
-        self.est.as_deref().expect("the estimator is rebuilt before the renderer is used again")
-    }
-
     /// The passes of an iteration.
     pub fn passes(&self) -> Vec<passes::PassInfo> {
-        self.est().passes()
+        self.est.passes()
     }
 
     /// How the light-vertex store was used so far (None: the estimator stores no light
     /// vertices).
     pub fn light_vertex_store_use(&self) -> Option<StoreUse> {
-        let lv = self.plan.light_vertices.as_ref().filter(|lv| lv.store_vertices)?;
-        let c = self.store_counters;
-        Some(StoreUse {
-            light_paths: lv.light_paths,
-            slots_per_path: lv.slots_per_path,
-            capacity: lv.capacity,
-            most_vertices: c.most_vertices,
-            grown: c.grown,
-            iterations_redone: c.iterations_redone,
-        })
+        self.est.light_vertex_store_use()
     }
 
     /// What the kernels were compiled with and the passes of an iteration
@@ -266,7 +231,7 @@ impl Renderer {
     pub fn buffers(&self) -> Vec<(String, u64)> {
         let mut b: Vec<&crate::gpu::Buffer> = self.scene_gpu.buffers.iter().chain(&self.scene_gpu.chunks).collect();
         b.extend([&self.film.accum, &self.film.stats]);
-        b.extend(self.est().buffers());
+        b.extend(self.est.buffers());
         b.iter().map(|b| (b.name().to_string(), b.size())).collect()
     }
 
@@ -354,25 +319,20 @@ impl Renderer {
                 let range = if n == 1 { format!("iteration {first}") } else { format!("iterations {first}-{last}") };
                 format!("{range} of {name}")
             };
-            let est = self.est.as_deref().expect("the estimator is there between batches");
             for i in 0..n {
-                est.record(&mut self.batch, (first + i) as u32).with_context(what)?;
+                self.est.record(&mut self.batch, (first + i) as u32).with_context(what)?;
             }
             self.batch.submit_wait(Some(&mut self.profile)).with_context(what)?;
-            // Iterations whose light vertices did not fit the store are not in the film
-            // (the camera kernel skips them): grow the store and render them again.
-            let grown_before = self.store_counters.grown;
-            let accepted = self.check_light_vertex_store(first, n).with_context(what)?;
-            let grown = self.store_counters.grown > grown_before;
-            let note = self.light_vertex_store_use().filter(|_| grown).map(|u| {
-                format!(
-                    "light-vertex store grown to {} vertices (an iteration stored {}); iterations {}-{} rendered again",
-                    u.capacity,
-                    u.most_vertices,
-                    first + accepted,
-                    first + n - 1
-                )
-            });
+            // An estimator may leave iterations out of the film (the light-vertex store's
+            // overflow): they are rendered again in the next batch.
+            let b = estimators::Build {
+                gpu: &self.gpu,
+                scene: &self.scene_gpu,
+                film: &self.film,
+                settings: &self.settings,
+                plan: &self.plan,
+            };
+            let BatchEnd { accepted, note } = self.est.finish_batch(&b, first, n).with_context(what)?;
             done += accepted;
             self.done += accepted;
             let dt = t0.elapsed().as_secs_f64().max(1e-6);
@@ -391,59 +351,6 @@ impl Renderer {
             };
             progress(&Progress { iterations: self.done, seconds: self.seconds, fraction, note });
         }
-        Ok(())
-    }
-
-    /// After the batch of iterations `first .. first + n`: reads the light-vertex store's
-    /// status back and, when an iteration's vertices did not fit, grows the store. Returns
-    /// how many of the batch's iterations are in the film.
-    fn check_light_vertex_store(&mut self, first: u64, n: u64) -> Result<u64> {
-        let Some(status) = self.est().light_vertex_store()? else {
-            return Ok(n);
-        };
-        let c = &mut self.store_counters;
-        c.most_vertices = c.most_vertices.max(status.most_vertices as u64);
-        if status.first_overflow == StoreStatus::NONE {
-            return Ok(n);
-        }
-        let accepted = (status.first_overflow as u64).saturating_sub(first).min(n);
-        c.grown += 1;
-        c.iterations_redone += n - accepted;
-        self.grow_light_vertex_store(status.most_vertices as u64)?;
-        Ok(accepted)
-    }
-
-    /// Rebuilds the estimator with a light-vertex store for iterations that store `needed`
-    /// vertices (and a margin), after checking the grown plan against the device. The old
-    /// store is freed first.
-    fn grow_light_vertex_store(&mut self, needed: u64) -> Result<()> {
-        let lv = self.plan.light_vertices.as_ref().expect("an estimator that stores light vertices has a store");
-        let mut plan = self.plan.clone();
-        plan.set_light_vertex_capacity(grown_capacity(needed, lv));
-        // The margin only as far as the device allows; `needed` itself is checked below.
-        plan.fit_light_vertex_capacity(&sizes::SizeLimits::of(&self.gpu));
-        let capacity = plan.light_vertices.as_ref().map_or(needed, |lv| lv.capacity.max(needed));
-        plan.set_light_vertex_capacity(capacity);
-        let f = &self.settings.frame;
-        let what = format!(
-            "a {}x{} {} render whose iterations store up to {needed} light vertices ({} light subpaths)",
-            f.width,
-            f.height,
-            self.settings.algorithm.name(),
-            lv.light_paths
-        );
-        plan.check(&self.gpu, &what)?;
-        self.est = None;
-        let info = self.settings.algorithm.info();
-        let b = estimators::Build {
-            gpu: &self.gpu,
-            scene: &self.scene_gpu,
-            film: &self.film,
-            settings: &self.settings,
-            plan: &plan,
-        };
-        self.est = Some((info.build)(&b).context("growing the light-vertex store")?);
-        self.plan = plan;
         Ok(())
     }
 

@@ -5,19 +5,19 @@
 //! `maxTexelBufferElements` or `maxMemoryAllocationSize`; the total against the largest
 //! device-local heap, system RAM on lavapipe), and the film and passes allocate what it
 //! says. Each part is defined next to the code that uses the buffers: [`ScenePlan`]
-//! (src/render/scene_gpu.rs), [`FilmPlan`] (film.rs), [`LightVertexPlan`], [`GridPlan`]
-//! (src/render/passes/). The light-vertex store's capacity is an estimate; when an
-//! iteration needs more, the renderer grows it ([`FramePlan::set_light_vertex_capacity`])
-//! and checks the plan again.
+//! (src/render/scene_gpu.rs), [`FilmPlan`] (film.rs), [`GridPlan`] (src/render/passes/),
+//! [`LightVertexPlan`] (src/render/light_vertex_store.rs). The
+//! light-vertex store's capacity is an estimate; when an iteration needs more, the
+//! estimator grows it and checks the plan again (src/render/light_vertex_store.rs).
 
 use anyhow::{bail, Result};
 
 use super::features::FeatureSet;
 use super::film::FilmPlan;
-use super::passes::hash_grid::{grid_buckets, GridPlan, GRID_KEY_BYTES, GRID_POINT_BYTES};
-use super::passes::light_subpaths::{
-    light_vertex_b_bytes, LightVertexAccess, LightVertexPlan, LightVertexSizing, LIGHT_VERTEX_A_BYTES,
+use super::light_vertex_store::{
+    grown_capacity, light_vertex_b_bytes, LightVertexAccess, LightVertexPlan, LightVertexSizing, LIGHT_VERTEX_A_BYTES,
 };
+use super::passes::hash_grid::{grid_buckets, GridPlan, GRID_KEY_BYTES, GRID_POINT_BYTES};
 use super::reads::Reads;
 use super::scene_gpu::ScenePlan;
 use super::settings::RenderSettings;
@@ -117,6 +117,38 @@ impl FramePlan {
         })
     }
 
+    /// Every buffer.
+    pub fn buffers(&self) -> Vec<BufferSize> {
+        let mut v = self.scene.buffers();
+        v.extend(self.film.buffers());
+        v.extend(self.light_vertices.iter().flat_map(|p| p.buffers()));
+        v.extend(self.grid.iter().flat_map(|p| p.buffers()));
+        v
+    }
+
+    /// Fails when the plan does not fit `gpu`; `what` describes the render in the message.
+    pub fn check(&self, gpu: &Gpu, what: &str) -> Result<()> {
+        check_sizes(&self.buffers(), &SizeLimits::of(gpu), what)
+    }
+}
+
+/// The light-vertex store's growth (src/render/light_vertex_store.rs).
+impl FramePlan {
+    /// This plan with a store for iterations that store `needed` vertices and a margin
+    /// ([`grown_capacity`], as far as the device allows), checked against `gpu`; `what`
+    /// describes the render in the message when it does not fit.
+    pub fn grown(&self, gpu: &Gpu, needed: u64, what: &str) -> Result<FramePlan> {
+        let lv = self.light_vertices.as_ref().expect("an estimator that stores light vertices has a store");
+        let mut grown = self.clone();
+        grown.set_light_vertex_capacity(grown_capacity(needed, lv));
+        // The margin only as far as the device allows; `needed` itself is checked below.
+        grown.fit_light_vertex_capacity(&SizeLimits::of(gpu));
+        let capacity = grown.light_vertices.as_ref().map_or(needed, |lv| lv.capacity.max(needed));
+        grown.set_light_vertex_capacity(capacity);
+        grown.check(gpu, what)?;
+        Ok(grown)
+    }
+
     /// Resizes the light-vertex store, and the hash grid over it, for `capacity` vertices.
     pub fn set_light_vertex_capacity(&mut self, capacity: u64) {
         if let Some(lv) = &mut self.light_vertices {
@@ -143,19 +175,5 @@ impl FramePlan {
         if fits < lv.capacity {
             self.set_light_vertex_capacity(fits.max(1));
         }
-    }
-
-    /// Every buffer.
-    pub fn buffers(&self) -> Vec<BufferSize> {
-        let mut v = self.scene.buffers();
-        v.extend(self.film.buffers());
-        v.extend(self.light_vertices.iter().flat_map(|p| p.buffers()));
-        v.extend(self.grid.iter().flat_map(|p| p.buffers()));
-        v
-    }
-
-    /// Fails when the plan does not fit `gpu`; `what` describes the render in the message.
-    pub fn check(&self, gpu: &Gpu, what: &str) -> Result<()> {
-        check_sizes(&self.buffers(), &SizeLimits::of(gpu), what)
     }
 }

@@ -5,30 +5,17 @@
 
 use anyhow::Result;
 
-use super::{Algorithm, Build, Estimator, EstimatorInfo, Techniques};
+use super::{Build, Estimator};
 use crate::gpu::{Batch, Buffer};
 use crate::render::gpu_types::GpuPush;
 use crate::render::passes::camera_subpaths::CameraSubpaths;
 use crate::render::passes::PassInfo;
 
-pub const INFO: EstimatorInfo = EstimatorInfo {
-    algorithm: Algorithm::El,
-    name: "el",
-    description: "Eye light: |cos| at the first hit, times its texture (a preview, not radiance).",
-    techniques: Techniques::NONE,
-    radiance: false,
-    consistent_only: false,
-    default_connect: None,
-    regenerates_paths: false,
-    default_sampler: None,
-    build,
-};
-
 struct EyeLight {
     camera: CameraSubpaths,
 }
 
-fn build(b: &Build) -> Result<Box<dyn Estimator>> {
+pub fn build(b: &Build) -> Result<Box<dyn Estimator>> {
     Ok(Box::new(EyeLight { camera: CameraSubpaths::eye_light(&b.passes())? }))
 }
 

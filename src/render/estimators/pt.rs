@@ -5,7 +5,7 @@
 
 use anyhow::Result;
 
-use super::{Algorithm, Build, Estimator, EstimatorInfo, Techniques};
+use super::{Build, Estimator};
 use crate::gpu::{Batch, Buffer};
 use crate::render::gpu_types::GpuPush;
 use crate::render::passes::camera_subpaths::CameraSubpaths;
@@ -13,25 +13,12 @@ use crate::render::passes::camera_subpaths::PtKernel;
 use crate::render::passes::PassInfo;
 use crate::render::settings::Sampler;
 
-pub const INFO: EstimatorInfo = EstimatorInfo {
-    algorithm: Algorithm::Pt,
-    name: "pt",
-    description: "Path tracing with next-event estimation and MIS.",
-    techniques: Techniques::NONE,
-    radiance: true,
-    consistent_only: false,
-    default_connect: None,
-    regenerates_paths: true,
-    default_sampler: Some(Sampler::Sobol),
-    build,
-};
-
 struct PathTracer {
     camera: CameraSubpaths,
     paths_per_invocation: u32,
 }
 
-fn build(b: &Build) -> Result<Box<dyn Estimator>> {
+pub fn build(b: &Build) -> Result<Box<dyn Estimator>> {
     let camera = CameraSubpaths::path_tracer(
         &b.passes(),
         PtKernel { nee: b.settings.nee, sobol: b.settings.sampler() == Sampler::Sobol },

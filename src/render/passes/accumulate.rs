@@ -3,10 +3,10 @@
 
 use anyhow::Result;
 
-use super::light_subpaths::LightVertexStore;
 use super::{PassContext, PassInfo};
 use crate::gpu::{Batch, Bind, Kernel};
 use crate::render::gpu_types::GpuPush;
+use crate::render::light_vertex_store::LightVertexStore;
 use crate::render::variants::workgroup_defines;
 
 /// The name profiles report.

@@ -9,10 +9,10 @@
 use anyhow::Result;
 
 use super::hash_grid::HashGrid;
-use super::light_subpaths::LightVertexStore;
 use super::{PassContext, PassInfo};
 use crate::gpu::{Batch, Bind, Defines, Kernel};
 use crate::render::gpu_types::GpuPush;
+use crate::render::light_vertex_store::LightVertexStore;
 use crate::render::reads::Reads;
 use crate::render::regen;
 use crate::render::settings::Connect;

@@ -23,10 +23,10 @@ use anyhow::{bail, Result};
 use bytemuck::{Pod, Zeroable};
 
 use super::exclusive_scan::{ExclusiveScan, ScanPlan};
-use super::light_subpaths::LIGHT_VERTEX_A_BYTES;
 use super::PassInfo;
 use crate::gpu::{Batch, Bind, Buffer, Gpu, Kernel};
 use crate::render::addresses::FrameAddresses;
+use crate::render::light_vertex_store::LIGHT_VERTEX_A_BYTES;
 use crate::render::sizes::{check_sizes, Access, BufferSize, SizeLimits};
 use crate::render::variants::workgroup_defines;
 
