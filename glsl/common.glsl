@@ -216,8 +216,7 @@ uint workgroup_index() {
 // per invocation has regen_stride(paths, k) = ceil(paths / k) invocations, and invocation
 // i traces paths i, i + stride, i + 2 stride, ... (below `paths`), starting the next one
 // in the same loop iteration in which the current one ends. A SIMD group then runs until
-// its lanes' total work is done instead of once per path until its longest path is
-// (measured on lavapipe: docs/performance.md, "Third round").
+// its lanes' total work is done instead of once per path until its longest path is.
 // Each path keeps its own index, random sequence and outputs, so the image does not
 // depend on k (tests/render_regen.rs). src/render/regen.rs chooses k.
 uint regen_stride(uint paths, uint k) {

@@ -10,8 +10,8 @@
 // insertion sort; above: heapsort, so a pathological bucket (a radius so large that
 // thousands of vertices share a cell) costs O(n log n) in its invocation, not O(n^2).
 // The merge query reads one contiguous uvec4 per candidate from grid_points (its radius
-// test loads no index and nothing from the light-vertex store: faster on lavapipe,
-// docs/performance.md, "Performance work"). The
+// test loads no index and nothing from the light-vertex store; a merge costs what its
+// candidates load: docs/hash-grid.md). The
 // position is stored as bits (uvec4), so no float operation can touch it (the slot in a
 // float would be a denormal). Slots are unique, so comparing them orders entries fully.
 #extension GL_GOOGLE_include_directive : require

@@ -2,7 +2,7 @@
 // Path tracing (push.paths_per_invocation pixel samples per invocation: path
 // regeneration, common.glsl regen_stride): BSDF sampling with next-event
 // estimation, combined by the balance heuristic (Veach 1997, 9.2; the power heuristic
-// was measured and not kept: docs/performance.md, "pt: variance per sample"). MIS pdfs
+// lowers no error here: docs/performance.md, "Tried and not kept"). MIS pdfs
 // are the BSDF's and the light's only: Russian roulette is not in them.
 // Russian roulette as pbrt-v4 (PathIntegrator::Li), not bsdf.glsl's per-vertex albedo
 // rule (which lt/bpt/vcm keep): none at the first RR_MIN_LENGTH - 1 vertices, then the
@@ -22,8 +22,9 @@
 layout(local_size_x = WORKGROUP_SIZE) in;
 
 // Russian roulette applies at vertices whose path so far has at least this many segments
-// (the camera's first hit has 1): measured against 2 (pbrt-v4's), 4 and 5 (Mitsuba 3's
-// rr_depth), docs/performance.md, "pt: variance per sample".
+// (the camera's first hit has 1): later starts lower the variance per sample by about as
+// much as they raise its cost (2, pbrt-v4's, and 4 and 5, Mitsuba 3's rr_depth, against
+// 3: docs/performance.md, "Defaults that matter for speed, and why").
 const uint RR_MIN_LENGTH = 3u;
 
 #include "scene.glsl"

@@ -385,7 +385,7 @@ bool trace_camera_segment(vec3 o, vec3 d, out Hit h) {
 // all of them at once, where `from_camera ? trace_camera_segment(..) : trace_closest(..)`
 // would run two traversals, each with only part of the lanes active (on lavapipe a
 // SIMD group's pass through a traversal costs about as much with one lane active as with
-// eight; docs/performance.md, "One traversal per path segment").
+// eight).
 bool trace_path_segment(vec3 o, vec3 d, bool from_camera, out Hit h) {
     return trace_closest_culling(o, d, 0.0, 1e30, from_camera && HAS_ONE_SIDED != 0, h);
 }

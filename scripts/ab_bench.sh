@@ -1,6 +1,7 @@
 #!/bin/bash
 # Interleaved A/B(/C...) runs of `vkvcm bench render` for comparing kernel variants on a
-# shared, loaded machine (docs/performance.md, "Performance work"). Each variant is
+# shared machine, whose speed drifts between runs: interleaved rounds share the drift
+# (docs/performance.md, "How to read these figures"). Each variant is
 #   NAME:GLSL_DIR:VKVCM_BINARY[:ENV=VALUE|:--OPTION=VALUE ...]
 # (GLSL_DIR is passed as VKVCM_GLSL_DIR: the shaders are compiled at run time; --OPTION
 # items are passed to `bench render`, e.g. :--paths-per-invocation=1). Every round

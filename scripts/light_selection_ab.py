@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Light selection by power against uniform selection, at equal CPU time
-(docs/performance.md, "Light selection by power"). Standard library only.
+(docs/performance.md, "Defaults that matter for speed, and why"). Standard library only.
 
     python3 scripts/light_selection_ab.py [--vkvcm target/release/vkvcm] [--out DIR]
         [--algos pt,bpt,vcm] [--seeds 5] [--seconds 6] [--size 128] [--reference-seconds 600]

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """A plain glTF (.glb) height-field grid of about N triangles, a camera and a sun, for
-scene-size benchmarks (docs/performance.md, "Scene size"). Standard library only.
+scene-size benchmarks (docs/performance.md, "Memory"). Standard library only.
 
     python3 scripts/make_grid_scene.py 10000000 /tmp/grid_10m.glb
     python3 scripts/make_grid_scene.py 1000000 /tmp/grid_100x1m.glb 100

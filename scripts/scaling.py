@@ -1,16 +1,16 @@
 #!/usr/bin/env python3
 """How a render's cost scales: samples per CPU-second of pt and vcm against the frame size
 and against the number of triangles, to predict a render's time (docs/performance.md,
-"Scaling").
+"Scaling with frame size and triangles").
 
     python3 scripts/scaling.py [--rounds 3] [--vkvcm target/release/vkvcm] [--quick]
 
 Every row is one `vkvcm bench render` (one warm-up iteration, then the timed ones;
 samples per CPU-second of the whole process during the timed render, the median round
 and the range over --rounds). Start-up and kernel builds are not in these figures
-(docs/performance.md, "Start-up: the kernel cache").
+(docs/performance.md, "Start-up time").
 
-- Frame size: gbs_s (a point light; SmallVCM's scene 0) and glm_c (an area light) at
+- Frame size: gbs_s (a sun; SmallVCM's scene 0) and glm_c (an area light) at
   128 to 1024 pixels square, the same number of samples at every size: 2^22 for pt, 2^20
   for vcm (vcm with the default N_L = W x H light subpaths per iteration).
 - Triangles: the room of `scripts/make_grid_scene.py --room` (a closed room lit by an

@@ -7,8 +7,9 @@ variant in turn, for ROUNDS rounds, the variants' order rotated per round, and r
 per pass and in total the variant's median over the base's, the median of the per-round
 (paired) ratios and the ratio of the fastest rounds. On a shared VM single renders
 spread by 15-25% or more, so read all three, and a pass's own ratio before the total:
-a change that removes work in one pass can slow another (docs/performance.md, "The
-light-vertex store without the copy"). Counts of work that do not spread:
+a change that removes work in one pass can slow another (the light-vertex store
+without its copy: a faster light pass, slower readers; docs/performance.md, "Tried and
+not kept"). Counts of work that do not spread:
 scripts/instructions_ab.py.
 
 Each variant is NAME=GLSL_DIR[@BINARY][|ARGS] (scripts/ab_variants.py):

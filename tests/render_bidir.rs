@@ -114,9 +114,9 @@ fn caustics_from_a_point_light_need_light_subpaths() {
             let var = s.variance.iter().map(|&v| lum(v.map(|x| x.sqrt())).powi(2)).sum::<f64>() / (n * n);
             (mean, (var / s.count as f64).sqrt())
         };
-        // 512 iterations each: at 256 the margin was z = 6.15 with pt's old roulette and
-        // 5.94 with pbrt-v4's (docs/performance.md, "pt: variance per sample"), the same
-        // difference at the same noise, so the test measured its own luck.
+        // 512 iterations each: at 256 the margin over the z = 6 bound is a few tenths,
+        // within what a change of pt's sampling moves it, so 256 would test the seed's
+        // luck rather than the caustics.
         let (mp, sp) = mean_and_se(&stats(gpu, &scene, Algorithm::Pt, 512, None));
         let (mb, sb) = mean_and_se(&stats(gpu, &scene, Algorithm::Bpt, 512, None));
         let z = (mb - mp) / (sp * sp + sb * sb).sqrt();

@@ -160,9 +160,9 @@ fn sobol_is_unbiased_with_less_error(algorithm: Algorithm, max_ratio: f64) {
     assert!(ratio < max_ratio, "{name}: sobol's squared error over independent's: {ratio:.3}");
 }
 
-/// pt: Sobol's squared error over independent's was 0.55-0.57 on gbs_b in
-/// docs/performance.md's measurements (128x128, 64 and 512 iterations, relMSE against a
-/// reference), 0.44 in this test.
+/// pt: Sobol's squared error over independent's is 0.55-0.57 on gbs_b at 128x128, 64 and
+/// 512 iterations (the low end of the 0.55-0.95 in docs/performance.md, "Defaults that
+/// matter for speed, and why"), 0.44 in this test.
 #[test]
 fn sobol_pt_is_unbiased_with_less_error() {
     sobol_is_unbiased_with_less_error(Algorithm::Pt, 0.8);

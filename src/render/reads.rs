@@ -13,10 +13,9 @@
 //! bytes, so the image is bit-identical (tests/render_reads.rs). On lavapipe a load from
 //! a storage buffer at an address that differs between the lanes of a SIMD group is
 //! compiled into a loop over the lanes with a bounds check, a branch and a scalar load
-//! per lane and per component, while a texel fetch is one 16-byte load per lane; texel
-//! reads measured faster there (docs/performance.md, "Fourth round (texel-buffer
-//! reads)"). GPUs are left on storage buffers: no GPU measurement backs another choice
-//! yet.
+//! per lane and per component, while a texel fetch is one 16-byte load per lane, so
+//! texel reads are faster there (docs/performance.md, "Defaults that matter for speed, and why"). GPUs keep storage
+//! buffers: their memory path differs and no GPU measurement backs another choice.
 
 use ash::vk;
 

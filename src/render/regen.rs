@@ -6,10 +6,10 @@
 //! until its longest path is. The image does not depend on `k`: every path keeps its
 //! index, random sequence and outputs (tests/render_regen.rs checks equality).
 //!
-//! On a CPU device (lavapipe: 8 lanes per SIMD group) more paths per invocation measured
-//! faster, up to 2 workgroups per thread (docs/performance.md, "Third round"). GPUs
-//! are left at one path per invocation: they hide divergence differently and need many
-//! invocations in flight, and no GPU measurement backs another choice yet.
+//! On a CPU device (lavapipe: 8 lanes per SIMD group) a SIMD group otherwise waits for
+//! its longest path, so more paths per invocation are faster, up to 2 workgroups per
+//! thread (docs/performance.md, "Defaults that matter for speed, and why"). GPUs keep one path per invocation: they
+//! hide divergence differently and need many invocations in flight.
 
 use ash::vk;
 

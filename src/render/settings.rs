@@ -329,8 +329,8 @@ pub struct FrameSettings {
     pub light_selection: LightSelection,
 }
 
-/// The default light selection: by power (docs/performance.md, "Light selection by
-/// power", measured against uniform).
+/// The default light selection: by power, so that next-event samples and light subpaths
+/// are not spent on dim lights (docs/performance.md, "Defaults that matter for speed, and why").
 pub const DEFAULT_LIGHT_SELECTION: LightSelection = LightSelection::Power;
 
 /// How a light is chosen for next-event estimation and for a light subpath's start

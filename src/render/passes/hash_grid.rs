@@ -34,8 +34,8 @@ use crate::render::variants::workgroup_defines;
 pub const NAME: &str = "grid build";
 
 /// Hash-grid buckets per light subpath. SmallVCM has one; four cut the candidates that a
-/// merge query rejects (other cells hashed into the same buckets); 8 and 16 measured no
-/// faster (docs/performance.md, "Performance work").
+/// merge query rejects (other cells hashed into the same buckets); more cost more scan
+/// and sort than they save (docs/performance.md, "Defaults that matter for speed, and why").
 const GRID_BUCKETS_PER_LIGHT_PATH: u64 = 4;
 
 /// Most hash-grid buckets: `grid_start` (one u32 per bucket + 1) then stays below
