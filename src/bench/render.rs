@@ -12,7 +12,8 @@ use anyhow::Result;
 use serde::Serialize;
 
 use crate::gpu::{Gpu, KernelTime};
-use crate::render::{render, Algorithm, Budget, Connect, RenderSettings, Renderer, Sampler};
+use crate::render::converge::Variant;
+use crate::render::{render, Algorithm, Budget, RenderSettings, Renderer};
 use crate::scene::Scene;
 
 #[derive(Clone, Debug, Serialize)]
@@ -165,85 +166,6 @@ pub fn table(rows: &[BenchRow]) -> String {
         );
     }
     s
-}
-
-/// An estimator with its connection strategy, sampler and light subpaths per iteration,
-/// named `algo` (its defaults), then `:path` / `:cache:N` (`render --connect`; bpt, vcm),
-/// then `:independent` / `:sobol` (`render --sampler`), then `@N` for N light subpaths per
-/// iteration (`render --light-paths`; the light-subpath estimators), e.g. `bpt:cache:2`,
-/// `pt:independent`, `vcm:path:sobol` or `vcm@65536`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Variant {
-    pub algorithm: Algorithm,
-    pub connect: Connect,
-    pub sampler: Sampler,
-    /// `None`: one per pixel.
-    pub light_paths: Option<u32>,
-}
-
-impl Variant {
-    pub fn parse(s: &str) -> Result<Variant> {
-        let (name, light_paths) = match s.rsplit_once('@') {
-            Some((name, n)) => {
-                let n: u32 = n.parse().map_err(|_| anyhow::anyhow!("{s:?}: {n:?} is not a light-path count"))?;
-                (name, Some(n))
-            }
-            None => (s, None),
-        };
-        // algo[:connection strategy][:sampler]: a sampler is the last part.
-        let (rest, sampler) = match name.rsplit_once(':') {
-            Some((rest, c)) => match <Sampler as clap::ValueEnum>::from_str(c, false) {
-                Ok(sampler) => (rest, Some(sampler)),
-                Err(_) => (name, None),
-            },
-            None => (name, None),
-        };
-        let (a, c) = match rest.split_once(':') {
-            Some((a, c)) => (a, Some(c)),
-            None => (rest, None),
-        };
-        let algorithm = Algorithm::from_name(&a.to_ascii_lowercase())
-            .ok_or_else(|| anyhow::anyhow!("{s:?}: unknown estimator {a:?}"))?;
-        let requested = match c {
-            None => None,
-            Some(c) => Some(Connect::parse(c).ok_or_else(|| {
-                anyhow::anyhow!("{s:?}: {c:?} is not path or cache:N (N >= 1), nor sobol or independent")
-            })?),
-        };
-        let connect = algorithm.info().connect(requested).map_err(|e| anyhow::anyhow!("{s:?}: {e}"))?;
-        let sampler = sampler.unwrap_or(algorithm.info().sampler(None));
-        let v = Variant { algorithm, connect, sampler, light_paths };
-        // The estimator's own check of the light-path count (a 1x1 frame: sizes do not matter).
-        algorithm.info().check(&v.settings(1, 1, Budget::Iterations(1))).map_err(|e| anyhow::anyhow!("{s:?}: {e}"))?;
-        Ok(v)
-    }
-
-    /// `algo`, then `:path` / `:cache:N` for a strategy other than its default, then
-    /// `:sobol` / `:independent` for a sampler other than its default, then `@N` with a
-    /// light-path count.
-    pub fn name(&self) -> String {
-        let mut name = self.algorithm.name().to_string();
-        if self.connect != self.algorithm.default_connect() {
-            name += &format!(":{}", self.connect.name());
-        }
-        if self.sampler != self.algorithm.info().sampler(None) {
-            name += &format!(":{}", self.sampler.name());
-        }
-        if let Some(n) = self.light_paths {
-            name += &format!("@{n}");
-        }
-        name
-    }
-
-    /// Render settings of this variant (its strategy and light-path count; the rest
-    /// defaults).
-    pub fn settings(&self, width: u32, height: u32, budget: Budget) -> RenderSettings {
-        let mut s = RenderSettings::new(self.algorithm, width, height, budget);
-        s.connect = self.connect;
-        s.sampler = Some(self.sampler);
-        s.light_paths = self.light_paths;
-        s
-    }
 }
 
 /// One estimator's error after a fixed wall-clock budget (averaged over rounds).
@@ -645,46 +567,5 @@ mod tests {
         // An even count takes the lower middle round.
         assert_eq!(median_of_rounds(&runs[..2])[0].samples_per_cpu_second, Some(1.0));
         assert!(median_of_rounds(&[]).is_empty());
-    }
-
-    #[test]
-    fn variant_names_parse_back() {
-        for s in [
-            "pt",
-            "vcm",
-            "bpt:path",
-            "bpt:cache:1",
-            "vcm:cache:4",
-            "vcm@65536",
-            "bpt:cache:2@100",
-            "pt:independent",
-            "vcm:path:independent",
-            "bpt:cache:2:independent@100",
-        ] {
-            let v = Variant::parse(s).unwrap();
-            assert_eq!(Variant::parse(&v.name()).unwrap(), v, "{s}");
-        }
-        assert_eq!(Variant::parse("bpt:cache:3").unwrap().connect, Connect::Cache(3));
-        assert_eq!(Variant::parse("bpt").unwrap().connect, Algorithm::Bpt.default_connect());
-        assert_eq!(Variant::parse("lt@1000").unwrap().light_paths, Some(1000));
-        let v = Variant::parse("vcm:path:independent").unwrap();
-        assert_eq!((v.connect, v.sampler), (Connect::Path, Sampler::Independent));
-        assert_eq!(Variant::parse("vcm:sobol").unwrap().name(), "vcm", "sobol is vcm's default");
-        for bad in [
-            "xyz",
-            "pt:cache:1",
-            "bpt:cache:0",
-            "bpt:cache",
-            "bpt:cache:x",
-            "bpt:other",
-            "pt@100",
-            "vcm@0",
-            "vcm@x",
-            "lt:sobol",
-            "el:sobol",
-            "pt:sobol:path",
-        ] {
-            assert!(Variant::parse(bad).is_err(), "{bad} accepted");
-        }
     }
 }

@@ -70,8 +70,8 @@ pub struct BenchEqualTimeArgs {
     /// --sampler`), e.g. pt:independent, vcm:path:independent; `@N` after a
     /// light-subpath estimator sets N light subpaths per iteration (`render
     /// --light-paths`), e.g. vcm@16384.
-    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm", value_parser = vkvcm::bench::render::Variant::parse)]
-    pub algos: Vec<vkvcm::bench::render::Variant>,
+    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm", value_parser = vkvcm::render::converge::Variant::parse)]
+    pub algos: Vec<vkvcm::render::converge::Variant>,
     #[arg(long, default_value_t = 128)]
     pub size: u32,
     /// Wall-clock seconds per estimator and round.
@@ -143,8 +143,8 @@ pub struct BenchRenderArgs {
     /// `:independent` / `:sobol` for a sampler other than the default (`render
     /// --sampler`), e.g. vcm:independent; `@N` after a light-subpath estimator sets N
     /// light subpaths per iteration (`render --light-paths`), e.g. vcm@16384.
-    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm", value_parser = vkvcm::bench::render::Variant::parse)]
-    pub algos: Vec<vkvcm::bench::render::Variant>,
+    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm", value_parser = vkvcm::render::converge::Variant::parse)]
+    pub algos: Vec<vkvcm::render::converge::Variant>,
     /// Image width and height.
     #[arg(long, default_value_t = 256)]
     pub size: u32,
