@@ -1,6 +1,6 @@
 //! Convergence measurements: a reference render from two independent halves (with its own
 //! error estimate), and error-vs-time curves of estimators against it (`vkvcm reference`,
-//! `vkvcm converge`, `vkvcm bench equal-time`).
+//! `vkvcm converge`, `vkvcm-bench equal-time`).
 //!
 //! The error estimate of a reference follows the usual split-sample trick: if `a` and `b`
 //! are independent unbiased renders with the same variance, `(a - b) / 2` has the variance
