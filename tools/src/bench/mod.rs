@@ -2,7 +2,7 @@
 //!
 //! * [`build`]: BVH build seconds per million triangles (`vkvcm-bench bvh-build`).
 //! * [`render`]: samples per CPU-second of whole renders (`vkvcm-bench render`,
-//!   `bench equal-time`, `bench suite`).
+//!   `equal-time`, `suite`).
 //! * [`traverse`]: the BVH traversal benchmark (`vkvcm-bench traverse`) and its scenes.
 
 pub mod build;
