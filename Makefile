@@ -19,16 +19,18 @@ render: build
 
 # Tests force lavapipe so results do not depend on the machine's GPU. The suite shares a
 # kernel cache of its own, emptied first, so each kernel variant is compiled once per run
-# (GpuOptions::for_tests).
+# (GpuOptions::for_tests). It covers the workspace (the renderer and tools/) with the
+# fault-injection feature, which the tests of device loss and device limits need.
 TEST_KERNEL_CACHE := $(CURDIR)/target/test-kernel-cache
 
 test: setup
 	rm -rf $(TEST_KERNEL_CACHE)
 	VK_DRIVER_FILES=$(LVP_ICD) VK_ICD_FILENAMES=$(LVP_ICD) VKVCM_TEST_KERNEL_CACHE=$(TEST_KERNEL_CACHE) \
-		cargo test -- --test-threads=2
+		cargo test --workspace --features vkvcm/fault-injection -- --test-threads=2
 
 clippy:
-	cargo clippy --all-targets -- -D warnings
+	cargo clippy --workspace --all-targets -- -D warnings
+	cargo clippy --workspace --all-targets --all-features -- -D warnings
 
 fmt:
 	cargo fmt --check

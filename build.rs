@@ -72,7 +72,9 @@ fn debian_compiler_identity(dir: &std::path::Path, linked: &[&str]) -> String {
 }
 
 /// Embeds every file under glsl/ into the binary (`glsl_sources.rs` in OUT_DIR) so that
-/// `vkvcm` compiles its kernels at run time without needing the source tree.
+/// `vkvcm` compiles its kernels at run time without needing the source tree. glsl/tests/
+/// (test and benchmark kernels) only with the `test-kernels` feature: a render never runs
+/// them.
 fn embed_glsl() {
     // The manifest directory of this run (cargo sets it for build scripts), not the one
     // this script was compiled in: a target/ dir copied to another checkout would
@@ -82,6 +84,9 @@ fn embed_glsl() {
     println!("cargo:rerun-if-changed={}", root.display());
     let mut files = Vec::new();
     collect(&root, &root, &mut files);
+    if std::env::var_os("CARGO_FEATURE_TEST_KERNELS").is_none() {
+        files.retain(|(rel, _)| !rel.starts_with("tests/"));
+    }
     files.sort();
     let mut out = String::from("pub static SOURCES: &[(&str, &str)] = &[\n");
     // Paths relative to CARGO_MANIFEST_DIR as the crate sees it when it is compiled, not

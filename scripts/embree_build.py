@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Embree's BVH build time on the meshes `vkvcm bench bvh-build --export-triangles DIR`
+"""Embree's BVH build time on the meshes `vkvcm-bench bvh-build --export-triangles DIR`
 wrote, for a side-by-side comparison with vkvcm's build (docs/bvh.md, "Build benchmark").
 
 Builds each DIR/*.f32 mesh (9 little-endian float32 per triangle) `--rounds` times with
@@ -10,7 +10,7 @@ before it is reported apart. Prints the median wall-clock build and seconds per 
 triangles. Embree uses all cores of the process's CPU affinity (TBB): restrict
 it with taskset to compare thread counts, e.g.
 
-    vkvcm bench bvh-build --threads 1,2 --export-triangles /tmp/meshes
+    vkvcm-bench bvh-build --threads 1,2 --export-triangles /tmp/meshes
     taskset -c 0 python3 scripts/embree_build.py /tmp/meshes       # 1 thread
     taskset -c 0,1 python3 scripts/embree_build.py /tmp/meshes     # 2 threads
 """

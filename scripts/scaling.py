@@ -3,9 +3,9 @@
 and against the number of triangles, to predict a render's time (docs/performance.md,
 "Scaling with frame size and triangles").
 
-    python3 scripts/scaling.py [--rounds 3] [--vkvcm target/release/vkvcm] [--quick]
+    python3 scripts/scaling.py [--rounds 3] [--vkvcm-bench target/release/vkvcm-bench] [--quick]
 
-Every row is one `vkvcm bench render` (one warm-up iteration, then the timed ones;
+Every row is one `vkvcm-bench render` (one warm-up iteration, then the timed ones;
 samples per CPU-second of the whole process during the timed render, the median round
 and the range over --rounds). Start-up and kernel builds are not in these figures
 (docs/performance.md, "Start-up time").
@@ -32,9 +32,9 @@ import tempfile
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
-def bench(vkvcm, scene, algo, size, iterations, rounds, work):
+def bench(vkvcm_bench, scene, algo, size, iterations, rounds, work):
     out = os.path.join(work, "bench.json")
-    cmd = [vkvcm, "bench", "render", "--scenes", scene, "--algos", algo, "--size", str(size),
+    cmd = [vkvcm_bench, "render", "--scenes", scene, "--algos", algo, "--size", str(size),
            "--iterations", str(iterations), "--rounds", str(rounds), "--json", out]
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
@@ -58,7 +58,7 @@ HEADER = ("| {first} | estimator | frame | iterations | samples | samples / CPU-
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--vkvcm", default="target/release/vkvcm")
+    ap.add_argument("--vkvcm-bench", default="target/release/vkvcm-bench")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--quick", action="store_true")
     a = ap.parse_args()
@@ -68,7 +68,7 @@ def main():
     rounds = 1 if a.quick else a.rounds
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
                             cwd=HERE).stdout.strip()
-    print(f"# {a.vkvcm} at commit {commit}, {rounds} round(s); load average {os.getloadavg()[0]:.2f} at the start")
+    print(f"# {a.vkvcm_bench} at commit {commit}, {rounds} round(s); load average {os.getloadavg()[0]:.2f} at the start")
     with tempfile.TemporaryDirectory() as work:
         print("\nFrame size\n")
         print(HEADER.format(first="scene"))
@@ -76,7 +76,7 @@ def main():
             for algo in ["pt", "vcm"]:
                 for size in sizes:
                     iterations = max(1, budget[algo] // (size * size))
-                    row = bench(a.vkvcm, scene, algo, size, iterations, rounds, work)
+                    row = bench(a.vkvcm_bench, scene, algo, size, iterations, rounds, work)
                     print(row_text(scene, algo, size, iterations, row), flush=True)
         print("\nTriangles (the room of make_grid_scene.py --room; 12 triangles besides the floor)\n")
         print(HEADER.format(first="floor triangles"))
@@ -87,7 +87,7 @@ def main():
             triangles = int(made.split("has ")[1].split()[0])
             for algo in ["pt", "vcm"]:
                 iterations = max(1, budget[algo] // (256 * 256))
-                row = bench(a.vkvcm, path, algo, 256, iterations, rounds, work)
+                row = bench(a.vkvcm_bench, path, algo, 256, iterations, rounds, work)
                 print(row_text(f"{triangles:,}", algo, 256, iterations, row), flush=True)
     print(f"\n# load average {os.getloadavg()[0]:.2f} at the end")
 

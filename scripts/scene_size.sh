@@ -1,15 +1,17 @@
 #!/usr/bin/env bash
 # Scene size on the height-field grids of scripts/make_grid_scene.py: the BVH build time
-# (`vkvcm bench bvh-build`, median of 5, 2 threads), and of one `vkvcm render -a pt`
+# (`vkvcm-bench bvh-build`, median of 5, 2 threads), and of one `vkvcm render -a pt`
 # (256x256, 32 iterations): the load time when over 1 s (shorter loads print no line),
 # device memory (and bytes per triangle), the process's peak host memory and the rays per
 # second of GPU time. A size NxK places a grid of N triangles K times (instances of one
 # mesh: K x N triangles in the scene, N stored); NxKf renders the same file with
 # --flatten-instances (K x N stored; the build column is then blank).
 #   scripts/scene_size.sh [TRIANGLES[xINSTANCES[f]]...]   (default 1000000 4500000 10000000)
-# Environment: VKVCM (default target/release/vkvcm). Run on an idle machine.
+# Environment: VKVCM (default target/release/vkvcm), VKVCM_BENCH (default
+# target/release/vkvcm-bench: cargo build --release -p vkvcm-tools). Run on an idle machine.
 set -euo pipefail
 bin=${VKVCM:-target/release/vkvcm}
+bench_bin=${VKVCM_BENCH:-target/release/vkvcm-bench}
 here=$(cd "$(dirname "$0")" && pwd)
 sizes=("$@")
 [ ${#sizes[@]} -gt 0 ] || sizes=(1000000 4500000 10000000)
@@ -24,7 +26,7 @@ for size in "${sizes[@]}"; do
     k=1
     [ "$size" = "$n" ] || k=${size#*x}
     python3 "$here/make_grid_scene.py" "$n" "$out/grid.glb" "$k" >/dev/null
-    "$bin" bench bvh-build --scenes "$out/grid.glb" --threads 2 >"$out/build" 2>&1
+    "$bench_bin" bvh-build --scenes "$out/grid.glb" --threads 2 >"$out/build" 2>&1
     /usr/bin/time -f "%M" -o "$out/rss" "$bin" render "$out/grid.glb" -a pt --width 256 --height 256 -i 32 \
         "${flatten[@]}" --verbose --profile -o "$out/img.exr" >"$out/log" 2>&1
     python3 - "$out/log" "$out/rss" "$out/build" "$k" "${#flatten[@]}" <<'PY'

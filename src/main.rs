@@ -22,9 +22,6 @@ enum Command {
     Devices,
     /// Render a scene to an EXR (and optionally a PNG).
     Render(cli::render::RenderArgs),
-    /// Benchmarks (results for docs/performance.md).
-    #[command(subcommand)]
-    Bench(cli::bench::BenchCommand),
     /// A reference image: a long render in two independent halves, with its own error
     /// estimate (RMS of the halves' difference / 2) stored in the EXR.
     Reference(cli::converge::ReferenceArgs),
@@ -41,7 +38,6 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Devices => devices(),
         Command::Render(args) => cli::render::render_cmd(args),
-        Command::Bench(cmd) => cmd.run(),
         Command::Reference(args) => cli::converge::reference_cmd(args),
         Command::Converge(args) => cli::converge::converge_cmd(args),
         Command::Diff(args) => cli::diff::diff_cmd(args),

@@ -1,4 +1,4 @@
-//! The traversal benchmark as an ignored test (the same code as `vkvcm bench traverse`):
+//! The traversal benchmark as an ignored test (the same code as `vkvcm-bench traverse`):
 //!
 //! ```text
 //! VKVCM_BENCH_SCENES=cornell,spheres,displaced \
@@ -8,8 +8,8 @@
 //! `VKVCM_BENCH_LOCAL_SIZE` sets the workgroup size, `VKVCM_BENCH_REPEATS` the timed
 //! dispatches, `VKVCM_BENCH_CT` / `_BINS` / `_LEAF` the SAH build options. Validation is off (it would time the layer, not the traversal).
 
-use vkvcm::bench::traverse::{bench_scene, bench_traverse, TraverseBenchOptions};
 use vkvcm::gpu::{Gpu, GpuOptions};
+use vkvcm_tools::bench::traverse::{bench_scene, bench_traverse, TraverseBenchOptions};
 
 #[test]
 #[ignore = "benchmark: run explicitly with --ignored --release"]

@@ -252,7 +252,7 @@ fn determinism_cases() -> Vec<(&'static str, Vec<Triangle>, Vec<Sphere>)> {
     let one_sphere = vec![Sphere { center: Vec3::ONE, radius: 0.5, material: 3 }];
     vec![
         ("soup of 100k triangles and 1k spheres", s.triangles, s.spheres),
-        ("163,840 triangles of 640 UV spheres", vkvcm::bench::traverse::sphere_grid([8, 8, 10]), Vec::new()),
+        ("163,840 triangles of 640 UV spheres", vkvcm_tools::bench::traverse::sphere_grid([8, 8, 10]), Vec::new()),
         ("60k triangles with one centroid", vec![same.clone(); 60_000], Vec::new()),
         ("5k coincident + 20k geometric sequence (depth guard)", depth_guard, Vec::new()),
         ("no primitive", Vec::new(), Vec::new()),
@@ -311,15 +311,15 @@ fn parallel_median_build_is_the_serial_build() {
 /// of either tree, and so of rendered images, is noticed.
 #[test]
 fn tree_unchanged_since_the_serial_builder() {
-    let scene = vkvcm::bench::traverse::scene_displaced();
+    let scene = vkvcm_tools::bench::traverse::scene_displaced();
     assert!(scene.triangles.len() >= SIZE_LEAF_RULE_MIN_PRIMS);
     let sah =
         build_with(&scene.triangles, &scene.spheres, &BuildOptions { leaf_rule: LeafRule::Sah, ..Default::default() });
     assert_eq!((sah.nodes.len(), sah.prims.len()), (543_136, 1_002_252));
-    assert_eq!(format!("{:08x}", vkvcm::bench::build::checksum(&sah)), "dda26bfc");
+    assert_eq!(format!("{:08x}", vkvcm_tools::bench::build::checksum(&sah)), "dda26bfc");
     let default = build(&scene.triangles, &scene.spheres);
     assert_eq!((default.nodes.len(), default.prims.len()), (302_975, 1_002_252));
-    assert_eq!(format!("{:08x}", vkvcm::bench::build::checksum(&default)), "3a840532");
+    assert_eq!(format!("{:08x}", vkvcm_tools::bench::build::checksum(&default)), "3a840532");
 }
 
 /// Primitives below each internal node (index = node), from the leaves up.
@@ -416,7 +416,7 @@ fn icosphere_is_watertight_on_cpu() {
 
 #[test]
 fn build_one_million_triangles() {
-    let scene = vkvcm::bench::traverse::scene_spheres();
+    let scene = vkvcm_tools::bench::traverse::scene_spheres();
     assert_eq!(scene.triangles.len(), 1 << 20);
     let serial = build_with(&scene.triangles, &scene.spheres, &BuildOptions { threads: 1, ..Default::default() });
     let bvh = build(&scene.triangles, &scene.spheres);
@@ -484,7 +484,7 @@ fn instanced_bvh_matches_the_flattened_brute_force() {
 fn instanced_bvh_stores_each_mesh_once() {
     use glam::Affine3A;
     use vkvcm::scene::{Camera, Instance, LoadReport, Scene, SharedMesh};
-    let ico = vkvcm::bench::traverse::icosphere(Vec3::ZERO, 1.0, 4, 0);
+    let ico = vkvcm_tools::bench::traverse::icosphere(Vec3::ZERO, 1.0, 4, 0);
     let n = ico.len() as u32;
     let instances: Vec<Instance> = (0..64)
         .map(|k| Instance {

@@ -214,6 +214,7 @@ fn resume_continues_to_the_total() {
 /// failed, and the image of the last completed snapshot written. A 16x16 film is copied
 /// to the host after every batch, so the loss at the 7th submit leaves 6 batches' worth.
 #[test]
+#[cfg_attr(not(feature = "fault-injection"), ignore = "needs --features fault-injection")]
 fn device_loss_writes_last_snapshot() {
     let dir = tempfile::tempdir().unwrap();
     let o = tiny(dir.path())

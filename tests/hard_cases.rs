@@ -14,10 +14,10 @@ use common::scenes::{area_lights, camera, inward_box, scene};
 use common::{render_stats, with_gpu};
 use glam::Vec3;
 use vkvcm::gpu::Gpu;
-use vkvcm::image::stats::{one_sample_test, welch_test};
 use vkvcm::image::Image;
 use vkvcm::render::{self, Algorithm, Budget, RenderOutput, RenderSettings};
 use vkvcm::scene::{Light, Material, Scene, Triangle};
+use vkvcm_tools::stats::{one_sample_test, welch_test};
 
 const ALPHA: f64 = 1e-3;
 
@@ -259,7 +259,7 @@ fn closed_furnace_with_shading_normals_gains_no_energy() {
     with_gpu(|gpu| {
         let pt = run(gpu, Algorithm::Pt, 256);
         let (mean, se) = (pt.mean_image(), pt.std_error_image());
-        let z = vkvcm::image::stats::inverse_normal_cdf(1.0 - vkvcm::image::stats::sidak(ALPHA, 3 * 256));
+        let z = vkvcm_tools::stats::inverse_normal_cdf(1.0 - vkvcm_tools::stats::sidak(ALPHA, 3 * 256));
         let (mut sum, mut sum_var) = (0.0f64, 0.0f64);
         for (m, e) in mean.data.iter().zip(&se.data) {
             for c in 0..3 {

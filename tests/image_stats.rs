@@ -6,11 +6,11 @@
 
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
-use vkvcm::image::stats::{
+use vkvcm::image::{read_exr, Image};
+use vkvcm_tools::stats::{
     dump_on_failure, inverse_normal_cdf, normal_sf, one_sample_test, sidak, student_t_two_sided_p, welch_test, z_test,
     z_test_analytic, PixelStats,
 };
-use vkvcm::image::{read_exr, Image};
 
 fn rel_err(got: f64, want: f64) -> f64 {
     ((got - want) / want).abs()
@@ -411,7 +411,7 @@ fn dumps_images_for_debugging() {
     let caught = std::panic::catch_unwind(|| t.assert_passed("image_stats_assert_selftest"));
     let msg = *caught.unwrap_err().downcast::<String>().unwrap();
     assert!(msg.contains("FAILED") && msg.contains("test-failures"), "{msg}");
-    let _ = std::fs::remove_dir_all(vkvcm::image::stats::failure_dir().join("image_stats_assert_selftest"));
+    let _ = std::fs::remove_dir_all(vkvcm_tools::stats::failure_dir().join("image_stats_assert_selftest"));
 }
 
 /// Calibration (run with `--ignored --nocapture`): false-failure rate of the Welch test

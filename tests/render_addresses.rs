@@ -143,6 +143,7 @@ fn render_cli(
 }
 
 #[test]
+#[cfg_attr(not(feature = "fault-injection"), ignore = "needs --features fault-injection")]
 fn frame_buffers_larger_than_one_binding_render() {
     let dir = tempfile::tempdir().unwrap();
     // 48 x 48: the film (64 bytes per pixel, 147 KiB) exceeds a 128 KiB binding; every
@@ -174,6 +175,7 @@ fn frame_buffers_larger_than_one_binding_render() {
 /// the buffer without addresses. Sabotage (by hand, not kept): registering the vertex
 /// attributes' address as the texels' fails BoxTextured (the images differ).
 #[test]
+#[cfg_attr(not(feature = "fault-injection"), ignore = "needs --features fault-injection")]
 fn scene_buffers_larger_than_one_binding_render() {
     let dir = tempfile::tempdir().unwrap();
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -227,6 +229,7 @@ fn render_chunked(
 /// from a vertex's second element (glsl/textures.glsl, vertex_attribute_at) fails
 /// BoxTextured.
 #[test]
+#[cfg_attr(not(feature = "fault-injection"), ignore = "needs --features fault-injection")]
 fn scene_bvh_and_geometry_larger_than_one_binding_render_in_chunks() {
     let dir = tempfile::tempdir().unwrap();
     let scene = common::instanced_gltf::write_instanced_gltf(dir.path());

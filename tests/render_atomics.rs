@@ -134,6 +134,7 @@ fn vkvcm(args: &[&str], without_int64: bool) -> std::process::Output {
 /// `vkvcm devices` says which fallbacks apply and every estimator renders the image of a
 /// device with them.
 #[test]
+#[cfg_attr(not(feature = "fault-injection"), ignore = "needs --features fault-injection")]
 fn a_device_without_64_bit_integers_renders_the_same_images() {
     let dir = tempfile::tempdir().unwrap();
     let out = vkvcm(&["devices"], true);

@@ -16,7 +16,7 @@
 //!   background's image (z-test), and specialised kernels equal generic ones.
 //!
 //! Statistics: each render's iterations are independent samples; ALPHA = 1e-3 per
-//! comparison after Šidák correction over pixels and channels (src/image/stats.rs).
+//! comparison after Šidák correction over pixels and channels (tools/src/stats.rs).
 
 mod common;
 
@@ -26,10 +26,10 @@ use common::scenes::{environment_scene, smooth_sky};
 use common::{render_stats, with_gpu};
 use glam::Vec3;
 use vkvcm::gpu::Gpu;
-use vkvcm::image::stats::{one_sample_test, welch_test, PixelStats};
 use vkvcm::image::Image;
 use vkvcm::render::{self, Algorithm, Budget, RenderOutput, RenderSettings};
 use vkvcm::scene::{Camera, EnvironmentLight, EnvironmentMap, Light, LoadReport, Material, Scene, Sphere};
+use vkvcm_tools::stats::{one_sample_test, welch_test, PixelStats};
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 24;

@@ -16,10 +16,10 @@ use std::sync::Arc;
 
 use common::{render_stats, with_gpu};
 use vkvcm::gpu::Gpu;
-use vkvcm::image::stats::welch_test;
 use vkvcm::render::features::FeatureSet;
 use vkvcm::render::{Algorithm, Budget, RenderOutput, RenderSettings, Renderer};
 use vkvcm::scene::{load_named, Scene};
+use vkvcm_tools::stats::welch_test;
 
 const SIZE: u32 = 24;
 const ITERATIONS: u64 = 32;
@@ -319,7 +319,7 @@ fn feature_derivation() {
 fn bench_suite_row_measures_both_variants() {
     let scene = load_named("glm_c").unwrap();
     with_gpu(|gpu| {
-        let row = vkvcm::bench::render::suite_row(gpu, &scene, Algorithm::Bpt, 16, 2, 1).unwrap();
+        let row = vkvcm_tools::bench::render::suite_row(gpu, &scene, Algorithm::Bpt, 16, 2, 1).unwrap();
         assert_eq!(row.iterations, 2);
         for v in [&row.specialised, &row.generic] {
             assert!(v.gpu_ms_per_iteration > 0.0 && v.rays_per_second > 0.0 && v.rays_per_iteration > 0.0);
@@ -331,6 +331,6 @@ fn bench_suite_row_measures_both_variants() {
         assert_eq!(row.specialised.rays_per_iteration, row.generic.rays_per_iteration);
         assert!(row.speedup.is_finite() && row.speedup > 0.0);
         assert!(row.compiled_out.contains(&"dielectric".to_string()), "{:?}", row.compiled_out);
-        assert!(vkvcm::bench::render::suite_table(&[row]).contains("| glm_c | bpt |"));
+        assert!(vkvcm_tools::bench::render::suite_table(&[row]).contains("| glm_c | bpt |"));
     });
 }

@@ -16,9 +16,9 @@ use common::scenes::*;
 use common::{image_mean, render_checked, render_stats, with_gpu};
 use glam::Vec3;
 use vkvcm::gpu::Gpu;
-use vkvcm::image::stats::{welch_test, PixelStats};
 use vkvcm::render::{Algorithm, Budget, RenderSettings};
 use vkvcm::scene::{Light, Material, Scene, Sphere};
+use vkvcm_tools::stats::{welch_test, PixelStats};
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 24;
@@ -223,7 +223,7 @@ fn gltf_material_never_reflects_more_than_it_receives() {
             let pt_out = render(Algorithm::Pt, 512);
             let pt = render_stats(&pt_out, None);
             let label = format!("metallic {metallic}, roughness {roughness}, F0 {f0}");
-            let z = vkvcm::image::stats::inverse_normal_cdf(1.0 - vkvcm::image::stats::sidak(ALPHA, 3 * pt.mean.len()));
+            let z = vkvcm_tools::stats::inverse_normal_cdf(1.0 - vkvcm_tools::stats::sidak(ALPHA, 3 * pt.mean.len()));
             let mut worst = 0.0f64;
             for (m, v) in pt.mean.iter().zip(&pt.variance) {
                 for c in 0..3 {
@@ -246,7 +246,7 @@ fn gltf_material_never_reflects_more_than_it_receives() {
                     }
                 }
                 let masked = render_stats(&pt_out, Some(&mask));
-                let t = vkvcm::image::stats::one_sample_test(&masked, &expected, ALPHA).unwrap();
+                let t = vkvcm_tools::stats::one_sample_test(&masked, &expected, ALPHA).unwrap();
                 assert!(t.passed(), "{label}: a smooth white dielectric must reflect everything: {t}");
             }
             let t = welch_test(&run(Algorithm::Bpt, 256), &pt, ALPHA).unwrap();

@@ -28,9 +28,9 @@ use std::sync::Arc;
 
 use common::{render_stats, with_gpu};
 use vkvcm::gpu::Gpu;
-use vkvcm::image::stats::{welch_test, PixelStats};
 use vkvcm::render::{self, Algorithm, Budget, Connect, RenderOutput, RenderSettings};
 use vkvcm::scene::Scene;
+use vkvcm_tools::stats::{welch_test, PixelStats};
 
 const ALPHA: f64 = 1e-3;
 

@@ -19,10 +19,10 @@ use common::scenes::*;
 use common::{image_mean, render_checked, render_stats, with_gpu};
 use glam::Vec3;
 use vkvcm::gpu::Gpu;
-use vkvcm::image::stats::{welch_test, PixelStats};
 use vkvcm::render::light_selection::LightDistribution;
 use vkvcm::render::{self, Algorithm, Budget, LightSelection, RenderSettings};
 use vkvcm::scene::{Light, Material, Scene};
+use vkvcm_tools::stats::{welch_test, PixelStats};
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 24;

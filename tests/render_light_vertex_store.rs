@@ -136,6 +136,7 @@ fn an_overflow_in_the_middle_of_a_batch_renders_the_rest_of_it_again() {
 }
 
 #[test]
+#[cfg_attr(not(feature = "fault-injection"), ignore = "needs --features fault-injection")]
 fn a_store_the_device_cannot_hold_is_refused_with_what_to_lower() {
     let dir = tempfile::tempdir().unwrap();
     let run = |cap: &str| {

@@ -31,10 +31,10 @@ use std::sync::Arc;
 
 use common::{render_stats, with_gpu};
 use vkvcm::gpu::Gpu;
-use vkvcm::image::stats::{welch_test, PixelStats};
 use vkvcm::render::Connect;
 use vkvcm::render::{self, Algorithm, Budget, RenderOutput, RenderSettings};
 use vkvcm::scene::Scene;
+use vkvcm_tools::stats::{welch_test, PixelStats};
 
 const ALPHA: f64 = 1e-3;
 /// Two-sided normal quantile of ALPHA, for the whole-image mean.

@@ -19,9 +19,9 @@ use common::scenes::*;
 use common::{render_checked, render_stats, with_gpu};
 use glam::Vec3;
 use vkvcm::gpu::Gpu;
-use vkvcm::image::stats::{welch_test, PixelStats};
 use vkvcm::render::{self, Algorithm, Budget, RenderSettings};
 use vkvcm::scene::{Light, Material, Scene, Triangle};
+use vkvcm_tools::stats::{welch_test, PixelStats};
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 24;

@@ -25,9 +25,9 @@ use common::scenes::*;
 use common::{image_mean, render_checked, render_stats, with_gpu};
 use glam::Vec3;
 use vkvcm::gpu::Gpu;
-use vkvcm::image::stats::{welch_test, PixelStats};
 use vkvcm::render::{self, Algorithm, Budget, RenderSettings};
 use vkvcm::scene::{EnvironmentLight, Light, Material, Scene, Sphere, Triangle, GLTF_DIELECTRIC_F0};
+use vkvcm_tools::stats::{welch_test, PixelStats};
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 24;
@@ -206,7 +206,7 @@ fn partial_transmission_furnace() {
             let mut sc = scene("furnace", vec![], vec![mat], vec![Light::Background { radiance: Vec3::ONE }], cam);
             sc.spheres = vec![Sphere { center: Vec3::ZERO, radius: 1.0, material: 0 }];
             let st = render_stats(&render(gpu, &sc, Algorithm::Pt, 512, 41, 24), None);
-            let z = vkvcm::image::stats::inverse_normal_cdf(1.0 - vkvcm::image::stats::sidak(ALPHA, 3 * st.mean.len()));
+            let z = vkvcm_tools::stats::inverse_normal_cdf(1.0 - vkvcm_tools::stats::sidak(ALPHA, 3 * st.mean.len()));
             let (mut worst, mut least) = (0.0f64, f64::INFINITY);
             for (m, v) in st.mean.iter().zip(&st.variance) {
                 for c in 0..3 {

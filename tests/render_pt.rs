@@ -10,10 +10,10 @@ mod common;
 use common::scenes::*;
 use common::with_gpu;
 use glam::Vec3;
-use vkvcm::image::stats::{z_test, z_test_analytic};
 use vkvcm::image::Image;
 use vkvcm::render::{self, Algorithm, Budget, RenderSettings};
 use vkvcm::scene::{Light, Material, Scene};
+use vkvcm_tools::stats::{z_test, z_test_analytic};
 
 /// Whole-image false-failure probability of each statistical test.
 const ALPHA: f64 = 1e-3;

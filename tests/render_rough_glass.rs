@@ -17,9 +17,9 @@ use common::scenes::*;
 use common::{image_mean, render_checked, render_stats, with_gpu};
 use glam::Vec3;
 use vkvcm::gpu::Gpu;
-use vkvcm::image::stats::{welch_test, PixelStats};
 use vkvcm::render::{self, Algorithm, Budget, RenderSettings};
 use vkvcm::scene::{Light, Material, Scene, Sphere};
+use vkvcm_tools::stats::{welch_test, PixelStats};
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 24;
@@ -178,7 +178,7 @@ fn rough_glass_furnace() {
         for (roughness, min_mean, mitsuba, mitsuba_se) in MITSUBA_FURNACE {
             let cam = camera(Vec3::new(0.0, 0.0, 3.2), Vec3::new(0.0, 0.0, -1.0), Vec3::Y, 45.0);
             let (sc, st) = furnace(gpu, roughness, cam, (w, h), 512, 61);
-            let z = vkvcm::image::stats::inverse_normal_cdf(1.0 - vkvcm::image::stats::sidak(ALPHA, 3 * st.mean.len()));
+            let z = vkvcm_tools::stats::inverse_normal_cdf(1.0 - vkvcm_tools::stats::sidak(ALPHA, 3 * st.mean.len()));
             let (mut worst, mut sum, mut var, mut n) = (0.0f64, 0.0f64, 0.0f64, 0usize);
             for (m, v) in st.mean.iter().zip(&st.variance) {
                 for c in 0..3 {
@@ -235,7 +235,7 @@ fn rough_glass_furnace_from_inside() {
         for (roughness, mitsuba, mitsuba_se) in MITSUBA_FURNACE_INSIDE {
             let cam = camera(Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), Vec3::Y, 45.0);
             let (_, st) = furnace(gpu, roughness, cam, (w, h), 256, 71);
-            let z = vkvcm::image::stats::inverse_normal_cdf(1.0 - vkvcm::image::stats::sidak(ALPHA, 3 * st.mean.len()));
+            let z = vkvcm_tools::stats::inverse_normal_cdf(1.0 - vkvcm_tools::stats::sidak(ALPHA, 3 * st.mean.len()));
             let (mut sum, mut var) = (0.0f64, 0.0f64);
             for (m, v) in st.mean.iter().zip(&st.variance) {
                 for c in 0..3 {

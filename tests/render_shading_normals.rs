@@ -25,9 +25,9 @@ use common::scenes::{glossy_floor_scene, smooth_sphere_mesh, tilt_shading_normal
 use common::{render_stats, with_gpu};
 use glam::Vec3;
 use vkvcm::gpu::Gpu;
-use vkvcm::image::stats::{welch_test, PixelStats};
 use vkvcm::render::{self, Algorithm, Budget, RenderSettings};
 use vkvcm::scene::{Material, Scene};
+use vkvcm_tools::stats::{welch_test, PixelStats};
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 24;

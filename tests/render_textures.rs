@@ -20,12 +20,12 @@ use common::scenes::{camera, scene};
 use common::{render_stats, with_gpu};
 use glam::{Vec2, Vec3, Vec4};
 use vkvcm::gpu::Gpu;
-use vkvcm::image::stats::{one_sample_test, welch_test, PixelStats};
 use vkvcm::image::Image;
 use vkvcm::render::{self, Algorithm, Budget, RenderOutput, RenderSettings};
 use vkvcm::scene::{
     AlphaMode, Filter, Light, Material, Scene, TextureImage, TextureRef, Triangle, VertexAttributes, Wrap,
 };
+use vkvcm_tools::stats::{one_sample_test, welch_test, PixelStats};
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 24;

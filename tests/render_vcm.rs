@@ -8,9 +8,9 @@ use std::sync::Arc;
 
 use common::{render_stats, with_gpu};
 use vkvcm::gpu::Gpu;
-use vkvcm::image::stats::welch_test;
 use vkvcm::render::{self, Algorithm, Budget, RenderOutput, RenderSettings};
 use vkvcm::scene::Scene;
+use vkvcm_tools::stats::welch_test;
 
 const ALPHA: f64 = 1e-3;
 

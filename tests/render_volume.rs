@@ -15,9 +15,9 @@ use common::scenes::*;
 use common::{image_mean, primary_hit_mask, render_checked, render_stats, with_gpu};
 use glam::Vec3;
 use vkvcm::gpu::Gpu;
-use vkvcm::image::stats::{inverse_normal_cdf, sidak, welch_test, PixelStats};
 use vkvcm::render::{Algorithm, Budget, RenderOutput, RenderSettings};
 use vkvcm::scene::{Light, Material, Scene, Sphere};
+use vkvcm_tools::stats::{inverse_normal_cdf, sidak, welch_test, PixelStats};
 
 const ALPHA: f64 = 1e-3;
 

@@ -15,9 +15,9 @@ mod common;
 use common::scenes::{area_lights, camera, inward_box, scene};
 use common::{image_mean, render_checked, render_stats, run_test_kernel, with_gpu};
 use glam::Vec3;
-use vkvcm::image::stats::{welch_test, PixelStats};
 use vkvcm::render::{Algorithm, Budget, RenderSettings, Sampler};
 use vkvcm::scene::{Material, Scene, Triangle};
+use vkvcm_tools::stats::{welch_test, PixelStats};
 
 /// (x, y, z) in 24-bit fixed point for each (key, dim, index): sobol2's point and
 /// sobol1's value.

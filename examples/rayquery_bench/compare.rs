@@ -1,14 +1,14 @@
-//! vkvcm's BVH traversal (`glsl/bvh_bench.comp`, as in `vkvcm bench traverse`) against
+//! vkvcm's BVH traversal (`glsl/tests/bvh_bench.comp`, as in `vkvcm-bench traverse`) against
 //! the driver's VK_KHR_ray_query on the same triangles and the same rays
-//! (`vkvcm::bench::traverse::{bench_scene, bench_ray_sets}`), interleaved per ray set so that
+//! (`vkvcm_tools::bench::traverse::{bench_scene, bench_ray_sets}`), interleaved per ray set so that
 //! other load on the machine hits both alike.
 
 use std::sync::Arc;
 
 use anyhow::{anyhow, Result};
-use vkvcm::bench::traverse::{bench_ray_sets, bench_scene, BenchRay, BenchScene};
 use vkvcm::bvh::{build_with, BuildOptions, GpuBvh, Ray};
 use vkvcm::gpu::{groups_for, Bind, Gpu, GpuOptions, Profile};
+use vkvcm_tools::bench::traverse::{bench_ray_sets, bench_scene, BenchRay, BenchScene};
 
 use crate::rq::RqDevice;
 
@@ -163,7 +163,7 @@ fn compare_scene(gpu: &Arc<Gpu>, rq: &RqDevice, scene: &BenchScene, opts: &Optio
         let ray_buf = gpu.buffer_from_slice("bench_rays", &data)?;
         let out = gpu.buffer_zeroed::<u32>("bench_results", data.len())?;
         let binds = [Bind::own(&nodes), Bind::own(&prims), Bind::own(&ray_buf), Bind::own(&out)];
-        let kernel = gpu.kernel("bvh_bench.comp", &defines, &binds)?;
+        let kernel = gpu.kernel("tests/bvh_bench.comp", &defines, &binds)?;
         let mut batch = gpu.batch()?;
         let groups = [groups_for(n, 64), 1, 1];
         let mut vkvcm_dispatch = || -> Result<f64> {

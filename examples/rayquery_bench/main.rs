@@ -1,5 +1,5 @@
 //! vkvcm's BVH traversal against the driver's own VK_KHR_ray_query (issue #8): the same
-//! triangles and the same rays as `vkvcm bench traverse`, closest hit, interleaved.
+//! triangles and the same rays as `vkvcm-bench traverse`, closest hit, interleaved.
 //!
 //! ```text
 //! cargo run --release --example rayquery_bench -- [--scenes cornell,spheres,displaced]
@@ -24,7 +24,7 @@ use clap::Parser;
 #[derive(Parser, Debug)]
 #[command(about = "vkvcm BVH traversal vs the driver's VK_KHR_ray_query on the same rays")]
 struct Args {
-    /// Comma-separated scenes of `vkvcm bench traverse`.
+    /// Comma-separated scenes of `vkvcm-bench traverse`.
     #[arg(long, default_value = "cornell,spheres,displaced")]
     scenes: String,
     /// Rays per set (camera: a square-ish image of this many pixels).

@@ -1,6 +1,6 @@
 #version 460
 // Closest hit with the driver's VK_KHR_ray_query (examples/rayquery_bench/): the same ray
-// layout as glsl/bvh_bench.comp; writes (t, primitive index) per ray, (-1, 0xffffffff)
+// layout as glsl/tests/bvh_bench.comp; writes (t, primitive index) per ray, (-1, 0xffffffff)
 // for a miss.
 #extension GL_EXT_ray_query : require
 #ifndef LOCAL_SIZE

@@ -13,8 +13,8 @@ use std::time::Instant;
 
 use anyhow::{anyhow, bail, Context, Result};
 use ash::vk;
-use vkvcm::bench::traverse::BenchRay;
 use vkvcm::scene::Triangle;
+use vkvcm_tools::bench::traverse::BenchRay;
 
 const SHADER: &str = include_str!("rayquery_bench.comp");
 const LOCAL_SIZE: u32 = 64;

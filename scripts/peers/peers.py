@@ -526,7 +526,7 @@ def scenes_of(args):
 
 def split_estimator(estimator):
     """A vkvcm estimator as `--estimators` names it, `algo[:path|:cache[:N]][:sobol|
-    :independent][@N_L]` (the names of `vkvcm bench --algos`), as (algo, its `vkvcm
+    :independent][@N_L]` (the names of `vkvcm-bench render --algos`), as (algo, its `vkvcm
     render` settings)."""
     spec, at, light_paths = estimator.partition("@")
     settings = []
@@ -1208,7 +1208,7 @@ def main():
             s.set_defaults(func=cmd_reference)
         else:
             s.add_argument("--seeds", type=int, help="runs per row, at least 3")
-            s.add_argument("--estimators", help="vkvcm estimators, comma-separated, as `vkvcm bench --algos` names them "
+            s.add_argument("--estimators", help="vkvcm estimators, comma-separated, as `vkvcm-bench render --algos` names them "
                                 "(e.g. vcm,bpt,bpt:path,vcm:cache:2,vcm@32768,pt,pt:independent)")
             s.add_argument("--references", help="folder of references (default OUT/references, with --quick OUT/references-quick)")
             s.set_defaults(func=cmd_run)

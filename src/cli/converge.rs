@@ -7,9 +7,9 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 
 use super::render::{check_writable, install_interrupt};
-use vkvcm::bench::render::Variant;
 use vkvcm::gpu::Gpu;
 use vkvcm::image::{self, plot};
+use vkvcm::render::converge::Variant;
 use vkvcm::render::converge::{self as conv, ReferenceError};
 use vkvcm::render::{Algorithm, Budget, RenderSettings};
 use vkvcm::scene::{self, Light, Scene};

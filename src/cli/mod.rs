@@ -1,6 +1,5 @@
 //! The subcommands of the `vkvcm` binary, one module each.
 
-pub mod bench;
 pub mod converge;
 pub mod diff;
 pub mod progress;

@@ -1,6 +1,6 @@
 //! `vkvcm render`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
@@ -287,6 +287,57 @@ fn check_args(a: &RenderArgs) -> Result<()> {
 
 pub fn render_cmd(a: RenderArgs) -> Result<()> {
     check_args(&a)?;
+    let scene = load_scene(&a)?;
+    let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}_{}.exr", scene.name, a.algo.name())));
+    check_writable(&output).context("--output")?;
+    if let Some(p) = &a.png {
+        check_writable(p).context("--png")?;
+    }
+    let settings = render_settings(&a)?;
+    if let Some(p) = &a.profile_json {
+        check_writable(p).context("--profile-json")?;
+    }
+    let camera = a.camera.clone().unwrap_or_else(|| "default".into());
+    let mut provenance = saved::Provenance::new(&scene, &camera, "");
+    let saved = read_resumed(&a, &output, &settings, &provenance)?;
+    if let (Some(s), Budget::Iterations(n)) = (&saved, settings.budget) {
+        if s.iterations >= n {
+            eprintln!(
+                "{} already has {} iterations (asked for {n} in total): nothing to do",
+                output.display(),
+                s.iterations
+            );
+            return Ok(());
+        }
+    }
+
+    let gpu = Gpu::new(&a.gpu.options())?;
+    eprintln!("device: {} ({})", gpu.info.name, gpu.info.driver);
+    provenance.device = gpu.info.name.clone();
+    let mut r = prepare_renderer(&a, &gpu, &scene, &settings)?;
+    if let Some(s) = &saved {
+        r.resume_saved(s)?;
+        eprintln!("resuming {} at iteration {} ({:.1} s rendered)", output.display(), s.iterations, s.seconds);
+    }
+    let file = OutputFile { path: &output, settings: &settings, provenance: &provenance };
+    let on_disk = saved.as_ref().map_or(0, |s| s.iterations);
+    let out = render_slices(&a, &mut r, &scene.name, &file, on_disk)?;
+    if out.iterations == 0 {
+        eprintln!("interrupted before the first iteration finished: nothing written");
+        std::process::exit(130);
+    }
+    write_outputs(&a, &r, &scene, &file, &out, saved.as_ref())?;
+    drop(r);
+    let msgs = gpu.validation_messages();
+    drop(gpu);
+    if !msgs.list().is_empty() {
+        bail!("{} Vulkan validation message(s) (printed above)", msgs.list().len());
+    }
+    Ok(())
+}
+
+/// The scene with the view and environment options applied; prints the loader's warnings.
+fn load_scene(a: &RenderArgs) -> Result<scene::Scene> {
     let scene_name = a.scene.clone().unwrap_or_else(|| "default".into());
     let options = vkvcm::scene::LoadOptions {
         scene: a.gltf_scene.clone(),
@@ -301,11 +352,11 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     if scene.report.degenerate_triangles > 0 {
         eprintln!("warning: skipped {} degenerate triangle(s)", scene.report.degenerate_triangles);
     }
-    let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}_{}.exr", scene.name, a.algo.name())));
-    check_writable(&output).context("--output")?;
-    if let Some(p) = &a.png {
-        check_writable(p).context("--png")?;
-    }
+    Ok(scene)
+}
+
+/// The render settings the arguments ask for.
+fn render_settings(a: &RenderArgs) -> Result<RenderSettings> {
     let budget = match (a.iterations, a.time) {
         (_, Some(t)) => Budget::Seconds(t),
         (Some(n), None) => Budget::Iterations(n),
@@ -325,42 +376,37 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     settings.connect = connect_setting(a.algo, a.connect, a.cache_connections)?;
     settings.light_paths = a.light_paths;
     settings.count_rays = a.profile || a.profile_json.is_some();
-    if let Some(p) = &a.profile_json {
-        check_writable(p).context("--profile-json")?;
-    }
-    let camera = a.camera.clone().unwrap_or_else(|| "default".into());
+    Ok(settings)
+}
 
-    // --resume: the saved render, checked against these settings before the GPU opens.
-    let mut provenance = saved::Provenance::new(&scene, &camera, "");
-    let saved = match &a.resume {
-        None => None,
-        Some(from) => {
-            let path = from.as_ref().unwrap_or(&output);
-            if from.is_none() && !path.exists() {
-                eprintln!("note: {} does not exist yet: starting a new render", path.display());
-                None
-            } else {
-                let s = saved::read_render_exr(path).context("--resume")?;
-                s.check_matches(&settings, &provenance).with_context(|| format!("cannot resume {}", path.display()))?;
-                Some(s)
-            }
-        }
-    };
-    if let (Some(s), Budget::Iterations(n)) = (&saved, budget) {
-        if s.iterations >= n {
-            eprintln!(
-                "{} already has {} iterations (asked for {n} in total): nothing to do",
-                output.display(),
-                s.iterations
-            );
-            return Ok(());
-        }
+/// With --resume, the saved render to continue, checked against `settings` before the
+/// GPU opens; none when --resume is absent or its default file does not exist yet.
+fn read_resumed(
+    a: &RenderArgs,
+    output: &Path,
+    settings: &RenderSettings,
+    provenance: &saved::Provenance,
+) -> Result<Option<saved::SavedRender>> {
+    let Some(from) = &a.resume else { return Ok(None) };
+    let path = from.as_deref().unwrap_or(output);
+    if from.is_none() && !path.exists() {
+        eprintln!("note: {} does not exist yet: starting a new render", path.display());
+        return Ok(None);
     }
+    let s = saved::read_render_exr(path).context("--resume")?;
+    s.check_matches(settings, provenance).with_context(|| format!("cannot resume {}", path.display()))?;
+    Ok(Some(s))
+}
 
-    let gpu = Gpu::new(&a.gpu.options())?;
-    eprintln!("device: {} ({})", gpu.info.name, gpu.info.driver);
-    provenance.device = gpu.info.name.clone();
-    Renderer::plan_for(&gpu, &scene, &settings).map_err(|e| {
+/// The renderer, after checking that the frame fits the device (the error names the
+/// options that size it); with --verbose, prints what it chose.
+fn prepare_renderer(
+    a: &RenderArgs,
+    gpu: &Arc<Gpu>,
+    scene: &scene::Scene,
+    settings: &RenderSettings,
+) -> Result<Renderer> {
+    Renderer::plan_for(gpu, scene, settings).map_err(|e| {
         let mpl = if a.algo.info().techniques.light_subpaths {
             format!(" --max-path-length {}", a.max_path_length)
         } else {
@@ -368,10 +414,10 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
         };
         anyhow!("--width {} --height {}{mpl}: {e:#}", a.width, a.height)
     })?;
-    let mut r = Renderer::new(&gpu, &scene, &settings)
+    let r = Renderer::new(gpu, scene, settings)
         .with_context(|| format!("preparing {} with {}", scene.name, a.algo.name()))?;
     if a.verbose {
-        eprintln!("{}", scene_summary(&scene));
+        eprintln!("{}", scene_summary(scene));
         eprintln!("{}", r.describe());
         let how = if a.paths_per_invocation.is_some() { "--paths-per-invocation" } else { "chosen for the device" };
         eprintln!("paths per invocation: {} ({how})", r.paths_per_invocation());
@@ -380,23 +426,42 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
         let how = if a.atomics.is_some() { "--atomics" } else { "chosen for the device" };
         eprintln!("splats summed with {}-bit atomics ({how})", r.atomics().name());
         eprint!("{}", render::features::buffer_table(&r.buffers()));
-        eprintln!("{}", kernel_cache_line(&gpu));
+        eprintln!("{}", kernel_cache_line(gpu));
     }
-    if let Some(s) = &saved {
-        r.resume_saved(s)?;
-        eprintln!("resuming {} at iteration {} ({:.1} s rendered)", output.display(), s.iterations, s.seconds);
+    Ok(r)
+}
+
+/// Where a render is written, and what the file records with it.
+struct OutputFile<'a> {
+    path: &'a Path,
+    settings: &'a RenderSettings,
+    provenance: &'a saved::Provenance,
+}
+
+impl OutputFile<'_> {
+    fn write(&self, out: &RenderOutput) -> Result<()> {
+        saved::write_render_exr(self.path, out, self.settings, self.provenance)
     }
+}
+
+/// Renders the budget in slices of --checkpoint-every seconds (or see
+/// SNAPSHOT_COST_FACTOR), reading the film back after each: the checkpoint to write, and
+/// what a device loss can still write. `on_disk`: iterations already in the output file.
+/// On a failure, the last film read back is written when it adds iterations.
+fn render_slices(
+    a: &RenderArgs,
+    r: &mut Renderer,
+    scene_name: &str,
+    file: &OutputFile,
+    mut on_disk: u64,
+) -> Result<RenderOutput> {
+    let budget = file.settings.budget;
     let cancel = install_interrupt();
     let pixels = (a.width as u64 * a.height as u64) as f64;
     let mut reporter = Reporter::new(budget, r.iterations(), r.seconds());
-
-    // Render in slices of --checkpoint-every seconds (or see SNAPSHOT_COST_FACTOR); after
-    // each, read the film back: the checkpoint to write, and what a device loss can still
-    // write. `on_disk`: iterations in the output file.
     let mut slice = a.checkpoint_every.unwrap_or(0.0);
     let start = Instant::now();
     let mut last: Option<RenderOutput> = None;
-    let mut on_disk = saved.as_ref().map_or(0, |s| s.iterations);
     let failure = loop {
         let slice_budget = match budget {
             Budget::Iterations(n) => Budget::Iterations(n.saturating_sub(r.iterations())),
@@ -422,10 +487,11 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
         match r.output() {
             Ok(out) => {
                 if a.checkpoint_every.is_some() {
-                    match saved::write_render_exr(&output, &out, &settings, &provenance) {
+                    match file.write(&out) {
                         Ok(()) => {
                             on_disk = out.iterations;
-                            reporter.note(&format!("checkpoint: {} iterations in {}", out.iterations, output.display()))
+                            let path = file.path.display();
+                            reporter.note(&format!("checkpoint: {} iterations in {path}", out.iterations))
                         }
                         Err(e) => reporter.note(&format!("warning: checkpoint not written: {e:#}")),
                     }
@@ -438,45 +504,52 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
         }
     };
     let out = match failure {
-        None => r.output().with_context(|| format!("rendering {} with {}", scene.name, a.algo.name())),
-        Some(e) => Err(e.context(format!("rendering {}", scene.name))),
+        None => r.output().with_context(|| format!("rendering {scene_name} with {}", a.algo.name())),
+        Some(e) => Err(e.context(format!("rendering {scene_name}"))),
     };
     reporter.finish();
-    let out = match out {
-        Ok(out) => out,
-        Err(e) => {
-            // The device may be gone: write the last host copy, if it adds iterations.
-            match last {
-                Some(l) if l.iterations > on_disk => {
-                    saved::write_render_exr(&output, &l, &settings, &provenance)?;
-                    eprintln!(
-                        "wrote the last completed {} iterations ({:.1} s) to {}",
-                        l.iterations,
-                        l.seconds,
-                        output.display()
-                    );
-                }
-                _ if on_disk > 0 => eprintln!("{} holds the last completed {on_disk} iterations", output.display()),
-                _ => eprintln!("no completed iterations to write; {} is unchanged", output.display()),
-            }
-            return Err(e);
-        }
-    };
-    if out.iterations == 0 {
-        eprintln!("interrupted before the first iteration finished: nothing written");
-        std::process::exit(130);
+    if out.is_err() {
+        write_last_completed(file, last, on_disk)?;
     }
+    out
+}
 
-    saved::write_render_exr(&output, &out, &settings, &provenance)?;
-    let new_seconds = out.seconds - saved.as_ref().map_or(0.0, |s| s.seconds);
-    let new_iterations = out.iterations - saved.as_ref().map_or(0, |s| s.iterations);
+/// After a failure (the device may be gone): writes `last`, the last host copy of the
+/// film, if it adds iterations to the `on_disk` ones, and says what the file holds.
+fn write_last_completed(file: &OutputFile, last: Option<RenderOutput>, on_disk: u64) -> Result<()> {
+    let path = file.path.display();
+    match last {
+        Some(l) if l.iterations > on_disk => {
+            file.write(&l)?;
+            eprintln!("wrote the last completed {} iterations ({:.1} s) to {path}", l.iterations, l.seconds);
+        }
+        _ if on_disk > 0 => eprintln!("{path} holds the last completed {on_disk} iterations"),
+        _ => eprintln!("no completed iterations to write; {path} is unchanged"),
+    }
+    Ok(())
+}
+
+/// Writes the finished render (EXR, and the PNG and profile JSON when asked) and prints
+/// its summary.
+fn write_outputs(
+    a: &RenderArgs,
+    r: &Renderer,
+    scene: &scene::Scene,
+    file: &OutputFile,
+    out: &RenderOutput,
+    saved: Option<&saved::SavedRender>,
+) -> Result<()> {
+    file.write(out)?;
+    let pixels = (a.width as u64 * a.height as u64) as f64;
+    let new_seconds = out.seconds - saved.map_or(0.0, |s| s.seconds);
+    let new_iterations = out.iterations - saved.map_or(0, |s| s.iterations);
     eprintln!(
         "{} iterations in {:.2} s ({:.0} samples/s){}; wrote {}",
         out.iterations,
         out.seconds,
         new_iterations as f64 * pixels / new_seconds.max(1e-9),
         if out.interrupted { " (interrupted)" } else { "" },
-        output.display()
+        file.path.display()
     );
     if out.rejected_samples > 0 {
         eprintln!("warning: {} sample(s) were NaN, infinite or negative and were rejected", out.rejected_samples);
@@ -498,12 +571,6 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
         report.reads = Some(r.reads().name().to_string());
         super::write_json(p, &report).context("--profile-json")?;
         eprintln!("wrote {}", p.display());
-    }
-    drop(r);
-    let msgs = gpu.validation_messages();
-    drop(gpu);
-    if !msgs.list().is_empty() {
-        bail!("{} Vulkan validation message(s) (printed above)", msgs.list().len());
     }
     Ok(())
 }

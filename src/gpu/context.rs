@@ -190,13 +190,24 @@ pub const BUFFER_DEVICE_ADDRESS: &str = "bufferDeviceAddress";
 /// Every feature and limit the kernels use (docs/devices.md): required ones, and
 /// optional ones with the fallback vkvcm uses without them.
 fn feature_status(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Vec<FeatureStatus> {
+    // SAFETY: valid handle.
+    let props = unsafe { instance.get_physical_device_properties(pd) };
+    let mut out = device_features(instance, pd, &props);
+    out.extend(device_limits(instance, pd, &props.limits));
+    out
+}
+
+/// The features of [`feature_status`].
+fn device_features(
+    instance: &ash::Instance,
+    pd: vk::PhysicalDevice,
+    props: &vk::PhysicalDeviceProperties,
+) -> Vec<FeatureStatus> {
     let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
     let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f12);
     // SAFETY: valid handles, chain of stack structs.
     unsafe { instance.get_physical_device_features2(pd, &mut f2) };
     let base = f2.features;
-    // SAFETY: valid handle.
-    let props = unsafe { instance.get_physical_device_properties(pd) };
     // SAFETY: valid handle.
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
     let texel_ok = [vk::Format::R32G32B32A32_UINT, vk::Format::R32_UINT].iter().all(|&f| {
@@ -206,20 +217,6 @@ fn feature_status(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Vec<Featu
     });
     let without_int64 = super::fault_injection::simulated_missing_int64();
     let l = &props.limits;
-    let limit = |name: &'static str, value: u64, needed: u64, why: &'static str| FeatureStatus {
-        name,
-        required: true,
-        present: value >= needed,
-        without: why,
-        value: format!("{value} (needs {needed})"),
-    };
-    let report = |name: &'static str, value: String, why: &'static str| FeatureStatus {
-        name,
-        required: false,
-        present: true,
-        without: why,
-        value,
-    };
     vec![
         FeatureStatus::feature("Vulkan 1.2", true, props.api_version >= API_VERSION, "the API vkvcm is written to"),
         FeatureStatus::feature(
@@ -258,6 +255,27 @@ fn feature_status(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Vec<Featu
             l.timestamp_compute_and_graphics == vk::TRUE,
             "--profile reports no GPU times",
         ),
+    ]
+}
+
+/// The limits of [`feature_status`]: required minimums, and the sizes a render is
+/// checked against.
+fn device_limits(instance: &ash::Instance, pd: vk::PhysicalDevice, l: &vk::PhysicalDeviceLimits) -> Vec<FeatureStatus> {
+    let limit = |name: &'static str, value: u64, needed: u64, why: &'static str| FeatureStatus {
+        name,
+        required: true,
+        present: value >= needed,
+        without: why,
+        value: format!("{value} (needs {needed})"),
+    };
+    let report = |name: &'static str, value: String, why: &'static str| FeatureStatus {
+        name,
+        required: false,
+        present: true,
+        without: why,
+        value,
+    };
+    vec![
         limit(
             "maxComputeWorkGroupInvocations",
             l.max_compute_work_group_invocations as u64,

@@ -1,5 +1,6 @@
-//! Fault injection for tests — not a feature. Three environment variables, each read once
-//! per process:
+//! Fault injection for tests. With the `fault-injection` cargo feature (which `make test`
+//! turns on) four environment variables, each read once per process, simulate faults;
+//! without it (the product) every hook here is a no-op and no variable is read:
 //!
 //! * `VKVCM_TEST_FAIL_AFTER_BATCHES=N`: the (N+1)-th and every later `Batch::submit_wait`
 //!   of the process, and every one-shot transfer after that, fail with
@@ -25,6 +26,9 @@ pub const FAIL_AFTER_BATCHES_VAR: &str = "VKVCM_TEST_FAIL_AFTER_BATCHES";
 /// variable says; `counts_as_batch` counts this call as one (batches do, one-shot
 /// transfers do not).
 pub(crate) fn simulated_device_loss(counts_as_batch: bool) -> Result<(), vk::Result> {
+    if !cfg!(feature = "fault-injection") {
+        return Ok(());
+    }
     static LIMIT: OnceLock<Option<u64>> = OnceLock::new();
     static SUBMITS: AtomicU64 = AtomicU64::new(0);
     let Some(limit) =
@@ -47,6 +51,9 @@ pub const WITHOUT_INT64_VAR: &str = "VKVCM_TEST_WITHOUT_INT64";
 
 /// Whether [`WITHOUT_INT64_VAR`] is set to anything but `0`.
 pub(crate) fn simulated_missing_int64() -> bool {
+    if !cfg!(feature = "fault-injection") {
+        return false;
+    }
     static SET: OnceLock<bool> = OnceLock::new();
     *SET.get_or_init(|| std::env::var(WITHOUT_INT64_VAR).is_ok_and(|v| !v.is_empty() && v != "0"))
 }
@@ -58,6 +65,9 @@ pub const MAX_BINDING_BYTES_VAR: &str = "VKVCM_TEST_MAX_BINDING_BYTES";
 
 /// `limits` with [`MAX_BINDING_BYTES_VAR`]'s cap applied.
 pub(crate) fn capped_binding_limits(mut limits: vk::PhysicalDeviceLimits) -> vk::PhysicalDeviceLimits {
+    if !cfg!(feature = "fault-injection") {
+        return limits;
+    }
     static CAP: OnceLock<Option<u64>> = OnceLock::new();
     if let Some(cap) =
         *CAP.get_or_init(|| std::env::var(MAX_BINDING_BYTES_VAR).ok().and_then(|v| v.trim().parse::<u64>().ok()))
@@ -75,6 +85,9 @@ pub const SCENE_CHUNK_BYTES_VAR: &str = "VKVCM_TEST_SCENE_CHUNK_BYTES";
 
 /// [`SCENE_CHUNK_BYTES_VAR`]'s cap in bytes (no cap: `u64::MAX`).
 pub(crate) fn scene_chunk_cap() -> u64 {
+    if !cfg!(feature = "fault-injection") {
+        return u64::MAX;
+    }
     static CAP: OnceLock<Option<u64>> = OnceLock::new();
     CAP.get_or_init(|| std::env::var(SCENE_CHUNK_BYTES_VAR).ok().and_then(|v| v.trim().parse().ok()))
         .unwrap_or(u64::MAX)

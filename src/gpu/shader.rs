@@ -1,5 +1,6 @@
 //! GLSL -> SPIR-V through shaderc, with `#include` resolved from glsl/ and per-variant
-//! `#define`s. The sources are embedded in the binary at build time; setting
+//! `#define`s. The sources are embedded in the binary at build time (glsl/tests/, the test
+//! and benchmark kernels, only with the `test-kernels` feature); setting
 //! `VKVCM_GLSL_DIR` reads them from that folder instead (for shader development).
 //! Resources declared without a `binding = N` get one from the compiler (glslang's
 //! auto-mapping); kernels are bound by name (src/gpu/reflect.rs).

@@ -180,15 +180,37 @@ pub(crate) fn encode_exr(
     if img.data.len() != w * h {
         bail!("image data has {} pixels, expected {}x{}", img.data.len(), img.width, img.height);
     }
+    let channels = sorted_channels(img, extra)?;
+    let channel_names: Vec<&str> = channels.iter().map(|c| c.0).collect();
+    let meta = sorted_metadata(meta)?;
 
-    // Channels in name order (OpenEXR requires it): which RGB component or extra channel.
+    let mut out = Vec::with_capacity(4096);
+    write_header(&mut out, img, &channel_names, &meta, compression);
+    let lines = compression.lines_per_block();
+    let chunks = h.div_ceil(lines);
+    let table = out.len();
+    out.resize(table + 8 * chunks, 0);
+    let payloads = encode_chunks(img, extra, &channels, compression)?;
+    for (chunk, payload) in payloads.iter().enumerate() {
+        let offset = out.len() as u64;
+        out[table + 8 * chunk..table + 8 * chunk + 8].copy_from_slice(&offset.to_le_bytes());
+        out.extend_from_slice(&((chunk * lines) as i32).to_le_bytes());
+        out.extend_from_slice(&(payload.len() as i32).to_le_bytes());
+        out.extend_from_slice(payload);
+    }
+    Ok(out)
+}
+
+/// The channels to write in name order (OpenEXR requires it): R, G and B of `img`, then
+/// the `extra` ones, each checked.
+fn sorted_channels<'a>(img: &Image, extra: &'a [ExtraChannel]) -> Result<Vec<(&'a str, Channel)>> {
     let mut channels: Vec<(&str, Channel)> =
         vec![("B", Channel::Rgb(2)), ("G", Channel::Rgb(1)), ("R", Channel::Rgb(0))];
     for (i, (name, data)) in extra.iter().enumerate() {
         if name.is_empty() || name.len() > 255 || !name.bytes().all(|b| b.is_ascii_graphic()) {
             bail!("invalid channel name {name:?}: must be 1 to 255 printable ASCII characters");
         }
-        if data.len() != w * h {
+        if data.len() != img.data.len() {
             bail!("channel {name:?} has {} values, expected {}x{}", data.len(), img.width, img.height);
         }
         channels.push((name.as_str(), Channel::Extra(i)));
@@ -197,8 +219,11 @@ pub(crate) fn encode_exr(
     if let Some(d) = channels.windows(2).find(|p| p[0].0 == p[1].0) {
         bail!("duplicate channel {:?}", d[0].0);
     }
-    let channel_names: Vec<&str> = channels.iter().map(|c| c.0).collect();
+    Ok(channels)
+}
 
+/// The metadata in key order, checked: valid keys, none standard or repeated.
+fn sorted_metadata(meta: &[(String, String)]) -> Result<Vec<&(String, String)>> {
     let mut meta: Vec<&(String, String)> = meta.iter().collect();
     meta.sort();
     for (i, (key, value)) in meta.iter().map(|kv| (&kv.0, &kv.1)).enumerate() {
@@ -215,15 +240,25 @@ pub(crate) fn encode_exr(
             bail!("metadata value of {key:?} is too long");
         }
     }
-    let long_names = meta.iter().any(|kv| kv.0.len() > 31) || channel_names.iter().any(|n| n.len() > 31);
+    Ok(meta)
+}
 
-    let mut out = Vec::with_capacity(4096);
+/// Appends the magic number, the version and the header (the required attributes, then
+/// `meta` as string attributes) to `out`.
+fn write_header(
+    out: &mut Vec<u8>,
+    img: &Image,
+    channel_names: &[&str],
+    meta: &[&(String, String)],
+    compression: ExrCompression,
+) {
+    let long_names = meta.iter().any(|kv| kv.0.len() > 31) || channel_names.iter().any(|n| n.len() > 31);
     out.extend_from_slice(&20000630i32.to_le_bytes()); // magic number
     let version: u32 = 2 | if long_names { 0x400 } else { 0 };
     out.extend_from_slice(&version.to_le_bytes());
 
     let mut chlist = Vec::new();
-    for name in &channel_names {
+    for name in channel_names {
         chlist.extend_from_slice(name.as_bytes());
         chlist.push(0);
         chlist.extend_from_slice(&2i32.to_le_bytes()); // pixel type FLOAT
@@ -239,33 +274,39 @@ pub(crate) fn encode_exr(
     let one = 1.0f32.to_le_bytes();
     let zero2 = [0u8; 8];
 
-    attribute(&mut out, "channels", "chlist", &chlist);
-    attribute(&mut out, "compression", "compression", &[compression.code()]);
-    attribute(&mut out, "dataWindow", "box2i", &window);
-    attribute(&mut out, "displayWindow", "box2i", &window);
-    attribute(&mut out, "lineOrder", "lineOrder", &[0]); // INCREASING_Y
-    attribute(&mut out, "pixelAspectRatio", "float", &one);
-    attribute(&mut out, "screenWindowCenter", "v2f", &zero2);
-    attribute(&mut out, "screenWindowWidth", "float", &one);
+    attribute(out, "channels", "chlist", &chlist);
+    attribute(out, "compression", "compression", &[compression.code()]);
+    attribute(out, "dataWindow", "box2i", &window);
+    attribute(out, "displayWindow", "box2i", &window);
+    attribute(out, "lineOrder", "lineOrder", &[0]); // INCREASING_Y
+    attribute(out, "pixelAspectRatio", "float", &one);
+    attribute(out, "screenWindowCenter", "v2f", &zero2);
+    attribute(out, "screenWindowWidth", "float", &one);
     for (key, value) in meta.iter().map(|kv| (&kv.0, &kv.1)) {
-        attribute(&mut out, key, "string", value.as_bytes());
+        attribute(out, key, "string", value.as_bytes());
     }
     out.push(0); // end of header
+}
 
+/// The payload of each chunk of scan lines, in order: the `channels` of `img` and `extra`
+/// per line, compressed as `compression` says. Compressed in parallel (ZIP is the slow
+/// part) and assembled in order, so the bytes do not depend on the thread count.
+fn encode_chunks(
+    img: &Image,
+    extra: &[ExtraChannel],
+    channels: &[(&str, Channel)],
+    compression: ExrCompression,
+) -> Result<Vec<Vec<u8>>> {
+    let (w, h) = (img.width as usize, img.height as usize);
     let lines = compression.lines_per_block();
     let chunks = h.div_ceil(lines);
-    let table = out.len();
-    out.resize(table + 8 * chunks, 0);
-
-    // Chunk payloads, compressed in parallel (ZIP is the slow part); assembled in order, so
-    // the bytes do not depend on the thread count.
     let encode_chunk = |chunk: usize, header: Option<&::exr::meta::header::Header>| -> Result<Vec<u8>> {
         let y0 = chunk * lines;
         let n = lines.min(h - y0);
         let mut raw = Vec::with_capacity(w * 4 * channels.len() * n);
         for y in y0..y0 + n {
             let row = y * w..(y + 1) * w;
-            for (_, c) in &channels {
+            for (_, c) in channels {
                 match *c {
                     Channel::Rgb(c) => {
                         img.data[row.clone()].iter().for_each(|p| raw.extend_from_slice(&p[c].to_le_bytes()))
@@ -287,43 +328,31 @@ pub(crate) fn encode_exr(
         }
     };
     let zip_header = match compression {
-        ExrCompression::Zip => Some(zip_header(w, h, &channel_names)),
+        ExrCompression::Zip => Some(zip_header(w, h, &channels.iter().map(|c| c.0).collect::<Vec<_>>())),
         ExrCompression::None => None,
     };
     let threads = match compression {
         ExrCompression::None => 1,
         ExrCompression::Zip => std::thread::available_parallelism().map_or(1, |n| n.get()).min(chunks).min(16),
     };
-    let payloads: Vec<Vec<u8>> = if threads <= 1 {
-        (0..chunks).map(|c| encode_chunk(c, zip_header.as_ref())).collect::<Result<_>>()?
-    } else {
-        let per = chunks.div_ceil(threads);
-        let parts: Vec<Result<Vec<Vec<u8>>>> = std::thread::scope(|scope| {
-            let handles: Vec<_> = (0..threads)
-                .map(|t| {
-                    let (encode_chunk, header) = (&encode_chunk, zip_header.as_ref());
-                    scope.spawn(move || {
-                        (t * per..((t + 1) * per).min(chunks)).map(|c| encode_chunk(c, header)).collect()
-                    })
-                })
-                .collect();
-            handles.into_iter().map(|h| h.join().expect("EXR compression thread panicked")).collect()
-        });
-        let mut all = Vec::with_capacity(chunks);
-        for part in parts {
-            all.extend(part?);
-        }
-        all
-    };
-
-    for (chunk, payload) in payloads.iter().enumerate() {
-        let offset = out.len() as u64;
-        out[table + 8 * chunk..table + 8 * chunk + 8].copy_from_slice(&offset.to_le_bytes());
-        out.extend_from_slice(&((chunk * lines) as i32).to_le_bytes());
-        out.extend_from_slice(&(payload.len() as i32).to_le_bytes());
-        out.extend_from_slice(payload);
+    if threads <= 1 {
+        return (0..chunks).map(|c| encode_chunk(c, zip_header.as_ref())).collect();
     }
-    Ok(out)
+    let per = chunks.div_ceil(threads);
+    let parts: Vec<Result<Vec<Vec<u8>>>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..threads)
+            .map(|t| {
+                let (encode_chunk, header) = (&encode_chunk, zip_header.as_ref());
+                scope.spawn(move || (t * per..((t + 1) * per).min(chunks)).map(|c| encode_chunk(c, header)).collect())
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().expect("EXR compression thread panicked")).collect()
+    });
+    let mut all = Vec::with_capacity(chunks);
+    for part in parts {
+        all.extend(part?);
+    }
+    Ok(all)
 }
 
 /// Where a written channel's values come from.

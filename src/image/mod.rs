@@ -5,7 +5,6 @@
 //!   writer is byte-deterministic (same image + metadata -> same bytes) and atomic.
 //! - [`write_png`]: tone-mapped 8-bit sRGB preview (exposure scale, clamp, sRGB OETF), atomic.
 //! - [`compare`] / [`Metrics`] and [`false_color_error`]: error against a reference.
-//! - [`stats`]: per-pixel Welch tests between sets of independent renders (render tests).
 //!
 //! Every file is written to a temporary file in the target directory and renamed over the
 //! destination, so a crash never leaves a truncated file where a good one was.
@@ -15,7 +14,6 @@ mod exr_io;
 mod metrics;
 pub mod plot;
 mod png_io;
-pub mod stats;
 
 pub use exr_io::{
     decode_exr_channels, read_exr, read_exr_channels, write_exr, write_exr_channels, write_exr_with, ExrCompression,

@@ -1,6 +1,6 @@
 //! Convergence measurements: a reference render from two independent halves (with its own
 //! error estimate), and error-vs-time curves of estimators against it (`vkvcm reference`,
-//! `vkvcm converge`, `vkvcm bench equal-time`).
+//! `vkvcm converge`, `vkvcm-bench equal-time`).
 //!
 //! The error estimate of a reference follows the usual split-sample trick: if `a` and `b`
 //! are independent unbiased renders with the same variance, `(a - b) / 2` has the variance
@@ -11,10 +11,10 @@
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use anyhow::{bail, Result};
+use anyhow::{anyhow, bail, Result};
 use serde::Serialize;
 
-use super::{Algorithm, Budget, Progress, RenderOutput, RenderSettings, Renderer};
+use super::{Algorithm, Budget, Connect, Progress, RenderOutput, RenderSettings, Renderer, Sampler};
 use crate::gpu::Gpu;
 use crate::image::{compare, Image, Metrics};
 use crate::scene::Scene;
@@ -29,6 +29,86 @@ pub fn checkpoint_times(total: f64, checkpoints: usize) -> Result<Vec<f64>> {
         bail!("checkpoints must be between 1 and 40 (got {checkpoints})");
     }
     Ok((0..checkpoints).map(|i| total * 0.5f64.powi((checkpoints - 1 - i) as i32)).collect())
+}
+
+/// An estimator with its connection strategy, sampler and light subpaths per iteration,
+/// named `algo` (its defaults), then `:path` / `:cache:N` (`render --connect`; bpt, vcm),
+/// then `:independent` / `:sobol` (`render --sampler`), then `@N` for N light subpaths per
+/// iteration (`render --light-paths`; the light-subpath estimators), e.g. `bpt:cache:2`,
+/// `pt:independent`, `vcm:path:sobol` or `vcm@65536`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Variant {
+    pub algorithm: Algorithm,
+    pub connect: Connect,
+    pub sampler: Sampler,
+    /// `None`: one per pixel.
+    pub light_paths: Option<u32>,
+}
+
+impl Variant {
+    pub fn parse(s: &str) -> Result<Variant> {
+        let (name, light_paths) = match s.rsplit_once('@') {
+            Some((name, n)) => {
+                let n: u32 = n.parse().map_err(|_| anyhow!("{s:?}: {n:?} is not a light-path count"))?;
+                (name, Some(n))
+            }
+            None => (s, None),
+        };
+        // algo[:connection strategy][:sampler]: a sampler is the last part.
+        let (rest, sampler) = match name.rsplit_once(':') {
+            Some((rest, c)) => match <Sampler as clap::ValueEnum>::from_str(c, false) {
+                Ok(sampler) => (rest, Some(sampler)),
+                Err(_) => (name, None),
+            },
+            None => (name, None),
+        };
+        let (a, c) = match rest.split_once(':') {
+            Some((a, c)) => (a, Some(c)),
+            None => (rest, None),
+        };
+        let algorithm =
+            Algorithm::from_name(&a.to_ascii_lowercase()).ok_or_else(|| anyhow!("{s:?}: unknown estimator {a:?}"))?;
+        let requested = match c {
+            None => None,
+            Some(c) => Some(
+                Connect::parse(c)
+                    .ok_or_else(|| anyhow!("{s:?}: {c:?} is not path or cache:N (N >= 1), nor sobol or independent"))?,
+            ),
+        };
+        let connect = algorithm.info().connect(requested).map_err(|e| anyhow!("{s:?}: {e}"))?;
+        let sampler = sampler.unwrap_or(algorithm.info().sampler(None));
+        let v = Variant { algorithm, connect, sampler, light_paths };
+        // The estimator's own check of the light-path count (a 1x1 frame: sizes do not matter).
+        algorithm.info().check(&v.settings(1, 1, Budget::Iterations(1))).map_err(|e| anyhow!("{s:?}: {e}"))?;
+        Ok(v)
+    }
+
+    /// `algo`, then `:path` / `:cache:N` for a strategy other than its default, then
+    /// `:sobol` / `:independent` for a sampler other than its default, then `@N` with a
+    /// light-path count.
+    pub fn name(&self) -> String {
+        let mut name = self.algorithm.name().to_string();
+        if self.connect != self.algorithm.default_connect() {
+            name += &format!(":{}", self.connect.name());
+        }
+        if self.sampler != self.algorithm.info().sampler(None) {
+            name += &format!(":{}", self.sampler.name());
+        }
+        if let Some(n) = self.light_paths {
+            name += &format!("@{n}");
+        }
+        name
+    }
+
+    /// Render settings of this variant (its strategy and light-path count; the rest
+    /// defaults).
+    pub fn settings(&self, width: u32, height: u32, budget: Budget) -> RenderSettings {
+        let mut s = RenderSettings::new(self.algorithm, width, height, budget);
+        s.connect = self.connect;
+        s.sampler = Some(self.sampler);
+        s.light_paths = self.light_paths;
+        s
+    }
 }
 
 /// A reference image with its own error estimate.
@@ -336,5 +416,46 @@ mod tests {
         ];
         assert_eq!(ReferenceError::from_metadata(&meta), ReferenceError { rmse: Some(1.5e-3), rel_mse: None });
         assert_eq!(ReferenceError::from_metadata(&[]), ReferenceError::default());
+    }
+
+    #[test]
+    fn variant_names_parse_back() {
+        for s in [
+            "pt",
+            "vcm",
+            "bpt:path",
+            "bpt:cache:1",
+            "vcm:cache:4",
+            "vcm@65536",
+            "bpt:cache:2@100",
+            "pt:independent",
+            "vcm:path:independent",
+            "bpt:cache:2:independent@100",
+        ] {
+            let v = Variant::parse(s).unwrap();
+            assert_eq!(Variant::parse(&v.name()).unwrap(), v, "{s}");
+        }
+        assert_eq!(Variant::parse("bpt:cache:3").unwrap().connect, Connect::Cache(3));
+        assert_eq!(Variant::parse("bpt").unwrap().connect, Algorithm::Bpt.default_connect());
+        assert_eq!(Variant::parse("lt@1000").unwrap().light_paths, Some(1000));
+        let v = Variant::parse("vcm:path:independent").unwrap();
+        assert_eq!((v.connect, v.sampler), (Connect::Path, Sampler::Independent));
+        assert_eq!(Variant::parse("vcm:sobol").unwrap().name(), "vcm", "sobol is vcm's default");
+        for bad in [
+            "xyz",
+            "pt:cache:1",
+            "bpt:cache:0",
+            "bpt:cache",
+            "bpt:cache:x",
+            "bpt:other",
+            "pt@100",
+            "vcm@0",
+            "vcm@x",
+            "lt:sobol",
+            "el:sobol",
+            "pt:sobol:path",
+        ] {
+            assert!(Variant::parse(bad).is_err(), "{bad} accepted");
+        }
     }
 }

@@ -315,6 +315,152 @@ pub fn gpu_params(scene: &Scene, frame: &FrameSettings, background: u32) -> GpuP
     }
 }
 
+/// The triangles as the kernels read them, with their per-vertex arrays.
+struct GpuGeometry {
+    triangles: Vec<GpuTriangle>,
+    normals: Vec<[f32; 4]>,
+    attributes: Vec<GpuVertexAttributes>,
+}
+
+/// The triangles with their materials and lights. The per-vertex arrays share one index
+/// per triangle: entries for the normals the kernels read (zero where a triangle has
+/// none: flat) and for the attributes (none: NaN texture coordinates, white).
+fn gpu_triangles(scene: &Scene, features: &FeatureSet) -> GpuGeometry {
+    let mut light_of_triangle = vec![NO_LIGHT; scene.triangles.len()];
+    for (i, l) in scene.lights.iter().enumerate() {
+        if let Light::Area { triangle, .. } = l {
+            light_of_triangle[*triangle as usize] = i as u32;
+        }
+    }
+    let mut normals: Vec<[f32; 4]> = Vec::new();
+    let mut attributes: Vec<GpuVertexAttributes> = Vec::new();
+    let triangles: Vec<GpuTriangle> = scene
+        .triangles
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let n = t.n.as_ref().filter(|_| features.shading_normals);
+            let a = t.attributes.as_deref().filter(|_| features.vertex_attributes);
+            let first = if n.is_some() || a.is_some() {
+                let first = (normals.len().max(attributes.len())) as u32;
+                if features.shading_normals {
+                    normals.extend((0..3).map(|k| n.map_or([0.0; 4], |n| v4(n[k], 0.0))));
+                }
+                if features.vertex_attributes {
+                    attributes.extend((0..3).map(|k| vertex_attributes(a, k)));
+                }
+                first
+            } else {
+                u32::MAX
+            };
+            GpuTriangle { material: t.material, light: light_of_triangle[i], first_vertex: first, _pad: 0 }
+        })
+        .collect();
+    GpuGeometry { triangles, normals, attributes }
+}
+
+/// The materials as the kernels read them, with the texture indices of each
+/// (`texture_indices`, [`gpu_textures`]) where `features` has the textures' kind.
+fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 4]]) -> Vec<GpuMaterial> {
+    scene
+        .materials
+        .iter()
+        .zip(texture_indices)
+        .map(|(m, &[texture, normal_map, emissive, metallic_roughness])| {
+            let normal_map = if features.normal_maps { normal_map } else { NO_TEXTURE };
+            let emissive = if features.emissive_textures { emissive } else { NO_TEXTURE };
+            let (metallic_roughness, base_metallic, f0_roughness) =
+                match (&m.metallic_roughness_texture, features.metallic_roughness_textures) {
+                    (Some(t), true) => (metallic_roughness, v4(t.base, t.metallic), v4(t.dielectric_f0, t.roughness)),
+                    _ => (NO_TEXTURE, [0.0; 4], [0.0; 4]),
+                };
+            // glsl/types.glsl, GpuMaterial.surface.z.
+            let cutoff = match m.alpha_mode {
+                AlphaMode::Mask { cutoff } if features.alpha_mask => cutoff,
+                AlphaMode::Blend if features.alpha_mask => ALPHA_BLEND,
+                _ => ALPHA_OPAQUE,
+            };
+            // A dielectric's lobes beside its glass have weight lobes_weight (glsl/bsdf.glsl);
+            // of weight 0 (clear glass) they are uploaded black, so that kernels without
+            // HAS_PARTIAL_TRANSMISSION, which apply no weight, give them none too.
+            let lobe = |c: Vec3| if m.lobes_weight() > 0.0 { c } else { Vec3::ZERO };
+            GpuMaterial {
+                diffuse: v4(lobe(m.diffuse), m.phong_exponent),
+                phong: v4(lobe(m.phong), m.ior),
+                mirror: v4(m.mirror, m.diffuse_fresnel_f0),
+                emission: v4(m.emission, m.dielectric_alpha()),
+                glossy: v4(lobe(m.glossy), (m.roughness * m.roughness).max(MIN_GGX_ALPHA)),
+                surface: [bits(texture), m.alpha, cutoff, m.glossy_untinted],
+                maps: [bits(normal_map), m.normal_scale, bits(emissive), bits(metallic_roughness)],
+                base_metallic,
+                f0_roughness,
+                medium: v4(m.medium_attenuation(), f32::from_bits(if m.one_sided { MATERIAL_ONE_SIDED } else { 0 })),
+                transmission: v4(m.transmission, 1.0 - m.lobes_weight()),
+            }
+        })
+        .collect()
+}
+
+/// Uploads the [`CHUNKED`] arrays: whole, each one buffer added to `buffers`, or with
+/// `chunk_bytes` in chunks of that many bytes (a power of two, so the kernels find element
+/// i's chunk by a shift), each chunk its own buffer (returned). Then adds `scene_chunks`,
+/// the chunks' addresses (a placeholder entry when there are none). Also returns each
+/// array's first entry in that table.
+fn upload_chunked(
+    gpu: &Arc<Gpu>,
+    chunked: [(&'static str, &[u8]); 5],
+    chunk_bytes: Option<u64>,
+    buffers: &mut Vec<Buffer>,
+) -> Result<(Vec<Buffer>, [u32; 8])> {
+    let mut chunks = Vec::new();
+    let mut chunk_table: Vec<[u32; 2]> = Vec::new();
+    let mut chunk_first = [0u32; 8];
+    match chunk_bytes {
+        None => {
+            for (name, bytes) in chunked {
+                buffers.push(gpu.buffer_from_slice(name, bytes)?);
+            }
+        }
+        Some(size) => {
+            for (k, (name, bytes)) in chunked.into_iter().enumerate() {
+                chunk_first[k] = chunk_table.len() as u32;
+                for piece in bytes.chunks(size as usize) {
+                    let b = gpu.buffer_from_slice(name, piece)?;
+                    let a = b.device_address()?;
+                    chunk_table.push([a as u32, (a >> 32) as u32]);
+                    chunks.push(b);
+                }
+            }
+        }
+    }
+    if chunk_table.is_empty() {
+        chunk_table.push([0, 0]);
+    }
+    buffers.push(gpu.buffer_from_slice("scene_chunks", &chunk_table)?);
+    Ok((chunks, chunk_first))
+}
+
+/// The addresses of the [`ADDRESSED`] buffers among `buffers` (all zero without device
+/// addresses; zero for the vertex attributes when they are read in chunks: no buffer of
+/// that name then).
+fn scene_addresses(gpu: &Gpu, buffers: &[Buffer], chunk_first: [u32; 8]) -> Result<GpuSceneAddresses> {
+    if !gpu.has(BUFFER_DEVICE_ADDRESS) {
+        return Ok(GpuSceneAddresses { chunk_first, ..Default::default() });
+    }
+    let address = |name: &str| -> Result<[u32; 2]> {
+        let Some(b) = buffers.iter().find(|b| b.name() == name) else { return Ok([0, 0]) };
+        let a = b.device_address()?;
+        Ok([a as u32, (a >> 32) as u32])
+    };
+    Ok(GpuSceneAddresses {
+        vertex_attributes: address(ADDRESSED[0])?,
+        texture_texels: address(ADDRESSED[1])?,
+        env_texels: address(ADDRESSED[2])?,
+        env_distribution: address(ADDRESSED[3])?,
+        chunk_first,
+    })
+}
+
 impl SceneGpu {
     /// The scene with kernels specialised to it, read as `reads`.
     pub fn new(gpu: &Arc<Gpu>, scene: &Scene, frame: &FrameSettings, reads: Reads) -> Result<SceneGpu> {
@@ -351,40 +497,7 @@ impl SceneGpu {
         }
         let (lights, background) = gpu_lights(scene, frame.light_selection)?;
         let params = gpu_params(scene, frame, background);
-
-        let mut light_of_triangle = vec![NO_LIGHT; scene.triangles.len()];
-        for (i, l) in scene.lights.iter().enumerate() {
-            if let Light::Area { triangle, .. } = l {
-                light_of_triangle[*triangle as usize] = i as u32;
-            }
-        }
-        // The per-vertex arrays share one index per triangle: entries for the normals the
-        // kernels read (zero where a triangle has none: flat) and for the attributes
-        // (none: NaN texture coordinates, white).
-        let mut normals: Vec<[f32; 4]> = Vec::new();
-        let mut attributes: Vec<GpuVertexAttributes> = Vec::new();
-        let triangles: Vec<GpuTriangle> = scene
-            .triangles
-            .iter()
-            .enumerate()
-            .map(|(i, t)| {
-                let n = t.n.as_ref().filter(|_| features.shading_normals);
-                let a = t.attributes.as_deref().filter(|_| features.vertex_attributes);
-                let first = if n.is_some() || a.is_some() {
-                    let first = (normals.len().max(attributes.len())) as u32;
-                    if features.shading_normals {
-                        normals.extend((0..3).map(|k| n.map_or([0.0; 4], |n| v4(n[k], 0.0))));
-                    }
-                    if features.vertex_attributes {
-                        attributes.extend((0..3).map(|k| vertex_attributes(a, k)));
-                    }
-                    first
-                } else {
-                    u32::MAX
-                };
-                GpuTriangle { material: t.material, light: light_of_triangle[i], first_vertex: first, _pad: 0 }
-            })
-            .collect();
+        let geometry = gpu_triangles(scene, features);
         let spheres: Vec<GpuSphere> = scene
             .spheres
             .iter()
@@ -395,48 +508,7 @@ impl SceneGpu {
         } else {
             (Vec::new(), vec![[NO_TEXTURE; 4]; scene.materials.len()], Vec::new())
         };
-        let materials: Vec<GpuMaterial> = scene
-            .materials
-            .iter()
-            .zip(&texture_indices)
-            .map(|(m, &[texture, normal_map, emissive, metallic_roughness])| {
-                let normal_map = if features.normal_maps { normal_map } else { NO_TEXTURE };
-                let emissive = if features.emissive_textures { emissive } else { NO_TEXTURE };
-                let (metallic_roughness, base_metallic, f0_roughness) =
-                    match (&m.metallic_roughness_texture, features.metallic_roughness_textures) {
-                        (Some(t), true) => {
-                            (metallic_roughness, v4(t.base, t.metallic), v4(t.dielectric_f0, t.roughness))
-                        }
-                        _ => (NO_TEXTURE, [0.0; 4], [0.0; 4]),
-                    };
-                // glsl/types.glsl, GpuMaterial.surface.z.
-                let cutoff = match m.alpha_mode {
-                    AlphaMode::Mask { cutoff } if features.alpha_mask => cutoff,
-                    AlphaMode::Blend if features.alpha_mask => ALPHA_BLEND,
-                    _ => ALPHA_OPAQUE,
-                };
-                // A dielectric's lobes beside its glass have weight lobes_weight (glsl/bsdf.glsl);
-                // of weight 0 (clear glass) they are uploaded black, so that kernels without
-                // HAS_PARTIAL_TRANSMISSION, which apply no weight, give them none too.
-                let lobe = |c: Vec3| if m.lobes_weight() > 0.0 { c } else { Vec3::ZERO };
-                GpuMaterial {
-                    diffuse: v4(lobe(m.diffuse), m.phong_exponent),
-                    phong: v4(lobe(m.phong), m.ior),
-                    mirror: v4(m.mirror, m.diffuse_fresnel_f0),
-                    emission: v4(m.emission, m.dielectric_alpha()),
-                    glossy: v4(lobe(m.glossy), (m.roughness * m.roughness).max(MIN_GGX_ALPHA)),
-                    surface: [bits(texture), m.alpha, cutoff, m.glossy_untinted],
-                    maps: [bits(normal_map), m.normal_scale, bits(emissive), bits(metallic_roughness)],
-                    base_metallic,
-                    f0_roughness,
-                    medium: v4(
-                        m.medium_attenuation(),
-                        f32::from_bits(if m.one_sided { MATERIAL_ONE_SIDED } else { 0 }),
-                    ),
-                    transmission: v4(m.transmission, 1.0 - m.lobes_weight()),
-                }
-            })
-            .collect();
+        let materials = gpu_materials(scene, features, &texture_indices);
         let env = match environment_map(scene) {
             Some(m) if features.environment_map => EnvironmentTables::new(m),
             _ => EnvironmentTables { texels: Vec::new(), distribution: Vec::new() },
@@ -444,39 +516,12 @@ impl SceneGpu {
         let chunked: [(&'static str, &[u8]); 5] = [
             (CHUNKED[0], bytemuck::cast_slice(&gb.nodes)),
             (CHUNKED[1], bytemuck::cast_slice(&gb.prims)),
-            (CHUNKED[2], bytemuck::cast_slice(&triangles)),
-            (CHUNKED[3], bytemuck::cast_slice(&normals)),
-            (CHUNKED[4], bytemuck::cast_slice(&attributes)),
+            (CHUNKED[2], bytemuck::cast_slice(&geometry.triangles)),
+            (CHUNKED[3], bytemuck::cast_slice(&geometry.normals)),
+            (CHUNKED[4], bytemuck::cast_slice(&geometry.attributes)),
         ];
         let mut buffers = vec![gpu.buffer_from_slice("scene_params", &[params])?];
-        let mut chunks = Vec::new();
-        let mut chunk_table: Vec<[u32; 2]> = Vec::new();
-        let mut chunk_first = [0u32; 8];
-        match chunk_bytes {
-            None => {
-                for (name, bytes) in chunked {
-                    buffers.push(gpu.buffer_from_slice(name, bytes)?);
-                }
-            }
-            Some(size) => {
-                // Each array in chunks of `size` bytes (a power of two, so the kernels find
-                // element i's chunk by a shift), each chunk its own buffer.
-                for (k, (name, bytes)) in chunked.into_iter().enumerate() {
-                    chunk_first[k] = chunk_table.len() as u32;
-                    for piece in bytes.chunks(size as usize) {
-                        let b = gpu.buffer_from_slice(name, piece)?;
-                        let a = b.device_address()?;
-                        chunk_table.push([a as u32, (a >> 32) as u32]);
-                        chunks.push(b);
-                    }
-                }
-            }
-        }
-        // The chunks' addresses (a placeholder entry when there are none).
-        if chunk_table.is_empty() {
-            chunk_table.push([0, 0]);
-        }
-        buffers.push(gpu.buffer_from_slice("scene_chunks", &chunk_table)?);
+        let (chunks, chunk_first) = upload_chunked(gpu, chunked, chunk_bytes, &mut buffers)?;
         buffers.extend([
             gpu.buffer_from_slice("spheres", &spheres)?,
             gpu.buffer_from_slice("materials", &materials)?,
@@ -486,24 +531,7 @@ impl SceneGpu {
             gpu.buffer_from_slice("env_texels", &env.texels)?,
             gpu.buffer_from_slice("env_distribution", &env.distribution)?,
         ]);
-        let mut addresses = GpuSceneAddresses { chunk_first, ..Default::default() };
-        if gpu.has(BUFFER_DEVICE_ADDRESS) {
-            // (Zero for the vertex attributes when they are read in chunks: no buffer of
-            // that name then.)
-            let address = |name: &str| -> Result<[u32; 2]> {
-                let Some(b) = buffers.iter().find(|b| b.name() == name) else { return Ok([0, 0]) };
-                let a = b.device_address()?;
-                Ok([a as u32, (a >> 32) as u32])
-            };
-            addresses = GpuSceneAddresses {
-                vertex_attributes: address(ADDRESSED[0])?,
-                texture_texels: address(ADDRESSED[1])?,
-                env_texels: address(ADDRESSED[2])?,
-                env_distribution: address(ADDRESSED[3])?,
-                chunk_first,
-            };
-        }
-        let mut buffers = buffers;
+        let addresses = scene_addresses(gpu, &buffers, chunk_first)?;
         buffers.push(gpu.buffer_from_slice("scene_addresses", &[addresses])?);
         let variant = SceneVariant {
             features: features.clone(),

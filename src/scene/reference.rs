@@ -264,51 +264,9 @@ pub fn reference_scene_json(name: &str) -> Option<Value> {
     let info = REFERENCE_SCENES.iter().find(|s| s.name == name)?;
     let id = info.smallvcm_id;
     let geo = geometry(id);
-
-    // One buffer of unindexed y-up positions; one accessor per run of equal material.
-    let mut positions: Vec<f32> = Vec::new();
-    let mut accessors = Vec::new();
-    let mut meshes = Vec::new();
-    let mut nodes = Vec::new();
-    for (mesh_name, tris) in &geo.meshes {
-        let mut primitives = Vec::new();
-        let mut start = 0;
-        while start < tris.len() {
-            let m = tris[start].1;
-            let end = (start..tris.len()).find(|&k| tris[k].1 != m).unwrap_or(tris.len());
-            let first_vertex = positions.len() / 3;
-            let mut lo = [f32::INFINITY; 3];
-            let mut hi = [f32::NEG_INFINITY; 3];
-            for (tri, _) in &tris[start..end] {
-                for p in tri {
-                    let q = yup(*p);
-                    for k in 0..3 {
-                        lo[k] = lo[k].min(q[k]);
-                        hi[k] = hi[k].max(q[k]);
-                    }
-                    positions.extend_from_slice(&q);
-                }
-            }
-            accessors.push(json!({
-                "bufferView": 0,
-                "byteOffset": first_vertex * 12,
-                "componentType": 5126,
-                "count": (end - start) * 3,
-                "type": "VEC3",
-                "min": vec(lo),
-                "max": vec(hi),
-            }));
-            primitives.push(json!({
-                "attributes": { "POSITION": accessors.len() - 1 },
-                "material": m,
-                "mode": 4,
-            }));
-            start = end;
-        }
-        meshes.push(json!({ "name": mesh_name, "primitives": primitives }));
-        nodes.push(json!({ "name": mesh_name, "mesh": meshes.len() - 1 }));
-    }
-    let bytes: Vec<u8> = positions.iter().flat_map(|x| x.to_le_bytes()).collect();
+    let mesh_json = mesh_json(&geo);
+    let mut nodes = mesh_json.nodes;
+    let bytes: Vec<u8> = mesh_json.positions.iter().flat_map(|x| x.to_le_bytes()).collect();
 
     let mut used = vec!["KHR_materials_ior", "KHR_materials_transmission", "VKVCM_materials_phong", "VKVCM_spheres"];
 
@@ -322,8 +280,97 @@ pub fn reference_scene_json(name: &str) -> Option<Value> {
         "name": "spheres",
         "extensions": { "VKVCM_spheres": { "spheres": spheres } },
     }));
+    nodes.push(camera_node());
+    let root_ext = add_lights(id, &mut nodes, &mut used);
+    used.sort_unstable();
 
-    // Camera: -Z = forward, +Y = up (orthogonalised as SmallVCM's Camera::Setup does).
+    let mut doc = json!({
+        "asset": {
+            "version": "2.0",
+            "generator": "vkvcm examples/make_reference_scenes.rs",
+            "extras": {
+                "smallvcm_scene": id,
+                "description": info.description,
+                "source": "SmallVCM LoadCornellBox (docs/smallvcm.md section 2); z-up (x,y,z) stored as y-up (x,z,-y)",
+            },
+        },
+        "extensionsUsed": used,
+        "scene": 0,
+        "scenes": [{ "name": info.name, "nodes": (0..nodes.len()).collect::<Vec<_>>() }],
+        "nodes": nodes,
+        "meshes": mesh_json.meshes,
+        "materials": materials(id),
+        "cameras": [{
+            "name": "smallvcm_camera",
+            "type": "perspective",
+            "perspective": { "yfov": std::f64::consts::FRAC_PI_4, "znear": 0.1, "zfar": 10000.0 },
+        }],
+        "accessors": mesh_json.accessors,
+        "bufferViews": [{ "buffer": 0, "byteOffset": 0, "byteLength": bytes.len(), "target": 34962 }],
+        "buffers": [{ "byteLength": bytes.len(), "uri": encode_data_uri(&bytes) }],
+    });
+    if !root_ext.is_empty() {
+        doc["extensions"] = Value::Object(root_ext);
+    }
+    Some(doc)
+}
+
+/// The triangle meshes of a reference scene as glTF: one buffer of unindexed y-up
+/// positions, one accessor (and primitive) per run of equal material, one node per mesh.
+struct MeshJson {
+    positions: Vec<f32>,
+    accessors: Vec<Value>,
+    meshes: Vec<Value>,
+    nodes: Vec<Value>,
+}
+
+/// The triangle meshes of `geo` as glTF.
+fn mesh_json(geo: &Geometry) -> MeshJson {
+    let mut out = MeshJson { positions: Vec::new(), accessors: Vec::new(), meshes: Vec::new(), nodes: Vec::new() };
+    for (mesh_name, tris) in &geo.meshes {
+        let mut primitives = Vec::new();
+        let mut start = 0;
+        while start < tris.len() {
+            let m = tris[start].1;
+            let end = (start..tris.len()).find(|&k| tris[k].1 != m).unwrap_or(tris.len());
+            let first_vertex = out.positions.len() / 3;
+            let mut lo = [f32::INFINITY; 3];
+            let mut hi = [f32::NEG_INFINITY; 3];
+            for (tri, _) in &tris[start..end] {
+                for p in tri {
+                    let q = yup(*p);
+                    for k in 0..3 {
+                        lo[k] = lo[k].min(q[k]);
+                        hi[k] = hi[k].max(q[k]);
+                    }
+                    out.positions.extend_from_slice(&q);
+                }
+            }
+            out.accessors.push(json!({
+                "bufferView": 0,
+                "byteOffset": first_vertex * 12,
+                "componentType": 5126,
+                "count": (end - start) * 3,
+                "type": "VEC3",
+                "min": vec(lo),
+                "max": vec(hi),
+            }));
+            primitives.push(json!({
+                "attributes": { "POSITION": out.accessors.len() - 1 },
+                "material": m,
+                "mode": 4,
+            }));
+            start = end;
+        }
+        out.meshes.push(json!({ "name": mesh_name, "primitives": primitives }));
+        out.nodes.push(json!({ "name": mesh_name, "mesh": out.meshes.len() - 1 }));
+    }
+    out
+}
+
+/// SmallVCM's camera as a node: -Z = forward, +Y = up (orthogonalised as SmallVCM's
+/// Camera::Setup does).
+fn camera_node() -> Value {
     let c_pos: P = [-0.0439815, -4.12529, 0.222539];
     let c_fwd: P = [0.00688625, 0.998505, -0.0542161];
     let c_up: P = [3.73896e-4, 0.0542148, 0.998529];
@@ -333,13 +380,17 @@ pub fn reference_scene_json(name: &str) -> Option<Value> {
     let up = (up - f * f.dot(up)).normalize();
     let right = f.cross(up);
     let q = DQuat::from_mat3(&DMat3::from_cols(right, up, -f)).normalize();
-    nodes.push(json!({
+    json!({
         "name": "camera",
         "camera": 0,
         "translation": vec(yup(c_pos)),
         "rotation": [q.x, q.y, q.z, q.w],
-    }));
+    })
+}
 
+/// The lights of SmallVCM scene `id` beside its emissive materials: adds their nodes and
+/// extensions to `nodes` and `used`; returns the document's root extensions.
+fn add_lights(id: u32, nodes: &mut Vec<Value>, used: &mut Vec<&str>) -> serde_json::Map<String, Value> {
     let mut root_ext = serde_json::Map::new();
     match id {
         0 => {
@@ -381,37 +432,7 @@ pub fn reference_scene_json(name: &str) -> Option<Value> {
             used.push("VKVCM_background");
         }
     }
-    used.sort_unstable();
-
-    let mut doc = json!({
-        "asset": {
-            "version": "2.0",
-            "generator": "vkvcm examples/make_reference_scenes.rs",
-            "extras": {
-                "smallvcm_scene": id,
-                "description": info.description,
-                "source": "SmallVCM LoadCornellBox (docs/smallvcm.md section 2); z-up (x,y,z) stored as y-up (x,z,-y)",
-            },
-        },
-        "extensionsUsed": used,
-        "scene": 0,
-        "scenes": [{ "name": info.name, "nodes": (0..nodes.len()).collect::<Vec<_>>() }],
-        "nodes": nodes,
-        "meshes": meshes,
-        "materials": materials(id),
-        "cameras": [{
-            "name": "smallvcm_camera",
-            "type": "perspective",
-            "perspective": { "yfov": std::f64::consts::FRAC_PI_4, "znear": 0.1, "zfar": 10000.0 },
-        }],
-        "accessors": accessors,
-        "bufferViews": [{ "buffer": 0, "byteOffset": 0, "byteLength": bytes.len(), "target": 34962 }],
-        "buffers": [{ "byteLength": bytes.len(), "uri": encode_data_uri(&bytes) }],
-    });
-    if !root_ext.is_empty() {
-        doc["extensions"] = Value::Object(root_ext);
-    }
-    Some(doc)
+    root_ext
 }
 
 /// The exact bytes of `scenes/<name>.gltf`.

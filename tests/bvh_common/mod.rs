@@ -4,9 +4,9 @@
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
-use vkvcm::bench::traverse::icosphere;
 use vkvcm::bvh::{Hit, Ray};
 use vkvcm::scene::{Sphere, Triangle};
+use vkvcm_tools::bench::traverse::icosphere;
 
 pub fn rng(seed: u64) -> Pcg64 {
     Pcg64::seed_from_u64(seed)

@@ -54,13 +54,13 @@ pub fn run_test_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(gpu: &Arc<Gpu>, path:
 }
 
 /// The mean over pixels and channels of a render's per-pixel means.
-pub fn image_mean(s: &vkvcm::image::stats::PixelStats) -> f64 {
+pub fn image_mean(s: &vkvcm_tools::stats::PixelStats) -> f64 {
     s.mean.iter().map(|c| c[0] + c[1] + c[2]).sum::<f64>() / (3 * s.mean.len()) as f64
 }
 
 /// Per-pixel statistics of one render, from its per-iteration sums (K = iterations).
 /// Pixels where `mask` is false are zeroed (equal means, zero variance: they pass).
-pub fn render_stats(out: &vkvcm::render::RenderOutput, mask: Option<&[bool]>) -> vkvcm::image::stats::PixelStats {
+pub fn render_stats(out: &vkvcm::render::RenderOutput, mask: Option<&[bool]>) -> vkvcm_tools::stats::PixelStats {
     let (mut sum, mut sum_sq) = (out.sum.clone(), out.sum_sq.clone());
     if let Some(m) = mask {
         for i in 0..sum.len() {
@@ -70,7 +70,7 @@ pub fn render_stats(out: &vkvcm::render::RenderOutput, mask: Option<&[bool]>) ->
             }
         }
     }
-    vkvcm::image::stats::PixelStats::from_sums(out.width, out.height, out.iterations as usize, &sum, &sum_sq)
+    vkvcm_tools::stats::PixelStats::from_sums(out.width, out.height, out.iterations as usize, &sum, &sum_sq)
         .expect("render statistics")
 }
 
@@ -136,7 +136,7 @@ pub fn primary_hit_mask(
 /// scripts/texture_reference.py): per-pixel statistics of its independent renders, from
 /// their mean and unbiased variance images (`STEM_mean.exr`, `STEM_var.exr`) and their
 /// count (`seeds` in `STEM.json`).
-pub fn mitsuba_reference(stem: &str) -> vkvcm::image::stats::PixelStats {
+pub fn mitsuba_reference(stem: &str) -> vkvcm_tools::stats::PixelStats {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/env");
     let meta: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join(format!("{stem}.json"))).unwrap()).unwrap();
@@ -150,7 +150,7 @@ pub fn mitsuba_reference(stem: &str) -> vkvcm::image::stats::PixelStats {
         .zip(&var.data)
         .map(|(m, v)| [0, 1, 2].map(|c| (k - 1) as f64 * v[c] as f64 + k as f64 * (m[c] as f64).powi(2)))
         .collect();
-    vkvcm::image::stats::PixelStats::from_sums(mean.width, mean.height, k, &sum, &sum_sq).unwrap()
+    vkvcm_tools::stats::PixelStats::from_sums(mean.width, mean.height, k, &sum, &sum_sq).unwrap()
 }
 
 /// Renders `scene` with each of `cases` (estimator, iterations) at the reference's size
@@ -181,10 +181,10 @@ pub fn assert_matches_mitsuba(
         let out = vkvcm::render::render(gpu, scene, &s, None, &mut |_| {}).unwrap();
         assert_eq!(out.rejected_samples, 0, "{stem} {algo:?}: rejected samples");
         let st = render_stats(&out, None);
-        vkvcm::image::stats::welch_test(&st, &reference, 1e-3)
+        vkvcm_tools::stats::welch_test(&st, &reference, 1e-3)
             .unwrap()
             .assert_passed(&format!("{stem}_{}", algo.name()));
-        let m = |p: &vkvcm::image::stats::PixelStats| p.mean.iter().map(|c| c[1]).sum::<f64>() / p.mean.len() as f64;
+        let m = |p: &vkvcm_tools::stats::PixelStats| p.mean.iter().map(|c| c[1]).sum::<f64>() / p.mean.len() as f64;
         let (a, b) = (m(&st), m(&reference));
         eprintln!("{stem}: {} x {iterations}: image mean (green) {a:.5}, Mitsuba's {b:.5}", algo.name());
         assert!((a - b).abs() < 0.005 * b, "{stem} {}: image mean {a}, Mitsuba's {b}", algo.name());

@@ -37,221 +37,282 @@ impl Importer<'_> {
         node_weights: Option<&[f32]>,
         label: &str,
     ) -> Result<()> {
-        let mi = mesh.index();
         let weights = node_weights.or(mesh.weights());
         for prim in mesh.primitives() {
-            let pi = prim.index();
-            let where_ = format!("mesh {mi} primitive {pi} (on {label})");
-            let mode = prim.mode();
-            if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
-                let name = match mode {
-                    Mode::Points => "POINTS",
-                    Mode::Lines => "LINES",
-                    Mode::LineLoop => "LINE_LOOP",
-                    Mode::LineStrip => "LINE_STRIP",
-                    _ => "?",
-                };
-                self.warnings.warn(format!("primitive mode {name} is not supported (primitive skipped)"), where_);
-                continue;
-            }
-            let Some(pos_acc) = prim.get(&Semantic::Positions) else {
-                self.warnings.warn("primitive without POSITION (skipped)", where_.clone());
-                continue;
-            };
-            let normal_acc = prim.get(&Semantic::Normals);
-            let index_acc = prim.indices();
-            let q = self.quantized;
-            let mut positions =
-                read_vec3(&self.buffers, &pos_acc, "POSITION", &POSITION_FORMATS, q).with_context(|| where_.clone())?;
-            let mut normals = match &normal_acc {
-                Some(a) => {
-                    let n =
-                        read_vec3(&self.buffers, a, "NORMAL", &NORMAL_FORMATS, q).with_context(|| where_.clone())?;
-                    if n.len() != positions.len() {
-                        bail!(
-                            "{where_}: NORMAL accessor {} has {} elements, POSITION accessor {} has {}",
-                            a.index(),
-                            n.len(),
-                            pos_acc.index(),
-                            positions.len()
-                        );
-                    }
-                    Some(n)
-                }
-                None => None,
-            };
-            self.apply_morph_targets(&prim, weights, &mut positions, normals.as_mut(), &where_)?;
-            let material = match prim.material().index() {
-                Some(i) => i as u32,
-                None => self.default_material(),
-            };
-            let (uvs, colors) = self.vertex_attributes(&prim, mi, weights, positions.len(), &where_)?;
-            // A texture on texture coordinates the primitive lacks cannot apply: the kernels
-            // find that set missing (NaN) and use the factors alone, while the material's
-            // other textures on the set it has still apply.
-            let mat = &self.scene.materials[material as usize];
-            let textures = [
-                ("baseColorTexture", mat.base_color_texture.as_ref(), "the texture is not applied"),
-                ("emissiveTexture", mat.emissive_texture.as_ref(), "the emissive factor alone applies"),
-                (
-                    "metallicRoughnessTexture",
-                    mat.metallic_roughness_texture.as_ref().map(|t| &t.texture),
-                    "the metallic and roughness factors alone apply",
-                ),
-            ];
-            for (slot, texture, what) in textures {
-                if let Some(k) = texture.map(|t| t.tex_coord).filter(|&k| uvs[k as usize].is_none()) {
-                    self.warnings.warn(
-                        format!("{slot} on TEXCOORD_{k}, which the primitive does not have ({what})"),
-                        where_.clone(),
-                    );
-                }
-            }
-            // A normal map needs its texture coordinates, and tangents: the primitive's
-            // TANGENT, or MikkTSpace's (glTF 2.0 section 3.7.2.1) generated below.
-            let normal_map =
-                self.scene.materials[material as usize].normal_texture.as_ref().map(|t| t.tex_coord as usize);
-            let normal_map = match normal_map {
-                Some(k) if uvs[k].is_none() => {
-                    self.warnings.warn(
-                        format!("normalTexture on TEXCOORD_{k}, which the primitive does not have (the normal map is not applied)"),
-                        where_.clone(),
-                    );
-                    None
-                }
-                other => other,
-            };
-            let tangents = match (normal_map, prim.get(&Semantic::Tangents)) {
-                (Some(_), Some(acc)) => {
-                    let t = read_tangents(&self.buffers, &acc, &TANGENT_FORMATS, q).with_context(|| where_.clone())?;
-                    if t.len() != positions.len() {
-                        bail!(
-                            "{where_}: TANGENT accessor {} has {} elements, the primitive has {} vertices",
-                            acc.index(),
-                            t.len(),
-                            positions.len()
-                        );
-                    }
-                    let mut t = t;
-                    self.morph_tangents(&prim, weights, &mut t, &where_)?;
-                    if let Some(i) = t.iter().position(|v| !v.is_finite()) {
-                        bail!("{where_}: TANGENT accessor {} element {i} is not finite (after morphing)", acc.index());
-                    }
-                    Some(t)
-                }
-                _ => None,
-            };
-            let indices: Vec<u32> = match &index_acc {
-                Some(a) => {
-                    let idx = read_indices(&self.buffers, a).with_context(|| where_.clone())?;
-                    if let Some((k, &v)) = idx.iter().enumerate().find(|(_, &v)| v as usize >= positions.len()) {
-                        bail!(
-                            "{where_}: index accessor {} element {k} = {v} is out of range (POSITION accessor {} has {} vertices)",
-                            a.index(),
-                            pos_acc.index(),
-                            positions.len()
-                        );
-                    }
-                    idx
-                }
-                None => (0..positions.len() as u32).collect(),
-            };
-            // Skinned: per vertex, the matrix that takes it to world space.
-            let vertex_matrices = match placement {
-                Placement::Rigid(_) => None,
-                Placement::Skinned(joints) => self.skin_vertex_matrices(&prim, joints, positions.len(), &where_)?,
-            };
-            let (world_p, world_n, world_t, flips): WorldVertices = match vertex_matrices {
-                None => {
-                    let world = match placement {
-                        Placement::Rigid(world) => *world,
-                        // A skinned node whose primitive has no JOINTS_0/WEIGHTS_0 (warned):
-                        // its vertices as stored, in world coordinates.
-                        Placement::Skinned(_) => self.rebase.as_mat4(),
-                    };
-                    let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
-                    let flip = Mat3::from_mat4(world).determinant() < 0.0;
-                    let p: Vec<Vec3> = positions.iter().map(|v| world.transform_point3(*v)).collect();
-                    let n = normals.map(|ns| ns.iter().map(|v| (normal_matrix * *v).normalize_or_zero()).collect());
-                    let t = tangents
-                        .as_ref()
-                        .map(|ts| ts.iter().map(|t| transform_tangent(Mat3::from_mat4(world), *t)).collect());
-                    (p, n, t, vec![flip; positions.len()])
-                }
-                Some(ms) => {
-                    let p: Vec<Vec3> = positions.iter().zip(&ms).map(|(v, m)| m.transform_point3(*v)).collect();
-                    let n: Option<Vec<Vec3>> = normals.map(|ns| {
-                        ns.iter()
-                            .zip(&ms)
-                            .map(|(v, m)| (Mat3::from_mat4(*m).inverse().transpose() * *v).normalize_or_zero())
-                            .collect()
-                    });
-                    let t = tangents.as_ref().map(|ts| {
-                        ts.iter().zip(&ms).map(|(t, m)| transform_tangent(Mat3::from_mat4(*m), *t)).collect()
-                    });
-                    let flips = ms.iter().map(|m| Mat3::from_mat4(*m).determinant() < 0.0).collect();
-                    (p, n, t, flips)
-                }
-            };
-            let tris: Vec<[u32; 3]> = match mode {
-                Mode::Triangles => {
-                    if !indices.len().is_multiple_of(3) {
-                        self.warnings.warn(
-                            "TRIANGLES primitive whose vertex/index count is not a multiple of 3 (trailing vertices ignored)",
-                            where_.clone(),
-                        );
-                    }
-                    indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
-                }
-                Mode::TriangleStrip => (0..indices.len().saturating_sub(2))
-                    .map(|i| {
-                        if i % 2 == 0 {
-                            [indices[i], indices[i + 1], indices[i + 2]]
-                        } else {
-                            [indices[i + 1], indices[i], indices[i + 2]]
-                        }
-                    })
-                    .collect(),
-                _ => (1..indices.len().saturating_sub(1)).map(|i| [indices[i], indices[i + 1], indices[0]]).collect(),
-            };
-            let first_triangle = self.scene.triangles.len();
-            for t in tris {
-                // A mirroring transform reverses the winding; keep the geometric normal on
-                // the side the author meant by swapping vertices 1 and 2 (with all their
-                // attributes). A skinned triangle follows the transform of its first vertex.
-                let t = if flips[t[0] as usize] { [t[0], t[2], t[1]] } else { t };
-                let p = t.map(|i| world_p[i as usize]);
-                let mut n = world_n.as_ref().map(|ns| t.map(|i| ns[i as usize]));
-                let area2 = (p[1] - p[0]).cross(p[2] - p[0]);
-                let zero_area = area2.length_squared().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater);
-                if !p.iter().all(|q| q.is_finite()) || zero_area || !area2.normalize().is_finite() {
-                    self.scene.report.degenerate_triangles += 1;
-                    continue;
-                }
-                if let Some(ns) = &n {
-                    if ns.iter().any(|v| *v == Vec3::ZERO || !v.is_finite()) {
-                        self.warnings.warn(
-                            "zero-length or invalid vertex normals (that triangle uses its geometric normal)",
-                            where_.clone(),
-                        );
-                        n = None;
-                    }
-                }
-                let attributes = (uvs.iter().any(Option::is_some) || colors.is_some()).then(|| {
-                    Box::new(VertexAttributes {
-                        uv: [0, 1].map(|k| uvs[k].as_ref().map(|uv| t.map(|i| uv[i as usize]))),
-                        color: colors.as_ref().map(|c| t.map(|i| c[i as usize])),
-                        tangent: world_t.as_ref().map(|ts| t.map(|i| ts[i as usize])),
-                    })
-                });
-                self.scene.triangles.push(Triangle { p, n, material, attributes });
-            }
-            if let (Some(set), None) = (normal_map, &world_t) {
-                super::tangents::generate(&mut self.scene.triangles[first_triangle..], set)
-                    .with_context(|| format!("{where_}: generating tangents"))?;
-            }
+            let where_ = format!("mesh {} primitive {} (on {label})", mesh.index(), prim.index());
+            self.add_primitive(&prim, mesh.index(), placement, weights, &where_)?;
         }
         Ok(())
+    }
+
+    /// [`Importer::add_mesh`] for one primitive (`where_` names it in messages); one of an
+    /// unsupported mode or without POSITION is skipped with a warning.
+    fn add_primitive(
+        &mut self,
+        prim: &gltf::Primitive,
+        mesh: usize,
+        placement: &Placement,
+        weights: Option<&[f32]>,
+        where_: &str,
+    ) -> Result<()> {
+        let mode = prim.mode();
+        if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+            let name = match mode {
+                Mode::Points => "POINTS",
+                Mode::Lines => "LINES",
+                Mode::LineLoop => "LINE_LOOP",
+                Mode::LineStrip => "LINE_STRIP",
+                _ => "?",
+            };
+            self.warnings.warn(format!("primitive mode {name} is not supported (primitive skipped)"), where_);
+            return Ok(());
+        }
+        let Some(pos_acc) = prim.get(&Semantic::Positions) else {
+            self.warnings.warn("primitive without POSITION (skipped)", where_);
+            return Ok(());
+        };
+        let (mut positions, mut normals) = self.read_positions_and_normals(prim, &pos_acc, where_)?;
+        self.apply_morph_targets(prim, weights, &mut positions, normals.as_mut(), where_)?;
+        let material = match prim.material().index() {
+            Some(i) => i as u32,
+            None => self.default_material(),
+        };
+        let (uvs, colors) = self.vertex_attributes(prim, mesh, weights, positions.len(), where_)?;
+        let normal_map = self.texture_sets_present(material, &uvs, where_);
+        let tangents = match (normal_map, prim.get(&Semantic::Tangents)) {
+            (Some(_), Some(acc)) => Some(self.read_morphed_tangents(prim, &acc, weights, positions.len(), where_)?),
+            _ => None,
+        };
+        let indices: Vec<u32> = match &prim.indices() {
+            Some(a) => {
+                let idx = read_indices(&self.buffers, a).with_context(|| where_.to_string())?;
+                if let Some((k, &v)) = idx.iter().enumerate().find(|(_, &v)| v as usize >= positions.len()) {
+                    bail!(
+                        "{where_}: index accessor {} element {k} = {v} is out of range (POSITION accessor {} has {} vertices)",
+                        a.index(),
+                        pos_acc.index(),
+                        positions.len()
+                    );
+                }
+                idx
+            }
+            None => (0..positions.len() as u32).collect(),
+        };
+        let world = self.world_vertices(prim, placement, &positions, normals, tangents, where_)?;
+        let tris = self.triangle_list(mode, &indices, where_);
+        let first_triangle = self.scene.triangles.len();
+        self.push_triangles(&tris, &world, &uvs, colors.as_deref(), material, where_);
+        if let (Some(set), None) = (normal_map, &world.2) {
+            super::tangents::generate(&mut self.scene.triangles[first_triangle..], set)
+                .with_context(|| format!("{where_}: generating tangents"))?;
+        }
+        Ok(())
+    }
+
+    /// The POSITION and NORMAL (if any) of a primitive, checked to be as many.
+    fn read_positions_and_normals(
+        &self,
+        prim: &gltf::Primitive,
+        pos_acc: &gltf::Accessor,
+        where_: &str,
+    ) -> Result<(Vec<Vec3>, Option<Vec<Vec3>>)> {
+        let q = self.quantized;
+        let positions =
+            read_vec3(&self.buffers, pos_acc, "POSITION", &POSITION_FORMATS, q).with_context(|| where_.to_string())?;
+        let Some(a) = prim.get(&Semantic::Normals) else { return Ok((positions, None)) };
+        let n = read_vec3(&self.buffers, &a, "NORMAL", &NORMAL_FORMATS, q).with_context(|| where_.to_string())?;
+        if n.len() != positions.len() {
+            bail!(
+                "{where_}: NORMAL accessor {} has {} elements, POSITION accessor {} has {}",
+                a.index(),
+                n.len(),
+                pos_acc.index(),
+                positions.len()
+            );
+        }
+        Ok((positions, Some(n)))
+    }
+
+    /// Warns of each texture of `material` on texture coordinates the primitive lacks
+    /// (`uvs`); returns the set of its normal map when the primitive has it.
+    fn texture_sets_present(&mut self, material: u32, uvs: &[Option<Vec<Vec2>>; 2], where_: &str) -> Option<usize> {
+        // A texture on texture coordinates the primitive lacks cannot apply: the kernels
+        // find that set missing (NaN) and use the factors alone, while the material's
+        // other textures on the set it has still apply.
+        let mat = &self.scene.materials[material as usize];
+        let textures = [
+            ("baseColorTexture", mat.base_color_texture.as_ref(), "the texture is not applied"),
+            ("emissiveTexture", mat.emissive_texture.as_ref(), "the emissive factor alone applies"),
+            (
+                "metallicRoughnessTexture",
+                mat.metallic_roughness_texture.as_ref().map(|t| &t.texture),
+                "the metallic and roughness factors alone apply",
+            ),
+        ];
+        for (slot, texture, what) in textures {
+            if let Some(k) = texture.map(|t| t.tex_coord).filter(|&k| uvs[k as usize].is_none()) {
+                self.warnings
+                    .warn(format!("{slot} on TEXCOORD_{k}, which the primitive does not have ({what})"), where_);
+            }
+        }
+        // A normal map needs its texture coordinates, and tangents: the primitive's
+        // TANGENT, or MikkTSpace's (glTF 2.0 section 3.7.2.1) generated after.
+        match mat.normal_texture.as_ref().map(|t| t.tex_coord as usize) {
+            Some(k) if uvs[k].is_none() => {
+                self.warnings.warn(
+                    format!("normalTexture on TEXCOORD_{k}, which the primitive does not have (the normal map is not applied)"),
+                    where_,
+                );
+                None
+            }
+            other => other,
+        }
+    }
+
+    /// The primitive's TANGENT (accessor `acc`, one per vertex of `vertices`), morphed
+    /// at `weights` and checked finite.
+    fn read_morphed_tangents(
+        &self,
+        prim: &gltf::Primitive,
+        acc: &gltf::Accessor,
+        weights: Option<&[f32]>,
+        vertices: usize,
+        where_: &str,
+    ) -> Result<Vec<Vec4>> {
+        let mut t =
+            read_tangents(&self.buffers, acc, &TANGENT_FORMATS, self.quantized).with_context(|| where_.to_string())?;
+        if t.len() != vertices {
+            bail!(
+                "{where_}: TANGENT accessor {} has {} elements, the primitive has {vertices} vertices",
+                acc.index(),
+                t.len()
+            );
+        }
+        self.morph_tangents(prim, weights, &mut t, where_)?;
+        if let Some(i) = t.iter().position(|v| !v.is_finite()) {
+            bail!("{where_}: TANGENT accessor {} element {i} is not finite (after morphing)", acc.index());
+        }
+        Ok(t)
+    }
+
+    /// The vertices in world space by `placement`, with per vertex whether its transform
+    /// mirrors.
+    fn world_vertices(
+        &mut self,
+        prim: &gltf::Primitive,
+        placement: &Placement,
+        positions: &[Vec3],
+        normals: Option<Vec<Vec3>>,
+        tangents: Option<Vec<Vec4>>,
+        where_: &str,
+    ) -> Result<WorldVertices> {
+        // Skinned: per vertex, the matrix that takes it to world space.
+        let vertex_matrices = match placement {
+            Placement::Rigid(_) => None,
+            Placement::Skinned(joints) => self.skin_vertex_matrices(prim, joints, positions.len(), where_)?,
+        };
+        Ok(match vertex_matrices {
+            None => {
+                let world = match placement {
+                    Placement::Rigid(world) => *world,
+                    // A skinned node whose primitive has no JOINTS_0/WEIGHTS_0 (warned):
+                    // its vertices as stored, in world coordinates.
+                    Placement::Skinned(_) => self.rebase.as_mat4(),
+                };
+                let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+                let flip = Mat3::from_mat4(world).determinant() < 0.0;
+                let p: Vec<Vec3> = positions.iter().map(|v| world.transform_point3(*v)).collect();
+                let n = normals.map(|ns| ns.iter().map(|v| (normal_matrix * *v).normalize_or_zero()).collect());
+                let t = tangents
+                    .as_ref()
+                    .map(|ts| ts.iter().map(|t| transform_tangent(Mat3::from_mat4(world), *t)).collect());
+                (p, n, t, vec![flip; positions.len()])
+            }
+            Some(ms) => {
+                let p: Vec<Vec3> = positions.iter().zip(&ms).map(|(v, m)| m.transform_point3(*v)).collect();
+                let n: Option<Vec<Vec3>> = normals.map(|ns| {
+                    ns.iter()
+                        .zip(&ms)
+                        .map(|(v, m)| (Mat3::from_mat4(*m).inverse().transpose() * *v).normalize_or_zero())
+                        .collect()
+                });
+                let t = tangents
+                    .as_ref()
+                    .map(|ts| ts.iter().zip(&ms).map(|(t, m)| transform_tangent(Mat3::from_mat4(*m), *t)).collect());
+                let flips = ms.iter().map(|m| Mat3::from_mat4(*m).determinant() < 0.0).collect();
+                (p, n, t, flips)
+            }
+        })
+    }
+
+    /// The triangles (vertex indices) of a primitive of `mode` with `indices`.
+    fn triangle_list(&mut self, mode: Mode, indices: &[u32], where_: &str) -> Vec<[u32; 3]> {
+        match mode {
+            Mode::Triangles => {
+                if !indices.len().is_multiple_of(3) {
+                    self.warnings.warn(
+                        "TRIANGLES primitive whose vertex/index count is not a multiple of 3 (trailing vertices ignored)",
+                        where_,
+                    );
+                }
+                indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+            }
+            Mode::TriangleStrip => (0..indices.len().saturating_sub(2))
+                .map(|i| {
+                    if i % 2 == 0 {
+                        [indices[i], indices[i + 1], indices[i + 2]]
+                    } else {
+                        [indices[i + 1], indices[i], indices[i + 2]]
+                    }
+                })
+                .collect(),
+            _ => (1..indices.len().saturating_sub(1)).map(|i| [indices[i], indices[i + 1], indices[0]]).collect(),
+        }
+    }
+
+    /// Adds the triangles `tris` of world-space vertices `world` with their attributes;
+    /// degenerate ones are counted in the report and dropped.
+    fn push_triangles(
+        &mut self,
+        tris: &[[u32; 3]],
+        world: &WorldVertices,
+        uvs: &[Option<Vec<Vec2>>; 2],
+        colors: Option<&[Vec4]>,
+        material: u32,
+        where_: &str,
+    ) {
+        let (world_p, world_n, world_t, flips) = world;
+        for &t in tris {
+            // A mirroring transform reverses the winding; keep the geometric normal on
+            // the side the author meant by swapping vertices 1 and 2 (with all their
+            // attributes). A skinned triangle follows the transform of its first vertex.
+            let t = if flips[t[0] as usize] { [t[0], t[2], t[1]] } else { t };
+            let p = t.map(|i| world_p[i as usize]);
+            let mut n = world_n.as_ref().map(|ns| t.map(|i| ns[i as usize]));
+            let area2 = (p[1] - p[0]).cross(p[2] - p[0]);
+            let zero_area = area2.length_squared().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater);
+            if !p.iter().all(|q| q.is_finite()) || zero_area || !area2.normalize().is_finite() {
+                self.scene.report.degenerate_triangles += 1;
+                continue;
+            }
+            if let Some(ns) = &n {
+                if ns.iter().any(|v| *v == Vec3::ZERO || !v.is_finite()) {
+                    self.warnings.warn(
+                        "zero-length or invalid vertex normals (that triangle uses its geometric normal)",
+                        where_,
+                    );
+                    n = None;
+                }
+            }
+            let attributes = (uvs.iter().any(Option::is_some) || colors.is_some()).then(|| {
+                Box::new(VertexAttributes {
+                    uv: [0, 1].map(|k| uvs[k].as_ref().map(|uv| t.map(|i| uv[i as usize]))),
+                    color: colors.map(|c| t.map(|i| c[i as usize])),
+                    tangent: world_t.as_ref().map(|ts| t.map(|i| ts[i as usize])),
+                })
+            });
+            self.scene.triangles.push(Triangle { p, n, material, attributes });
+        }
     }
 
     /// The TEXCOORD_0, TEXCOORD_1 and COLOR_0 of `prim` (`vertices` of them each, when

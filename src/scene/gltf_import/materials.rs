@@ -15,6 +15,33 @@ use glam::Vec3;
 /// and large enough that any segment longer than 1e-25 transmits nothing.
 pub const MAX_ATTENUATION: f32 = 1e30;
 
+/// Which of a material's textures its mapping reads (the others are warned of).
+#[derive(Clone, Copy, Default)]
+struct TexturesRead {
+    base_color: bool,
+    metallic_roughness: bool,
+}
+
+/// The alpha and alpha mode of `m` whose baseColorFactor alpha is `factor`. glTF 2.0
+/// section 3.9.4 ("Alpha Coverage"): alpha = baseColorFactor alpha (times the texture's
+/// and COLOR_0's); OPAQUE ignores it, MASK cuts out where it is below alphaCutoff
+/// (default 0.5), BLEND composites: here stochastically, each ray meeting the surface
+/// with probability alpha (alphaCutoff is ignored, per spec).
+fn alpha(m: &gltf::Material, factor: f32, label: &str) -> Result<(f32, AlphaMode)> {
+    let mode = match m.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+        gltf::material::AlphaMode::Mask => {
+            let cutoff = m.alpha_cutoff().unwrap_or(0.5);
+            if !(cutoff >= 0.0 && cutoff.is_finite()) {
+                bail!("{label}: alphaCutoff {cutoff} must be a finite number >= 0");
+            }
+            AlphaMode::Mask { cutoff }
+        }
+        gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+    };
+    Ok((factor.clamp(0.0, 1.0), mode))
+}
+
 impl Importer<'_> {
     /// Index of glTF's default material (for primitives and spheres without one), added
     /// to the scene's materials on first use.
@@ -51,39 +78,9 @@ impl Importer<'_> {
         let roughness = pbr.roughness_factor().clamp(0.0, 1.0);
 
         let phong_ext = m.extensions().and_then(|e| e.get(EXT_MATERIALS_PHONG));
-        let (mut base_texture_read, mut metallic_roughness_read) = (false, false);
+        let mut read = TexturesRead::default();
         let mut out = if let Some(v) = phong_ext {
-            let ctx = format!("materials[{index}].extensions.{EXT_MATERIALS_PHONG}");
-            if !v.is_object() {
-                bail!("{ctx} must be an object");
-            }
-            let c =
-                |f: &str| -> Result<Vec3> { non_negative(ext_vec3(v, f, Vec3::ZERO, &ctx)?, &format!("{ctx}.{f}")) };
-            let exponent = ext_f32(v, "exponent", 1.0, &ctx)?;
-            if exponent < 0.0 {
-                bail!("{ctx}.exponent must not be negative");
-            }
-            let phong = Material {
-                name: String::new(),
-                diffuse: c("diffuse")?,
-                phong: c("phong")?,
-                phong_exponent: exponent,
-                mirror: c("mirror")?,
-                ior: ext_f32(v, "ior", -1.0, &ctx)?,
-                emission: Vec3::ZERO,
-                glossy: Vec3::ZERO,
-                roughness: 1.0,
-                ..Material::default()
-            };
-            // SmallVCM's glass is a mirror and an IOR; lobes beside it would need a glass
-            // weight, which the extension does not have.
-            if phong.is_dielectric() && (phong.diffuse != Vec3::ZERO || phong.phong != Vec3::ZERO) {
-                self.warnings.warn(
-                    "the diffuse and phong lobes of a VKVCM_materials_phong dielectric (ior >= 0) are ignored",
-                    label.clone(),
-                );
-            }
-            phong
+            self.phong_material(v, index, &label)?
         } else if let Some(t) = m.transmission().filter(|t| t.transmission_factor() > 0.0 && metallic < 1.0) {
             // Glass of weight (1 - metallic) transmission beside the metallic/roughness
             // lobes (Material::transmissive). Its transmitted part and the lobes are tinted
@@ -95,65 +92,13 @@ impl Importer<'_> {
                 Material::transmissive(base, metallic, roughness, t.transmission_factor(), ior, dielectric_f0);
             if let Some(info) = pbr.base_color_texture() {
                 glass.base_color_texture = self.base_color_texture(&info, &label)?;
-                base_texture_read = true;
+                read.base_color = true;
             }
             glass
         } else {
-            if m.transmission().is_some_and(|t| t.transmission_factor() > 0.0) {
-                // glTF: transmission replaces the dielectric part, which metallic 1 leaves none of.
-                self.warnings.warn(
-                    "KHR_materials_transmission on a fully metallic material (metallicFactor 1, glTF's default) \
-                     transmits nothing",
-                    label.clone(),
-                );
-            }
-            let dielectric_f0 = self.dielectric_f0(m, &label)?;
-            // glTF 2.0 section 3.9.2: roughness = roughnessFactor x G, metallic =
-            // metallicFactor x B of the metallicRoughnessTexture (linear).
-            let texture = match pbr.metallic_roughness_texture() {
-                Some(info) => {
-                    metallic_roughness_read = true;
-                    self.metallic_roughness_texture(&info, &label)?
-                }
-                None => None,
-            };
-            let mut mr = match texture {
-                Some(t) => Material::metallic_roughness_textured(base, metallic, roughness, dielectric_f0, t),
-                None => Material::metallic_roughness_with_f0(base, metallic, roughness, dielectric_f0),
-            };
-            if let Some(info) = pbr.base_color_texture() {
-                mr.base_color_texture = self.base_color_texture(&info, &label)?;
-                base_texture_read = true;
-            }
-            mr
+            self.metallic_roughness_material(m, base, metallic, roughness, &mut read, &label)?
         };
-
-        // The textures that are not read; baseColorTexture and metallicRoughnessTexture
-        // only on the paths above that do not use them.
-        let mut textures = Vec::new();
-        if pbr.base_color_texture().is_some() && !base_texture_read {
-            textures.push("baseColorTexture");
-        }
-        if pbr.metallic_roughness_texture().is_some() && !metallic_roughness_read {
-            textures.push("metallicRoughnessTexture");
-        }
-        if m.normal_texture().is_some() && phong_ext.is_some() {
-            textures.push("normalTexture");
-        }
-        if m.occlusion_texture().is_some() {
-            // Ambient occlusion is what the estimators compute from the geometry; a baked
-            // occlusion map would darken it twice.
-            self.warnings.warn(
-                "occlusionTexture is ignored (light transport computes occlusion from the geometry)",
-                label.clone(),
-            );
-        }
-        if m.transmission().and_then(|t| t.transmission_texture()).is_some() {
-            textures.push("transmissionTexture");
-        }
-        for t in textures {
-            self.warnings.warn("textures are not supported (the constant factors are used)", format!("{label} {t}"));
-        }
+        self.warn_unread_textures(m, phong_ext.is_some(), read, &label);
 
         // The normal map bends the shading normal of every lobe, so it applies to every
         // material kind but the VKVCM_materials_phong one (SmallVCM's exact materials).
@@ -163,36 +108,8 @@ impl Importer<'_> {
                 out.normal_scale = scale;
             }
         }
-
-        // glTF 2.0 section 3.9.4 ("Alpha Coverage"): alpha = baseColorFactor alpha (times
-        // the texture's and COLOR_0's); OPAQUE ignores it, MASK cuts out where it is below
-        // alphaCutoff (default 0.5), BLEND composites: here stochastically, each ray
-        // meeting the surface with probability alpha (alphaCutoff is ignored, per spec).
-        out.alpha = bc[3].clamp(0.0, 1.0);
-        out.alpha_mode = match m.alpha_mode() {
-            gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
-            gltf::material::AlphaMode::Mask => {
-                let cutoff = m.alpha_cutoff().unwrap_or(0.5);
-                if !(cutoff >= 0.0 && cutoff.is_finite()) {
-                    bail!("{label}: alphaCutoff {cutoff} must be a finite number >= 0");
-                }
-                AlphaMode::Mask { cutoff }
-            }
-            gltf::material::AlphaMode::Blend => AlphaMode::Blend,
-        };
-        let strength = m.emissive_strength().unwrap_or(1.0);
-        let ef = m.emissive_factor();
-        out.emission = non_negative(Vec3::from_array(ef) * strength, &format!("{label} emission"))?;
-        if !out.emission.is_finite() {
-            bail!("{label}: emission is not finite");
-        }
-        // glTF: emitted radiance = emissiveFactor x emissiveTexture (x strength); the
-        // factor defaults to 0, so a texture without a factor emits nothing.
-        if let Some(info) = m.emissive_texture() {
-            if out.emission != Vec3::ZERO {
-                out.emissive_texture = self.emissive_texture(&info, &label)?;
-            }
-        }
+        (out.alpha, out.alpha_mode) = alpha(m, bc[3], &label)?;
+        self.set_emission(m, &mut out, &label)?;
         // glTF's doubleSided false (the default) is back-face culling: the camera does not
         // see the back side of such a surface (glsl/scene.glsl, trace_camera_segment and
         // visible_to_camera; light meets both sides). A dielectric stays two-sided: its
@@ -213,6 +130,129 @@ impl Importer<'_> {
         }
         out.name = name;
         Ok(out)
+    }
+
+    /// The material of vkvcm's `VKVCM_materials_phong` extension `v` (SmallVCM's
+    /// materials) on material `index`.
+    fn phong_material(&mut self, v: &serde_json::Value, index: usize, label: &str) -> Result<Material> {
+        let ctx = format!("materials[{index}].extensions.{EXT_MATERIALS_PHONG}");
+        if !v.is_object() {
+            bail!("{ctx} must be an object");
+        }
+        let c = |f: &str| -> Result<Vec3> { non_negative(ext_vec3(v, f, Vec3::ZERO, &ctx)?, &format!("{ctx}.{f}")) };
+        let exponent = ext_f32(v, "exponent", 1.0, &ctx)?;
+        if exponent < 0.0 {
+            bail!("{ctx}.exponent must not be negative");
+        }
+        let phong = Material {
+            name: String::new(),
+            diffuse: c("diffuse")?,
+            phong: c("phong")?,
+            phong_exponent: exponent,
+            mirror: c("mirror")?,
+            ior: ext_f32(v, "ior", -1.0, &ctx)?,
+            emission: Vec3::ZERO,
+            glossy: Vec3::ZERO,
+            roughness: 1.0,
+            ..Material::default()
+        };
+        // SmallVCM's glass is a mirror and an IOR; lobes beside it would need a glass
+        // weight, which the extension does not have.
+        if phong.is_dielectric() && (phong.diffuse != Vec3::ZERO || phong.phong != Vec3::ZERO) {
+            self.warnings.warn(
+                "the diffuse and phong lobes of a VKVCM_materials_phong dielectric (ior >= 0) are ignored",
+                label,
+            );
+        }
+        Ok(phong)
+    }
+
+    /// The metallic/roughness mapping of `m` (its factors, clamped: `base`, `metallic`,
+    /// `roughness`), with its base colour and metallic-roughness textures.
+    fn metallic_roughness_material(
+        &mut self,
+        m: &gltf::Material,
+        base: Vec3,
+        metallic: f32,
+        roughness: f32,
+        read: &mut TexturesRead,
+        label: &str,
+    ) -> Result<Material> {
+        let pbr = m.pbr_metallic_roughness();
+        if m.transmission().is_some_and(|t| t.transmission_factor() > 0.0) {
+            // glTF: transmission replaces the dielectric part, which metallic 1 leaves none of.
+            self.warnings.warn(
+                "KHR_materials_transmission on a fully metallic material (metallicFactor 1, glTF's default) \
+                 transmits nothing",
+                label,
+            );
+        }
+        let dielectric_f0 = self.dielectric_f0(m, label)?;
+        // glTF 2.0 section 3.9.2: roughness = roughnessFactor x G, metallic =
+        // metallicFactor x B of the metallicRoughnessTexture (linear).
+        let texture = match pbr.metallic_roughness_texture() {
+            Some(info) => {
+                read.metallic_roughness = true;
+                self.metallic_roughness_texture(&info, label)?
+            }
+            None => None,
+        };
+        let mut mr = match texture {
+            Some(t) => Material::metallic_roughness_textured(base, metallic, roughness, dielectric_f0, t),
+            None => Material::metallic_roughness_with_f0(base, metallic, roughness, dielectric_f0),
+        };
+        if let Some(info) = pbr.base_color_texture() {
+            mr.base_color_texture = self.base_color_texture(&info, label)?;
+            read.base_color = true;
+        }
+        Ok(mr)
+    }
+
+    /// Warns of the textures of `m` that are not read (`phong`: it is a
+    /// `VKVCM_materials_phong` material); baseColorTexture and metallicRoughnessTexture
+    /// only where the material's mapping did not use them (`read`).
+    fn warn_unread_textures(&mut self, m: &gltf::Material, phong: bool, read: TexturesRead, label: &str) {
+        let pbr = m.pbr_metallic_roughness();
+        let mut textures = Vec::new();
+        if pbr.base_color_texture().is_some() && !read.base_color {
+            textures.push("baseColorTexture");
+        }
+        if pbr.metallic_roughness_texture().is_some() && !read.metallic_roughness {
+            textures.push("metallicRoughnessTexture");
+        }
+        if m.normal_texture().is_some() && phong {
+            textures.push("normalTexture");
+        }
+        if m.occlusion_texture().is_some() {
+            // Ambient occlusion is what the estimators compute from the geometry; a baked
+            // occlusion map would darken it twice.
+            self.warnings
+                .warn("occlusionTexture is ignored (light transport computes occlusion from the geometry)", label);
+        }
+        if m.transmission().and_then(|t| t.transmission_texture()).is_some() {
+            textures.push("transmissionTexture");
+        }
+        for t in textures {
+            self.warnings.warn("textures are not supported (the constant factors are used)", format!("{label} {t}"));
+        }
+    }
+
+    /// Sets the emission of `out` from `m`'s emissive factor, strength and texture.
+    fn set_emission(&mut self, m: &gltf::Material, out: &mut Material, label: &str) -> Result<()> {
+        let strength = m.emissive_strength().unwrap_or(1.0);
+        let ef = m.emissive_factor();
+        out.emission = non_negative(Vec3::from_array(ef) * strength, &format!("{label} emission"))?;
+        if !out.emission.is_finite() {
+            bail!("{label}: emission is not finite");
+        }
+        // glTF: emitted radiance = emissiveFactor x emissiveTexture (x strength); the
+        // factor defaults to 0, so a texture without a factor emits nothing.
+        if let Some(info) = m.emissive_texture() {
+            if out.emission != Vec3::ZERO {
+                out.emissive_texture = self.emissive_texture(&info, label)?;
+            }
+        }
+        Ok(())
     }
 
     /// The attenuation coefficient of KHR_materials_volume on a transmissive material

@@ -1,4 +1,4 @@
-//! `vkvcm bench render`: a fixed suite (scenes x estimators, fixed iterations) measuring
+//! `vkvcm-bench render`: a fixed suite (scenes x estimators, fixed iterations) measuring
 //! samples per wall second and per CPU-second of the whole process (user + sys from
 //! getrusage; on lavapipe the GPU work is CPU work of this process), and GPU
 //! time per kernel stage. Each row first renders one untimed warm-up iteration (it pays
@@ -11,9 +11,10 @@ use std::time::Instant;
 use anyhow::Result;
 use serde::Serialize;
 
-use crate::gpu::{Gpu, KernelTime};
-use crate::render::{render, Algorithm, Budget, Connect, RenderSettings, Renderer, Sampler};
-use crate::scene::Scene;
+use vkvcm::gpu::{Gpu, KernelTime};
+use vkvcm::render::converge::Variant;
+use vkvcm::render::{render, Algorithm, Budget, RenderSettings, Renderer};
+use vkvcm::scene::Scene;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct BenchRow {
@@ -78,11 +79,11 @@ pub struct Overrides {
     /// Paths per kernel invocation (src/render/regen.rs).
     pub paths_per_invocation: Option<u32>,
     /// How the kernels read their read-only buffers (src/render/reads.rs).
-    pub reads: Option<crate::render::reads::Reads>,
+    pub reads: Option<vkvcm::render::reads::Reads>,
     /// How splats are summed (src/render/atomics.rs).
-    pub atomics: Option<crate::render::atomics::SplatAtomics>,
+    pub atomics: Option<vkvcm::render::atomics::SplatAtomics>,
     /// How lights are picked (src/render/light_selection.rs).
-    pub light_selection: Option<crate::render::LightSelection>,
+    pub light_selection: Option<vkvcm::render::LightSelection>,
 }
 
 /// Renders `scene` with `variant` for 1 warm-up iteration, then `iterations` timed ones,
@@ -167,85 +168,6 @@ pub fn table(rows: &[BenchRow]) -> String {
     s
 }
 
-/// An estimator with its connection strategy, sampler and light subpaths per iteration,
-/// named `algo` (its defaults), then `:path` / `:cache:N` (`render --connect`; bpt, vcm),
-/// then `:independent` / `:sobol` (`render --sampler`), then `@N` for N light subpaths per
-/// iteration (`render --light-paths`; the light-subpath estimators), e.g. `bpt:cache:2`,
-/// `pt:independent`, `vcm:path:sobol` or `vcm@65536`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Variant {
-    pub algorithm: Algorithm,
-    pub connect: Connect,
-    pub sampler: Sampler,
-    /// `None`: one per pixel.
-    pub light_paths: Option<u32>,
-}
-
-impl Variant {
-    pub fn parse(s: &str) -> Result<Variant> {
-        let (name, light_paths) = match s.rsplit_once('@') {
-            Some((name, n)) => {
-                let n: u32 = n.parse().map_err(|_| anyhow::anyhow!("{s:?}: {n:?} is not a light-path count"))?;
-                (name, Some(n))
-            }
-            None => (s, None),
-        };
-        // algo[:connection strategy][:sampler]: a sampler is the last part.
-        let (rest, sampler) = match name.rsplit_once(':') {
-            Some((rest, c)) => match <Sampler as clap::ValueEnum>::from_str(c, false) {
-                Ok(sampler) => (rest, Some(sampler)),
-                Err(_) => (name, None),
-            },
-            None => (name, None),
-        };
-        let (a, c) = match rest.split_once(':') {
-            Some((a, c)) => (a, Some(c)),
-            None => (rest, None),
-        };
-        let algorithm = Algorithm::from_name(&a.to_ascii_lowercase())
-            .ok_or_else(|| anyhow::anyhow!("{s:?}: unknown estimator {a:?}"))?;
-        let requested = match c {
-            None => None,
-            Some(c) => Some(Connect::parse(c).ok_or_else(|| {
-                anyhow::anyhow!("{s:?}: {c:?} is not path or cache:N (N >= 1), nor sobol or independent")
-            })?),
-        };
-        let connect = algorithm.info().connect(requested).map_err(|e| anyhow::anyhow!("{s:?}: {e}"))?;
-        let sampler = sampler.unwrap_or(algorithm.info().sampler(None));
-        let v = Variant { algorithm, connect, sampler, light_paths };
-        // The estimator's own check of the light-path count (a 1x1 frame: sizes do not matter).
-        algorithm.info().check(&v.settings(1, 1, Budget::Iterations(1))).map_err(|e| anyhow::anyhow!("{s:?}: {e}"))?;
-        Ok(v)
-    }
-
-    /// `algo`, then `:path` / `:cache:N` for a strategy other than its default, then
-    /// `:sobol` / `:independent` for a sampler other than its default, then `@N` with a
-    /// light-path count.
-    pub fn name(&self) -> String {
-        let mut name = self.algorithm.name().to_string();
-        if self.connect != self.algorithm.default_connect() {
-            name += &format!(":{}", self.connect.name());
-        }
-        if self.sampler != self.algorithm.info().sampler(None) {
-            name += &format!(":{}", self.sampler.name());
-        }
-        if let Some(n) = self.light_paths {
-            name += &format!("@{n}");
-        }
-        name
-    }
-
-    /// Render settings of this variant (its strategy and light-path count; the rest
-    /// defaults).
-    pub fn settings(&self, width: u32, height: u32, budget: Budget) -> RenderSettings {
-        let mut s = RenderSettings::new(self.algorithm, width, height, budget);
-        s.connect = self.connect;
-        s.sampler = Some(self.sampler);
-        s.light_paths = self.light_paths;
-        s
-    }
-}
-
 /// One estimator's error after a fixed wall-clock budget (averaged over rounds).
 #[derive(Clone, Debug, Serialize)]
 pub struct EqualTimeRow {
@@ -275,16 +197,16 @@ pub struct EqualTimeRow {
 /// A long render used as the reference, with an estimate of its own remaining noise:
 /// the RMS over pixels and channels of the standard error of its per-pixel mean.
 pub struct Reference {
-    pub image: crate::image::Image,
+    pub image: vkvcm::image::Image,
     pub algorithm: Algorithm,
     pub iterations: u64,
     pub noise_rms: f64,
 }
 
-/// `iterations` in all, in two independent halves ([`crate::render::converge::render_reference`]).
+/// `iterations` in all, in two independent halves ([`vkvcm::render::converge::render_reference`]).
 pub fn reference(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, size: u32, iterations: u64) -> Result<Reference> {
     let s = RenderSettings::new(algo, size, size, Budget::Iterations(iterations));
-    let r = crate::render::converge::render_reference(gpu, scene, &s, None, &mut |_, _| {})?;
+    let r = vkvcm::render::converge::render_reference(gpu, scene, &s, None, &mut |_, _| {})?;
     Ok(Reference { image: r.image, algorithm: algo, iterations: r.iterations, noise_rms: r.stderr_rms })
 }
 
@@ -302,11 +224,11 @@ pub fn equal_time(
     let (w, h) = (reference.image.width, reference.image.height);
     let mut s = variant.settings(w, h, Budget::Seconds(seconds));
     s.frame.seed = seed;
-    let target = crate::render::converge::Target {
+    let target = vkvcm::render::converge::Target {
         image: &reference.image,
-        error: crate::render::converge::ReferenceError { rmse: Some(reference.noise_rms), rel_mse: None },
+        error: vkvcm::render::converge::ReferenceError { rmse: Some(reference.noise_rms), rel_mse: None },
     };
-    let rows = crate::render::converge::converge_one(gpu, scene, &s, &target, &[seconds], None, &mut |_| {})?;
+    let rows = vkvcm::render::converge::converge_one(gpu, scene, &s, &target, &[seconds], None, &mut |_| {})?;
     let row = rows.last().ok_or_else(|| anyhow::anyhow!("equal-time render of {} measured nothing", variant.name()))?;
     Ok(EqualTimeRow {
         scene: scene.name.clone(),
@@ -402,9 +324,9 @@ pub fn equal_time_table(rows: &[EqualTimeRow]) -> String {
     s
 }
 
-// ---- `vkvcm bench suite`: specialised against generic kernels (src/render/features.rs).
+// ---- `vkvcm-bench suite`: specialised against generic kernels (src/render/features.rs).
 
-/// The fixed suite of `vkvcm bench suite` (docs/performance.md): the four reference
+/// The fixed suite of `vkvcm-bench suite` (docs/performance.md): the four reference
 /// scenes x six estimators at 128x128, 8 rounds of 4 timed iterations per variant.
 pub const SUITE_SCENES: [&str; 4] = ["gbs_s", "glm_c", "gbs_p", "gbs_b"];
 pub const SUITE_ALGOS: [Algorithm; 6] =
@@ -426,7 +348,7 @@ pub struct VariantStats {
     pub rays_per_second: f64,
     pub rays_per_iteration: f64,
     /// GPU ms per iteration of each stage over all rounds.
-    pub stages: Vec<crate::gpu::StageTime>,
+    pub stages: Vec<vkvcm::gpu::StageTime>,
 }
 
 /// One scene and estimator, specialised and generic.
@@ -462,7 +384,7 @@ fn median(v: &mut [f64]) -> f64 {
     }
 }
 
-fn variant_stats(total: &crate::gpu::Profile, round_ms: &mut [f64], pixels: f64) -> VariantStats {
+fn variant_stats(total: &vkvcm::gpu::Profile, round_ms: &mut [f64], pixels: f64) -> VariantStats {
     let it = total.iterations.max(1) as f64;
     let med = median(round_ms);
     let rays = total.rays.unwrap_or(0) as f64;
@@ -493,16 +415,16 @@ pub fn suite_row(
     rounds: u32,
     per_round: u64,
 ) -> Result<SuiteRow> {
-    let make = |generic: bool| -> Result<crate::render::Renderer> {
+    let make = |generic: bool| -> Result<vkvcm::render::Renderer> {
         let mut s = RenderSettings::new(algo, size, size, Budget::Iterations(per_round));
         s.generic = generic;
         s.count_rays = true;
-        let mut r = crate::render::Renderer::new(gpu, scene, &s)?;
+        let mut r = vkvcm::render::Renderer::new(gpu, scene, &s)?;
         r.run(Budget::Iterations(1), None, &mut |_| {})?;
         Ok(r)
     };
     // Index 0: specialised, 1: generic; built in `first_generic` order.
-    let build = |first_generic: bool| -> Result<[crate::render::Renderer; 2]> {
+    let build = |first_generic: bool| -> Result<[vkvcm::render::Renderer; 2]> {
         Ok(if first_generic {
             let g = make(true)?;
             [make(false)?, g]
@@ -531,7 +453,7 @@ pub fn suite_row(
         ];
         all.iter().filter(|(_, on)| !on).map(|(n, _)| n.to_string()).collect()
     };
-    let mut totals = [crate::gpu::Profile::default(), crate::gpu::Profile::default()];
+    let mut totals = [vkvcm::gpu::Profile::default(), vkvcm::gpu::Profile::default()];
     let mut round_ms: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
     for round in 0..rounds {
         if round == rounds / 2 && round > 0 {
@@ -645,46 +567,5 @@ mod tests {
         // An even count takes the lower middle round.
         assert_eq!(median_of_rounds(&runs[..2])[0].samples_per_cpu_second, Some(1.0));
         assert!(median_of_rounds(&[]).is_empty());
-    }
-
-    #[test]
-    fn variant_names_parse_back() {
-        for s in [
-            "pt",
-            "vcm",
-            "bpt:path",
-            "bpt:cache:1",
-            "vcm:cache:4",
-            "vcm@65536",
-            "bpt:cache:2@100",
-            "pt:independent",
-            "vcm:path:independent",
-            "bpt:cache:2:independent@100",
-        ] {
-            let v = Variant::parse(s).unwrap();
-            assert_eq!(Variant::parse(&v.name()).unwrap(), v, "{s}");
-        }
-        assert_eq!(Variant::parse("bpt:cache:3").unwrap().connect, Connect::Cache(3));
-        assert_eq!(Variant::parse("bpt").unwrap().connect, Algorithm::Bpt.default_connect());
-        assert_eq!(Variant::parse("lt@1000").unwrap().light_paths, Some(1000));
-        let v = Variant::parse("vcm:path:independent").unwrap();
-        assert_eq!((v.connect, v.sampler), (Connect::Path, Sampler::Independent));
-        assert_eq!(Variant::parse("vcm:sobol").unwrap().name(), "vcm", "sobol is vcm's default");
-        for bad in [
-            "xyz",
-            "pt:cache:1",
-            "bpt:cache:0",
-            "bpt:cache",
-            "bpt:cache:x",
-            "bpt:other",
-            "pt@100",
-            "vcm@0",
-            "vcm@x",
-            "lt:sobol",
-            "el:sobol",
-            "pt:sobol:path",
-        ] {
-            assert!(Variant::parse(bad).is_err(), "{bad} accepted");
-        }
     }
 }

@@ -1,17 +1,29 @@
-//! `vkvcm bench ...`: render throughput, BVH traversal and equal-time error.
+//! `vkvcm-bench ...`: render throughput, BVH traversal and equal-time error (results for
+//! docs/performance.md and docs/bvh.md).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 use std::sync::Arc;
 
 use anyhow::{bail, Context, Result};
-use clap::{Args, Subcommand};
+use clap::{Args, Parser};
 
-use super::write_json;
-use vkvcm::gpu::Gpu;
+use vkvcm::gpu::{Gpu, GpuOptions};
 use vkvcm::render::{self, Algorithm};
 use vkvcm::scene;
 
-#[derive(Subcommand)]
+fn main() -> ExitCode {
+    match BenchCommand::parse().run() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+#[derive(Parser)]
+#[command(name = "vkvcm-bench", version, about = "Benchmarks of vkvcm (results for docs/performance.md)")]
 pub enum BenchCommand {
     /// Samples/s per wall second and per CPU-second, and GPU ms per kernel, for scenes x
     /// estimators at a fixed iteration count (after one warm-up iteration each).
@@ -45,19 +57,19 @@ pub struct BenchSuiteArgs {
     /// Estimators (the suite: all but el).
     #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm")]
     pub algos: Vec<Algorithm>,
-    #[arg(long, default_value_t = vkvcm::bench::render::SUITE_SIZE)]
+    #[arg(long, default_value_t = vkvcm_tools::bench::render::SUITE_SIZE)]
     pub size: u32,
     /// Rounds; each runs both variants, alternating which goes first (the renderers are
     /// rebuilt in the other order after half of them).
-    #[arg(long, default_value_t = vkvcm::bench::render::SUITE_ROUNDS)]
+    #[arg(long, default_value_t = vkvcm_tools::bench::render::SUITE_ROUNDS)]
     pub rounds: u32,
     /// Timed iterations per variant and round.
-    #[arg(long, default_value_t = vkvcm::bench::render::SUITE_ITERATIONS_PER_ROUND)]
+    #[arg(long, default_value_t = vkvcm_tools::bench::render::SUITE_ITERATIONS_PER_ROUND)]
     pub iterations: u64,
     #[arg(long)]
     pub json: Option<PathBuf>,
     #[command(flatten)]
-    pub gpu: super::GpuArgs,
+    pub gpu: GpuArgs,
 }
 
 #[derive(Args)]
@@ -70,8 +82,8 @@ pub struct BenchEqualTimeArgs {
     /// --sampler`), e.g. pt:independent, vcm:path:independent; `@N` after a
     /// light-subpath estimator sets N light subpaths per iteration (`render
     /// --light-paths`), e.g. vcm@16384.
-    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm", value_parser = vkvcm::bench::render::Variant::parse)]
-    pub algos: Vec<vkvcm::bench::render::Variant>,
+    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm", value_parser = vkvcm::render::converge::Variant::parse)]
+    pub algos: Vec<vkvcm::render::converge::Variant>,
     #[arg(long, default_value_t = 128)]
     pub size: u32,
     /// Wall-clock seconds per estimator and round.
@@ -90,7 +102,7 @@ pub struct BenchEqualTimeArgs {
     #[arg(long)]
     pub json: Option<PathBuf>,
     #[command(flatten)]
-    pub gpu: super::GpuArgs,
+    pub gpu: GpuArgs,
 }
 
 #[derive(Args)]
@@ -105,7 +117,7 @@ pub struct BenchTraverseArgs {
     #[arg(long, value_enum, default_value = "auto")]
     pub leaf_rule: vkvcm::bvh::LeafRule,
     #[command(flatten)]
-    pub gpu: super::GpuArgs,
+    pub gpu: GpuArgs,
 }
 
 #[derive(Args)]
@@ -143,8 +155,8 @@ pub struct BenchRenderArgs {
     /// `:independent` / `:sobol` for a sampler other than the default (`render
     /// --sampler`), e.g. vcm:independent; `@N` after a light-subpath estimator sets N
     /// light subpaths per iteration (`render --light-paths`), e.g. vcm@16384.
-    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm", value_parser = vkvcm::bench::render::Variant::parse)]
-    pub algos: Vec<vkvcm::bench::render::Variant>,
+    #[arg(long, value_delimiter = ',', default_value = "pt,lt,bpt,ppm,bpm,vcm", value_parser = vkvcm::render::converge::Variant::parse)]
+    pub algos: Vec<vkvcm::render::converge::Variant>,
     /// Image width and height.
     #[arg(long, default_value_t = 256)]
     pub size: u32,
@@ -173,7 +185,46 @@ pub struct BenchRenderArgs {
     #[arg(long)]
     pub json: Option<PathBuf>,
     #[command(flatten)]
-    pub gpu: super::GpuArgs,
+    pub gpu: GpuArgs,
+}
+
+/// The device options (as `vkvcm render` takes them).
+#[derive(Args, Clone, Debug)]
+pub struct GpuArgs {
+    /// Vulkan device: index or name substring (see `vkvcm devices`).
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Build every kernel afresh, neither reading nor writing the kernel cache
+    /// (docs/kernel-cache.md).
+    #[arg(long)]
+    pub no_kernel_cache: bool,
+}
+
+impl GpuArgs {
+    fn options(&self) -> GpuOptions {
+        let opts = GpuOptions::from_env(self.device.clone());
+        if self.no_kernel_cache {
+            GpuOptions { kernel_cache: None, ..opts }
+        } else {
+            opts
+        }
+    }
+}
+
+/// Fails early, before a long benchmark, when `path` cannot be written.
+fn check_writable(path: &Path) -> Result<()> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    tempfile::NamedTempFile::new_in(dir).map(drop).with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Writes `value` as pretty JSON, atomically.
+fn write_json<T: serde::Serialize>(p: &Path, value: &T) -> Result<()> {
+    let text = serde_json::to_string_pretty(value)?;
+    let dir = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let mut f = tempfile::NamedTempFile::new_in(dir).with_context(|| format!("cannot write {}", p.display()))?;
+    std::io::Write::write_all(&mut f, text.as_bytes())?;
+    f.persist(p).with_context(|| format!("cannot write {}", p.display()))?;
+    Ok(())
 }
 
 impl BenchCommand {
@@ -189,7 +240,7 @@ impl BenchCommand {
 }
 
 /// Opens the device for a benchmark and prints which one it is (results name it).
-fn open_bench_gpu(args: &super::GpuArgs) -> Result<Arc<Gpu>> {
+fn open_bench_gpu(args: &GpuArgs) -> Result<Arc<Gpu>> {
     let gpu = Gpu::new(&args.options())?;
     println!("device: {} ({}), Vulkan {}", gpu.info.name, gpu.info.driver, gpu.info.api_version);
     Ok(gpu)
@@ -198,11 +249,11 @@ fn open_bench_gpu(args: &super::GpuArgs) -> Result<Arc<Gpu>> {
 fn bench_traverse(a: BenchTraverseArgs) -> Result<()> {
     let gpu = open_bench_gpu(&a.gpu)?;
     let build = vkvcm::bvh::BuildOptions { leaf_rule: a.leaf_rule, ..Default::default() };
-    let opts = vkvcm::bench::traverse::TraverseBenchOptions { rays: a.rays.max(1), build, ..Default::default() };
+    let opts = vkvcm_tools::bench::traverse::TraverseBenchOptions { rays: a.rays.max(1), build, ..Default::default() };
     for name in &a.scenes {
-        let scene = vkvcm::bench::traverse::bench_scene(name)
+        let scene = vkvcm_tools::bench::traverse::bench_scene(name)
             .with_context(|| format!("unknown traversal scene {name:?} (cornell, spheres, displaced)"))?;
-        let report = vkvcm::bench::traverse::bench_traverse(&gpu, &scene, &opts)?;
+        let report = vkvcm_tools::bench::traverse::bench_traverse(&gpu, &scene, &opts)?;
         println!("{report}");
     }
     Ok(())
@@ -210,17 +261,17 @@ fn bench_traverse(a: BenchTraverseArgs) -> Result<()> {
 
 fn bench_bvh_build(a: BenchBvhBuildArgs) -> Result<()> {
     if let Some(p) = &a.json {
-        super::render::check_writable(p).context("--json")?;
+        check_writable(p).context("--json")?;
     }
     println!("BVH build on {} cores available", std::thread::available_parallelism().map_or(1, |n| n.get()));
     let mut rows = Vec::new();
     for name in &a.scenes {
-        let scene = vkvcm::bench::build::build_scene(name)?;
+        let scene = vkvcm_tools::bench::build::build_scene(name)?;
         if let Some(dir) = &a.export_triangles {
-            let path = vkvcm::bench::build::export_triangles(&scene, dir)?;
+            let path = vkvcm_tools::bench::build::export_triangles(&scene, dir)?;
             println!("{name}: triangles written to {}", path.display());
         }
-        for row in vkvcm::bench::build::bench_build(&scene, &a.threads, a.rounds, a.leaf_rule)? {
+        for row in vkvcm_tools::bench::build::bench_build(&scene, &a.threads, a.rounds, a.leaf_rule)? {
             println!("{row}");
             rows.push(row);
         }
@@ -240,7 +291,7 @@ fn bench_equal_time(a: BenchEqualTimeArgs) -> Result<()> {
     for name in &a.scenes {
         let scene = scene::load_named(name)?;
         eprintln!("{name}: reference, {} x {} iterations ...", a.reference_algo.name(), a.reference_iterations);
-        let r = vkvcm::bench::render::reference(&gpu, &scene, a.reference_algo, a.size, a.reference_iterations)?;
+        let r = vkvcm_tools::bench::render::reference(&gpu, &scene, a.reference_algo, a.size, a.reference_iterations)?;
         println!(
             "{name}: reference {} x {} iterations at {}x{}, its own noise (RMS standard error) {:.5}",
             r.algorithm.name(),
@@ -249,14 +300,14 @@ fn bench_equal_time(a: BenchEqualTimeArgs) -> Result<()> {
             a.size,
             r.noise_rms
         );
-        let mut log = |row: &vkvcm::bench::render::EqualTimeRow| {
+        let mut log = |row: &vkvcm_tools::bench::render::EqualTimeRow| {
             eprintln!("{name} {}: RMSE {:.5}, {} iterations", row.algorithm, row.rmse, row.iterations)
         };
-        rows.extend(vkvcm::bench::render::equal_time_rounds(
+        rows.extend(vkvcm_tools::bench::render::equal_time_rounds(
             &gpu, &scene, &a.algos, a.seconds, a.rounds, &r, &mut log,
         )?);
     }
-    print!("{}", vkvcm::bench::render::equal_time_table(&rows));
+    print!("{}", vkvcm_tools::bench::render::equal_time_table(&rows));
     if let Some(p) = &a.json {
         write_json(p, &rows)?;
     }
@@ -268,14 +319,14 @@ fn bench_suite(a: BenchSuiteArgs) -> Result<()> {
         bail!("--size, --rounds and --iterations must be at least 1");
     }
     if let Some(p) = &a.json {
-        super::render::check_writable(p).context("--json")?;
+        check_writable(p).context("--json")?;
     }
     let gpu = open_bench_gpu(&a.gpu)?;
     let mut rows = Vec::new();
     for name in &a.scenes {
         let scene = scene::load_named(name)?;
         for &algo in &a.algos {
-            let row = vkvcm::bench::render::suite_row(&gpu, &scene, algo, a.size, a.rounds, a.iterations)
+            let row = vkvcm_tools::bench::render::suite_row(&gpu, &scene, algo, a.size, a.rounds, a.iterations)
                 .with_context(|| format!("benchmarking {} on {name}", algo.name()))?;
             eprintln!(
                 "{} {}: specialised {:.2} ms/it, generic {:.2} ms/it, speedup {:.3} ({:.2}-{:.2})",
@@ -290,7 +341,7 @@ fn bench_suite(a: BenchSuiteArgs) -> Result<()> {
             rows.push(row);
         }
     }
-    print!("{}", vkvcm::bench::render::suite_table(&rows));
+    print!("{}", vkvcm_tools::bench::render::suite_table(&rows));
     if let Some(p) = &a.json {
         write_json(p, &rows)?;
     }
@@ -303,7 +354,7 @@ fn bench_render(a: BenchRenderArgs) -> Result<()> {
     }
     let gpu = open_bench_gpu(&a.gpu)?;
     let scenes = a.scenes.iter().map(|n| Ok((n, scene::load_named(n)?))).collect::<Result<Vec<_>>>()?;
-    let overrides = vkvcm::bench::render::Overrides {
+    let overrides = vkvcm_tools::bench::render::Overrides {
         paths_per_invocation: a.paths_per_invocation,
         reads: a.reads,
         atomics: a.atomics,
@@ -315,7 +366,7 @@ fn bench_render(a: BenchRenderArgs) -> Result<()> {
         for (name, scene) in &scenes {
             for &variant in &a.algos {
                 let size = (a.size, a.size);
-                let row = vkvcm::bench::render::bench_one(&gpu, scene, variant, size, a.iterations, overrides)
+                let row = vkvcm_tools::bench::render::bench_one(&gpu, scene, variant, size, a.iterations, overrides)
                     .with_context(|| format!("benchmarking {} on {name}", variant.name()))?;
                 let cpu = row.samples_per_cpu_second.map_or("-".into(), |c| format!("{c:.0}"));
                 eprintln!(
@@ -327,8 +378,8 @@ fn bench_render(a: BenchRenderArgs) -> Result<()> {
         }
         runs.push(rows);
     }
-    let rows = vkvcm::bench::render::median_of_rounds(&runs);
-    print!("{}", vkvcm::bench::render::table(&rows));
+    let rows = vkvcm_tools::bench::render::median_of_rounds(&runs);
+    print!("{}", vkvcm_tools::bench::render::table(&rows));
     if let Some(p) = &a.json {
         write_json(p, &rows)?;
     }

@@ -1,4 +1,4 @@
-//! Traversal benchmark (`vkvcm bench traverse`) and the scenes it runs on.
+//! Traversal benchmark (`vkvcm-bench traverse`) and the scenes it runs on.
 //!
 //! [`bench_traverse`] builds the BVH (timed), uploads it, and measures closest-hit and
 //! any-hit traversal on the GPU for 2^20 camera rays (a pinhole camera, one ray per pixel
@@ -18,10 +18,10 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use serde::Serialize;
 
-use crate::bvh::traverse::{any_hit_counted, closest_hit_counted};
-use crate::bvh::{build_with, Aabb, BuildOptions, Ray};
-use crate::gpu::{groups_for, Bind, Gpu, Profile};
-use crate::scene::{Sphere, Triangle};
+use vkvcm::bvh::traverse::{any_hit_counted, closest_hit_counted};
+use vkvcm::bvh::{build_with, Aabb, BuildOptions, Ray};
+use vkvcm::gpu::{groups_for, Bind, Gpu, Profile};
+use vkvcm::scene::{Sphere, Triangle};
 
 /// Small deterministic generator (PCG32, O'Neill 2014) so the library needs no `rand`.
 #[derive(Clone, Debug)]
@@ -484,7 +484,7 @@ pub(crate) fn process_cpu_seconds() -> Option<f64> {
     Some(ticks / 100.0) // USER_HZ is 100 on Linux
 }
 
-/// One ray as the benchmark kernels read it (`glsl/bvh_bench.comp`, and the ray-query
+/// One ray as the benchmark kernels read it (`glsl/tests/bvh_bench.comp`, and the ray-query
 /// comparison in `examples/rayquery_bench/`): origin and direction, `w` unused.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -553,7 +553,7 @@ pub fn bench_traverse(gpu: &Arc<Gpu>, scene: &BenchScene, opts: &TraverseBenchOp
             let mut defines = vec![("MODE", m.as_str()), ("LOCAL_SIZE", ls.as_str())];
             defines.extend(bvh_defines.iter().map(|(k, v)| (*k, v.as_str())));
             let binds = [Bind::own(&nodes), Bind::own(&prims), Bind::own(&ray_buf), Bind::own(&out)];
-            let k = gpu.kernel("bvh_bench.comp", &defines, &binds)?;
+            let k = gpu.kernel("tests/bvh_bench.comp", &defines, &binds)?;
             let groups = [groups_for(n, opts.local_size), 1, 1];
             let mut batch = gpu.batch()?;
             // Warm-up: pays lavapipe's shader compile and faults the buffers in.

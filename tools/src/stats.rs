@@ -42,10 +42,10 @@
 //! across seeds. Use enough samples per pixel per render that fireflies are not the whole
 //! story, or downsample.
 
-use super::{false_color_error, write_exr, write_png, Image};
 use anyhow::{anyhow, bail, Result};
 use std::fmt;
 use std::path::{Path, PathBuf};
+use vkvcm::image::{error_ramp, false_color_error, write_exr, write_png, Image};
 
 /// Relative difference of two means below which a test passes regardless of variance.
 pub const EQUAL_RELATIVE: f64 = 1e-6;
@@ -244,7 +244,7 @@ impl ZTest {
         let z_ramp = abs_z.map(|z| {
             let worst =
                 z.iter().copied().fold(0.0f32, |m, v| if v.is_nan() || m.is_nan() { f32::NAN } else { m.max(v) });
-            super::error_ramp(if worst.is_nan() { f32::NAN } else { worst / thr })
+            error_ramp(if worst.is_nan() { f32::NAN } else { worst / thr })
         });
         write_png(&dir.join("z.png"), &z_ramp, 1.0)?;
         Ok(dir)

@@ -1,4 +1,4 @@
-//! BVH build benchmark (`vkvcm bench bvh-build`): wall-clock build seconds per million
+//! BVH build benchmark (`vkvcm-bench bvh-build`): wall-clock build seconds per million
 //! triangles, per thread count, on generated meshes of 1M and 4M triangles or on loaded
 //! scenes; and whether every thread count built the same BVH.
 //!
@@ -6,7 +6,7 @@
 //! traversal scenes ([`super::traverse::bench_scene`]); `spheres-4m` (16,384 UV spheres,
 //! 4,194,304 triangles) and `displaced-4m` (cube-sphere of 578^2 * 12 = 4,009,008
 //! triangles) are the same kinds at four times the size. Anything else is loaded as a
-//! scene ([`crate::scene::load_named`]: a built-in name or a glTF path). No GPU is used.
+//! scene ([`vkvcm::scene::load_named`]: a built-in name or a glTF path). No GPU is used.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -15,8 +15,8 @@ use anyhow::{bail, Context, Result};
 use serde::Serialize;
 
 use super::traverse::{bench_scene, displaced_sphere, process_cpu_seconds, sphere_grid};
-use crate::bvh::{build_instanced, BuildOptions, Bvh, LeafRule};
-use crate::scene::{self, Instance, SharedMesh, Sphere, Triangle};
+use vkvcm::bvh::{build_instanced, BuildOptions, Bvh, LeafRule};
+use vkvcm::scene::{self, Instance, SharedMesh, Sphere, Triangle};
 
 /// The generated meshes [`build_scene`] knows.
 pub const BUILD_SCENES: &[&str] = &["spheres", "displaced", "spheres-4m", "displaced-4m"];
@@ -24,7 +24,7 @@ pub const BUILD_SCENES: &[&str] = &["spheres", "displaced", "spheres-4m", "displ
 /// The primitives of one benchmark scene.
 pub struct BuildScene {
     pub name: String,
-    /// World-space triangles, then the shared meshes' (see [`crate::scene::Scene`]).
+    /// World-space triangles, then the shared meshes' (see [`vkvcm::scene::Scene`]).
     pub triangles: Vec<Triangle>,
     pub spheres: Vec<Sphere>,
     pub meshes: Vec<SharedMesh>,
