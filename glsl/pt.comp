@@ -32,117 +32,148 @@ const uint RR_MIN_LENGTH = 3u;
 #include "film.glsl"
 #include "path_sampler.glsl"
 
+// The state of the path being traced.
+struct PtPath {
+    vec3 o, d;          // ray origin (already offset) and direction
+    vec3 thr;           // throughput
+    uint len;           // segments so far
+    // The surface the current segment leaves (its material and geometric normal; the
+    // camera: NO_MATERIAL), for the segment's transmittance (glsl/medium.glsl).
+    uint from_material;
+    vec3 from_ng;
+    float last_pdf;     // solid-angle pdf of the last BSDF sample, for MIS at emitters
+    bool last_specular;
+    float eta_scale;    // refraction's radiance scaling, undone for the roulette
+};
+
+// Starts the path of `pixel`.
+void start_path(uint pixel, out PtPath path, out PathSampler ps) {
+    ps = path_sampler(pixel);
+    path.o = params.cam_pos.xyz;
+    path.d = camera_sample_at(pixel, sample_2d(ps, DIM2_PIXEL));
+    path.thr = vec3(1.0);
+    path.last_pdf = 1.0;
+    path.eta_scale = 1.0;
+    path.last_specular = true;
+    path.len = 1u;
+    path.from_material = NO_MATERIAL;
+    path.from_ng = vec3(0.0);
+}
+
+// ---- The stages of a vertex, in the order main() runs them.
+
+// The path left the scene: the segment's transmittance and the background's emission,
+// weighted against next-event estimation.
+void add_background(inout PtPath path, inout vec3 L) {
+    path.thr *= segment_transmittance(path.from_material, path.from_ng, NO_MATERIAL, vec3(0.0), path.d, 1e30);
+    uint bg = background_light();
+    if (bg != NO_LIGHT && path.len >= min_path_length()) {
+        float dpdf, epdf;
+        vec3 Le = background_radiance(bg, path.d, dpdf, epdf);
+        float wgt = (NEE == 0 || path.last_specular) ? 1.0 : balance(path.last_pdf, light_pick_prob(bg) * dpdf);
+        L += path.thr * Le * wgt;
+    }
+}
+
+// The path hit an emitter at surface `s`: its emission, weighted against next-event
+// estimation.
+void add_emission(PtPath path, Hit h, Surface s, inout vec3 L) {
+    if (s.light != NO_LIGHT && path.len >= min_path_length()) {
+        float dpdf_a, epdf;
+        vec3 Le = area_light_radiance(s.light, h.u, h.v, path.d, dpdf_a, epdf);
+        if (max3(Le) > 0.0) {
+            float cos_l = abs(dot(s.ng, path.d));
+            float dpdf_w = dpdf_a * h.t * h.t / cos_l;
+            float wgt =
+                (NEE == 0 || path.last_specular) ? 1.0 : balance(path.last_pdf, light_pick_prob(s.light) * dpdf_w);
+            L += path.thr * Le * wgt;
+        }
+    }
+}
+
+#if NEE
+// Next-event estimation at a non-delta vertex: one light sample, weighted against BSDF
+// sampling.
+void connect_to_lights(PtPath path, Surface s, Bsdf b, inout PathSampler ps, inout vec3 L) {
+    uint li = pick_light_at(sample_1d(ps, DIM1_PICK(path.len)));
+    float pick = light_pick_prob(li);
+    LightSample ls = light_illuminate(li, s.p, sample_2d(ps, DIM2_LIGHT(path.len)));
+    if (!ls.ok) return;
+    float pf, pr;
+    vec3 f = bsdf_eval(b, ls.wi, pf, pr);
+    if (max3(f) <= 0.0) return;
+    if (!light_sample_visible(s.p, s.ng, ls)) return;
+    float wgt = ls.delta ? 1.0 : balance(pick * ls.pdf_w, pf);
+    float cos_x = bsdf_cos(b, ls.wi);
+    vec3 tr = segment_transmittance(s.material, s.ng, NO_MATERIAL, vec3(0.0), ls.wi, ls.dist);
+    L += path.thr * tr * f * ls.radiance * (wgt * cos_x / (pick * ls.pdf_w));
+}
+#endif
+
+// Samples the next direction and plays Russian roulette; false when the path ends.
+bool continue_path(inout PtPath path, Surface s, Bsdf b, inout PathSampler ps) {
+    BsdfSample bs = bsdf_sample(b, sample_bsdf_at(ps, path.len));
+    if (!bs.ok) return false;
+    path.thr *= bs.weight;
+    // Refraction scales radiance by eta_ratio^2 (bsdf.glsl); the roulette undoes it.
+    if (dot(bs.wi, b.ng) * dot(b.wo, b.ng) < 0.0) path.eta_scale /= b.eta_ratio * b.eta_ratio;
+    path.last_pdf = bs.pdf;
+    path.last_specular = bs.specular;
+    if (max3(path.thr) <= 0.0) return false;
+    // Russian roulette as pbrt-v4 (PathIntegrator::Li): from vertex RR_MIN_LENGTH on,
+    // end the path with probability q = max(0, 1 - maxcomp(throughput * eta_scale))
+    // and divide the throughput by 1 - q. Not part of the MIS pdfs (as pbrt-v4).
+    if (path.len >= RR_MIN_LENGTH) {
+        float p = max3(path.thr) * path.eta_scale;
+        if (p < 1.0) {
+            if (sample_1d(ps, DIM1_ROULETTE(path.len)) >= p) return false;
+            path.thr /= p;
+        }
+    }
+    path.o = offset_ray(s.p, s.ng, bs.wi, scene_radius());
+    path.d = bs.wi;
+    path.from_material = s.material;
+    path.from_ng = s.ng;
+    path.len++;
+    return true;
+}
+
 void main() {
     uint stride = regen_stride(push.count, push.paths_per_invocation);
     uint pixel = invocation_index();
     if (pixel >= stride) return;
     uint max_len = max_path_length();
-    uint min_len = min_path_length();
+    PtPath path;
     PathSampler ps;
-    uint len;
-    vec3 o, d, thr, L;
-    // The surface the current segment leaves (its material and geometric normal; the
-    // camera: NO_MATERIAL), for the segment's transmittance (glsl/medium.glsl).
-    uint from_material;
-    vec3 from_ng;
-    float last_pdf, eta_scale;
-    bool last_specular;
-    bool alive = false;
-    bool started = false;
+    start_path(pixel, path, ps);
+    vec3 L = vec3(0.0);
+    bool alive = true;
     // One loop iteration = one vertex of the current path; a path that ends adds its
     // pixel's value to the film, and the next one starts in the same iteration.
     while (true) {
         if (!alive) {
-            if (started) {
-                film_add(pixel, L);
-                pixel += stride;
-                if (pixel >= push.count) break;
-            }
-            started = true;
-            ps = path_sampler(pixel);
-            o = params.cam_pos.xyz;
-            d = camera_sample_at(pixel, sample_2d(ps, DIM2_PIXEL));
-            thr = vec3(1.0);
+            film_add(pixel, L);
+            pixel += stride;
+            if (pixel >= push.count) break;
+            start_path(pixel, path, ps);
             L = vec3(0.0);
-            last_pdf = 1.0;
-            eta_scale = 1.0;
-            last_specular = true;
-            len = 1u;
-            from_material = NO_MATERIAL;
-            from_ng = vec3(0.0);
         }
         alive = false;
         Hit h;
-        if (!trace_path_segment(o, d, len == 1u, h)) {
-            thr *= segment_transmittance(from_material, from_ng, NO_MATERIAL, vec3(0.0), d, 1e30);
-            uint bg = background_light();
-            if (bg != NO_LIGHT && len >= min_len) {
-                float dpdf, epdf;
-                vec3 Le = background_radiance(bg, d, dpdf, epdf);
-                float wgt = (NEE == 0 || last_specular) ? 1.0 : balance(last_pdf, light_pick_prob(bg) * dpdf);
-                L += thr * Le * wgt;
-            }
+        if (!trace_path_segment(path.o, path.d, path.len == 1u, h)) {
+            add_background(path, L);
             continue;
         }
-        Surface s = surface_at(h, o, d);
-        thr *= segment_transmittance(from_material, from_ng, s.material, s.ng, d, h.t);
-        if (s.light != NO_LIGHT && len >= min_len) {
-            float dpdf_a, epdf;
-            vec3 Le = area_light_radiance(s.light, h.u, h.v, d, dpdf_a, epdf);
-            if (max3(Le) > 0.0) {
-                float cos_l = abs(dot(s.ng, d));
-                float dpdf_w = dpdf_a * h.t * h.t / cos_l;
-                float wgt =
-                    (NEE == 0 || last_specular) ? 1.0 : balance(last_pdf, light_pick_prob(s.light) * dpdf_w);
-                L += thr * Le * wgt;
-            }
-        }
-        if (len >= max_len) continue;
-        Bsdf b = bsdf_init(s.material, s.ng, s.ns, -d, false, s.tint);
+        Surface s = surface_at(h, path.o, path.d);
+        path.thr *= segment_transmittance(path.from_material, path.from_ng, s.material, s.ng, path.d, h.t);
+        add_emission(path, h, s, L);
+        if (path.len >= max_len) continue;
+        Bsdf b = bsdf_init(s.material, s.ng, s.ns, -path.d, false, s.tint);
         if (!b.valid) continue;
 #if NEE
-        if (!b.delta && len + 1u >= min_len) {
-            uint li = pick_light_at(sample_1d(ps, DIM1_PICK(len)));
-            float pick = light_pick_prob(li);
-            LightSample ls = light_illuminate(li, s.p, sample_2d(ps, DIM2_LIGHT(len)));
-            if (ls.ok) {
-                float pf, pr;
-                vec3 f = bsdf_eval(b, ls.wi, pf, pr);
-                if (max3(f) > 0.0) {
-                    if (light_sample_visible(s.p, s.ng, ls)) {
-                        float wgt = ls.delta ? 1.0 : balance(pick * ls.pdf_w, pf);
-                        float cos_x = bsdf_cos(b, ls.wi);
-                        vec3 tr = segment_transmittance(s.material, s.ng, NO_MATERIAL, vec3(0.0), ls.wi, ls.dist);
-                        L += thr * tr * f * ls.radiance * (wgt * cos_x / (pick * ls.pdf_w));
-                    }
-                }
-            }
-        }
+        if (!b.delta && path.len + 1u >= min_path_length()) connect_to_lights(path, s, b, ps, L);
 #endif
-        BsdfSample bs = bsdf_sample(b, sample_bsdf_at(ps, len));
-        if (!bs.ok) continue;
-        thr *= bs.weight;
-        // Refraction scales radiance by eta_ratio^2 (bsdf.glsl); the roulette undoes it.
-        if (dot(bs.wi, b.ng) * dot(b.wo, b.ng) < 0.0) eta_scale /= b.eta_ratio * b.eta_ratio;
-        last_pdf = bs.pdf;
-        last_specular = bs.specular;
-        if (max3(thr) <= 0.0) continue;
-        // Russian roulette as pbrt-v4 (PathIntegrator::Li): from vertex RR_MIN_LENGTH on,
-        // end the path with probability q = max(0, 1 - maxcomp(throughput * eta_scale))
-        // and divide the throughput by 1 - q. Not part of the MIS pdfs (as pbrt-v4).
-        if (len >= RR_MIN_LENGTH) {
-            float p = max3(thr) * eta_scale;
-            if (p < 1.0) {
-                if (sample_1d(ps, DIM1_ROULETTE(len)) >= p) continue;
-                thr /= p;
-            }
-        }
-        o = offset_ray(s.p, s.ng, bs.wi, scene_radius());
-        d = bs.wi;
-        from_material = s.material;
-        from_ng = s.ng;
-        len++;
-        alive = true;
+        alive = continue_path(path, s, b, ps);
     }
     COUNT_RAYS_FLUSH();
 }
