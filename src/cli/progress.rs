@@ -103,11 +103,13 @@ pub struct Reporter {
     base_seconds: f64,
     base_iterations: u64,
     last_line: f64,
+    /// --quiet: no bar, no progress lines; only warnings among the notes.
+    quiet: bool,
 }
 
 impl Reporter {
-    pub fn new(budget: Budget, base_iterations: u64, base_seconds: f64) -> Self {
-        let bar = std::io::stderr().is_terminal().then(|| {
+    pub fn new(budget: Budget, base_iterations: u64, base_seconds: f64, quiet: bool) -> Self {
+        let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
             let total = match budget {
                 Budget::Iterations(n) => n,
                 Budget::Seconds(_) => 1000,
@@ -119,10 +121,13 @@ impl Reporter {
             );
             b
         });
-        Reporter { bar, budget, base_seconds, base_iterations, last_line: -1.0 }
+        Reporter { bar, budget, base_seconds, base_iterations, last_line: -1.0, quiet }
     }
 
     pub fn update(&mut self, p: &Progress, pixels: f64) {
+        if self.quiet {
+            return;
+        }
         let seconds = p.seconds - self.base_seconds;
         let fraction = match self.budget {
             Budget::Iterations(n) => p.iterations as f64 / n as f64,
@@ -148,6 +153,9 @@ impl Reporter {
 
     /// A line that does not disturb the bar.
     pub fn note(&self, line: &str) {
+        if self.quiet && !line.starts_with("warning") {
+            return;
+        }
         match &self.bar {
             Some(b) => b.println(line),
             None => eprintln!("{line}"),

@@ -8,6 +8,7 @@ use std::time::Instant;
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 
+use super::exit::{Class, ClassifyExt};
 use super::progress::Reporter;
 use vkvcm::gpu::Gpu;
 use vkvcm::image::{self, Image};
@@ -143,8 +144,12 @@ pub struct RenderArgs {
     #[arg(long, value_enum)]
     pub atomics: Option<render::atomics::SplatAtomics>,
     /// Print the feature set the kernels are compiled with and the buffers allocated.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "quiet")]
     pub verbose: bool,
+    /// Print no progress and no summary: only warnings and errors (the exit code says how
+    /// it ended: README.md).
+    #[arg(long, short = 'q')]
+    pub quiet: bool,
     #[command(flatten)]
     pub gpu: super::GpuArgs,
 }
@@ -285,46 +290,51 @@ fn check_args(a: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
-pub fn render_cmd(a: RenderArgs) -> Result<()> {
-    check_args(&a)?;
-    let scene = load_scene(&a)?;
+/// Renders; `Some(Class::Interrupted)` when SIGINT or SIGTERM stopped it (what was
+/// rendered is written).
+pub fn render_cmd(a: RenderArgs) -> Result<Option<Class>> {
+    check_args(&a).class(Class::Usage)?;
+    let scene = load_scene(&a).class(Class::Scene)?;
     let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}_{}.exr", scene.name, a.algo.name())));
     check_writable(&output).context("--output")?;
     if let Some(p) = &a.png {
         check_writable(p).context("--png")?;
     }
-    let settings = render_settings(&a)?;
+    let settings = render_settings(&a).class(Class::Usage)?;
     if let Some(p) = &a.profile_json {
         check_writable(p).context("--profile-json")?;
     }
     let camera = a.camera.clone().unwrap_or_else(|| "default".into());
     let mut provenance = saved::Provenance::new(&scene, &camera, "");
-    let saved = read_resumed(&a, &output, &settings, &provenance)?;
+    let saved = read_resumed(&a, &output, &settings, &provenance).class(Class::Usage)?;
     if let (Some(s), Budget::Iterations(n)) = (&saved, settings.budget) {
         if s.iterations >= n {
-            eprintln!(
-                "{} already has {} iterations (asked for {n} in total): nothing to do",
-                output.display(),
-                s.iterations
+            say(
+                &a,
+                &format!(
+                    "{} already has {} iterations (asked for {n} in total): nothing to do",
+                    output.display(),
+                    s.iterations
+                ),
             );
-            return Ok(());
+            return Ok(None);
         }
     }
 
-    let gpu = Gpu::new(&a.gpu.options())?;
-    eprintln!("device: {} ({})", gpu.info.name, gpu.info.driver);
+    let gpu = a.gpu.open()?;
+    say(&a, &format!("device: {} ({})", gpu.info.name, gpu.info.driver));
     provenance.device = gpu.info.name.clone();
     let mut r = prepare_renderer(&a, &gpu, &scene, &settings)?;
     if let Some(s) = &saved {
         r.resume_saved(s)?;
-        eprintln!("resuming {} at iteration {} ({:.1} s rendered)", output.display(), s.iterations, s.seconds);
+        say(&a, &format!("resuming {} at iteration {} ({:.1} s rendered)", output.display(), s.iterations, s.seconds));
     }
     let file = OutputFile { path: &output, settings: &settings, provenance: &provenance };
     let on_disk = saved.as_ref().map_or(0, |s| s.iterations);
     let out = render_slices(&a, &mut r, &scene.name, &file, on_disk)?;
     if out.iterations == 0 {
         eprintln!("interrupted before the first iteration finished: nothing written");
-        std::process::exit(130);
+        return Ok(Some(Class::Interrupted));
     }
     write_outputs(&a, &r, &scene, &file, &out, saved.as_ref())?;
     drop(r);
@@ -333,7 +343,14 @@ pub fn render_cmd(a: RenderArgs) -> Result<()> {
     if !msgs.list().is_empty() {
         bail!("{} Vulkan validation message(s) (printed above)", msgs.list().len());
     }
-    Ok(())
+    Ok(out.interrupted.then_some(Class::Interrupted))
+}
+
+/// An informational line on stderr, left out with --quiet.
+fn say(a: &RenderArgs, line: &str) {
+    if !a.quiet {
+        eprintln!("{line}");
+    }
 }
 
 /// The scene with the view and environment options applied; prints the loader's warnings.
@@ -406,14 +423,16 @@ fn prepare_renderer(
     scene: &scene::Scene,
     settings: &RenderSettings,
 ) -> Result<Renderer> {
-    Renderer::plan_for(gpu, scene, settings).map_err(|e| {
-        let mpl = if a.algo.info().techniques.light_subpaths {
-            format!(" --max-path-length {}", a.max_path_length)
-        } else {
-            String::new()
-        };
-        anyhow!("--width {} --height {}{mpl}: {e:#}", a.width, a.height)
-    })?;
+    Renderer::plan_for(gpu, scene, settings)
+        .map_err(|e| {
+            let mpl = if a.algo.info().techniques.light_subpaths {
+                format!(" --max-path-length {}", a.max_path_length)
+            } else {
+                String::new()
+            };
+            anyhow!("--width {} --height {}{mpl}: {e:#}", a.width, a.height)
+        })
+        .class(Class::Memory)?;
     let r = Renderer::new(gpu, scene, settings)
         .with_context(|| format!("preparing {} with {}", scene.name, a.algo.name()))?;
     if a.verbose {
@@ -458,7 +477,7 @@ fn render_slices(
     let budget = file.settings.budget;
     let cancel = install_interrupt();
     let pixels = (a.width as u64 * a.height as u64) as f64;
-    let mut reporter = Reporter::new(budget, r.iterations(), r.seconds());
+    let mut reporter = Reporter::new(budget, r.iterations(), r.seconds(), a.quiet);
     let mut slice = a.checkpoint_every.unwrap_or(0.0);
     let start = Instant::now();
     let mut last: Option<RenderOutput> = None;
@@ -543,13 +562,16 @@ fn write_outputs(
     let pixels = (a.width as u64 * a.height as u64) as f64;
     let new_seconds = out.seconds - saved.map_or(0.0, |s| s.seconds);
     let new_iterations = out.iterations - saved.map_or(0, |s| s.iterations);
-    eprintln!(
-        "{} iterations in {:.2} s ({:.0} samples/s){}; wrote {}",
-        out.iterations,
-        out.seconds,
-        new_iterations as f64 * pixels / new_seconds.max(1e-9),
-        if out.interrupted { " (interrupted)" } else { "" },
-        file.path.display()
+    say(
+        a,
+        &format!(
+            "{} iterations in {:.2} s ({:.0} samples/s){}; wrote {}",
+            out.iterations,
+            out.seconds,
+            new_iterations as f64 * pixels / new_seconds.max(1e-9),
+            if out.interrupted { " (interrupted)" } else { "" },
+            file.path.display()
+        ),
     );
     if out.rejected_samples > 0 {
         eprintln!("warning: {} sample(s) were NaN, infinite or negative and were rejected", out.rejected_samples);
@@ -560,7 +582,7 @@ fn write_outputs(
     if let Some(p) = &a.png {
         let img = Image { width: out.width, height: out.height, data: out.pixels.clone() };
         image::write_png(p, &img, a.exposure)?;
-        eprintln!("wrote {}", p.display());
+        say(a, &format!("wrote {}", p.display()));
     }
     if a.profile {
         eprint!("{}", out.profile.report());
@@ -570,7 +592,7 @@ fn write_outputs(
         report.paths_per_invocation = Some(r.paths_per_invocation());
         report.reads = Some(r.reads().name().to_string());
         super::write_json(p, &report).context("--profile-json")?;
-        eprintln!("wrote {}", p.display());
+        say(a, &format!("wrote {}", p.display()));
     }
     Ok(())
 }

@@ -129,6 +129,15 @@ impl Renderer {
     /// The plan of sizes of a render of `scene` with `settings` on `gpu`, checked against
     /// the device: what [`Renderer::new`] allocates, refused before anything is.
     pub fn plan_for(gpu: &Gpu, scene: &Scene, settings: &RenderSettings) -> Result<plan::FramePlan> {
+        let plan = Self::plan_sizes(gpu, scene, settings)?;
+        let (frame, info) = (&settings.frame, settings.algorithm.info());
+        plan.check(gpu, &format!("a {}x{} {} render", frame.width, frame.height, info.name))?;
+        Ok(plan)
+    }
+
+    /// The plan of sizes [`Renderer::plan_for`] checks, before that check: what
+    /// `vkvcm info` shows of a frame that may not fit the device.
+    pub fn plan_sizes(gpu: &Gpu, scene: &Scene, settings: &RenderSettings) -> Result<plan::FramePlan> {
         let info = settings.algorithm.info();
         let frame = &settings.frame;
         settings.check()?;
@@ -159,7 +168,6 @@ impl Renderer {
         let limits = sizes::SizeLimits::of(gpu);
         plan.scene.chunk_if_over_binding(&limits, device_addresses);
         plan.fit_light_vertex_capacity(&limits);
-        plan.check(gpu, &format!("a {}x{} {} render", frame.width, frame.height, info.name))?;
         Ok(plan)
     }
 
