@@ -46,6 +46,18 @@ impl<T, E: Into<anyhow::Error>> ClassifyExt<T> for Result<T, E> {
     }
 }
 
+/// `r`, with an error that says the device ran out of memory (src/gpu/buffer.rs's and
+/// vk_error_text's words) tagged as a memory failure: for the allocation of a render's
+/// buffers, whose plan fitted the heap but not what is free of it.
+pub fn memory_if_out_of_memory<T>(r: anyhow::Result<T>) -> anyhow::Result<T> {
+    match r {
+        Err(e) if ["out of device memory", "out of host memory"].iter().any(|w| format!("{e:#}").contains(w)) => {
+            Err(e).class(Class::Memory)
+        }
+        r => r,
+    }
+}
+
 /// The class of `e`: its tag, else out of memory where Vulkan said so, else `Other`.
 pub fn class_of(e: &anyhow::Error) -> Class {
     if let Some(c) = e.downcast_ref::<Classified>() {

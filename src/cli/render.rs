@@ -433,8 +433,9 @@ fn prepare_renderer(
             anyhow!("--width {} --height {}{mpl}: {e:#}", a.width, a.height)
         })
         .class(Class::Memory)?;
-    let r = Renderer::new(gpu, scene, settings)
-        .with_context(|| format!("preparing {} with {}", scene.name, a.algo.name()))?;
+    let r = super::exit::memory_if_out_of_memory(
+        Renderer::new(gpu, scene, settings).with_context(|| format!("preparing {} with {}", scene.name, a.algo.name())),
+    )?;
     if a.verbose {
         eprintln!("{}", scene_summary(scene));
         eprintln!("{}", r.describe());
