@@ -9,9 +9,9 @@ use std::process::ExitCode;
 pub enum Class {
     /// Any other failure: writing an output, a device lost mid-render, validation messages.
     Other = 1,
-    /// Bad arguments (clap's own parse errors exit 2 too).
+    /// Bad arguments (clap's own parse errors exit 2 too), an unreadable --reference.
     Usage = 2,
-    /// The scene (or --env map, --reference image) cannot be read or is invalid.
+    /// The scene (or its --env map) cannot be read or is invalid.
     Scene = 3,
     /// No usable Vulkan device: none found, --device matches none, or it cannot be opened.
     Device = 4,

@@ -105,6 +105,8 @@ pub struct Reporter {
     last_line: f64,
     /// --quiet: no bar, no progress lines; only warnings among the notes.
     quiet: bool,
+    /// render --reference: the error of the last image read back, shown on each line.
+    error: Option<String>,
 }
 
 impl Reporter {
@@ -121,7 +123,7 @@ impl Reporter {
             );
             b
         });
-        Reporter { bar, budget, base_seconds, base_iterations, last_line: -1.0, quiet }
+        Reporter { bar, budget, base_seconds, base_iterations, last_line: -1.0, quiet, error: None }
     }
 
     pub fn update(&mut self, p: &Progress, pixels: f64) {
@@ -135,7 +137,10 @@ impl Reporter {
         }
         .clamp(0.0, 1.0);
         let rate = (p.iterations - self.base_iterations) as f64 * pixels / seconds.max(1e-9);
-        let msg = format!("{} it, {:.2} Msamples/s", p.iterations, rate * 1e-6);
+        let mut msg = format!("{} it, {:.2} Msamples/s", p.iterations, rate * 1e-6);
+        if let Some(e) = &self.error {
+            msg += &format!(", {e}");
+        }
         match &self.bar {
             Some(b) => {
                 let len = b.length().unwrap_or(1);
@@ -149,6 +154,11 @@ impl Reporter {
                 }
             }
         }
+    }
+
+    /// The error against a reference that the following progress lines show.
+    pub fn set_error(&mut self, error: &str) {
+        self.error = Some(error.to_string());
     }
 
     /// A line that does not disturb the bar.

@@ -143,6 +143,11 @@ pub struct RenderArgs {
     /// Default: 64 where the device has 64-bit buffer atomics (docs/devices.md).
     #[arg(long, value_enum)]
     pub atomics: Option<render::atomics::SplatAtomics>,
+    /// Measure the image against this reference EXR (same size) as `vkvcm diff` does: RMSE
+    /// and relative MSE on each progress line (of the last image read back) and, at the
+    /// end, printed and stored in the output EXR's attributes.
+    #[arg(long, value_name = "EXR")]
+    pub reference: Option<PathBuf>,
     /// Print the feature set the kernels are compiled with and the buffers allocated.
     #[arg(long, conflicts_with = "quiet")]
     pub verbose: bool,
@@ -301,6 +306,7 @@ pub fn render_cmd(a: RenderArgs) -> Result<Option<Class>> {
         check_writable(p).context("--png")?;
     }
     let settings = render_settings(&a).class(Class::Usage)?;
+    let reference = read_reference(&a).class(Class::Usage)?;
     if let Some(p) = &a.profile_json {
         check_writable(p).context("--profile-json")?;
     }
@@ -329,7 +335,8 @@ pub fn render_cmd(a: RenderArgs) -> Result<Option<Class>> {
         r.resume_saved(s)?;
         say(&a, &format!("resuming {} at iteration {} ({:.1} s rendered)", output.display(), s.iterations, s.seconds));
     }
-    let file = OutputFile { path: &output, settings: &settings, provenance: &provenance };
+    let file =
+        OutputFile { path: &output, settings: &settings, provenance: &provenance, reference: reference.as_ref() };
     let on_disk = saved.as_ref().map_or(0, |s| s.iterations);
     let out = render_slices(&a, &mut r, &scene.name, &file, on_disk)?;
     if out.iterations == 0 {
@@ -456,12 +463,45 @@ struct OutputFile<'a> {
     path: &'a Path,
     settings: &'a RenderSettings,
     provenance: &'a saved::Provenance,
+    /// --reference: the image the render is measured against.
+    reference: Option<&'a Image>,
 }
 
 impl OutputFile<'_> {
     fn write(&self, out: &RenderOutput) -> Result<()> {
-        saved::write_render_exr(self.path, out, self.settings, self.provenance)
+        let more = match self.error(out)? {
+            Some(m) => vec![
+                ("vkvcm:reference_rmse".to_string(), m.rmse.to_string()),
+                ("vkvcm:reference_rel_mse".to_string(), m.rel_mse.to_string()),
+            ],
+            None => Vec::new(),
+        };
+        saved::write_render_exr_with(self.path, out, self.settings, self.provenance, &more)
     }
+
+    /// The error of `out` against --reference, measured as `vkvcm diff` does.
+    fn error(&self, out: &RenderOutput) -> Result<Option<image::Metrics>> {
+        let Some(reference) = self.reference else { return Ok(None) };
+        let img = Image { width: out.width, height: out.height, data: out.pixels.clone() };
+        image::compare(&img, reference).context("--reference").map(Some)
+    }
+}
+
+/// --reference, read and checked against the frame's size before anything renders.
+fn read_reference(a: &RenderArgs) -> Result<Option<Image>> {
+    let Some(p) = &a.reference else { return Ok(None) };
+    let (img, _) = image::read_exr(p).context("--reference")?;
+    if (img.width, img.height) != (a.width, a.height) {
+        bail!(
+            "--reference {}: the reference is {}x{}, the render --width {} --height {}",
+            p.display(),
+            img.width,
+            img.height,
+            a.width,
+            a.height
+        );
+    }
+    Ok(Some(img))
 }
 
 /// Renders the budget in slices of --checkpoint-every seconds (or see
@@ -518,13 +558,24 @@ fn render_slices(
                 } else {
                     slice = (SNAPSHOT_COST_FACTOR * t0.elapsed().as_secs_f64()).min(MAX_SNAPSHOT_SECONDS);
                 }
+                if let Ok(Some(m)) = file.error(&out) {
+                    reporter.set_error(&format!(
+                        "rmse {:.4e}, rel_mse {:.4e} (at {} it)",
+                        m.rmse, m.rel_mse, out.iterations
+                    ));
+                }
                 last = Some(out);
             }
             Err(e) => break Some(e),
         }
     };
     let out = match failure {
-        None => r.output().with_context(|| format!("rendering {scene_name} with {}", a.algo.name())),
+        // A signal between slices leaves the renderer's flag unset: the render was
+        // interrupted all the same (exit code 130).
+        None => r
+            .output()
+            .map(|o| RenderOutput { interrupted: o.interrupted || cancel.load(Ordering::SeqCst), ..o })
+            .with_context(|| format!("rendering {scene_name} with {}", a.algo.name())),
         Some(e) => Err(e.context(format!("rendering {scene_name}"))),
     };
     reporter.finish();
@@ -574,6 +625,9 @@ fn write_outputs(
             file.path.display()
         ),
     );
+    if let Some(m) = file.error(out)? {
+        say(a, &format!("against the reference: rmse {:.6e}, rel_mse {:.6e}", m.rmse, m.rel_mse));
+    }
     if out.rejected_samples > 0 {
         eprintln!("warning: {} sample(s) were NaN, infinite or negative and were rejected", out.rejected_samples);
     }
