@@ -6,6 +6,7 @@ pub mod exit;
 pub mod info;
 pub mod progress;
 pub mod render;
+pub mod trace;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;

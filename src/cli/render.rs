@@ -123,6 +123,11 @@ pub struct RenderArgs {
     /// Write the --profile report as JSON to FILE (implies counting rays).
     #[arg(long, value_name = "FILE")]
     pub profile_json: Option<PathBuf>,
+    /// Write a trace of the render to FILE in the Chrome trace-event format (Perfetto,
+    /// chrome://tracing): host phases on a CPU track, every timed dispatch with its pass,
+    /// kernel, iteration and workgroups on a GPU track.
+    #[arg(long, value_name = "FILE")]
+    pub profile_trace: Option<PathBuf>,
     /// Compile every scene feature into the kernels instead of only the scene's (for
     /// comparison: the image agrees within float rounding).
     #[arg(long)]
@@ -299,7 +304,14 @@ fn check_args(a: &RenderArgs) -> Result<()> {
 /// rendered is written).
 pub fn render_cmd(a: RenderArgs) -> Result<Option<Class>> {
     check_args(&a).class(Class::Usage)?;
-    let scene = load_scene(&a).class(Class::Scene)?;
+    if let Some(p) = &a.profile_trace {
+        check_writable(p).context("--profile-trace")?;
+        super::trace::start();
+    }
+    let scene = {
+        let _p = super::trace::phase("scene load");
+        load_scene(&a).class(Class::Scene)?
+    };
     let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}_{}.exr", scene.name, a.algo.name())));
     check_writable(&output).context("--output")?;
     if let Some(p) = &a.png {
@@ -327,10 +339,23 @@ pub fn render_cmd(a: RenderArgs) -> Result<Option<Class>> {
         }
     }
 
-    let gpu = a.gpu.open()?;
+    let gpu = {
+        let _p = super::trace::phase("device open");
+        a.gpu.open()?
+    };
     say(&a, &format!("device: {} ({})", gpu.info.name, gpu.info.driver));
     provenance.device = gpu.info.name.clone();
-    let mut r = prepare_renderer(&a, &gpu, &scene, &settings)?;
+    let mut r = {
+        let mut p = super::trace::phase("prepare: BVH build, upload, kernels");
+        let r = prepare_renderer(&a, &gpu, &scene, &settings)?;
+        let c = gpu.shader_counts();
+        p.arg("kernels compiled", c.compiled.into());
+        p.arg("kernels from the cache", c.from_disk.into());
+        r
+    };
+    if a.profile_trace.is_some() {
+        r.trace_dispatches();
+    }
     if let Some(s) = &saved {
         r.resume_saved(s)?;
         say(&a, &format!("resuming {} at iteration {} ({:.1} s rendered)", output.display(), s.iterations, s.seconds));
@@ -344,6 +369,10 @@ pub fn render_cmd(a: RenderArgs) -> Result<Option<Class>> {
         return Ok(Some(Class::Interrupted));
     }
     write_outputs(&a, &r, &scene, &file, &out, saved.as_ref())?;
+    if let Some(p) = &a.profile_trace {
+        super::trace::write(p).context("--profile-trace")?;
+        say(&a, &format!("wrote {}", p.display()));
+    }
     drop(r);
     let msgs = gpu.validation_messages();
     drop(gpu);
@@ -522,6 +551,7 @@ fn render_slices(
     let mut slice = a.checkpoint_every.unwrap_or(0.0);
     let start = Instant::now();
     let mut last: Option<RenderOutput> = None;
+    let _render = super::trace::phase("render");
     let failure = loop {
         let slice_budget = match budget {
             Budget::Iterations(n) => Budget::Iterations(n.saturating_sub(r.iterations())),
@@ -544,7 +574,11 @@ fn render_slices(
             break Some(e);
         }
         let t0 = Instant::now();
-        match r.output() {
+        super::trace::dispatches(&r.take_dispatches());
+        let readback = super::trace::phase("readback");
+        let output = r.output();
+        drop(readback);
+        match output {
             Ok(out) => {
                 if a.checkpoint_every.is_some() {
                     match file.write(&out) {
@@ -569,6 +603,7 @@ fn render_slices(
             Err(e) => break Some(e),
         }
     };
+    super::trace::dispatches(&r.take_dispatches());
     let out = match failure {
         // A signal between slices leaves the renderer's flag unset: the render was
         // interrupted all the same (exit code 130).
@@ -610,7 +645,10 @@ fn write_outputs(
     out: &RenderOutput,
     saved: Option<&saved::SavedRender>,
 ) -> Result<()> {
-    file.write(out)?;
+    {
+        let _p = super::trace::phase("write EXR");
+        file.write(out)?;
+    }
     let pixels = (a.width as u64 * a.height as u64) as f64;
     let new_seconds = out.seconds - saved.map_or(0.0, |s| s.seconds);
     let new_iterations = out.iterations - saved.map_or(0, |s| s.iterations);

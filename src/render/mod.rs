@@ -171,6 +171,16 @@ impl Renderer {
         Ok(plan)
     }
 
+    /// Keep every timed dispatch from now on, for [`Renderer::take_dispatches`].
+    pub fn trace_dispatches(&mut self) {
+        self.profile.dispatches = Some(Vec::new());
+    }
+
+    /// The dispatches kept since [`Renderer::trace_dispatches`] (and the last take).
+    pub fn take_dispatches(&mut self) -> Vec<crate::gpu::DispatchEvent> {
+        self.profile.dispatches.as_mut().map(std::mem::take).unwrap_or_default()
+    }
+
     /// Iterations accumulated so far.
     pub fn iterations(&self) -> u64 {
         self.done
@@ -328,6 +338,7 @@ impl Renderer {
                 format!("{range} of {name}")
             };
             for i in 0..n {
+                self.batch.set_iteration(first + i);
                 self.est.record(&mut self.batch, (first + i) as u32).with_context(what)?;
             }
             self.batch.submit_wait(Some(&mut self.profile)).with_context(what)?;
