@@ -146,7 +146,7 @@ pub fn info_cmd(a: InfoArgs) -> Result<Option<Class>> {
     let options = scene::LoadOptions {
         scene: a.gltf_scene.clone(),
         flatten_instances: a.flatten_instances,
-        ..a.env.load_options(a.camera.clone())?
+        ..a.env.load_options(a.camera.clone()).class(Class::Scene)?
     };
     let loaded = scene::load_named_with(&name, &options).class(Class::Scene)?;
     let file = scene::builtin_path(&name).or_else(|| Some(PathBuf::from(&name)).filter(|p| p.is_file()));
