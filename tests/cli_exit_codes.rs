@@ -50,6 +50,12 @@ fn each_class_of_failure_has_its_code() {
     // 5: the frame does not fit the device.
     render_exits(d, &["--width", "16", "--height", "100000000", "-o", "x.exr"], 5);
     assert!(!d.join("x.exr").exists());
+    // reference and converge share the scene and device codes.
+    let reference = |args: &[&str]| {
+        vkvcm(d).args(["reference", "-a", "pt", "--width", "8", "--height", "8"]).args(args).output().unwrap()
+    };
+    assert_eq!(reference(&["no_such_scene.gltf", "-o", "r.exr"]).status.code(), Some(3));
+    assert_eq!(reference(&["gbs_s", "--device", "99", "-o", "r.exr"]).status.code(), Some(4));
     // 0, and the image.
     render_exits(d, &small, 0);
     assert!(d.join("x.exr").is_file());
