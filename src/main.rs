@@ -4,8 +4,10 @@ mod cli;
 
 use std::process::ExitCode;
 
-use anyhow::{bail, Result};
-use clap::{Parser, Subcommand};
+use anyhow::Result;
+use clap::{CommandFactory, Parser, Subcommand};
+
+use cli::exit::{Class, ClassifyExt};
 
 use vkvcm::gpu;
 
@@ -29,32 +31,51 @@ enum Command {
     Converge(cli::converge::ConvergeArgs),
     /// RMSE, relative MSE, mean bias and max error of a.exr against b.exr (the reference).
     Diff(cli::diff::DiffArgs),
+    /// What a render of a scene would hold and need, before rendering: what the importer
+    /// read and skipped, the kernels' features, and each buffer's memory on the device.
+    Info(cli::info::InfoArgs),
+    /// Print a shell completion script: `vkvcm completions bash > ~/.local/share/bash-completion/completions/vkvcm`.
+    Completions {
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    // Scene loads and BVH builds of more than a second get a progress line.
-    vkvcm::activity::set_observer(Box::new(cli::progress::ActivityLines));
+    // Scene loads and BVH builds of more than a second get a progress line (not with
+    // --quiet).
+    let quiet = matches!(&cli.command, Command::Render(a) if a.quiet);
+    if !quiet {
+        vkvcm::activity::set_observer(Box::new(cli::progress::ActivityLines));
+    }
+    let done = |r: Result<()>| r.map(|()| None);
     let result = match cli.command {
-        Command::Devices => devices(),
+        Command::Devices => done(devices()),
         Command::Render(args) => cli::render::render_cmd(args),
-        Command::Reference(args) => cli::converge::reference_cmd(args),
-        Command::Converge(args) => cli::converge::converge_cmd(args),
-        Command::Diff(args) => cli::diff::diff_cmd(args),
+        Command::Reference(args) => done(cli::converge::reference_cmd(args)),
+        Command::Converge(args) => done(cli::converge::converge_cmd(args)),
+        Command::Diff(args) => done(cli::diff::diff_cmd(args)),
+        Command::Info(args) => cli::info::info_cmd(args),
+        Command::Completions { shell } => {
+            clap_complete::generate(shell, &mut Cli::command(), "vkvcm", &mut std::io::stdout());
+            Ok(None)
+        }
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(None) => ExitCode::SUCCESS,
+        Ok(Some(class)) => cli::exit::code(class),
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            cli::exit::code(cli::exit::class_of(&e))
         }
     }
 }
 
 fn devices() -> Result<()> {
-    let list = gpu::list_devices()?;
+    let list = gpu::list_devices().class(Class::Device)?;
     if list.is_empty() {
-        bail!("no Vulkan device found");
+        return Err(anyhow::anyhow!("no Vulkan device found")).class(Class::Device);
     }
     for d in &list {
         println!("{}: {} ({}), driver {}, Vulkan {}", d.index, d.name, d.type_name(), d.driver, d.api_version);

@@ -119,12 +119,18 @@ fn sds_hazard(scene: &Scene) -> Option<&'static str> {
     specular.then_some(delta)
 }
 
+/// The scene of `reference` and `converge`; a failure exits 3, as render's.
+fn load_scene(name: &str, env: &super::EnvArgs) -> Result<Scene> {
+    use super::exit::{Class, ClassifyExt};
+    env.load_options(None).and_then(|o| scene::load_named_with(name, &o)).class(Class::Scene)
+}
+
 fn meta_value<'a>(meta: &'a [(String, String)], key: &str) -> Option<&'a str> {
     meta.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
 }
 
 fn open_gpu(args: &super::GpuArgs) -> Result<std::sync::Arc<Gpu>> {
-    let gpu = Gpu::new(&args.options())?;
+    let gpu = args.open()?;
     eprintln!("device: {} ({})", gpu.info.name, gpu.info.driver);
     Ok(gpu)
 }
@@ -141,7 +147,7 @@ fn check_validation(gpu: std::sync::Arc<Gpu>) -> Result<()> {
 
 pub fn reference_cmd(a: ReferenceArgs) -> Result<()> {
     a.env.check()?;
-    let scene = scene::load_named_with(&a.scene, &a.env.load_options(None)?)?;
+    let scene = load_scene(&a.scene, &a.env)?;
     let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}_reference.exr", scene.name)));
     check_writable(&output)?;
     if let Some(p) = &a.png {
@@ -257,7 +263,7 @@ pub fn converge_cmd(a: ConvergeArgs) -> Result<()> {
         check_writable(p)?;
     }
     a.env.check()?;
-    let scene = scene::load_named_with(&a.scene, &a.env.load_options(None)?)?;
+    let scene = load_scene(&a.scene, &a.env)?;
     if let Some(s) = meta_value(&meta, "vkvcm:scene").filter(|s| *s != scene.name) {
         eprintln!("warning: the reference {} was rendered from scene {s}, not {}", a.reference.display(), scene.name);
     }

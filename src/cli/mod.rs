@@ -2,8 +2,11 @@
 
 pub mod converge;
 pub mod diff;
+pub mod exit;
+pub mod info;
 pub mod progress;
 pub mod render;
+pub mod trace;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
@@ -75,6 +78,12 @@ impl GpuArgs {
         } else {
             opts
         }
+    }
+
+    /// The device these options name; a failure is a device failure (exit code 4).
+    pub fn open(&self) -> Result<std::sync::Arc<vkvcm::gpu::Gpu>> {
+        use exit::ClassifyExt;
+        vkvcm::gpu::Gpu::new(&self.options()).class(exit::Class::Device)
     }
 }
 

@@ -103,11 +103,15 @@ pub struct Reporter {
     base_seconds: f64,
     base_iterations: u64,
     last_line: f64,
+    /// --quiet: no bar, no progress lines; only warnings among the notes.
+    quiet: bool,
+    /// render --reference: the error of the last image read back, shown on each line.
+    error: Option<String>,
 }
 
 impl Reporter {
-    pub fn new(budget: Budget, base_iterations: u64, base_seconds: f64) -> Self {
-        let bar = std::io::stderr().is_terminal().then(|| {
+    pub fn new(budget: Budget, base_iterations: u64, base_seconds: f64, quiet: bool) -> Self {
+        let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
             let total = match budget {
                 Budget::Iterations(n) => n,
                 Budget::Seconds(_) => 1000,
@@ -119,10 +123,13 @@ impl Reporter {
             );
             b
         });
-        Reporter { bar, budget, base_seconds, base_iterations, last_line: -1.0 }
+        Reporter { bar, budget, base_seconds, base_iterations, last_line: -1.0, quiet, error: None }
     }
 
     pub fn update(&mut self, p: &Progress, pixels: f64) {
+        if self.quiet {
+            return;
+        }
         let seconds = p.seconds - self.base_seconds;
         let fraction = match self.budget {
             Budget::Iterations(n) => p.iterations as f64 / n as f64,
@@ -130,7 +137,10 @@ impl Reporter {
         }
         .clamp(0.0, 1.0);
         let rate = (p.iterations - self.base_iterations) as f64 * pixels / seconds.max(1e-9);
-        let msg = format!("{} it, {:.2} Msamples/s", p.iterations, rate * 1e-6);
+        let mut msg = format!("{} it, {:.2} Msamples/s", p.iterations, rate * 1e-6);
+        if let Some(e) = &self.error {
+            msg += &format!(", {e}");
+        }
         match &self.bar {
             Some(b) => {
                 let len = b.length().unwrap_or(1);
@@ -146,8 +156,16 @@ impl Reporter {
         }
     }
 
+    /// The error against a reference that the following progress lines show.
+    pub fn set_error(&mut self, error: &str) {
+        self.error = Some(error.to_string());
+    }
+
     /// A line that does not disturb the bar.
     pub fn note(&self, line: &str) {
+        if self.quiet && !line.starts_with("warning") {
+            return;
+        }
         match &self.bar {
             Some(b) => b.println(line),
             None => eprintln!("{line}"),

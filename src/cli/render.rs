@@ -8,6 +8,7 @@ use std::time::Instant;
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 
+use super::exit::{Class, ClassifyExt};
 use super::progress::Reporter;
 use vkvcm::gpu::Gpu;
 use vkvcm::image::{self, Image};
@@ -122,6 +123,11 @@ pub struct RenderArgs {
     /// Write the --profile report as JSON to FILE (implies counting rays).
     #[arg(long, value_name = "FILE")]
     pub profile_json: Option<PathBuf>,
+    /// Write a trace of the render to FILE in the Chrome trace-event format (Perfetto,
+    /// chrome://tracing): host phases on a CPU track, every timed dispatch with its pass,
+    /// kernel, iteration and workgroups on a GPU track.
+    #[arg(long, value_name = "FILE")]
+    pub profile_trace: Option<PathBuf>,
     /// Compile every scene feature into the kernels instead of only the scene's (for
     /// comparison: the image agrees within float rounding).
     #[arg(long)]
@@ -142,9 +148,18 @@ pub struct RenderArgs {
     /// Default: 64 where the device has 64-bit buffer atomics (docs/devices.md).
     #[arg(long, value_enum)]
     pub atomics: Option<render::atomics::SplatAtomics>,
+    /// Measure the image against this reference EXR (same size) as `vkvcm diff` does: RMSE
+    /// and relative MSE on each progress line (of the last image read back) and, at the
+    /// end, printed and stored in the output EXR's attributes.
+    #[arg(long, value_name = "EXR")]
+    pub reference: Option<PathBuf>,
     /// Print the feature set the kernels are compiled with and the buffers allocated.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "quiet")]
     pub verbose: bool,
+    /// Print no progress and no summary: only warnings and errors (the exit code says how
+    /// it ended: README.md).
+    #[arg(long, short = 'q')]
+    pub quiet: bool,
     #[command(flatten)]
     pub gpu: super::GpuArgs,
 }
@@ -285,55 +300,93 @@ fn check_args(a: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
-pub fn render_cmd(a: RenderArgs) -> Result<()> {
-    check_args(&a)?;
-    let scene = load_scene(&a)?;
+/// Renders; `Some(Class::Interrupted)` when SIGINT or SIGTERM stopped it (what was
+/// rendered is written).
+pub fn render_cmd(a: RenderArgs) -> Result<Option<Class>> {
+    check_args(&a).class(Class::Usage)?;
+    if let Some(p) = &a.profile_trace {
+        check_writable(p).context("--profile-trace")?;
+        super::trace::start();
+    }
+    let scene = {
+        let _p = super::trace::phase("scene load");
+        load_scene(&a).class(Class::Scene)?
+    };
     let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}_{}.exr", scene.name, a.algo.name())));
     check_writable(&output).context("--output")?;
     if let Some(p) = &a.png {
         check_writable(p).context("--png")?;
     }
-    let settings = render_settings(&a)?;
+    let settings = render_settings(&a).class(Class::Usage)?;
+    let reference = read_reference(&a).class(Class::Usage)?;
     if let Some(p) = &a.profile_json {
         check_writable(p).context("--profile-json")?;
     }
     let camera = a.camera.clone().unwrap_or_else(|| "default".into());
     let mut provenance = saved::Provenance::new(&scene, &camera, "");
-    let saved = read_resumed(&a, &output, &settings, &provenance)?;
+    let saved = read_resumed(&a, &output, &settings, &provenance).class(Class::Usage)?;
     if let (Some(s), Budget::Iterations(n)) = (&saved, settings.budget) {
         if s.iterations >= n {
-            eprintln!(
-                "{} already has {} iterations (asked for {n} in total): nothing to do",
-                output.display(),
-                s.iterations
+            say(
+                &a,
+                &format!(
+                    "{} already has {} iterations (asked for {n} in total): nothing to do",
+                    output.display(),
+                    s.iterations
+                ),
             );
-            return Ok(());
+            return Ok(None);
         }
     }
 
-    let gpu = Gpu::new(&a.gpu.options())?;
-    eprintln!("device: {} ({})", gpu.info.name, gpu.info.driver);
+    let gpu = {
+        let _p = super::trace::phase("device open");
+        a.gpu.open()?
+    };
+    say(&a, &format!("device: {} ({})", gpu.info.name, gpu.info.driver));
     provenance.device = gpu.info.name.clone();
-    let mut r = prepare_renderer(&a, &gpu, &scene, &settings)?;
+    let mut r = {
+        let mut p = super::trace::phase("prepare: BVH build, upload, kernels");
+        let r = prepare_renderer(&a, &gpu, &scene, &settings)?;
+        let c = gpu.shader_counts();
+        p.arg("kernels compiled", c.compiled.into());
+        p.arg("kernels from the cache", c.from_disk.into());
+        r
+    };
+    if a.profile_trace.is_some() {
+        r.trace_dispatches();
+    }
     if let Some(s) = &saved {
         r.resume_saved(s)?;
-        eprintln!("resuming {} at iteration {} ({:.1} s rendered)", output.display(), s.iterations, s.seconds);
+        say(&a, &format!("resuming {} at iteration {} ({:.1} s rendered)", output.display(), s.iterations, s.seconds));
     }
-    let file = OutputFile { path: &output, settings: &settings, provenance: &provenance };
+    let file =
+        OutputFile { path: &output, settings: &settings, provenance: &provenance, reference: reference.as_ref() };
     let on_disk = saved.as_ref().map_or(0, |s| s.iterations);
     let out = render_slices(&a, &mut r, &scene.name, &file, on_disk)?;
     if out.iterations == 0 {
         eprintln!("interrupted before the first iteration finished: nothing written");
-        std::process::exit(130);
+        return Ok(Some(Class::Interrupted));
     }
     write_outputs(&a, &r, &scene, &file, &out, saved.as_ref())?;
+    if let Some(p) = &a.profile_trace {
+        super::trace::write(p).context("--profile-trace")?;
+        say(&a, &format!("wrote {}", p.display()));
+    }
     drop(r);
     let msgs = gpu.validation_messages();
     drop(gpu);
     if !msgs.list().is_empty() {
         bail!("{} Vulkan validation message(s) (printed above)", msgs.list().len());
     }
-    Ok(())
+    Ok(out.interrupted.then_some(Class::Interrupted))
+}
+
+/// An informational line on stderr, left out with --quiet.
+fn say(a: &RenderArgs, line: &str) {
+    if !a.quiet {
+        eprintln!("{line}");
+    }
 }
 
 /// The scene with the view and environment options applied; prints the loader's warnings.
@@ -406,16 +459,19 @@ fn prepare_renderer(
     scene: &scene::Scene,
     settings: &RenderSettings,
 ) -> Result<Renderer> {
-    Renderer::plan_for(gpu, scene, settings).map_err(|e| {
-        let mpl = if a.algo.info().techniques.light_subpaths {
-            format!(" --max-path-length {}", a.max_path_length)
-        } else {
-            String::new()
-        };
-        anyhow!("--width {} --height {}{mpl}: {e:#}", a.width, a.height)
-    })?;
-    let r = Renderer::new(gpu, scene, settings)
-        .with_context(|| format!("preparing {} with {}", scene.name, a.algo.name()))?;
+    Renderer::plan_for(gpu, scene, settings)
+        .map_err(|e| {
+            let mpl = if a.algo.info().techniques.light_subpaths {
+                format!(" --max-path-length {}", a.max_path_length)
+            } else {
+                String::new()
+            };
+            anyhow!("--width {} --height {}{mpl}: {e:#}", a.width, a.height)
+        })
+        .class(Class::Memory)?;
+    let r = super::exit::memory_if_out_of_memory(
+        Renderer::new(gpu, scene, settings).with_context(|| format!("preparing {} with {}", scene.name, a.algo.name())),
+    )?;
     if a.verbose {
         eprintln!("{}", scene_summary(scene));
         eprintln!("{}", r.describe());
@@ -436,12 +492,45 @@ struct OutputFile<'a> {
     path: &'a Path,
     settings: &'a RenderSettings,
     provenance: &'a saved::Provenance,
+    /// --reference: the image the render is measured against.
+    reference: Option<&'a Image>,
 }
 
 impl OutputFile<'_> {
     fn write(&self, out: &RenderOutput) -> Result<()> {
-        saved::write_render_exr(self.path, out, self.settings, self.provenance)
+        let more = match self.error(out)? {
+            Some(m) => vec![
+                ("vkvcm:reference_rmse".to_string(), m.rmse.to_string()),
+                ("vkvcm:reference_rel_mse".to_string(), m.rel_mse.to_string()),
+            ],
+            None => Vec::new(),
+        };
+        saved::write_render_exr_with(self.path, out, self.settings, self.provenance, &more)
     }
+
+    /// The error of `out` against --reference, measured as `vkvcm diff` does.
+    fn error(&self, out: &RenderOutput) -> Result<Option<image::Metrics>> {
+        let Some(reference) = self.reference else { return Ok(None) };
+        let img = Image { width: out.width, height: out.height, data: out.pixels.clone() };
+        image::compare(&img, reference).context("--reference").map(Some)
+    }
+}
+
+/// --reference, read and checked against the frame's size before anything renders.
+fn read_reference(a: &RenderArgs) -> Result<Option<Image>> {
+    let Some(p) = &a.reference else { return Ok(None) };
+    let (img, _) = image::read_exr(p).context("--reference")?;
+    if (img.width, img.height) != (a.width, a.height) {
+        bail!(
+            "--reference {}: the reference is {}x{}, the render --width {} --height {}",
+            p.display(),
+            img.width,
+            img.height,
+            a.width,
+            a.height
+        );
+    }
+    Ok(Some(img))
 }
 
 /// Renders the budget in slices of --checkpoint-every seconds (or see
@@ -458,10 +547,11 @@ fn render_slices(
     let budget = file.settings.budget;
     let cancel = install_interrupt();
     let pixels = (a.width as u64 * a.height as u64) as f64;
-    let mut reporter = Reporter::new(budget, r.iterations(), r.seconds());
+    let mut reporter = Reporter::new(budget, r.iterations(), r.seconds(), a.quiet);
     let mut slice = a.checkpoint_every.unwrap_or(0.0);
     let start = Instant::now();
     let mut last: Option<RenderOutput> = None;
+    let _render = super::trace::phase("render");
     let failure = loop {
         let slice_budget = match budget {
             Budget::Iterations(n) => Budget::Iterations(n.saturating_sub(r.iterations())),
@@ -484,7 +574,11 @@ fn render_slices(
             break Some(e);
         }
         let t0 = Instant::now();
-        match r.output() {
+        super::trace::dispatches(&r.take_dispatches());
+        let readback = super::trace::phase("readback");
+        let output = r.output();
+        drop(readback);
+        match output {
             Ok(out) => {
                 if a.checkpoint_every.is_some() {
                     match file.write(&out) {
@@ -498,13 +592,25 @@ fn render_slices(
                 } else {
                     slice = (SNAPSHOT_COST_FACTOR * t0.elapsed().as_secs_f64()).min(MAX_SNAPSHOT_SECONDS);
                 }
+                if let Ok(Some(m)) = file.error(&out) {
+                    reporter.set_error(&format!(
+                        "rmse {:.4e}, rel_mse {:.4e} (at {} it)",
+                        m.rmse, m.rel_mse, out.iterations
+                    ));
+                }
                 last = Some(out);
             }
             Err(e) => break Some(e),
         }
     };
+    super::trace::dispatches(&r.take_dispatches());
     let out = match failure {
-        None => r.output().with_context(|| format!("rendering {scene_name} with {}", a.algo.name())),
+        // A signal between slices leaves the renderer's flag unset: the render was
+        // interrupted all the same (exit code 130).
+        None => r
+            .output()
+            .map(|o| RenderOutput { interrupted: o.interrupted || cancel.load(Ordering::SeqCst), ..o })
+            .with_context(|| format!("rendering {scene_name} with {}", a.algo.name())),
         Some(e) => Err(e.context(format!("rendering {scene_name}"))),
     };
     reporter.finish();
@@ -539,18 +645,27 @@ fn write_outputs(
     out: &RenderOutput,
     saved: Option<&saved::SavedRender>,
 ) -> Result<()> {
-    file.write(out)?;
+    {
+        let _p = super::trace::phase("write EXR");
+        file.write(out)?;
+    }
     let pixels = (a.width as u64 * a.height as u64) as f64;
     let new_seconds = out.seconds - saved.map_or(0.0, |s| s.seconds);
     let new_iterations = out.iterations - saved.map_or(0, |s| s.iterations);
-    eprintln!(
-        "{} iterations in {:.2} s ({:.0} samples/s){}; wrote {}",
-        out.iterations,
-        out.seconds,
-        new_iterations as f64 * pixels / new_seconds.max(1e-9),
-        if out.interrupted { " (interrupted)" } else { "" },
-        file.path.display()
+    say(
+        a,
+        &format!(
+            "{} iterations in {:.2} s ({:.0} samples/s){}; wrote {}",
+            out.iterations,
+            out.seconds,
+            new_iterations as f64 * pixels / new_seconds.max(1e-9),
+            if out.interrupted { " (interrupted)" } else { "" },
+            file.path.display()
+        ),
     );
+    if let Some(m) = file.error(out)? {
+        say(a, &format!("against the reference: rmse {:.6e}, rel_mse {:.6e}", m.rmse, m.rel_mse));
+    }
     if out.rejected_samples > 0 {
         eprintln!("warning: {} sample(s) were NaN, infinite or negative and were rejected", out.rejected_samples);
     }
@@ -560,7 +675,7 @@ fn write_outputs(
     if let Some(p) = &a.png {
         let img = Image { width: out.width, height: out.height, data: out.pixels.clone() };
         image::write_png(p, &img, a.exposure)?;
-        eprintln!("wrote {}", p.display());
+        say(a, &format!("wrote {}", p.display()));
     }
     if a.profile {
         eprint!("{}", out.profile.report());
@@ -570,7 +685,7 @@ fn write_outputs(
         report.paths_per_invocation = Some(r.paths_per_invocation());
         report.reads = Some(r.reads().name().to_string());
         super::write_json(p, &report).context("--profile-json")?;
-        eprintln!("wrote {}", p.display());
+        say(a, &format!("wrote {}", p.display()));
     }
     Ok(())
 }

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use anyhow::{anyhow, bail, Context, Result};
 use ash::vk;
 
-use super::{fault_injection, Buffer, Gpu, Kernel, Profile, PUSH_CONSTANT_BYTES};
+use super::{fault_injection, Buffer, DispatchEvent, Gpu, Kernel, Profile, PUSH_CONSTANT_BYTES};
 
 /// The pass of dispatches recorded before any [`Batch::begin_pass`].
 pub const UNNAMED_PASS: &str = "other";
@@ -36,6 +36,10 @@ pub struct Batch {
     queries: vk::QueryPool,
     /// The (pass, kernel) of each timed dispatch, in recording order.
     timed: Vec<(String, String)>,
+    /// The workgroups and iteration of each timed dispatch (for traces).
+    timed_groups: Vec<([u32; 3], Option<u64>)>,
+    /// The iteration the next dispatches belong to ([`Batch::set_iteration`]).
+    iteration: Option<u64>,
     /// The pass that the next dispatches belong to ([`Batch::begin_pass`]).
     pass: String,
     /// Kernels recorded since the last submit, each once, for error messages.
@@ -55,6 +59,8 @@ impl Gpu {
                 fence: vk::Fence::null(),
                 queries: vk::QueryPool::null(),
                 timed: Vec::new(),
+                timed_groups: Vec::new(),
+                iteration: None,
                 pass: UNNAMED_PASS.to_string(),
                 kernels: Vec::new(),
                 recording: false,
@@ -98,6 +104,7 @@ impl Batch {
             }
         }
         self.timed.clear();
+        self.timed_groups.clear();
         self.kernels.clear();
         self.recording = true;
         Ok(())
@@ -130,6 +137,11 @@ impl Batch {
     /// time under this name (until the next call).
     pub fn begin_pass(&mut self, name: &str) {
         name.clone_into(&mut self.pass);
+    }
+
+    /// Names the iteration that the following dispatches belong to (traces show it).
+    pub fn set_iteration(&mut self, iteration: u64) {
+        self.iteration = Some(iteration);
     }
 
     /// Records `kernel` over `groups` workgroups with `push` as push constants.
@@ -173,6 +185,7 @@ impl Batch {
         }
         if timed {
             self.timed.push((self.pass.clone(), kernel.name().to_string()));
+            self.timed_groups.push((groups, self.iteration));
         }
         if !self.kernels.iter().any(|k| k == kernel.name()) {
             self.kernels.push(kernel.name().to_string());
@@ -198,12 +211,14 @@ impl Batch {
         let dev = &self.gpu.device;
         let kernels = if self.kernels.is_empty() { "transfers".to_string() } else { self.kernels.join(", ") };
         let fail = |step: &str, e: vk::Result| anyhow!("{step} of a batch ({kernels}): {}", vk_error_text(e));
+        let submitted_us;
         // SAFETY: recorded command buffer; fence unsignalled (reset after each wait).
         unsafe {
             dev.end_command_buffer(self.cmd).map_err(|e| fail("recording", e))?;
             let cmds = [self.cmd];
             let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
             fault_injection::simulated_device_loss(true).map_err(|e| fail("vkQueueSubmit", e))?;
+            submitted_us = super::profile::trace_clock_us();
             dev.queue_submit(self.gpu.queue, &submit, self.fence).map_err(|e| fail("vkQueueSubmit", e))?;
             dev.wait_for_fences(&[self.fence], true, u64::MAX).map_err(|e| fail("waiting for the GPU", e))?;
             dev.reset_fences(&[self.fence]).map_err(|e| fail("vkResetFences", e))?;
@@ -221,9 +236,23 @@ impl Batch {
                     )
                 }
                 .context("reading timestamps failed")?;
+                let period = self.gpu.timestamp_period_ns;
                 for (i, (pass, kernel)) in self.timed.iter().enumerate() {
-                    let ns = ts[2 * i + 1].saturating_sub(ts[2 * i]) as f64 * self.gpu.timestamp_period_ns;
+                    let ns = ts[2 * i + 1].saturating_sub(ts[2 * i]) as f64 * period;
                     p.add(pass, kernel, ns);
+                    if let Some(d) = &mut p.dispatches {
+                        // GPU ticks have their own epoch: the batch starts at its submission
+                        // on the host clock, so batches follow each other on the trace.
+                        let (groups, iteration) = self.timed_groups[i];
+                        d.push(DispatchEvent {
+                            pass: pass.clone(),
+                            kernel: kernel.clone(),
+                            groups,
+                            iteration,
+                            start_us: submitted_us + ts[2 * i].saturating_sub(ts[0]) as f64 * period * 1e-3,
+                            duration_us: ns * 1e-3,
+                        });
+                    }
                 }
             }
         }

@@ -21,7 +21,7 @@ pub use context::{
     SHADER_INT64_ATOMICS, TEXEL_BUFFER_FORMATS, TIMESTAMPS,
 };
 pub use kernel::{Bind, Defines, Kernel, Texels, PUSH_CONSTANT_BYTES};
-pub use profile::{KernelTime, Profile, ProfileReport, StageTime};
+pub use profile::{trace_clock_us, DispatchEvent, KernelTime, Profile, ProfileReport, StageTime};
 pub use shader::ShaderCounts;
 pub use validation::Messages;
 

@@ -23,6 +23,29 @@ pub struct Profile {
     pub wall_seconds: f64,
     /// Rays traced in those iterations, when counted (kernels built with COUNT_RAYS).
     pub rays: Option<u64>,
+    /// Every timed dispatch, when asked for (`render --profile-trace`); else `None`.
+    #[serde(skip)]
+    pub dispatches: Option<Vec<DispatchEvent>>,
+}
+
+/// One timed dispatch, for a trace (`render --profile-trace`).
+#[derive(Clone, Debug)]
+pub struct DispatchEvent {
+    pub pass: String,
+    pub kernel: String,
+    pub groups: [u32; 3],
+    /// The iteration it belongs to, as the renderer said ([`crate::gpu::Batch::set_iteration`]).
+    pub iteration: Option<u64>,
+    /// Start and duration in microseconds on the [`trace_clock_us`] clock: the GPU's
+    /// timestamps, placed so that the batch's first dispatch starts when it was submitted.
+    pub start_us: f64,
+    pub duration_us: f64,
+}
+
+/// Microseconds since the process's first call: the clock of traces' host and GPU events.
+pub fn trace_clock_us() -> f64 {
+    static EPOCH: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
+    EPOCH.get_or_init(std::time::Instant::now).elapsed().as_secs_f64() * 1e6
 }
 
 /// GPU time of one stage.
@@ -86,6 +109,7 @@ impl Profile {
             iterations: self.iterations - earlier.iterations,
             wall_seconds: self.wall_seconds - earlier.wall_seconds,
             rays: self.rays.map(|r| r - earlier.rays.unwrap_or(0)),
+            dispatches: None,
         }
     }
 

@@ -129,6 +129,15 @@ impl Renderer {
     /// The plan of sizes of a render of `scene` with `settings` on `gpu`, checked against
     /// the device: what [`Renderer::new`] allocates, refused before anything is.
     pub fn plan_for(gpu: &Gpu, scene: &Scene, settings: &RenderSettings) -> Result<plan::FramePlan> {
+        let plan = Self::plan_sizes(gpu, scene, settings)?;
+        let (frame, info) = (&settings.frame, settings.algorithm.info());
+        plan.check(gpu, &format!("a {}x{} {} render", frame.width, frame.height, info.name))?;
+        Ok(plan)
+    }
+
+    /// The plan of sizes [`Renderer::plan_for`] checks, before that check: what
+    /// `vkvcm info` shows of a frame that may not fit the device.
+    pub fn plan_sizes(gpu: &Gpu, scene: &Scene, settings: &RenderSettings) -> Result<plan::FramePlan> {
         let info = settings.algorithm.info();
         let frame = &settings.frame;
         settings.check()?;
@@ -159,8 +168,17 @@ impl Renderer {
         let limits = sizes::SizeLimits::of(gpu);
         plan.scene.chunk_if_over_binding(&limits, device_addresses);
         plan.fit_light_vertex_capacity(&limits);
-        plan.check(gpu, &format!("a {}x{} {} render", frame.width, frame.height, info.name))?;
         Ok(plan)
+    }
+
+    /// Keep every timed dispatch from now on, for [`Renderer::take_dispatches`].
+    pub fn trace_dispatches(&mut self) {
+        self.profile.dispatches = Some(Vec::new());
+    }
+
+    /// The dispatches kept since [`Renderer::trace_dispatches`] (and the last take).
+    pub fn take_dispatches(&mut self) -> Vec<crate::gpu::DispatchEvent> {
+        self.profile.dispatches.as_mut().map(std::mem::take).unwrap_or_default()
     }
 
     /// Iterations accumulated so far.
@@ -320,6 +338,7 @@ impl Renderer {
                 format!("{range} of {name}")
             };
             for i in 0..n {
+                self.batch.set_iteration(first + i);
                 self.est.record(&mut self.batch, (first + i) as u32).with_context(what)?;
             }
             self.batch.submit_wait(Some(&mut self.profile)).with_context(what)?;

@@ -110,6 +110,19 @@ pub fn render_metadata(out: &RenderOutput, s: &RenderSettings, p: &Provenance) -
 
 /// Writes `out` (atomically) with everything [`read_render_exr`] needs to resume it.
 pub fn write_render_exr(path: &Path, out: &RenderOutput, s: &RenderSettings, p: &Provenance) -> Result<()> {
+    write_render_exr_with(path, out, s, p, &[])
+}
+
+/// [`write_render_exr`] with more attributes (`render --reference`'s errors).
+pub fn write_render_exr_with(
+    path: &Path,
+    out: &RenderOutput,
+    s: &RenderSettings,
+    p: &Provenance,
+    more: &[(String, String)],
+) -> Result<()> {
+    let mut meta = render_metadata(out, s, p);
+    meta.extend_from_slice(more);
     let img = Image { width: out.width, height: out.height, data: out.pixels.clone() };
     let k = 1.0 / out.iterations.max(1) as f64;
     let extra: Vec<image::ExtraChannel> = MOMENT2_CHANNELS
@@ -117,7 +130,7 @@ pub fn write_render_exr(path: &Path, out: &RenderOutput, s: &RenderSettings, p: 
         .enumerate()
         .map(|(c, name)| (name.to_string(), out.sum_sq.iter().map(|q| (q[c] * k) as f32).collect()))
         .collect();
-    image::write_exr_channels(path, &img, &extra, &render_metadata(out, s, p), ExrCompression::Zip)
+    image::write_exr_channels(path, &img, &extra, &meta, ExrCompression::Zip)
 }
 
 /// Reads a render written by [`write_render_exr`]. Errors name the file and what is
