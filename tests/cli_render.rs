@@ -267,6 +267,38 @@ fn a_file_without_camera_or_lights_renders_with_the_defaults() {
     }
 }
 
+/// The frame follows the camera: a camera of aspectRatio 2 gives a 512 x 256 image by
+/// default and --width 64 alone a 64 x 32 one (both given: as given); --look-from takes
+/// negative coordinates.
+#[test]
+fn the_frame_follows_the_camera_and_negative_coordinates_parse() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/khronos/Box.gltf");
+    let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(src).unwrap()).unwrap();
+    doc["cameras"] = serde_json::json!([{"type": "perspective", "perspective": {"yfov": 0.7, "aspectRatio": 2.0, "znear": 0.1}}]);
+    doc["nodes"].as_array_mut().unwrap().push(serde_json::json!({"camera": 0, "translation": [0.0, 0.0, 4.0]}));
+    let n = doc["nodes"].as_array().unwrap().len() - 1;
+    doc["scenes"][0]["nodes"].as_array_mut().unwrap().push(serde_json::json!(n));
+    let file = dir.path().join("wide.gltf");
+    std::fs::write(&file, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let cases: [(&[&str], (u32, u32)); 4] = [
+        (&[], (512, 256)),
+        (&["--width", "64"], (64, 32)),
+        (&["--width", "20", "--height", "30"], (20, 30)),
+        (&["--height", "16", "--look-from", "-14,-14,-14", "--look-at", "-0.5,0,0"], (32, 16)),
+    ];
+    for (k, (args, size)) in cases.iter().enumerate() {
+        let exr = dir.path().join(format!("{k}.exr"));
+        let mut c = vkvcm(dir.path());
+        c.args(["render", file.to_str().unwrap(), "-a", "el", "-i", "1", "-o", exr.to_str().unwrap()]).args(*args);
+        let o = c.output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success() && error_lines(&o).is_empty(), "{args:?}: {err}");
+        let (img, _) = vkvcm::image::read_exr(&exr).unwrap();
+        assert_eq!((img.width, img.height), *size, "{args:?}");
+    }
+}
+
 /// `--env` lights a file without lights with the map instead of the white sky (no sky
 /// warning), `--env-strength` scales the image, and a missing or unreadable map is one
 /// error line naming --env.

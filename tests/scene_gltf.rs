@@ -608,13 +608,63 @@ fn the_view_can_be_set_in_world_coordinates() {
     let d = Doc::triangle();
     let mut s = d.load().unwrap();
     let origin = glam::DVec3::from_array(s.report.origin).as_vec3();
-    s.set_view(Some(glam::Vec3::new(0.0, 0.0, 5.0)), Some(glam::Vec3::ZERO), Some(0.5)).unwrap();
+    s.set_view(Some(glam::Vec3::new(0.0, 0.0, 5.0)), Some(glam::Vec3::ZERO), None, Some(0.5)).unwrap();
     assert!((s.camera.position - (glam::Vec3::new(0.0, 0.0, 5.0) - origin)).length() < 1e-5, "{:?}", s.camera);
     assert!((s.camera.forward - glam::Vec3::NEG_Z).length() < 1e-5, "{:?}", s.camera);
     assert_eq!(s.camera.yfov, 0.5);
-    assert!(s.set_view(None, None, Some(4.0)).is_err(), "a field of view past 180 degrees");
+    assert!(s.set_view(None, None, None, Some(4.0)).is_err(), "a field of view past 180 degrees");
     let p = s.camera.position + origin;
-    assert!(s.set_view(Some(p), Some(p), None).is_err(), "position = target");
+    assert!(s.set_view(Some(p), Some(p), None, None).is_err(), "position = target");
+    assert!(s.set_view(None, None, Some(Vec3::ZERO), None).is_err(), "an up direction of length 0");
+}
+
+/// A new view keeps world +Y up, not the file camera's up: Box.gltf has no camera, so its
+/// default camera looks down from 20 degrees and turned 30 degrees, and its up vector,
+/// made orthogonal to a head-on view of the +Z face, was rolled about the view (the
+/// face's edges drawn slanted). With --up the image's up is that direction.
+#[test]
+fn a_new_view_keeps_world_up() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/khronos/Box.gltf");
+    let mut s = load(&path).unwrap();
+    assert!(s.camera.up.x.abs() > 0.05, "the default camera is not tilted: the test would be vacuous {:?}", s.camera);
+    s.set_view(Some(Vec3::new(0.0, 0.0, 4.0)), None, None, None).unwrap();
+    assert!((s.camera.forward - Vec3::NEG_Z).length() < 1e-5, "{:?}", s.camera);
+    assert!((s.camera.up - Vec3::Y).length() < 1e-5, "a head-on view is rolled: {:?}", s.camera);
+    // --look-at alone, too.
+    let mut s = load(&path).unwrap();
+    s.set_view(None, Some(s.camera.position + Vec3::new(1.0, 0.0, 0.0)), None, None).unwrap();
+    assert!((s.camera.up - Vec3::Y).length() < 1e-5, "{:?}", s.camera);
+    // From below on a diagonal (negative coordinates): up is the part of +Y across the view.
+    s.set_view(Some(Vec3::new(-14.0, -14.0, -14.0)), Some(Vec3::ZERO), None, None).unwrap();
+    assert!(s.camera.up.y > 0.0 && s.camera.up.dot(s.camera.forward).abs() < 1e-5, "{:?}", s.camera);
+    assert!(s.camera.up.cross(Vec3::Y).dot(s.camera.forward).abs() < 1e-5, "up leaves the +Y plane: {:?}", s.camera);
+    s.set_view(Some(Vec3::new(0.0, 0.0, 4.0)), None, Some(Vec3::new(2.0, 0.0, 0.0)), None).unwrap();
+    assert!((s.camera.up - Vec3::X).length() < 1e-5, "--up 2,0,0: {:?}", s.camera);
+}
+
+/// A camera's aspectRatio is reported (the image's default shape); `--camera auto` frames
+/// the scene although the file has a camera; a wrong name lists the cameras and auto.
+#[test]
+fn camera_aspect_ratio_and_auto() {
+    let mut d = Doc::triangle();
+    let s = d.load().unwrap();
+    assert_eq!(s.report.camera_aspect, None);
+    d.json["cameras"][0]["perspective"]["aspectRatio"] = json!(1.5);
+    let s = d.load().unwrap();
+    assert_eq!(s.report.camera_aspect, Some(1.5));
+    let dir = tempfile::tempdir().unwrap();
+    let path = d.write(dir.path());
+    let auto = load_with(&path, &LoadOptions { camera: Some("auto".into()), ..Default::default() }).unwrap();
+    let (c, r) = auto.bounding_sphere();
+    assert_eq!(Some(auto.camera.clone()), scene::Camera::framing(c, r), "--camera auto");
+    assert_ne!(auto.camera.position, s.camera.position);
+    assert_eq!(auto.report.camera_aspect, None);
+    assert!(!auto.report.warnings.iter().any(|w| w.contains("default camera")), "{:?}", auto.report.warnings);
+    let e = err_of(load_with(&path, &LoadOptions { camera: Some("nope".into()), ..Default::default() }));
+    assert!(e.contains("available: cam") && e.contains("auto"), "{e}");
+    d.json["cameras"][0]["perspective"]["aspectRatio"] = json!(0.0);
+    let e = err_of(d.load());
+    assert!(e.contains("aspectRatio"), "{e}");
 }
 
 #[test]
