@@ -575,6 +575,55 @@ fn missing_lights_get_a_white_sky() {
     assert_eq!(s.report.warnings.iter().filter(|w| w.contains("white sky")).count(), 1, "{:?}", s.report.warnings);
 }
 
+/// LoadOptions::default_environment (vkvcm render's studio) lights a file without
+/// punctual lights and without an environment, also when it has emissive surfaces (which
+/// stay lights), with a note saying so; a punctual light or the file's own background
+/// keeps it out; `no_environment` leaves the file without any environment (no white sky).
+#[test]
+fn the_default_environment_lights_files_without_punctual_lights() {
+    use vkvcm::scene::{default_environments, EnvironmentLight, Light};
+    let studio = EnvironmentLight {
+        map: std::sync::Arc::new(default_environments::studio(16, 8).unwrap()),
+        scale: Vec3::ONE,
+        rotation_deg: 0.0,
+    };
+    let with_default = LoadOptions { default_environment: Some(studio.clone()), ..Default::default() };
+    let mut d = Doc::triangle();
+    d.json["materials"] = json!([{"emissiveFactor": [1.0, 1.0, 1.0]}]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let dir = tempfile::tempdir().unwrap();
+    let path = d.write(dir.path());
+    let s = load_with(&path, &with_default).unwrap();
+    assert!(matches!(s.lights[..], [Light::Area { .. }, Light::Environment(ref e)] if *e == studio), "{:?}", s.lights);
+    let note = s.report.lighting_note.clone().unwrap_or_default();
+    assert!(note.contains("studio") && note.contains("emissive") && note.contains("--env"), "{note}");
+    assert!(!s.report.warnings.iter().any(|w| w.contains("white sky")), "{:?}", s.report.warnings);
+    // Without the option: the emission alone, as before.
+    let s = load_with(&path, &LoadOptions::default()).unwrap();
+    assert!(matches!(s.lights[..], [Light::Area { .. }]) && s.report.lighting_note.is_none(), "{:?}", s.lights);
+    // A punctual light, or the file's background, keeps the default out.
+    for (ext, value) in [
+        ("KHR_lights_punctual", json!({"lights": [{"type": "point", "intensity": 1.0}]})),
+        ("VKVCM_background", json!({"radiance": [0.5, 0.5, 0.5]})),
+    ] {
+        let mut d = Doc::triangle();
+        d.json["extensionsUsed"] = json!([ext]);
+        d.json["extensions"] = Value::Object([(ext.to_string(), value)].into_iter().collect());
+        if ext == "KHR_lights_punctual" {
+            d.json["nodes"][0]["extensions"] = json!({"KHR_lights_punctual": {"light": 0}});
+        }
+        let s = load_with(&d.write(dir.path()), &with_default).unwrap();
+        assert!(!s.lights.iter().any(|l| matches!(l, Light::Environment(_))), "{ext}: {:?}", s.lights);
+        assert!(s.report.lighting_note.is_none(), "{ext}");
+        let none = LoadOptions { no_environment: true, ..Default::default() };
+        let s = load_with(&d.write(dir.path()), &none).unwrap();
+        assert!(!s.lights.iter().any(Light::is_environment), "{ext} --env none: {:?}", s.lights);
+    }
+    // The reference scenes keep SmallVCM's lights.
+    let glm_c = vkvcm::scene::load_named_with("glm_c", &with_default).unwrap();
+    assert!(!glm_c.lights.iter().any(Light::is_environment), "{:?}", glm_c.lights);
+}
+
 /// VKVCM_environment: the map's file relative to the scene's folder, its strength and
 /// rotation; LoadOptions::environment replaces it (and the white sky).
 #[test]

@@ -584,6 +584,7 @@ impl Scene {
     }
 }
 
+pub mod default_environments;
 pub mod environment;
 pub mod gltf_import;
 pub mod reference;
@@ -627,7 +628,9 @@ pub fn load_named_with(name_or_path: &str, options: &LoadOptions) -> anyhow::Res
                 env!("CARGO_MANIFEST_DIR")
             )
         })?;
-        let mut scene = load_with(&path, options)?;
+        // The reference scenes are lit as SmallVCM defines them: no viewer's default light.
+        let options = LoadOptions { default_environment: None, ..options.clone() };
+        let mut scene = load_with(&path, &options)?;
         check_renderable(&scene).map_err(|e| gltf_import::one_line(&path, &e))?;
         scene.name = name.to_string();
         return Ok(scene);
