@@ -243,7 +243,7 @@ fn device_loss_writes_last_snapshot() {
 
 /// A glTF file with neither a camera nor a light (the corpus triangle with a grey
 /// material and without its camera node) renders a non-black image: a default camera
-/// frames it and a white sky lights it, each announced once. `--look-from` / `--look-at`
+/// frames it and the built-in studio lights it, each announced once. `--look-from` / `--look-at`
 /// then move that camera (a view from behind the triangle still sees it: two-sided).
 #[test]
 fn a_file_without_camera_or_lights_renders_with_the_defaults() {
@@ -261,11 +261,79 @@ fn a_file_without_camera_or_lights_renders_with_the_defaults() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(o.status.success() && error_lines(&o).is_empty(), "{name}: {err}");
         assert_eq!(err.matches("default camera").count(), 1, "{name}: {err}");
-        assert_eq!(err.matches("white sky").count(), 1, "{name}: {err}");
+        assert_eq!(err.matches("built-in studio lights the scene").count(), 1, "{name}: {err}");
+        assert!(!err.contains("white sky"), "{name}: {err}");
         let (img, _) = vkvcm::image::read_exr(&exr).unwrap();
         let mean: f32 = img.data.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / img.data.len() as f32;
         assert!(mean > 0.01, "{name}: the image is black (mean {mean})");
     }
+}
+
+/// The frame follows the camera: a camera of aspectRatio 2 gives a 512 x 256 image by
+/// default and --width 64 alone a 64 x 32 one (both given: as given); --look-from takes
+/// negative coordinates.
+#[test]
+fn the_frame_follows_the_camera_and_negative_coordinates_parse() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/khronos/Box.gltf");
+    let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(src).unwrap()).unwrap();
+    doc["cameras"] =
+        serde_json::json!([{"type": "perspective", "perspective": {"yfov": 0.7, "aspectRatio": 2.0, "znear": 0.1}}]);
+    doc["nodes"].as_array_mut().unwrap().push(serde_json::json!({"camera": 0, "translation": [0.0, 0.0, 4.0]}));
+    let n = doc["nodes"].as_array().unwrap().len() - 1;
+    doc["scenes"][0]["nodes"].as_array_mut().unwrap().push(serde_json::json!(n));
+    let file = dir.path().join("wide.gltf");
+    std::fs::write(&file, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let cases: [(&[&str], (u32, u32)); 4] = [
+        (&[], (512, 256)),
+        (&["--width", "64"], (64, 32)),
+        (&["--width", "20", "--height", "30"], (20, 30)),
+        (&["--height", "16", "--look-from", "-14,-14,-14", "--look-at", "-0.5,0,0"], (32, 16)),
+    ];
+    for (k, (args, size)) in cases.iter().enumerate() {
+        let exr = dir.path().join(format!("{k}.exr"));
+        let mut c = vkvcm(dir.path());
+        c.args(["render", file.to_str().unwrap(), "-a", "el", "-i", "1", "-o", exr.to_str().unwrap()]).args(*args);
+        let o = c.output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success() && error_lines(&o).is_empty(), "{args:?}: {err}");
+        let (img, _) = vkvcm::image::read_exr(&exr).unwrap();
+        assert_eq!((img.width, img.height), *size, "{args:?}");
+    }
+}
+
+/// A file whose only lights are emissive triangles gets the studio too, with one line
+/// that says so and how to change it; `--env none` leaves only the emission (a darker
+/// image, no line), `--env sky` lights it with the sky (no line: asked for).
+#[test]
+fn emissive_only_files_get_the_studio() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/malformed/no_camera.gltf");
+    let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(src).unwrap()).unwrap();
+    doc["materials"][0] = serde_json::json!({"name": "glow", "emissiveFactor": [0.2, 0.2, 0.2]});
+    let file = dir.path().join("glow.gltf");
+    std::fs::write(&file, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let mut means = Vec::new();
+    for env in [None, Some("none"), Some("sky")] {
+        let exr = dir.path().join(format!("{env:?}.exr"));
+        let mut c = tiny(dir.path());
+        c.args([file.to_str().unwrap(), "-i", "4", "-o", exr.to_str().unwrap()]);
+        if let Some(e) = env {
+            c.args(["--env", e]);
+        }
+        let o = c.output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success() && error_lines(&o).is_empty(), "{env:?}: {err}");
+        let notes = err.lines().filter(|l| l.starts_with("note: ") && l.contains("studio")).count();
+        assert_eq!(notes, usize::from(env.is_none()), "{env:?}: {err}");
+        if env.is_none() {
+            assert!(err.contains("together with its emissive surfaces") && err.contains("--env"), "{err}");
+        }
+        let (img, _) = vkvcm::image::read_exr(&exr).unwrap();
+        means.push(img.data.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / img.data.len() as f64);
+    }
+    assert!(means[0] > 2.0 * means[1], "studio {} vs emission alone {}", means[0], means[1]);
+    assert!(means[2] > 2.0 * means[1], "sky {} vs emission alone {}", means[2], means[1]);
 }
 
 /// `--env` lights a file without lights with the map instead of the white sky (no sky

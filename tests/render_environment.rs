@@ -401,3 +401,79 @@ fn matches_mitsuba_with(gltf: &str, reference_stem: &str, estimators: &[(Algorit
     let scene = vkvcm::scene::load_with(&dir.join(gltf), &Default::default()).unwrap();
     with_gpu(|gpu| common::assert_matches_mitsuba(gpu, &scene, reference_stem, 8, estimators));
 }
+
+/// Luminance of the irradiance on a surface facing +Y, by the midpoint rule on a grid 4
+/// times finer than the texels in (u, v) (independent of the generator's own quadrature,
+/// which takes each texel once at its centre), the map's nearest texel at each point.
+fn irradiance_from_above(m: &EnvironmentMap) -> f64 {
+    const SUB: u32 = 4;
+    let (nu, nv) = (m.width * SUB, (m.height - 1) * SUB);
+    let (du, dv) = (std::f64::consts::TAU / nu as f64, std::f64::consts::PI / nv as f64);
+    let mut sum = 0.0;
+    for b in 0..nv / 2 {
+        let theta = (b as f64 + 0.5) * dv;
+        let j = ((b as f64 + 0.5) / SUB as f64).round() as u32;
+        for a in 0..nu {
+            let t = m.texel(a / SUB, j);
+            let lum = (0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2]) as f64;
+            sum += lum * theta.cos() * theta.sin() * du * dv;
+        }
+    }
+    sum
+}
+
+/// The built-in studio and sky (src/scene/default_environments.rs): deterministic, finite,
+/// not negative, normalised so that a white surface facing up has radiance 1 (irradiance
+/// pi, within 2% by an independent integration), the sky's brightest texel within a
+/// degree of the sun asked for, and parameters outside Preetham's fits refused.
+#[test]
+fn built_in_environments_are_deterministic_and_normalised() {
+    use vkvcm::scene::default_environments::{sky, studio, SkyParameters};
+    let p = SkyParameters { sun_azimuth_deg: -60.0, sun_elevation_deg: 30.0, turbidity: 4.0 };
+    for (name, make) in [
+        ("studio", Box::new(|| studio(256, 128).unwrap()) as Box<dyn Fn() -> EnvironmentMap>),
+        ("sky", Box::new(move || sky(512, 256, &p).unwrap())),
+    ] {
+        let (a, b) = (make(), make());
+        assert!(a == b, "{name}: two maps differ");
+        assert!(a.texels.iter().flatten().all(|c| c.is_finite() && *c >= 0.0), "{name}");
+        let e = irradiance_from_above(&a);
+        assert!((e / std::f64::consts::PI - 1.0).abs() < 0.02, "{name}: irradiance from above {e}, not pi");
+    }
+    let m = sky(512, 256, &p).unwrap();
+    let brightest = (0..m.texels.len()).max_by(|&x, &y| m.texels[x][1].total_cmp(&m.texels[y][1])).unwrap() as u32;
+    let (u, v) = ((brightest % m.width) as f32 + 0.5, (brightest / m.width) as f32);
+    let (theta, phi) = (v / (m.height - 1) as f32 * std::f32::consts::PI, u / m.width as f32 * std::f32::consts::TAU);
+    let d = Vec3::new(theta.sin() * phi.sin(), theta.cos(), -theta.sin() * phi.cos());
+    let (az, el) = ((-60f32).to_radians(), 30f32.to_radians());
+    let sun = Vec3::new(el.cos() * az.sin(), el.sin(), el.cos() * az.cos());
+    assert!(d.dot(sun).acos().to_degrees() < 1.0, "brightest texel along {d}, sun along {sun}");
+    for bad in [
+        SkyParameters { turbidity: 1.0, ..p },
+        SkyParameters { sun_elevation_deg: 0.0, ..p },
+        SkyParameters { sun_elevation_deg: 91.0, ..p },
+    ] {
+        assert!(sky(64, 32, &bad).is_err(), "{bad:?}");
+    }
+}
+
+/// The studio and the sky are sampled as their radiance says: path tracing with
+/// next-event estimation (which draws directions from the map's distribution) against
+/// BSDF sampling alone, per pixel (Welch), on the environment test scene. Small maps (the
+/// sky's sun then spans a few degrees), so that BSDF sampling finds it often enough to
+/// have a usable variance.
+#[test]
+fn built_in_environments_are_importance_sampled_without_bias() {
+    use vkvcm::scene::default_environments::{sky, studio, SkyParameters};
+    let maps = [("studio", studio(64, 32).unwrap()), ("sky", sky(32, 16, &SkyParameters::default()).unwrap())];
+    with_gpu(|gpu| {
+        for (name, map) in maps {
+            let scene = environment_scene(map, 10.0);
+            let pt = stats(gpu, &scene, Algorithm::Pt, 1024);
+            let mut bsdf_only = settings(Algorithm::Pt, 4096, 5);
+            bsdf_only.nee = false;
+            let pt_bsdf = render_stats(&render_with(gpu, &scene, &bsdf_only), None);
+            welch_test(&pt, &pt_bsdf, ALPHA).unwrap().assert_passed(&format!("env_{name}_nee_vs_bsdf"));
+        }
+    });
+}

@@ -575,6 +575,55 @@ fn missing_lights_get_a_white_sky() {
     assert_eq!(s.report.warnings.iter().filter(|w| w.contains("white sky")).count(), 1, "{:?}", s.report.warnings);
 }
 
+/// LoadOptions::default_environment (vkvcm render's studio) lights a file without
+/// punctual lights and without an environment, also when it has emissive surfaces (which
+/// stay lights), with a note saying so; a punctual light or the file's own background
+/// keeps it out; `no_environment` leaves the file without any environment (no white sky).
+#[test]
+fn the_default_environment_lights_files_without_punctual_lights() {
+    use vkvcm::scene::{default_environments, EnvironmentLight, Light};
+    let studio = EnvironmentLight {
+        map: std::sync::Arc::new(default_environments::studio(16, 8).unwrap()),
+        scale: Vec3::ONE,
+        rotation_deg: 0.0,
+    };
+    let with_default = LoadOptions { default_environment: Some(studio.clone()), ..Default::default() };
+    let mut d = Doc::triangle();
+    d.json["materials"] = json!([{"emissiveFactor": [1.0, 1.0, 1.0]}]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let dir = tempfile::tempdir().unwrap();
+    let path = d.write(dir.path());
+    let s = load_with(&path, &with_default).unwrap();
+    assert!(matches!(s.lights[..], [Light::Area { .. }, Light::Environment(ref e)] if *e == studio), "{:?}", s.lights);
+    let note = s.report.lighting_note.clone().unwrap_or_default();
+    assert!(note.contains("studio") && note.contains("emissive") && note.contains("--env"), "{note}");
+    assert!(!s.report.warnings.iter().any(|w| w.contains("white sky")), "{:?}", s.report.warnings);
+    // Without the option: the emission alone, as before.
+    let s = load_with(&path, &LoadOptions::default()).unwrap();
+    assert!(matches!(s.lights[..], [Light::Area { .. }]) && s.report.lighting_note.is_none(), "{:?}", s.lights);
+    // A punctual light, or the file's background, keeps the default out.
+    for (ext, value) in [
+        ("KHR_lights_punctual", json!({"lights": [{"type": "point", "intensity": 1.0}]})),
+        ("VKVCM_background", json!({"radiance": [0.5, 0.5, 0.5]})),
+    ] {
+        let mut d = Doc::triangle();
+        d.json["extensionsUsed"] = json!([ext]);
+        d.json["extensions"] = Value::Object([(ext.to_string(), value)].into_iter().collect());
+        if ext == "KHR_lights_punctual" {
+            d.json["nodes"][0]["extensions"] = json!({"KHR_lights_punctual": {"light": 0}});
+        }
+        let s = load_with(&d.write(dir.path()), &with_default).unwrap();
+        assert!(!s.lights.iter().any(|l| matches!(l, Light::Environment(_))), "{ext}: {:?}", s.lights);
+        assert!(s.report.lighting_note.is_none(), "{ext}");
+        let none = LoadOptions { no_environment: true, ..Default::default() };
+        let s = load_with(&d.write(dir.path()), &none).unwrap();
+        assert!(!s.lights.iter().any(Light::is_environment), "{ext} --env none: {:?}", s.lights);
+    }
+    // The reference scenes keep SmallVCM's lights.
+    let glm_c = vkvcm::scene::load_named_with("glm_c", &with_default).unwrap();
+    assert!(!glm_c.lights.iter().any(Light::is_environment), "{:?}", glm_c.lights);
+}
+
 /// VKVCM_environment: the map's file relative to the scene's folder, its strength and
 /// rotation; LoadOptions::environment replaces it (and the white sky).
 #[test]
@@ -587,7 +636,7 @@ fn environment_extension_and_override() {
     assert_eq!(envs.len(), 1, "{:?}", s.lights);
     assert_eq!((envs[0].map.width, envs[0].map.height), (128, 64));
     assert_eq!((envs[0].scale, envs[0].rotation_deg), (glam::Vec3::ONE, 30.0));
-    assert!(s.report.warnings.is_empty(), "{:?}", s.report.warnings);
+    assert!(s.report.warnings.iter().all(|w| !w.contains("occlusion")), "{:?}", s.report.warnings);
     let other = EnvironmentLight {
         map: std::sync::Arc::new(EnvironmentMap::constant(4, 3, [2.0; 3])),
         scale: glam::Vec3::splat(0.5),
@@ -608,13 +657,63 @@ fn the_view_can_be_set_in_world_coordinates() {
     let d = Doc::triangle();
     let mut s = d.load().unwrap();
     let origin = glam::DVec3::from_array(s.report.origin).as_vec3();
-    s.set_view(Some(glam::Vec3::new(0.0, 0.0, 5.0)), Some(glam::Vec3::ZERO), Some(0.5)).unwrap();
+    s.set_view(Some(glam::Vec3::new(0.0, 0.0, 5.0)), Some(glam::Vec3::ZERO), None, Some(0.5)).unwrap();
     assert!((s.camera.position - (glam::Vec3::new(0.0, 0.0, 5.0) - origin)).length() < 1e-5, "{:?}", s.camera);
     assert!((s.camera.forward - glam::Vec3::NEG_Z).length() < 1e-5, "{:?}", s.camera);
     assert_eq!(s.camera.yfov, 0.5);
-    assert!(s.set_view(None, None, Some(4.0)).is_err(), "a field of view past 180 degrees");
+    assert!(s.set_view(None, None, None, Some(4.0)).is_err(), "a field of view past 180 degrees");
     let p = s.camera.position + origin;
-    assert!(s.set_view(Some(p), Some(p), None).is_err(), "position = target");
+    assert!(s.set_view(Some(p), Some(p), None, None).is_err(), "position = target");
+    assert!(s.set_view(None, None, Some(Vec3::ZERO), None).is_err(), "an up direction of length 0");
+}
+
+/// A new view keeps world +Y up, not the file camera's up: Box.gltf has no camera, so its
+/// default camera looks down from 20 degrees and turned 30 degrees, and its up vector,
+/// made orthogonal to a head-on view of the +Z face, was rolled about the view (the
+/// face's edges drawn slanted). With --up the image's up is that direction.
+#[test]
+fn a_new_view_keeps_world_up() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/khronos/Box.gltf");
+    let mut s = load(&path).unwrap();
+    assert!(s.camera.up.x.abs() > 0.05, "the default camera is not tilted: the test would be vacuous {:?}", s.camera);
+    s.set_view(Some(Vec3::new(0.0, 0.0, 4.0)), None, None, None).unwrap();
+    assert!((s.camera.forward - Vec3::NEG_Z).length() < 1e-5, "{:?}", s.camera);
+    assert!((s.camera.up - Vec3::Y).length() < 1e-5, "a head-on view is rolled: {:?}", s.camera);
+    // --look-at alone, too.
+    let mut s = load(&path).unwrap();
+    s.set_view(None, Some(s.camera.position + Vec3::new(1.0, 0.0, 0.0)), None, None).unwrap();
+    assert!((s.camera.up - Vec3::Y).length() < 1e-5, "{:?}", s.camera);
+    // From below on a diagonal (negative coordinates): up is the part of +Y across the view.
+    s.set_view(Some(Vec3::new(-14.0, -14.0, -14.0)), Some(Vec3::ZERO), None, None).unwrap();
+    assert!(s.camera.up.y > 0.0 && s.camera.up.dot(s.camera.forward).abs() < 1e-5, "{:?}", s.camera);
+    assert!(s.camera.up.cross(Vec3::Y).dot(s.camera.forward).abs() < 1e-5, "up leaves the +Y plane: {:?}", s.camera);
+    s.set_view(Some(Vec3::new(0.0, 0.0, 4.0)), None, Some(Vec3::new(2.0, 0.0, 0.0)), None).unwrap();
+    assert!((s.camera.up - Vec3::X).length() < 1e-5, "--up 2,0,0: {:?}", s.camera);
+}
+
+/// A camera's aspectRatio is reported (the image's default shape); `--camera auto` frames
+/// the scene although the file has a camera; a wrong name lists the cameras and auto.
+#[test]
+fn camera_aspect_ratio_and_auto() {
+    let mut d = Doc::triangle();
+    let s = d.load().unwrap();
+    assert_eq!(s.report.camera_aspect, None);
+    d.json["cameras"][0]["perspective"]["aspectRatio"] = json!(1.5);
+    let s = d.load().unwrap();
+    assert_eq!(s.report.camera_aspect, Some(1.5));
+    let dir = tempfile::tempdir().unwrap();
+    let path = d.write(dir.path());
+    let auto = load_with(&path, &LoadOptions { camera: Some("auto".into()), ..Default::default() }).unwrap();
+    let (c, r) = auto.bounding_sphere();
+    assert_eq!(Some(auto.camera.clone()), scene::Camera::framing(c, r), "--camera auto");
+    assert_ne!(auto.camera.position, s.camera.position);
+    assert_eq!(auto.report.camera_aspect, None);
+    assert!(!auto.report.warnings.iter().any(|w| w.contains("default camera")), "{:?}", auto.report.warnings);
+    let e = err_of(load_with(&path, &LoadOptions { camera: Some("nope".into()), ..Default::default() }));
+    assert!(e.contains("available: cam") && e.contains("auto"), "{e}");
+    d.json["cameras"][0]["perspective"]["aspectRatio"] = json!(0.0);
+    let e = err_of(d.load());
+    assert!(e.contains("aspectRatio"), "{e}");
 }
 
 #[test]
@@ -732,7 +831,7 @@ fn punctual_lights() {
     let Light::Directional { direction, irradiance } = s.lights[2] else { panic!() };
     assert_close(direction, Vec3::NEG_X);
     assert_eq!(irradiance, Vec3::new(1.5, 3.0, 3.0));
-    assert!(s.report.warnings.is_empty(), "{:?}", s.report.warnings);
+    assert!(s.report.warnings.iter().all(|w| !w.contains("occlusion")), "{:?}", s.report.warnings);
 }
 
 #[test]
@@ -1778,9 +1877,10 @@ fn tangents_are_read_and_follow_mirroring() {
 
 /// emissiveTexture is read (sRGB, as the base colour) when the material emits:
 /// emission = emissiveFactor x texture; without a factor (glTF's default 0) nothing emits
-/// and the texture is not kept. occlusionTexture is named in its own warning.
+/// and the texture is not kept. occlusionTexture, which a path tracer does not need (it
+/// computes occlusion), gives no warning.
 #[test]
-fn emissive_textures_are_read_and_occlusion_is_named() {
+fn emissive_textures_are_read_and_occlusion_is_silent() {
     let mut d = Doc::textured();
     d.json["materials"] = json!([{
         "name": "glow",
@@ -1793,7 +1893,7 @@ fn emissive_textures_are_read_and_occlusion_is_named() {
     assert_eq!(m.emission, Vec3::new(1.0, 0.5, 0.25));
     assert_eq!(m.emissive_texture.as_ref().map(|t| (t.image, t.tex_coord)), Some((0, 0)));
     assert!(s.report.warnings.iter().all(|w| !w.contains("emissiveTexture")), "{:?}", s.report.warnings);
-    assert!(s.report.warnings.iter().any(|w| w.contains("occlusionTexture is ignored")), "{:?}", s.report.warnings);
+    assert!(s.report.warnings.iter().all(|w| !w.contains("occlusion")), "{:?}", s.report.warnings);
     assert!(matches!(s.lights[0], vkvcm::scene::Light::Area { .. }));
 
     d.json["materials"][0].as_object_mut().unwrap().remove("emissiveFactor");

@@ -13,20 +13,32 @@ use clap::Args;
 
 use vkvcm::gpu::GpuOptions;
 
-/// The environment-map options of the commands that render a scene (docs/environment.md).
+/// The environment options of the commands that render a scene (docs/environment.md).
 #[derive(Args, Clone, Debug)]
 pub struct EnvArgs {
-    /// Light the scene with an equirectangular environment map (Radiance .hdr or OpenEXR;
-    /// row 0 is the sky, the image centre looks along +Z: docs/environment.md) instead of
-    /// the file's background or the default white sky. Importance-sampled.
-    #[arg(long, value_name = "FILE")]
-    pub env: Option<std::path::PathBuf>,
+    /// Light the scene with `studio` (a neutral studio: a grey room with soft lights),
+    /// `sky` (an analytic daylight sky with a sun, Preetham et al. 1999), an
+    /// equirectangular map FILE (Radiance .hdr or OpenEXR; row 0 is the sky, the image
+    /// centre looks along +Z: docs/environment.md; ./studio for a file of that name), or
+    /// `none`, instead of the file's own environment. Default: the file's; a file with
+    /// neither punctual lights nor an environment gets the studio. Importance-sampled.
+    #[arg(long, value_name = "studio|sky|FILE|none")]
+    pub env: Option<String>,
     /// With --env: radiance scale of the map.
     #[arg(long, value_name = "S", default_value_t = 1.0, requires = "env")]
     pub env_strength: f32,
     /// With --env: turn the map about the world's +Y axis by DEG degrees (right-handed).
     #[arg(long, value_name = "DEG", default_value_t = 0.0, allow_negative_numbers = true, requires = "env")]
     pub env_rotate: f32,
+    /// With --env sky: the sun's height above the horizon, in (0, 90] degrees (default 45).
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    pub sun_elevation: Option<f32>,
+    /// With --env sky: the sun's direction in degrees from +Z towards +X (default 30).
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    pub sun_azimuth: Option<f32>,
+    /// With --env sky: the air's turbidity, 2 (very clear) to 10 (hazy) (default 3).
+    #[arg(long, value_name = "T")]
+    pub turbidity: Option<f32>,
 }
 
 impl EnvArgs {
@@ -38,21 +50,44 @@ impl EnvArgs {
         if !self.env_rotate.is_finite() {
             bail!("--env-rotate {}: must be a number of degrees", self.env_rotate);
         }
+        let sky_options = self.sun_elevation.is_some() || self.sun_azimuth.is_some() || self.turbidity.is_some();
+        if sky_options && self.env.as_deref() != Some("sky") {
+            bail!("--sun-elevation, --sun-azimuth and --turbidity shape --env sky, which is not chosen");
+        }
         Ok(())
     }
 
-    /// Scene load options with the map read (`camera` as `--camera` gives it; the file's
-    /// default glTF scene).
+    /// Scene load options with the environment made or read (`camera` as `--camera`
+    /// gives it; the file's default glTF scene).
     pub fn load_options(&self, camera: Option<String>) -> Result<vkvcm::scene::LoadOptions> {
-        let environment = match &self.env {
-            Some(path) => Some(vkvcm::scene::EnvironmentLight {
-                map: std::sync::Arc::new(vkvcm::scene::EnvironmentMap::load(path).context("--env")?),
-                scale: glam::Vec3::splat(self.env_strength),
-                rotation_deg: self.env_rotate,
-            }),
-            None => None,
+        use vkvcm::scene::default_environments::{self as defaults, SkyParameters};
+        let light = |map| vkvcm::scene::EnvironmentLight {
+            map: std::sync::Arc::new(map),
+            scale: glam::Vec3::splat(self.env_strength),
+            rotation_deg: self.env_rotate,
         };
-        Ok(vkvcm::scene::LoadOptions { camera, environment, ..Default::default() })
+        let studio = || defaults::studio(defaults::STUDIO_SIZE.0, defaults::STUDIO_SIZE.1);
+        let mut options = vkvcm::scene::LoadOptions { camera, ..Default::default() };
+        match self.env.as_deref() {
+            None => options.default_environment = Some(light(studio()?)),
+            Some("none") => options.no_environment = true,
+            Some("studio") => options.environment = Some(light(studio()?)),
+            Some("sky") => {
+                let d = SkyParameters::default();
+                let p = SkyParameters {
+                    sun_azimuth_deg: self.sun_azimuth.unwrap_or(d.sun_azimuth_deg),
+                    sun_elevation_deg: self.sun_elevation.unwrap_or(d.sun_elevation_deg),
+                    turbidity: self.turbidity.unwrap_or(d.turbidity),
+                };
+                let map = defaults::sky(defaults::SKY_SIZE.0, defaults::SKY_SIZE.1, &p).context("--env sky")?;
+                options.environment = Some(light(map));
+            }
+            Some(path) => {
+                let map = vkvcm::scene::EnvironmentMap::load(std::path::Path::new(path)).context("--env")?;
+                options.environment = Some(light(map));
+            }
+        }
+        Ok(options)
     }
 }
 

@@ -30,9 +30,18 @@ pub struct RenderArgs {
     /// --resume: this many more seconds).
     #[arg(long, short = 't')]
     pub time: Option<f64>,
-    #[arg(long, default_value_t = 512)]
+    /// Image width (default: 512 pixels on the longer side, the other following the
+    /// camera's aspect ratio: a glTF camera's aspectRatio, else square; one of --width
+    /// and --height alone sets the other by that ratio).
+    #[arg(long = "width", value_name = "PIXELS")]
+    pub width_arg: Option<u32>,
+    /// Image height (default: see --width).
+    #[arg(long = "height", value_name = "PIXELS")]
+    pub height_arg: Option<u32>,
+    /// The frame's size, from --width/--height and the camera (`frame_size`).
+    #[arg(skip)]
     pub width: u32,
-    #[arg(long, default_value_t = 512)]
+    #[arg(skip)]
     pub height: u32,
     #[arg(long, default_value_t = 1234)]
     pub seed: u32,
@@ -74,8 +83,8 @@ pub struct RenderArgs {
     /// With --connect cache: light vertices connected to per camera vertex.
     #[arg(long, default_value_t = vkvcm::render::DEFAULT_CACHE_CONNECTIONS)]
     pub cache_connections: u32,
-    /// Camera to use, by node or camera name (default: the first one; a file without a
-    /// camera gets one that frames the scene).
+    /// Camera to use, by node or camera name, or `auto`: one that frames the scene
+    /// (default: the file's first camera, else auto).
     #[arg(long)]
     pub camera: Option<String>,
     /// glTF files with several scenes: render the scene with this name, else with this
@@ -88,12 +97,17 @@ pub struct RenderArgs {
     #[arg(long)]
     pub flatten_instances: bool,
     /// Put the camera at X,Y,Z (the file's world coordinates); it then looks at the
-    /// centre of the scene unless --look-at says otherwise.
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3)]
+    /// centre of the scene unless --look-at says otherwise, with world +Y up unless --up
+    /// says otherwise.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
     pub look_from: Option<glam::Vec3>,
     /// Point the camera at X,Y,Z (the file's world coordinates).
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3)]
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
     pub look_at: Option<glam::Vec3>,
+    /// The direction that is up in the image (default with --look-from / --look-at:
+    /// world +Y; alone it turns the file's camera about its view).
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub up: Option<glam::Vec3>,
     /// Vertical field of view in degrees.
     #[arg(long, value_name = "DEGREES")]
     pub fov: Option<f32>,
@@ -265,10 +279,10 @@ fn kernel_cache_line(gpu: &Gpu) -> String {
 
 /// Checks the arguments that need no scene or device; errors name the option.
 fn check_args(a: &RenderArgs) -> Result<()> {
-    if a.width == 0 {
+    if a.width_arg == Some(0) {
         bail!("--width 0: the image width must be at least 1 pixel");
     }
-    if a.height == 0 {
+    if a.height_arg == Some(0) {
         bail!("--height 0: the image height must be at least 1 pixel");
     }
     if a.iterations == Some(0) {
@@ -302,7 +316,7 @@ fn check_args(a: &RenderArgs) -> Result<()> {
 
 /// Renders; `Some(Class::Interrupted)` when SIGINT or SIGTERM stopped it (what was
 /// rendered is written).
-pub fn render_cmd(a: RenderArgs) -> Result<Option<Class>> {
+pub fn render_cmd(mut a: RenderArgs) -> Result<Option<Class>> {
     check_args(&a).class(Class::Usage)?;
     if let Some(p) = &a.profile_trace {
         check_writable(p).context("--profile-trace")?;
@@ -312,6 +326,7 @@ pub fn render_cmd(a: RenderArgs) -> Result<Option<Class>> {
         let _p = super::trace::phase("scene load");
         load_scene(&a).class(Class::Scene)?
     };
+    (a.width, a.height) = frame_size(a.width_arg, a.height_arg, scene.report.camera_aspect);
     let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}_{}.exr", scene.name, a.algo.name())));
     check_writable(&output).context("--output")?;
     if let Some(p) = &a.png {
@@ -398,14 +413,35 @@ fn load_scene(a: &RenderArgs) -> Result<scene::Scene> {
         ..a.env.load_options(a.camera.clone())?
     };
     let mut scene = scene::load_named_with(&scene_name, &options)?;
-    scene.set_view(a.look_from, a.look_at, a.fov.map(f32::to_radians)).context("--look-from / --look-at / --fov")?;
+    scene
+        .set_view(a.look_from, a.look_at, a.up, a.fov.map(f32::to_radians))
+        .context("--look-from / --look-at / --up / --fov")?;
     for w in &scene.report.warnings {
         eprintln!("warning: {w}");
+    }
+    if let Some(n) = &scene.report.lighting_note {
+        eprintln!("note: {n}");
     }
     if scene.report.degenerate_triangles > 0 {
         eprintln!("warning: skipped {} degenerate triangle(s)", scene.report.degenerate_triangles);
     }
     Ok(scene)
+}
+
+/// The frame's size: --width and --height, else 512 pixels on the longer side with the
+/// camera's `aspect` (width / height; square without one), one given side setting the
+/// other by it, as a glTF viewer shows a camera of that aspect ratio.
+pub fn frame_size(width: Option<u32>, height: Option<u32>, aspect: Option<f32>) -> (u32, u32) {
+    const LONG_SIDE: u32 = 512;
+    let aspect = aspect.filter(|a| *a > 0.0 && a.is_finite()).unwrap_or(1.0) as f64;
+    let side = |x: f64| (x.round() as u32).max(1);
+    match (width, height) {
+        (Some(w), Some(h)) => (w, h),
+        (Some(w), None) => (w, side(w as f64 / aspect)),
+        (None, Some(h)) => (side(h as f64 * aspect), h),
+        (None, None) if aspect >= 1.0 => (LONG_SIDE, side(LONG_SIDE as f64 / aspect)),
+        (None, None) => (side(LONG_SIDE as f64 * aspect), LONG_SIDE),
+    }
 }
 
 /// The render settings the arguments ask for.

@@ -498,7 +498,13 @@ pub struct LoadReport {
     /// World position (in the file's coordinates, f64) that the importer moved to the
     /// origin: the chosen camera's position. Scene coordinates are camera-relative.
     pub origin: [f64; 3],
+    /// The chosen glTF camera's `aspectRatio` (width / height), when it has one: the
+    /// image's default shape (`vkvcm render` without --width/--height).
+    pub camera_aspect: Option<f32>,
     pub warnings: Vec<String>,
+    /// What lit the scene when the importer chose its light (the default environment),
+    /// one line for the user; none otherwise.
+    pub lighting_note: Option<String>,
 }
 
 /// A scene ready for BVH construction and rendering.
@@ -578,6 +584,7 @@ impl Scene {
     }
 }
 
+pub mod default_environments;
 pub mod environment;
 pub mod gltf_import;
 pub mod reference;
@@ -621,7 +628,9 @@ pub fn load_named_with(name_or_path: &str, options: &LoadOptions) -> anyhow::Res
                 env!("CARGO_MANIFEST_DIR")
             )
         })?;
-        let mut scene = load_with(&path, options)?;
+        // The reference scenes are lit as SmallVCM defines them: no viewer's default light.
+        let options = LoadOptions { default_environment: None, ..options.clone() };
+        let mut scene = load_with(&path, &options)?;
         check_renderable(&scene).map_err(|e| gltf_import::one_line(&path, &e))?;
         scene.name = name.to_string();
         return Ok(scene);
@@ -795,16 +804,19 @@ impl Scene {
         ((lo + hi) * 0.5, (hi - lo).length_squared().sqrt() * 0.5)
     }
 
-    /// Points the camera as the command line asks (`--look-from`, `--look-at`, `--fov`),
-    /// in the file's world coordinates (the importer re-centred the scene on
+    /// Points the camera as the command line asks (`--look-from`, `--look-at`, `--up`,
+    /// `--fov`), in the file's world coordinates (the importer re-centred the scene on
     /// `report.origin`, which is subtracted here). A position without a target looks at
     /// the centre of the scene's bounds; a target without a position keeps the camera
-    /// where it is. The up direction stays the camera's, made orthogonal to the new
-    /// view (world +Y if the view is along it).
+    /// where it is. A new view keeps `up`, else world +Y (as glTF viewers' orbit cameras
+    /// do), made orthogonal to the view; the file camera's own up is not kept, since a
+    /// tilted camera moved to look head-on at a face would draw it rotated. `up` alone
+    /// turns the camera about its viewing direction.
     pub fn set_view(
         &mut self,
         look_from: Option<Vec3>,
         look_at: Option<Vec3>,
+        up: Option<Vec3>,
         yfov: Option<f32>,
     ) -> anyhow::Result<()> {
         let origin = glam::DVec3::from_array(self.report.origin);
@@ -815,7 +827,12 @@ impl Scene {
             }
             self.camera.yfov = f;
         }
-        if look_from.is_none() && look_at.is_none() {
+        if let Some(u) = up {
+            if u.try_normalize().is_none() {
+                anyhow::bail!("the up direction {u} has no length");
+            }
+        }
+        if look_from.is_none() && look_at.is_none() && up.is_none() {
             return Ok(());
         }
         let position = look_from.map(local).unwrap_or(self.camera.position);
@@ -826,7 +843,7 @@ impl Scene {
                 self.camera.position + self.camera.forward
             }
         });
-        let camera = Camera::looking_at(position, target, self.camera.up, self.camera.yfov)
+        let camera = Camera::looking_at(position, target, up.unwrap_or(Vec3::Y), self.camera.yfov)
             .ok_or_else(|| anyhow::anyhow!("the camera's position and target are the same point"))?;
         self.camera = camera;
         Ok(())

@@ -152,7 +152,12 @@ case("uri_drive_letter.gltf", doc(set_(["buffers", 0, "uri"], "C:\\\\x.bin")), "
 case("uri_directory.gltf", doc(set_(["buffers", 0, "uri"], ".")), "buffer 0")
 
 # Features, structure, content.
-case("required_extension.gltf", doc(set_(["extensionsRequired"], ["KHR_draco_mesh_compression"])), "unsupported required extension(s) KHR_draco_mesh_compression")
+case("required_extension.gltf", doc(set_(["extensionsRequired"], ["KHR_materials_clearcoat"])), "unsupported required extension(s) KHR_materials_clearcoat")
+# Compression extensions: refused with the tool that removes them.
+case("required_draco.gltf", doc(set_(["extensionsRequired"], ["KHR_draco_mesh_compression"])), "KHR_draco_mesh_compression is not supported: Draco-compressed meshes are not decoded: decompress the file with `gltf-transform cp")
+case("required_meshopt.gltf", doc(set_(["extensionsRequired"], ["EXT_meshopt_compression"])), "EXT_meshopt_compression is not supported: meshopt-compressed buffers are not decoded: decompress the file with `gltfpack")
+case("required_basisu.gltf", doc(set_(["extensionsRequired"], ["KHR_texture_basisu"])), "KHR_texture_basisu is not supported: KTX2 / Basis Universal textures are not decoded")
+case("required_webp.gltf", doc(set_(["extensionsRequired"], ["EXT_texture_webp"])), "EXT_texture_webp is not supported: WebP textures are not decoded: convert them to PNG with `gltf-transform png")
 case("no_scenes.gltf", doc(lambda d: (d.pop("scenes"), d.pop("scene"))), "the file has no scene")
 case("scene_index_out_of_range.gltf", doc(set_(["scene"], 5)), "scene")
 case("no_nodes.gltf", doc(set_(["scenes", 0, "nodes"], [])), "no geometry for a default camera to frame")

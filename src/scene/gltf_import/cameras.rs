@@ -15,6 +15,8 @@ pub(super) struct CameraCandidate {
     /// The node's world transform (re-centred, f32).
     world: Mat4,
     yfov: f32,
+    /// glTF's `aspectRatio` (width / height), when given.
+    aspect: Option<f32>,
     /// The node's index.
     node: usize,
 }
@@ -29,6 +31,7 @@ impl Importer<'_> {
                 camera_name: cam.name().map(str::to_string),
                 world,
                 yfov: p.yfov(),
+                aspect: p.aspect_ratio(),
                 node: node.index(),
             }),
             gltf::camera::Projection::Orthographic(_) => {
@@ -49,6 +52,8 @@ impl Importer<'_> {
     /// orthographic one, and lists the perspective cameras).
     pub(super) fn choose_camera(&mut self, options: &LoadOptions) -> Result<Camera> {
         let chosen = match &options.camera {
+            // `--camera auto`: the framing camera, whatever cameras the file has.
+            Some(want) if want == AUTO_CAMERA => return self.framing_camera(),
             Some(want) => self
                 .cameras
                 .iter()
@@ -71,17 +76,16 @@ impl Importer<'_> {
                         Some((_, _, node)) => anyhow!(
                             "camera '{want}' (node {node}) is orthographic: orthographic cameras are not supported (perspective cameras: {names})"
                         ),
-                        None => anyhow!("no perspective camera named '{want}' (available: {names})"),
+                        None => anyhow!(
+                            "no perspective camera named '{want}' (available: {names}; or {AUTO_CAMERA}, a camera that frames the scene)"
+                        ),
                     }
                 })?,
             None => {
                 match self.cameras.first() {
                     Some(c) => c,
                     None => {
-                        let (c, r) = self.scene.bounding_sphere();
-                        let camera = Camera::framing(c, r).ok_or_else(|| {
-                        anyhow!("no perspective camera in the default scene, and no geometry for a default camera to frame")
-                    })?;
+                        let camera = self.framing_camera()?;
                         self.warnings.warn(
                         "no perspective camera: a default camera frames the scene (from the front, +Z, turned 30 degrees right and 20 degrees up, 40-degree field of view; --look-from, --look-at, --fov change it)",
                         "",
@@ -102,9 +106,25 @@ impl Importer<'_> {
         if !(chosen.yfov > 0.0 && chosen.yfov < std::f32::consts::PI) {
             bail!("camera node {}: yfov {} is not in (0, pi)", chosen.node, chosen.yfov);
         }
+        let aspect = chosen.aspect.filter(|a| *a > 0.0 && a.is_finite());
+        if let Some(a) = chosen.aspect.filter(|a| !(*a > 0.0 && a.is_finite())) {
+            bail!("camera node {}: aspectRatio {a} is not a positive number", chosen.node);
+        }
+        self.scene.report.camera_aspect = aspect;
         Ok(Camera { position, forward, up, yfov: chosen.yfov })
     }
+
+    /// The camera that frames the scene's geometry ([`Camera::framing`]).
+    fn framing_camera(&self) -> Result<Camera> {
+        let (c, r) = self.scene.bounding_sphere();
+        Camera::framing(c, r).ok_or_else(|| {
+            anyhow!("no perspective camera in the default scene, and no geometry for a default camera to frame")
+        })
+    }
 }
+
+/// `--camera auto` (`LoadOptions::camera`): frame the scene even when the file has cameras.
+pub const AUTO_CAMERA: &str = "auto";
 
 /// World position of the camera the importer will choose (the one named `want`, else the
 /// first perspective camera in traversal order), or the origin when there is none: the

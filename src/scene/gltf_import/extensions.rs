@@ -37,6 +37,27 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     EXT_ENVIRONMENT,
 ];
 
+/// Compression extensions that vkvcm does not decode, each with what it compresses and a
+/// tool that writes the file without it (the message of a file that requires one).
+pub const REFUSED_COMPRESSION: &[(&str, &str)] = &[
+    (
+        "KHR_draco_mesh_compression",
+        "Draco-compressed meshes are not decoded: decompress the file with `gltf-transform cp IN OUT` (glTF-Transform decodes Draco as it reads)",
+    ),
+    (
+        "EXT_meshopt_compression",
+        "meshopt-compressed buffers are not decoded: decompress the file with `gltfpack -i IN -o OUT` (without -c; gltfpack reads meshopt input from version 0.21)",
+    ),
+    (
+        "KHR_texture_basisu",
+        "KTX2 / Basis Universal textures are not decoded: convert them to PNG or JPEG (e.g. with KTX-Software's `ktx extract`; glTF-Transform cannot decode KTX2)",
+    ),
+    (
+        "EXT_texture_webp",
+        "WebP textures are not decoded: convert them to PNG with `gltf-transform png IN OUT`",
+    ),
+];
+
 /// Applies the extension policy to `root`. glTF 2.0 (section 3.12): a loader that does not
 /// support an extension listed in `extensionsRequired` must not load the asset, so those
 /// are errors; unknown extensions that are only used become warnings (one per name).
@@ -48,6 +69,10 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
 pub(super) fn check_extensions(root: &mut json::Root, warnings: &mut Warnings) -> Result<bool> {
     let unsupported: Vec<&str> =
         root.extensions_required.iter().map(String::as_str).filter(|e| !SUPPORTED_EXTENSIONS.contains(e)).collect();
+    // Compressed assets are common and have a one-command fix: name it.
+    if let Some((ext, why)) = REFUSED_COMPRESSION.iter().find(|(e, _)| unsupported.contains(e)) {
+        bail!("required extension {ext} is not supported: {why}");
+    }
     if !unsupported.is_empty() {
         bail!(
             "unsupported required extension(s) {} (extensionsRequired; supported: {})",

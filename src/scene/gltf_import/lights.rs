@@ -60,8 +60,9 @@ impl Importer<'_> {
 
     /// The scene's light list, in this order: area lights (in triangle order), punctual
     /// lights (in node order), the background (`options.environment`, else the file's).
-    /// Emissive spheres are not light sources (a warning); a scene without any light gets
-    /// a uniform white sky and a warning.
+    /// Emissive spheres are not light sources (a warning). Without punctual lights and an
+    /// environment, `options.default_environment` is added; a scene still without any light
+    /// gets a uniform white sky and a warning. `options.no_environment` adds none.
     pub(super) fn collect_lights(&mut self, options: &LoadOptions) -> Result<()> {
         for (i, t) in self.scene.triangles.iter().enumerate() {
             let e = self.scene.materials[t.material as usize].emission;
@@ -78,7 +79,11 @@ impl Importer<'_> {
                 );
             }
         }
+        let has_punctual = !self.punctual.is_empty();
         self.scene.lights.append(&mut self.punctual);
+        if options.no_environment {
+            return Ok(());
+        }
         if let Some(env) = &options.environment {
             self.scene.lights.push(Light::Environment(env.clone()));
         } else {
@@ -97,6 +102,17 @@ impl Importer<'_> {
                 let light = self.environment_light(env)?;
                 self.scene.lights.push(Light::Environment(light));
             }
+        }
+        let has_environment = self.scene.lights.iter().any(Light::is_environment);
+        if let (Some(env), false, false) = (&options.default_environment, has_punctual, has_environment) {
+            // Emissive surfaces alone leave most of a model (DamagedHelmet, ToyCar) black:
+            // viewers add their environment to them too.
+            let with = if self.scene.lights.is_empty() { "" } else { " together with its emissive surfaces" };
+            self.scene.report.lighting_note = Some(format!(
+                "the file has no punctual light and no environment: the built-in {} lights the scene{with} (--env studio|sky|FILE|none chooses another)",
+                env.map.source
+            ));
+            self.scene.lights.push(Light::Environment(env.clone()));
         }
         if self.scene.lights.is_empty() {
             // A file without lights is lit as glTF viewers light it by default.

@@ -223,12 +223,9 @@ impl Importer<'_> {
         if m.normal_texture().is_some() && phong {
             textures.push("normalTexture");
         }
-        if m.occlusion_texture().is_some() {
-            // Ambient occlusion is what the estimators compute from the geometry; a baked
-            // occlusion map would darken it twice.
-            self.warnings
-                .warn("occlusionTexture is ignored (light transport computes occlusion from the geometry)", label);
-        }
+        // occlusionTexture is read silently as nothing: ambient occlusion is what light
+        // transport computes from the geometry, and a baked map would darken it twice, so
+        // there is nothing missing to warn about.
         if m.transmission().and_then(|t| t.transmission_texture()).is_some() {
             textures.push("transmissionTexture");
         }

@@ -73,6 +73,14 @@ pub struct LoadOptions {
     /// (`VKVCM_background` / `VKVCM_environment`, which are then not read) or the default
     /// white sky (`vkvcm render --env`).
     pub environment: Option<EnvironmentLight>,
+    /// The environment of a file that has neither punctual lights nor an environment of
+    /// its own (`VKVCM_background` / `VKVCM_environment`), emissive surfaces or not, as
+    /// glTF viewers light such files (`vkvcm render`'s default: the studio,
+    /// src/scene/default_environments.rs); it sets `LoadReport::lighting_note`. `None`:
+    /// only a file without any light gets a light, the uniform white sky.
+    pub default_environment: Option<EnvironmentLight>,
+    /// No environment at all, not even the file's own or the white sky (`--env none`).
+    pub no_environment: bool,
     /// Store every mesh placement as world-space triangles, even of meshes that several
     /// nodes (or `EXT_mesh_gpu_instancing`) place, which are otherwise stored once and
     /// instanced (`vkvcm render --flatten-instances`; the image is the same up to float
