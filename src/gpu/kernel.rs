@@ -306,7 +306,7 @@ fn check_bindings(limits: &vk::PhysicalDeviceLimits, chosen: &[(&ReflectedBindin
     for (r, b) in chosen {
         let buf = b.buffer;
         let (max, what) = if r.descriptor_type == vk::DescriptorType::STORAGE_BUFFER {
-            (limits.max_storage_buffer_range as u64, "bytes (maxStorageBufferRange)")
+            (limits.max_storage_buffer_range as u64, "bytes (maxStorageBufferRange); use a smaller image or scene")
         } else {
             let (_, texel) = b.texels.format_and_size();
             if buf.size() % texel != 0 {
@@ -316,14 +316,13 @@ fn check_bindings(limits: &vk::PhysicalDeviceLimits, chosen: &[(&ReflectedBindin
                     buf.size()
                 );
             }
-            (limits.max_texel_buffer_elements as u64 * texel, "bytes as texels (maxTexelBufferElements)")
+            (
+                limits.max_texel_buffer_elements as u64 * texel,
+                "bytes as texels (maxTexelBufferElements); --reads storage reads it from a storage buffer",
+            )
         };
         if buf.size() > max {
-            bail!(
-                "buffer {:?} needs {} bytes but this device binds at most {max} {what}; use a smaller image or scene",
-                buf.name(),
-                buf.size(),
-            );
+            bail!("buffer {:?} needs {} bytes but this device binds at most {max} {what}", buf.name(), buf.size(),);
         }
     }
     Ok(())
