@@ -123,9 +123,11 @@ impl Gpu {
     /// the compiled kernel declares takes the buffer of the same name in `bindings`, as
     /// the kind of descriptor the kernel declares (storage or texel buffer); `bindings`
     /// may hold buffers the kernel does not declare (a variant that compiles a binding
-    /// out), and a declared binding without a buffer is an error.
+    /// out), and a declared binding without a buffer is an error. A kernel that needs a
+    /// feature the device lacks (64-bit integers or atomics) is refused before any
+    /// Vulkan object is created for it.
     pub fn kernel(self: &Arc<Self>, source: &str, defines: &[(&str, &str)], bindings: &[Bind]) -> Result<Kernel> {
-        let (module, interface) = self.shaders.module(&self.device, source, defines)?;
+        let (module, interface) = self.shaders.module(&self.device, source, defines, &|f| self.has(f))?;
         let chosen = choose(source, &interface, bindings)?;
         check_bindings(&self.limits, &chosen).with_context(|| format!("kernel {source}"))?;
         let dev = &self.device;
