@@ -35,12 +35,16 @@ fn kernels_needing_64_bit_integers_are_refused_before_they_are_created() {
     with_gpu_without_int64(|gpu| {
         let input = gpu.buffer_zeroed::<[u32; 2]>("test_input", 4).unwrap();
         let output = gpu.buffer_zeroed::<[u32; 2]>("test_output", 4).unwrap();
-        let e = gpu.kernel("tests/u64_to_float.comp", &[], &[Bind::own(&input), Bind::own(&output)]).err();
-        let e = format!("{:#}", e.expect("a kernel with 64-bit integers was built on a device without them"));
+        let Err(e) = gpu.kernel("tests/u64_to_float.comp", &[], &[Bind::own(&input), Bind::own(&output)]) else {
+            panic!("a kernel with 64-bit integers was built on a device without them")
+        };
+        let e = format!("{e:#}");
         assert!(e.contains("u64_to_float.comp") && e.contains(SHADER_INT64), "{e}");
         let keys = gpu.buffer_zeroed::<u32>("keys", 4).unwrap();
         let binds = [Bind::u32("Keys", &keys), Bind::u32("Hist", &keys), Bind::u32("Sum", &output)];
-        let e = gpu.kernel("tests/atomics.comp", &[], &binds).err().expect("a kernel with 64-bit atomics was built");
+        let Err(e) = gpu.kernel("tests/atomics.comp", &[], &binds) else {
+            panic!("a kernel with 64-bit atomics was built")
+        };
         let e = format!("{e:#}");
         assert!(e.contains("atomics.comp") && e.contains("shaderInt64"), "{e}");
     });
@@ -52,7 +56,7 @@ fn the_renderer_refuses_64_bit_atomics_and_renders_with_32() {
         let scene = vkvcm::scene::load_named("gbs_s").unwrap();
         let mut s = RenderSettings::new(Algorithm::Lt, 8, 8, Budget::Iterations(1));
         s.atomics = Some(SplatAtomics::Bits64);
-        let e = Renderer::new(gpu, &scene, &s).err().expect("--atomics 64 accepted without 64-bit atomics");
+        let Err(e) = Renderer::new(gpu, &scene, &s) else { panic!("--atomics 64 accepted without 64-bit atomics") };
         assert!(format!("{e:#}").contains("--atomics 32"), "{e:#}");
         s.atomics = None;
         let out = vkvcm::render::render(gpu, &scene, &s, None, &mut |_| {}).unwrap();

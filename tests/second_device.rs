@@ -82,7 +82,7 @@ fn reads_chosen_at_the_devices_own_texel_limit_render() {
         let scene = vkvcm::scene::load_named("gbs_s").unwrap();
         let s = RenderSettings::new(Algorithm::Vcm, side, side, Budget::Iterations(1));
         let forced = RenderSettings { reads: Some(Reads::Texel), ..s.clone() };
-        let e = Renderer::plan_for(gpu, &scene, &forced).err().expect("grid_start fits the texel limit");
+        let Err(e) = Renderer::plan_for(gpu, &scene, &forced) else { panic!("grid_start fits the texel limit") };
         assert!(format!("{e:#}").contains("--reads storage"), "{e:#}");
         let mut r = Renderer::new(gpu, &scene, &s).unwrap();
         assert_eq!(r.store_reads(), Reads::Storage, "{side}x{side}: the store and grid are over the texel limit");
