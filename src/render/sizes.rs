@@ -279,7 +279,9 @@ mod tests {
         assert!(e.to_string().contains("--reads storage") && e.to_string().contains("401 bytes"), "{e}");
         let both = BufferSize::new("grid_start", 100).reached(Access::StorageAndTexelU32);
         assert!(check_sizes(&[both], &l, "x").is_ok());
-        let e = check_sizes(&[BufferSize { bytes: 101, ..both }], &l, "x").unwrap_err().to_string();
+        // Bound both ways: the smaller of the two limits applies (here the storage one).
+        let wide_texels = SizeLimits { texel_elements: 50, ..l };
+        let e = check_sizes(&[BufferSize { bytes: 101, ..both }], &wide_texels, "x").unwrap_err().to_string();
         assert!(e.contains("maxStorageBufferRange") && e.contains("101 bytes") && e.contains("100 bytes"), "{e}");
         let tight = SizeLimits { texel_elements: 10, ..l };
         let e = check_sizes(&[BufferSize { bytes: 41, ..both }], &tight, "x").unwrap_err().to_string();
