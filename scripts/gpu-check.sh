@@ -27,6 +27,7 @@ quick=0
 if [ "${1:-}" = "--quick" ]; then quick=1; shift; fi
 out=${1:-gpu-check-$(date -u +%Y%m%d-%H%M%S)}
 mkdir -p "$out/json" "$out/logs" "$out/renders"
+out=$(cd "$out" && pwd) # absolute: the tests' kernel cache lies in it
 started=$(date +%s)
 
 features=(--workspace --features vkvcm/fault-injection)
@@ -53,7 +54,7 @@ chosen=$(grep -m1 -E '^[0-9]+:' "$out/devices.txt" || true)
 
 # Tests: their own kernel cache in the folder, so that nothing of an earlier run is used.
 echo "gpu-check.sh: tests ($(printf '%s ' "${tests[@]}"))"
-if VKVCM_TEST_KERNEL_CACHE=$(pwd)/$out/test-kernel-cache timeout "${TEST_TIMEOUT:-300}" \
+if VKVCM_TEST_KERNEL_CACHE=$out/test-kernel-cache timeout "${TEST_TIMEOUT:-300}" \
   cargo test -q "${features[@]}" "${tests[@]}" -- --test-threads=2 > "$out/tests.log" 2>&1; then
   tests_result="passed"
 else
