@@ -1,11 +1,14 @@
 # vkvcm: the two set-up commands of README.md.
 #   make render  - install what is missing (Debian 12, as root), build, render the default scene
 #   make test    - install what is missing, build, run the whole test suite (validation on)
+#                  on lavapipe, a set on SwiftShader, and gpu-check --quick
+#   make gpu-check - on a machine with a GPU: devices, the statistical tests, a benchmark
+#                  matrix at 1920x1080 (scripts/gpu-check.sh; about ten minutes)
 # Tests run on lavapipe unless VKVCM_TEST_DEVICE names another device.
 
 LVP_ICD := $(firstword $(wildcard /usr/share/vulkan/icd.d/lvp_icd.x86_64.json /usr/share/vulkan/icd.d/lvp_icd.json))
 
-.PHONY: setup build render test clippy fmt
+.PHONY: setup build render test test-swiftshader gpu-check clippy fmt
 
 setup:
 	bash scripts/setup-debian.sh
@@ -23,10 +26,24 @@ render: build
 # fault-injection feature, which the tests of device loss and device limits need.
 TEST_KERNEL_CACHE := $(CURDIR)/target/test-kernel-cache
 
+#
+# Then a set of the tests on SwiftShader, a second Vulkan implementation with other limits
+# (scripts/test-swiftshader.sh says which and why), and the GPU check's quick mode on
+# lavapipe with the binary the tests built, so that it cannot rot.
 test: setup
 	rm -rf $(TEST_KERNEL_CACHE)
 	VK_DRIVER_FILES=$(LVP_ICD) VK_ICD_FILENAMES=$(LVP_ICD) VKVCM_TEST_KERNEL_CACHE=$(TEST_KERNEL_CACHE) \
 		cargo test --workspace --features vkvcm/fault-injection -- --test-threads=2
+	$(MAKE) --no-print-directory test-swiftshader
+	rm -rf target/gpu-check-quick
+	VK_DRIVER_FILES=$(LVP_ICD) VK_ICD_FILENAMES=$(LVP_ICD) VKVCM=target/debug/vkvcm VKVCM_CACHE_DIR=$(TEST_KERNEL_CACHE) \
+		bash scripts/gpu-check.sh --quick target/gpu-check-quick
+
+test-swiftshader:
+	LVP_ICD=$(LVP_ICD) VKVCM_TEST_KERNEL_CACHE=$(TEST_KERNEL_CACHE) bash scripts/test-swiftshader.sh
+
+gpu-check:
+	bash scripts/gpu-check.sh
 
 clippy:
 	cargo clippy --workspace --all-targets -- -D warnings

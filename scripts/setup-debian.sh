@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs what vkvcm needs on a fresh Debian 12 (bookworm) machine, as root.
-# Idempotent: a second run installs nothing new. See docs/toolchain.md (1, 2) for why
+# Idempotent: a second run installs nothing new. SwiftShader, the second Vulkan
+# implementation of the tests, is installed by install-swiftshader.sh. See docs/toolchain.md (1, 2) for why
 # Mesa comes from bookworm-backports (lavapipe's storage-buffer reads are ~9x faster).
 set -euo pipefail
 
@@ -41,4 +42,6 @@ if [ "$need" = 1 ]; then
   apt-get install -y -q --no-install-recommends $pkgs
   apt-get install -y -q --no-install-recommends -t bookworm-backports mesa-vulkan-drivers
 fi
+# The second Vulkan implementation the tests run on (Makefile, test-swiftshader).
+bash "$(dirname "$0")/install-swiftshader.sh"
 echo "setup-debian.sh: Vulkan toolchain ready (mesa-vulkan-drivers $(dpkg-query -W -f='${Version}' mesa-vulkan-drivers))"

@@ -515,6 +515,12 @@ fn prepare_renderer(
         eprintln!("paths per invocation: {} ({how})", r.paths_per_invocation());
         let how = if a.reads.is_some() { "--reads" } else { "chosen for the device" };
         eprintln!("read-only buffers read as: {} buffers ({how})", r.reads().name());
+        if r.store_reads() != r.reads() {
+            eprintln!(
+                "light-vertex store and hash grid read as: {} buffers (over the texel limit)",
+                r.store_reads().name()
+            );
+        }
         let how = if a.atomics.is_some() { "--atomics" } else { "chosen for the device" };
         eprintln!("splats summed with {}-bit atomics ({how})", r.atomics().name());
         eprint!("{}", render::features::buffer_table(&r.buffers()));

@@ -314,7 +314,12 @@ fn device_limits(instance: &ash::Instance, pd: vk::PhysicalDevice, l: &vk::Physi
         ),
         report(
             "maxTexelBufferElements",
-            format!("{} M texels", l.max_texel_buffer_elements as u64 >> 20),
+            // Exact: SwiftShader's 65536 would print as 0 M.
+            format!(
+                "{} texels ({} bytes of 16-byte texels)",
+                l.max_texel_buffer_elements,
+                l.max_texel_buffer_elements as u64 * 16
+            ),
             "the largest texel buffer (checked per render)",
         ),
         report(

@@ -1,5 +1,5 @@
 //! Fault injection for tests. With the `fault-injection` cargo feature (which `make test`
-//! turns on) four environment variables, each read once per process, simulate faults;
+//! turns on) five environment variables, each read once per process, simulate faults;
 //! without it (the product) every hook here is a no-op and no variable is read:
 //!
 //! * `VKVCM_TEST_FAIL_AFTER_BATCHES=N`: the (N+1)-th and every later `Batch::submit_wait`
@@ -10,6 +10,9 @@
 //!   that tests/render_atomics.rs can run the fallbacks of docs/devices.md on lavapipe;
 //! * `VKVCM_TEST_MAX_BINDING_BYTES=N`: the device binds at most N bytes per buffer, so
 //!   that tests/render_addresses.rs reaches the binding limits with tiny frames;
+//! * `VKVCM_TEST_MAX_TEXEL_ELEMENTS=N`: the device binds at most N texels per texel
+//!   buffer (maxTexelBufferElements) and its other limits are left alone, as on
+//!   SwiftShader (65536), so that tests/render_reads.rs reaches the texel limit on lavapipe;
 //! * `VKVCM_TEST_SCENE_CHUNK_BYTES=N`: scene arrays read in chunks (past one binding) are
 //!   split into chunks of at most N bytes, so that tests reach several chunks with tiny
 //!   scenes.
@@ -76,8 +79,17 @@ pub(crate) fn capped_binding_limits(mut limits: vk::PhysicalDeviceLimits) -> vk:
         limits.max_storage_buffer_range = limits.max_storage_buffer_range.min(cap);
         limits.max_texel_buffer_elements = limits.max_texel_buffer_elements.min(cap / 16);
     }
+    static TEXELS: OnceLock<Option<u32>> = OnceLock::new();
+    if let Some(texels) =
+        *TEXELS.get_or_init(|| std::env::var(MAX_TEXEL_ELEMENTS_VAR).ok().and_then(|v| v.trim().parse::<u32>().ok()))
+    {
+        limits.max_texel_buffer_elements = limits.max_texel_buffer_elements.min(texels);
+    }
     limits
 }
+
+/// The environment variable that caps maxTexelBufferElements alone at its value in texels.
+pub const MAX_TEXEL_ELEMENTS_VAR: &str = "VKVCM_TEST_MAX_TEXEL_ELEMENTS";
 
 /// The environment variable that caps the chunk of scene arrays read in chunks
 /// (src/render/sizes.rs, `scene_chunk_bytes`).

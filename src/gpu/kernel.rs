@@ -123,9 +123,11 @@ impl Gpu {
     /// the compiled kernel declares takes the buffer of the same name in `bindings`, as
     /// the kind of descriptor the kernel declares (storage or texel buffer); `bindings`
     /// may hold buffers the kernel does not declare (a variant that compiles a binding
-    /// out), and a declared binding without a buffer is an error.
+    /// out), and a declared binding without a buffer is an error. A kernel that needs a
+    /// feature the device lacks (64-bit integers or atomics) is refused before any
+    /// Vulkan object is created for it.
     pub fn kernel(self: &Arc<Self>, source: &str, defines: &[(&str, &str)], bindings: &[Bind]) -> Result<Kernel> {
-        let (module, interface) = self.shaders.module(&self.device, source, defines)?;
+        let (module, interface) = self.shaders.module(&self.device, source, defines, &|f| self.has(f))?;
         let chosen = choose(source, &interface, bindings)?;
         check_bindings(&self.limits, &chosen).with_context(|| format!("kernel {source}"))?;
         let dev = &self.device;
@@ -306,7 +308,7 @@ fn check_bindings(limits: &vk::PhysicalDeviceLimits, chosen: &[(&ReflectedBindin
     for (r, b) in chosen {
         let buf = b.buffer;
         let (max, what) = if r.descriptor_type == vk::DescriptorType::STORAGE_BUFFER {
-            (limits.max_storage_buffer_range as u64, "bytes (maxStorageBufferRange)")
+            (limits.max_storage_buffer_range as u64, "bytes (maxStorageBufferRange); use a smaller image or scene")
         } else {
             let (_, texel) = b.texels.format_and_size();
             if buf.size() % texel != 0 {
@@ -316,14 +318,13 @@ fn check_bindings(limits: &vk::PhysicalDeviceLimits, chosen: &[(&ReflectedBindin
                     buf.size()
                 );
             }
-            (limits.max_texel_buffer_elements as u64 * texel, "bytes as texels (maxTexelBufferElements)")
+            (
+                limits.max_texel_buffer_elements as u64 * texel,
+                "bytes as texels (maxTexelBufferElements); --reads storage reads it from a storage buffer",
+            )
         };
         if buf.size() > max {
-            bail!(
-                "buffer {:?} needs {} bytes but this device binds at most {max} {what}; use a smaller image or scene",
-                buf.name(),
-                buf.size(),
-            );
+            bail!("buffer {:?} needs {} bytes but this device binds at most {max} {what}", buf.name(), buf.size(),);
         }
     }
     Ok(())

@@ -13,7 +13,7 @@ use std::collections::HashMap;
 use anyhow::{anyhow, bail, Result};
 use ash::vk;
 use rspirv_reflect::rspirv::dr::Operand;
-use rspirv_reflect::rspirv::spirv::Op;
+use rspirv_reflect::rspirv::spirv::{Capability, Op};
 use rspirv_reflect::{DescriptorType, Reflection};
 
 /// One descriptor binding of set 0.
@@ -31,6 +31,26 @@ pub struct KernelInterface {
     pub bindings: Vec<ReflectedBinding>,
     /// `local_size_x, y, z`.
     pub local_size: [u32; 3],
+    /// The device features (names of src/gpu/context.rs's feature list) its SPIR-V
+    /// capabilities need, of those vkvcm enables only where the device has them.
+    pub needs: Vec<&'static str>,
+}
+
+/// The SPIR-V capabilities that need an optional device feature, with its name: a
+/// module declaring one on a device without the feature is invalid, and a driver may
+/// abort on it (SwiftShader: SIGILL), so no such module is created.
+const FEATURE_CAPABILITIES: [(Capability, &str); 2] =
+    [(Capability::Int64, super::SHADER_INT64), (Capability::Int64Atomics, super::SHADER_INT64_ATOMICS)];
+
+impl KernelInterface {
+    /// Fails, naming the feature, when the kernel `name` needs one that `has` says the
+    /// device lacks.
+    pub fn check_features(&self, name: &str, has: impl Fn(&str) -> bool) -> Result<()> {
+        if let Some(f) = self.needs.iter().find(|f| !has(f)) {
+            bail!("kernel {name} needs {f}, which this device lacks (or vkvcm did not enable)");
+        }
+        Ok(())
+    }
 }
 
 /// Reflects the compute kernel `name` (for messages) from its SPIR-V words.
@@ -63,7 +83,16 @@ pub fn reflect(name: &str, spirv: &[u32]) -> Result<KernelInterface> {
             bail!("kernel {name}: bindings {other} and {} are both named {:?}", b.binding, b.name);
         }
     }
-    Ok(KernelInterface { bindings, local_size: [x, y, z] })
+    let declared: Vec<Capability> =
+        r.0.capabilities
+            .iter()
+            .filter_map(|i| match i.operands.first() {
+                Some(Operand::Capability(c)) => Some(*c),
+                _ => None,
+            })
+            .collect();
+    let needs = FEATURE_CAPABILITIES.iter().filter(|(c, _)| declared.contains(c)).map(|&(_, f)| f).collect();
+    Ok(KernelInterface { bindings, local_size: [x, y, z], needs })
 }
 
 /// For each variable of set 0 with a binding: the name of the block type it points to

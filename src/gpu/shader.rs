@@ -335,6 +335,7 @@ impl ShaderCache {
         device: &ash::Device,
         name: &str,
         defines: &[(&str, &str)],
+        has: &dyn Fn(&str) -> bool,
     ) -> Result<(vk::ShaderModule, KernelInterface)> {
         let src = source(name).ok_or_else(|| anyhow!("no kernel named {name:?} in glsl/"))?;
         let sources = ResolvedSources::new(name, &src);
@@ -359,6 +360,8 @@ impl ShaderCache {
                 (spirv, interface)
             }
         };
+        // Before the module exists: refused, not created, when the device lacks a feature.
+        interface.check_features(name, has)?;
         let spirv = strip_debug_info(&spirv);
         let info = vk::ShaderModuleCreateInfo::default().code(&spirv);
         // SAFETY: SPIR-V from shaderc (or as shaderc wrote it to the kernel cache: the

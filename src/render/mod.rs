@@ -95,7 +95,8 @@ impl Renderer {
         let frame = &settings.frame;
         let plan = Self::plan_for(gpu, scene, settings)?;
         let features = features::FeatureSet::new(scene, settings.generic).with_count_rays(settings.count_rays);
-        let reads = reads::Reads::resolve(gpu, settings.reads)?;
+        // The plan's reads, which it checked (it reads from storage what exceeds a texel limit).
+        let reads = plan.reads;
         let atomics = atomics::SplatAtomics::resolve(gpu, settings.atomics)?;
         let scene_gpu = SceneGpu::with_features(gpu, scene, frame, &features, reads, atomics, plan.scene.chunk_bytes)?;
         let film = Film::new(gpu, &plan.film)?;
@@ -165,8 +166,10 @@ impl Renderer {
             light_sizing,
             light_k,
         )?;
+        plan.reads_chosen = settings.reads.is_none();
         let limits = sizes::SizeLimits::of(gpu);
         plan.scene.chunk_if_over_binding(&limits, device_addresses);
+        plan.read_from_storage_where_over(scene, &limits);
         plan.fit_light_vertex_capacity(&limits);
         Ok(plan)
     }
@@ -199,6 +202,12 @@ impl Renderer {
     /// How the kernels read their read-only buffers ([`reads`]).
     pub fn reads(&self) -> reads::Reads {
         self.scene_gpu.reads()
+    }
+
+    /// How the camera kernel first reads the light-vertex store and the hash grid (a store
+    /// grown past a texel limit is read from storage, when the reads were chosen).
+    pub fn store_reads(&self) -> reads::Reads {
+        self.plan.store_reads
     }
 
     /// How splats are summed (src/render/atomics.rs).

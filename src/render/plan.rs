@@ -35,6 +35,17 @@ pub struct FramePlan {
     pub light_paths: u32,
     /// Paths per kernel invocation (path regeneration, src/render/regen.rs).
     pub paths_per_invocation: u32,
+    /// How the kernels read the scene (TEXEL_READS, src/render/reads.rs).
+    pub reads: Reads,
+    /// How the camera kernel reads the light-vertex store, its offsets and the hash grid
+    /// (STORE_TEXEL_READS): chosen apart from the scene's, as their sizes grow with the
+    /// frame rather than the scene.
+    pub store_reads: Reads,
+    /// Whether the reads were chosen for the device (no `--reads`): then a buffer over a
+    /// texel limit is read from storage instead ([`FramePlan::read_from_storage_where_over`]).
+    pub reads_chosen: bool,
+    /// Whether the device has buffer device addresses (how the frame's buffers are reached).
+    pub device_addresses: bool,
     /// Upper bounds of the scene's buffers (their sizes are exact after the BVH build).
     pub scene: ScenePlan,
     pub film: FilmPlan,
@@ -68,12 +79,6 @@ impl FramePlan {
         light_paths_per_invocation: impl Fn(u32) -> u32,
     ) -> Result<FramePlan> {
         let frame_access = if device_addresses { Access::Address } else { Access::Storage };
-        // The camera kernel reads the store and the grid entries as texels with texel reads.
-        let read_access = match (device_addresses, reads) {
-            (false, _) => Access::Storage,
-            (true, Reads::Texel) => Access::Texel,
-            (true, Reads::Storage) => Access::Address,
-        };
         let prims = scene.triangles.len() + scene.spheres.len() + 3 * scene.instances.len();
         if prims > crate::bvh::layout::MAX_PRIMS {
             bail!(
@@ -84,9 +89,8 @@ impl FramePlan {
         }
         let pixels = s.frame.width * s.frame.height;
         let light_paths = s.light_paths();
-        // The offsets are read by the camera kernel as uint texels with texel reads.
-        let offsets_access = if read_access == Access::Texel { Access::TexelU32 } else { read_access };
-        let access = LightVertexAccess { frame: frame_access, vertices: read_access, offsets: offsets_access };
+        // The store's read access is set by `set_store_reads` below.
+        let access = LightVertexAccess { frame: frame_access, vertices: frame_access, offsets: frame_access };
         let light_vertices = techniques.light_subpaths.then(|| {
             LightVertexPlan::new(
                 pixels,
@@ -102,19 +106,80 @@ impl FramePlan {
         let grid = match &light_vertices {
             Some(lv) if techniques.vertex_merging => {
                 let plan = GridPlan::new(light_paths, lv.capacity, grid_buckets(light_paths as u64));
-                Some(plan.reached(read_access, frame_access))
+                Some(plan.reached(frame_access, frame_access))
             }
             _ => None,
         };
-        Ok(FramePlan {
+        let mut plan = FramePlan {
             pixels,
             light_paths,
             paths_per_invocation,
+            reads,
+            store_reads: reads,
+            reads_chosen: false,
+            device_addresses,
             scene: ScenePlan::new(scene, reads, device_addresses),
             film: FilmPlan::new(s.frame.width, s.frame.height, frame_access),
             light_vertices,
             grid,
-        })
+        };
+        plan.set_store_reads(reads);
+        Ok(plan)
+    }
+
+    /// Makes the camera kernel read the light-vertex store, its offsets and the hash
+    /// grid's entries as `reads`, and sets how each of those buffers is reached: written
+    /// by address (or bound as storage buffers without addresses) and, with texel reads,
+    /// also bound as texel buffers; `grid_start` is always bound as a storage buffer by
+    /// the grid's build (src/render/passes/hash_grid.rs).
+    pub fn set_store_reads(&mut self, reads: Reads) {
+        self.store_reads = reads;
+        let written = if self.device_addresses { Access::Address } else { Access::Storage };
+        let texel = |bytes: u64| (reads == Reads::Texel).then_some(bytes);
+        if let Some(lv) = &mut self.light_vertices {
+            lv.vertices_a = lv.vertices_a.reached(written.with_texels(texel(16)));
+            lv.vertices_b = lv.vertices_b.reached(written.with_texels(texel(16)));
+            lv.offsets = lv.offsets.reached(written.with_texels(texel(4)));
+        }
+        if let Some(g) = &mut self.grid {
+            g.points = g.points.reached(written.with_texels(texel(16)));
+            g.start = g.start.reached(Access::Storage.with_texels(texel(4)));
+        }
+    }
+
+    /// Where the reads were chosen for the device (`reads_chosen`) and a buffer read as
+    /// texels is larger than the device's texel limit allows, reads it from storage
+    /// instead, so that the automatic choice is never one the plan refuses: the scene's
+    /// buffers all together (they share TEXEL_READS), and apart from them the store and
+    /// the grid (STORE_TEXEL_READS). `scene` rebuilds the scene's part; the scene is
+    /// chunked again as [`ScenePlan::chunk_if_over_binding`] would. Returns whether
+    /// anything changed.
+    pub fn read_from_storage_where_over(&mut self, scene: &Scene, limits: &SizeLimits) -> bool {
+        if !self.reads_chosen {
+            return false;
+        }
+        let over = |b: &BufferSize| b.access.texel_bytes().is_some() && b.bytes > limits.max_bytes(b);
+        let mut changed = false;
+        if self.reads == Reads::Texel && self.scene.buffers().iter().any(over) {
+            self.reads = Reads::Storage;
+            self.scene = ScenePlan::new(scene, Reads::Storage, self.device_addresses);
+            self.scene.chunk_if_over_binding(limits, self.device_addresses);
+            changed = true;
+        }
+        if self.store_over_texel_limit(limits) {
+            self.set_store_reads(Reads::Storage);
+            changed = true;
+        }
+        changed
+    }
+
+    /// Whether the camera kernel reads the store or the grid as texels and one of their
+    /// buffers is larger than the device's texel limit allows.
+    fn store_over_texel_limit(&self, limits: &SizeLimits) -> bool {
+        let over = |b: &BufferSize| b.access.texel_bytes().is_some() && b.bytes > limits.max_bytes(b);
+        let mut store = self.light_vertices.iter().flat_map(|p| p.buffers()).collect::<Vec<_>>();
+        store.extend(self.grid.iter().flat_map(|p| p.buffers()));
+        self.store_reads == Reads::Texel && store.iter().any(over)
     }
 
     /// Every buffer.
@@ -141,6 +206,13 @@ impl FramePlan {
         let lv = self.light_vertices.as_ref().expect("an estimator that stores light vertices has a store");
         let mut grown = self.clone();
         grown.set_light_vertex_capacity(grown_capacity(needed, lv));
+        // A store grown past the texel limit is read from storage (when the reads were
+        // chosen for the device): the estimator rebuilds its kernels from this plan.
+        let mut at_least = grown.clone();
+        at_least.set_light_vertex_capacity(needed);
+        if self.reads_chosen && at_least.store_over_texel_limit(&SizeLimits::of(gpu)) {
+            grown.set_store_reads(Reads::Storage);
+        }
         // The margin only as far as the device allows; `needed` itself is checked below.
         grown.fit_light_vertex_capacity(&SizeLimits::of(gpu));
         let capacity = grown.light_vertices.as_ref().map_or(needed, |lv| lv.capacity.max(needed));

@@ -17,6 +17,11 @@ pub enum Access {
     Texel,
     /// As [`Access::Texel`], of 4-byte (`uint`) texels.
     TexelU32,
+    /// Bound as a storage buffer by one kernel and as a uniform texel buffer of 16-byte
+    /// texels by another: both limits apply.
+    StorageAndTexel,
+    /// As [`Access::StorageAndTexel`], of 4-byte (`uint`) texels.
+    StorageAndTexelU32,
     /// Reached by device address (src/render/addresses.rs): limited by the allocation size
     /// and by [`MAX_ADDRESSED_BYTES`].
     Address,
@@ -51,6 +56,31 @@ impl BufferSize {
     }
 }
 
+impl Access {
+    /// The size in bytes of one texel, when a kernel binds the buffer as a texel buffer.
+    pub fn texel_bytes(self) -> Option<u64> {
+        match self {
+            Access::Texel | Access::StorageAndTexel => Some(16),
+            Access::TexelU32 | Access::StorageAndTexelU32 => Some(4),
+            _ => None,
+        }
+    }
+
+    /// This access with the texel binding of `texel_bytes` added (or removed with `None`):
+    /// how the store's buffers are reached with and without texel reads.
+    pub fn with_texels(self, texel_bytes: Option<u64>) -> Access {
+        let storage = matches!(self, Access::Storage | Access::StorageAndTexel | Access::StorageAndTexelU32);
+        match (storage, texel_bytes) {
+            (_, None) if storage => Access::Storage,
+            (_, None) => self,
+            (true, Some(16)) => Access::StorageAndTexel,
+            (true, Some(_)) => Access::StorageAndTexelU32,
+            (false, Some(16)) => Access::Texel,
+            (false, Some(_)) => Access::TexelU32,
+        }
+    }
+}
+
 /// `bytes` in MiB for messages.
 pub fn mib(bytes: u64) -> String {
     let m = bytes as f64 / (1u64 << 20) as f64;
@@ -58,6 +88,16 @@ pub fn mib(bytes: u64) -> String {
         format!("{m:.2} MiB")
     } else {
         format!("{m:.0} MiB")
+    }
+}
+
+/// `needed` and `max` for a message: in MiB, or in bytes where MiB would print them alike
+/// (262148 bytes against 262144 both print as 0.25 MiB).
+pub fn sizes_apart(needed: u64, max: u64) -> (String, String) {
+    if mib(needed) == mib(max) {
+        (format!("{needed} bytes"), format!("{max} bytes"))
+    } else {
+        (mib(needed), mib(max))
     }
 }
 
@@ -122,10 +162,18 @@ impl SizeLimits {
             Access::Storage => {
                 Some((self.storage_binding, "the device binds at most {} per storage buffer (maxStorageBufferRange)"))
             }
-            Access::Texel | Access::TexelU32 => {
-                let texel = if b.access == Access::Texel { 16 } else { 4 };
+            Access::Texel | Access::TexelU32 | Access::StorageAndTexel | Access::StorageAndTexelU32 => {
+                let texel = b.access.texel_bytes().unwrap_or(16);
                 let max = self.texel_elements.saturating_mul(texel);
-                Some((max, "the device binds at most {} per texel buffer (maxTexelBufferElements)"))
+                let storage_too = matches!(b.access, Access::StorageAndTexel | Access::StorageAndTexelU32);
+                if storage_too && self.storage_binding < max {
+                    Some((
+                        self.storage_binding,
+                        "the device binds at most {} per storage buffer (maxStorageBufferRange)",
+                    ))
+                } else {
+                    Some((max, "the device binds at most {} per texel buffer (maxTexelBufferElements)"))
+                }
             }
             Access::Address if MAX_ADDRESSED_BYTES < self.allocation => {
                 Some((MAX_ADDRESSED_BYTES, "the kernels index at most {} of a buffer by address (2^31 elements)"))
@@ -160,11 +208,13 @@ pub fn check_sizes(sizes: &[BufferSize], limits: &SizeLimits, what: &str) -> Res
     let over = |b: &&BufferSize| b.bytes > limits.for_buffer(b).0;
     if let Some(b) = sizes.iter().rev().filter(over).max_by_key(|b| b.bytes) {
         let (max, text) = limits.for_buffer(b);
+        let (needed, max) = sizes_apart(b.bytes, max);
+        // Texel reads are what limits it: storage reads lift that limit (src/render/reads.rs).
+        let storage_reads = if text.contains("maxTexelBufferElements") { "use --reads storage, or " } else { "" };
         bail!(
-            "{what} needs {} for buffer {}, but {}; {}",
-            mib(b.bytes),
+            "{what} needs {needed} for buffer {}, but {}; {storage_reads}{}",
             b.name,
-            text.replace("{}", &mib(max)),
+            text.replace("{}", &max),
             remedy(b.name)
         );
     }
@@ -225,6 +275,17 @@ mod tests {
         assert!(e.contains("maxStorageBufferRange"), "{e}");
         let e = check_sizes(&[BufferSize::new("bvh_prims", 401).reached(Access::Texel)], &l, "x").unwrap_err();
         assert!(e.to_string().contains("maxTexelBufferElements"), "{e}");
+        // Texel limits name the way around them, and sizes that MiB would print alike are exact.
+        assert!(e.to_string().contains("--reads storage") && e.to_string().contains("401 bytes"), "{e}");
+        let both = BufferSize::new("grid_start", 100).reached(Access::StorageAndTexelU32);
+        assert!(check_sizes(&[both], &l, "x").is_ok());
+        // Bound both ways: the smaller of the two limits applies (here the storage one).
+        let wide_texels = SizeLimits { texel_elements: 50, ..l };
+        let e = check_sizes(&[BufferSize { bytes: 101, ..both }], &wide_texels, "x").unwrap_err().to_string();
+        assert!(e.contains("maxStorageBufferRange") && e.contains("101 bytes") && e.contains("100 bytes"), "{e}");
+        let tight = SizeLimits { texel_elements: 10, ..l };
+        let e = check_sizes(&[BufferSize { bytes: 41, ..both }], &tight, "x").unwrap_err().to_string();
+        assert!(e.contains("maxTexelBufferElements") && e.contains("--reads storage"), "{e}");
         let index = BufferSize::new("light_vertex_offsets", 100).reached(Access::TexelU32);
         assert!(check_sizes(&[index], &l, "x").is_ok());
         assert!(check_sizes(&[BufferSize { bytes: 101, ..index }], &l, "x").is_err());

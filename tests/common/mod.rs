@@ -29,6 +29,32 @@ pub fn with_gpu_options<R>(opts: &GpuOptions, f: impl FnOnce(&Arc<Gpu>) -> R) ->
     r
 }
 
+/// Whether `gpu` has the feature `feature` (a name of src/gpu/context.rs's list, e.g.
+/// `vkvcm::gpu::SHADER_INT64_ATOMICS`). Where it lacks it, the test `test` (or the part of
+/// it that needs the feature) is skipped, never failed: [`skip`] says so.
+pub fn device_has(gpu: &Gpu, feature: &str, test: &str) -> bool {
+    let has = gpu.has(feature);
+    if !has {
+        skip(test, &format!("device {:?} lacks {feature}", gpu.info.name));
+    }
+    has
+}
+
+/// Records that `test` was skipped for `reason`: `skipped: <test>: <reason>` on stderr
+/// (shown with --nocapture) and, where `VKVCM_TEST_SKIP_LOG` names a file, appended to it,
+/// so that `make test` can count and list the skips (Makefile, test-swiftshader).
+pub fn skip(test: &str, reason: &str) {
+    let line = format!("skipped: {test}: {reason}");
+    eprintln!("{line}");
+    if let Some(path) = std::env::var_os("VKVCM_TEST_SKIP_LOG") {
+        use std::io::Write;
+        let file = std::fs::OpenOptions::new().create(true).append(true).open(&path);
+        if let Err(e) = file.and_then(|mut f| writeln!(f, "{line}")) {
+            panic!("cannot append to VKVCM_TEST_SKIP_LOG {path:?}: {e}");
+        }
+    }
+}
+
 /// `VKVCM_CACHE_DIR` for a test's `vkvcm` process: the suite's kernel cache
 /// (`VKVCM_TEST_KERNEL_CACHE`, an absolute path, which `make test` sets: see
 /// [`GpuOptions::for_tests`]) when there is one, else `own` (a folder of the test's, or ""

@@ -98,7 +98,7 @@ impl Passes {
             FilmPass::Accumulate(Accumulate::new(&pass, &store)?)
         } else {
             let sobol = b.settings.sampler() == Sampler::Sobol;
-            let camera_kernel = CameraKernel::new(techniques, b.settings.connect, b.scene.reads(), sobol);
+            let camera_kernel = CameraKernel::new(techniques, b.settings.connect, b.plan.store_reads, sobol);
             FilmPass::Camera(CameraSubpaths::bidirectional(&pass, &store, grid.as_ref(), camera_kernel)?)
         };
         Ok(Passes { film_pass, light, grid, store })

@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# The tests `make test` runs on SwiftShader (scripts/install-swiftshader.sh) beside the
+# whole suite on lavapipe: a second Vulkan implementation with other limits (no
+# shaderInt64 or 64-bit atomics, 65536 texels per texel buffer, subgroups of 4). The set
+# covers, at the sizes of the lavapipe tests (seconds measured on SwiftShader on the
+# project's 2-core machine, shared, 2026-12-06; docs/devices.md says why these):
+#   every estimator, both read paths    render_reads (bit-identical storage vs texel)   124
+#   splats with 32-bit atomics          render_atomics (64-bit parts skipped)            20
+#   kernels needing missing features    device_features                                   1
+#   reads chosen per texel limit, and   render_texel_limit (incl. a store grown past     39
+#   the light-vertex store's growth     the limit), second_device (the real limit)
+#   the compute basics, subgroups of 4  gpu_core, hash_grid                              25
+#   the environment map                 render_environment (one filtered test)           43
+#   lavapipe and SwiftShader agree      second_device (both ICDs, a per-pixel z-test)    19
+# Left out for their cost on SwiftShader: render_textures (one test alone > 1 min).
+# Tests needing what SwiftShader lacks print `skipped: ...`; they are counted at the end.
+# Environment as `make test` sets it: VKVCM_TEST_KERNEL_CACHE; LVP_ICD and
+# SWIFTSHADER_ICD override the ICD files.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+lvp=${LVP_ICD:-$(ls /usr/share/vulkan/icd.d/lvp_icd*.json | head -n1)}
+ss=${SWIFTSHADER_ICD:-/opt/vkvcm/swiftshader/vk_swiftshader_icd.json}
+[ -f "$ss" ] || { echo "test-swiftshader.sh: no SwiftShader at $ss (scripts/install-swiftshader.sh)" >&2; exit 1; }
+skips=$(mktemp)
+trap 'rm -f "$skips"' EXIT
+export VKVCM_TEST_DEVICE=SwiftShader VKVCM_TEST_SKIP_LOG=$skips
+
+run() { # ICD files, then cargo test's arguments
+  local icds=$1
+  shift
+  VK_DRIVER_FILES=$icds VK_ICD_FILENAMES=$icds cargo test -q --workspace --features vkvcm/fault-injection "$@"
+}
+start=$(date +%s)
+run "$ss" --test render_reads --test render_atomics --test device_features --test render_texel_limit \
+  --test gpu_core --test hash_grid -- --test-threads=2
+run "$ss" --test render_environment -- --test-threads=2 --exact constant_map_renders_the_constant_background
+# Both implementations in one process: the cross-check picks each by name.
+run "$ss:$lvp" --test second_device -- --test-threads=2
+n=$(wc -l < "$skips")
+echo "test-swiftshader.sh: passed in $(( $(date +%s) - start )) s; $n test(s) or parts skipped for what the device lacks:"
+sed 's/^/  /' "$skips"
