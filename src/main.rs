@@ -23,7 +23,7 @@ enum Command {
     /// List Vulkan devices and the features vkvcm needs.
     Devices,
     /// Render a scene to an EXR (and optionally a PNG).
-    Render(cli::render::RenderArgs),
+    Render(Box<cli::render::RenderArgs>),
     /// A reference image: a long render in two independent halves, with its own error
     /// estimate (RMS of the halves' difference / 2) stored in the EXR.
     Reference(cli::converge::ReferenceArgs),
@@ -52,7 +52,7 @@ fn main() -> ExitCode {
     let done = |r: Result<()>| r.map(|()| None);
     let result = match cli.command {
         Command::Devices => done(devices()),
-        Command::Render(args) => cli::render::render_cmd(args),
+        Command::Render(args) => cli::render::render_cmd(*args),
         Command::Reference(args) => done(cli::converge::reference_cmd(args)),
         Command::Converge(args) => done(cli::converge::converge_cmd(args)),
         Command::Diff(args) => done(cli::diff::diff_cmd(args)),

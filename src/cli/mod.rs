@@ -20,9 +20,11 @@ pub struct EnvArgs {
     /// `sky` (an analytic daylight sky with a sun, Preetham et al. 1999), an
     /// equirectangular map FILE (Radiance .hdr or OpenEXR; row 0 is the sky, the image
     /// centre looks along +Z: docs/environment.md; ./studio for a file of that name), or
-    /// `none`, instead of the file's own environment. Default: the file's; a file with
-    /// neither punctual lights nor an environment gets the studio. Importance-sampled.
-    #[arg(long, value_name = "studio|sky|FILE|none")]
+    /// `none`, instead of the file's own environment; `white`: the uniform white sky of
+    /// radiance 1 that the library gives a file without lights (for comparisons with
+    /// renderers that default to it). Default: the file's; a file with neither punctual
+    /// lights nor an environment gets the studio. Importance-sampled.
+    #[arg(long, value_name = "studio|sky|white|FILE|none")]
     pub env: Option<String>,
     /// With --env: radiance scale of the map.
     #[arg(long, value_name = "S", default_value_t = 1.0, requires = "env")]
@@ -71,6 +73,8 @@ impl EnvArgs {
         match self.env.as_deref() {
             None => options.default_environment = Some(light(studio()?)),
             Some("none") => options.no_environment = true,
+            // The library's own default: a uniform white sky where the file has no light.
+            Some("white") => {}
             Some("studio") => options.environment = Some(light(studio()?)),
             Some("sky") => {
                 let d = SkyParameters::default();
