@@ -12,13 +12,7 @@ use serde_json::Value;
 mod common;
 
 fn vkvcm(dir: &Path) -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_vkvcm"));
-    c.current_dir(dir).env("VKVCM_VALIDATION", "1").env_remove("VKVCM_TEST_FAIL_AFTER_BATCHES");
-    c.env("VKVCM_CACHE_DIR", common::cli_cache_dir(dir.join("kernel-cache")));
-    if std::env::var_os("VK_DRIVER_FILES").is_none() {
-        c.env("VK_DRIVER_FILES", "/usr/share/vulkan/icd.d/lvp_icd.json");
-    }
-    c
+    common::vkvcm_in(dir)
 }
 
 /// Fails unless any two of `slices` (start, end) are disjoint or one holds the other.

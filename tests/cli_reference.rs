@@ -7,13 +7,7 @@ use std::process::{Command, Output};
 mod common;
 
 fn vkvcm(dir: &Path) -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_vkvcm"));
-    c.current_dir(dir).env("VKVCM_VALIDATION", "1").env_remove("VKVCM_TEST_FAIL_AFTER_BATCHES");
-    c.env("VKVCM_CACHE_DIR", common::cli_cache_dir(dir.join("kernel-cache")));
-    if std::env::var_os("VK_DRIVER_FILES").is_none() {
-        c.env("VK_DRIVER_FILES", "/usr/share/vulkan/icd.d/lvp_icd.json");
-    }
-    c
+    common::vkvcm_in(dir)
 }
 
 fn ok(o: Output) -> String {

@@ -66,6 +66,19 @@ pub fn cli_cache_dir(own: impl AsRef<std::ffi::OsStr>) -> std::ffi::OsString {
     }
 }
 
+/// `vkvcm` run in `dir` as the CLI tests run it: validation on, no injected faults, the
+/// suite's kernel cache (or one of the test's own), lavapipe unless the environment names
+/// a driver.
+pub fn vkvcm_in(dir: &std::path::Path) -> std::process::Command {
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_vkvcm"));
+    c.current_dir(dir).env("VKVCM_VALIDATION", "1").env_remove("VKVCM_TEST_FAIL_AFTER_BATCHES");
+    c.env("VKVCM_CACHE_DIR", cli_cache_dir(dir.join("kernel-cache")));
+    if std::env::var_os("VK_DRIVER_FILES").is_none() {
+        c.env("VK_DRIVER_FILES", "/usr/share/vulkan/icd.d/lvp_icd.json");
+    }
+    c
+}
+
 /// Runs test kernel `path` (glsl/; its bindings named `test_input`, read, and `test_output`, one `O`
 /// written per input element; push constant: the element count) over `input`.
 pub fn run_test_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(gpu: &Arc<Gpu>, path: &str, input: &[I]) -> Vec<O> {
