@@ -130,7 +130,7 @@ fn meta_value<'a>(meta: &'a [(String, String)], key: &str) -> Option<&'a str> {
 }
 
 fn open_gpu(args: &super::GpuArgs) -> Result<std::sync::Arc<Gpu>> {
-    let gpu = args.open()?;
+    let gpu = super::open_device(args)?;
     eprintln!("device: {} ({})", gpu.info.name, gpu.info.driver);
     Ok(gpu)
 }

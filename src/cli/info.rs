@@ -157,7 +157,7 @@ pub fn info_cmd(a: InfoArgs) -> Result<Option<Class>> {
     let mut settings = RenderSettings::new(a.algo, a.width, a.height, Budget::Iterations(1));
     settings.light_paths = a.light_paths;
     settings.generic = a.generic;
-    let gpu = a.gpu.open()?;
+    let gpu = super::open_device(&a.gpu)?;
     let plan = Renderer::plan_sizes(&gpu, &loaded, &settings).class(Class::Usage)?;
     let limits = SizeLimits::of(&gpu);
     let buffers: Vec<BufferInfo> = plan

@@ -356,7 +356,7 @@ pub fn render_cmd(mut a: RenderArgs) -> Result<Option<Class>> {
 
     let gpu = {
         let _p = super::trace::phase("device open");
-        a.gpu.open()?
+        super::open_device(&a.gpu)?
     };
     say(&a, &format!("device: {} ({})", gpu.info.name, gpu.info.driver));
     provenance.device = gpu.info.name.clone();

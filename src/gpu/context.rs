@@ -14,6 +14,31 @@ use super::pipeline_cache::PipelineCache;
 use super::shader::{ShaderCache, ShaderCounts};
 use super::validation::{Messages, Validation};
 
+/// The device options of every command that opens one (`vkvcm` and `vkvcm-bench`).
+#[derive(clap::Args, Clone, Debug)]
+pub struct GpuArgs {
+    /// Vulkan device: index or name substring (see `vkvcm devices`).
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Build every kernel afresh, neither reading nor writing the kernel cache (compiled
+    /// kernels kept in $VKVCM_CACHE_DIR, else $XDG_CACHE_HOME/vkvcm, else ~/.cache/vkvcm;
+    /// docs/kernel-cache.md).
+    #[arg(long)]
+    pub no_kernel_cache: bool,
+}
+
+impl GpuArgs {
+    /// The device options: these arguments over the environment's ([`GpuOptions::from_env`]).
+    pub fn options(&self) -> GpuOptions {
+        let opts = GpuOptions::from_env(self.device.clone());
+        if self.no_kernel_cache {
+            GpuOptions { kernel_cache: None, ..opts }
+        } else {
+            opts
+        }
+    }
+}
+
 /// How to open the GPU.
 #[derive(Clone, Debug, Default)]
 pub struct GpuOptions {

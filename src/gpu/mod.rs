@@ -17,7 +17,7 @@ mod validation;
 pub use batch::Batch;
 pub use buffer::Buffer;
 pub use context::{
-    list_devices, DeviceInfo, FeatureStatus, Gpu, GpuOptions, BUFFER_DEVICE_ADDRESS, SHADER_INT64,
+    list_devices, DeviceInfo, FeatureStatus, Gpu, GpuArgs, GpuOptions, BUFFER_DEVICE_ADDRESS, SHADER_INT64,
     SHADER_INT64_ATOMICS, TEXEL_BUFFER_FORMATS, TIMESTAMPS,
 };
 pub use kernel::{Bind, Defines, Kernel, Texels, PUSH_CONSTANT_BYTES};

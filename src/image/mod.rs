@@ -185,3 +185,9 @@ impl Image {
         Image::from_fn(w, h, |i, j| self.get(x + i, y + j))
     }
 }
+
+/// Writes `value` as pretty JSON, atomically (a complete file or none).
+pub fn write_json<T: serde::Serialize>(path: &std::path::Path, value: &T) -> anyhow::Result<()> {
+    let text = serde_json::to_string_pretty(value)?;
+    atomic::write_atomic(path, "JSON", |w| Ok(w.write_all(text.as_bytes())?))
+}

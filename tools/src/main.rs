@@ -8,7 +8,8 @@ use std::sync::Arc;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser};
 
-use vkvcm::gpu::{Gpu, GpuOptions};
+use vkvcm::gpu::{Gpu, GpuArgs};
+use vkvcm::image::write_json;
 use vkvcm::render::{self, Algorithm};
 use vkvcm::scene;
 
@@ -188,43 +189,10 @@ pub struct BenchRenderArgs {
     pub gpu: GpuArgs,
 }
 
-/// The device options (as `vkvcm render` takes them).
-#[derive(Args, Clone, Debug)]
-pub struct GpuArgs {
-    /// Vulkan device: index or name substring (see `vkvcm devices`).
-    #[arg(long)]
-    pub device: Option<String>,
-    /// Build every kernel afresh, neither reading nor writing the kernel cache
-    /// (docs/kernel-cache.md).
-    #[arg(long)]
-    pub no_kernel_cache: bool,
-}
-
-impl GpuArgs {
-    fn options(&self) -> GpuOptions {
-        let opts = GpuOptions::from_env(self.device.clone());
-        if self.no_kernel_cache {
-            GpuOptions { kernel_cache: None, ..opts }
-        } else {
-            opts
-        }
-    }
-}
-
 /// Fails early, before a long benchmark, when `path` cannot be written.
 fn check_writable(path: &Path) -> Result<()> {
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     tempfile::NamedTempFile::new_in(dir).map(drop).with_context(|| format!("cannot write {}", path.display()))
-}
-
-/// Writes `value` as pretty JSON, atomically.
-fn write_json<T: serde::Serialize>(p: &Path, value: &T) -> Result<()> {
-    let text = serde_json::to_string_pretty(value)?;
-    let dir = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let mut f = tempfile::NamedTempFile::new_in(dir).with_context(|| format!("cannot write {}", p.display()))?;
-    std::io::Write::write_all(&mut f, text.as_bytes())?;
-    f.persist(p).with_context(|| format!("cannot write {}", p.display()))?;
-    Ok(())
 }
 
 impl BenchCommand {
