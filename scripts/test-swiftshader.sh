@@ -12,6 +12,7 @@
 #   the compute basics, subgroups of 4  gpu_core, hash_grid                              25
 #   the environment map                 render_environment (one filtered test)           43
 #   lavapipe and SwiftShader agree      second_device (both ICDs, a per-pixel z-test)    19
+#   one render on both devices          render_devices (--devices, a per-pixel z-test)   17
 # Left out for their cost on SwiftShader: render_textures (one test alone > 1 min).
 # Tests needing what SwiftShader lacks print `skipped: ...`; they are counted at the end.
 # Environment as `make test` sets it: VKVCM_TEST_KERNEL_CACHE; LVP_ICD and
@@ -35,7 +36,7 @@ run "$ss" --test render_reads --test render_atomics --test device_features --tes
   --test gpu_core --test hash_grid -- --test-threads=2
 run "$ss" --test render_environment -- --test-threads=2 --exact constant_map_renders_the_constant_background
 # Both implementations in one process: the cross-check picks each by name.
-run "$ss:$lvp" --test second_device -- --test-threads=2
+run "$ss:$lvp" --test second_device --test render_devices -- --test-threads=2 --skip identical_devices
 n=$(wc -l < "$skips")
 echo "test-swiftshader.sh: passed in $(( $(date +%s) - start )) s; $n test(s) or parts skipped for what the device lacks:"
 sed 's/^/  /' "$skips"

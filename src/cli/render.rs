@@ -357,6 +357,9 @@ pub fn render_cmd(mut a: RenderArgs) -> Result<Option<Class>> {
         }
     }
 
+    if let Some(list) = &a.shards.devices {
+        return super::shard::render_on_devices(&a, list, &scene, &settings, &mut provenance, &output);
+    }
     let gpu = {
         let _p = super::trace::phase("device open");
         super::open_device(&a.gpu)?

@@ -1,12 +1,20 @@
 //! `render --shard K/N` (one shard of a render split over machines) and `render --devices`
 //! (a render split over this machine's devices): docs/distributed.md.
 
-use anyhow::{bail, Result};
+use std::path::Path;
+use std::sync::atomic::Ordering;
+
+use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 
-use vkvcm::render::saved::ShardOf;
+use super::exit::{Class, ClassifyExt};
+use super::render::RenderArgs;
+use vkvcm::gpu::GpuOptions;
+use vkvcm::image::{self, Image};
+use vkvcm::render::saved::{self, Provenance, ShardOf};
 use vkvcm::render::shard::Shard;
-use vkvcm::render::{Budget, RenderSettings};
+use vkvcm::render::{devices, Budget, RenderSettings};
+use vkvcm::scene::Scene;
 
 /// The render options that split a render (flattened into `render`'s arguments).
 #[derive(Args, Clone, Debug, Default)]
@@ -20,7 +28,11 @@ pub struct ShardArgs {
     /// Render on several Vulkan devices of this machine at once (`all`, or indices as
     /// `vkvcm devices` lists them, e.g. 0,2), each taking the next block of iterations as
     /// it finishes one, and add their films exactly (docs/distributed.md).
-    #[arg(long, value_name = "all|I,J,...", conflicts_with = "shard")]
+    #[arg(
+        long,
+        value_name = "all|I,J,...",
+        conflicts_with_all = ["shard", "device", "time", "resume", "checkpoint_every", "profile", "profile_json", "profile_trace"]
+    )]
     pub devices: Option<String>,
 }
 
@@ -42,4 +54,75 @@ impl ShardArgs {
         settings.budget = Budget::Iterations(shard.range(total).end - shard.range(total).start);
         Ok(Some(ShardOf { shard, total }))
     }
+}
+
+/// The devices `--devices` names (`all`: every usable one), as options to open each.
+fn device_options(list: &str, base: &GpuOptions) -> Result<Vec<GpuOptions>> {
+    let found = vkvcm::gpu::list_devices().class(Class::Device)?;
+    let indices: Vec<usize> = if list.trim() == "all" {
+        found.iter().filter(|d| d.missing_required().is_empty()).map(|d| d.index).collect()
+    } else {
+        let mut v = Vec::new();
+        for part in list.split(',') {
+            let i: usize =
+                part.trim().parse().map_err(|_| anyhow!("--devices {list}: {part:?} is not a device index"))?;
+            if !found.iter().any(|d| d.index == i) {
+                bail!("--devices {list}: there is no device {i} (`vkvcm devices` lists them)");
+            }
+            if v.contains(&i) {
+                bail!("--devices {list}: device {i} is named twice");
+            }
+            v.push(i);
+        }
+        v
+    };
+    if indices.is_empty() {
+        return Err(anyhow!("--devices {list}: no usable Vulkan device")).class(Class::Device);
+    }
+    Ok(indices.into_iter().map(|i| GpuOptions { device: Some(i.to_string()), ..base.clone() }).collect())
+}
+
+/// `render --devices`: the render on every device named, merged, written as one render.
+pub fn render_on_devices(
+    a: &RenderArgs,
+    list: &str,
+    scene: &Scene,
+    settings: &RenderSettings,
+    provenance: &mut Provenance,
+    output: &Path,
+) -> Result<Option<Class>> {
+    let opts = device_options(list, &a.gpu.options()).class(Class::Usage)?;
+    let cancel = super::render::install_interrupt();
+    if !a.quiet {
+        let Budget::Iterations(total) = settings.budget else { unreachable!("--devices conflicts with --time") };
+        eprintln!(
+            "rendering on {} device(s), blocks of {} iterations from a shared queue",
+            opts.len(),
+            devices::block_size(total, opts.len())
+        );
+    }
+    let (out, shares) =
+        super::exit::memory_if_out_of_memory(devices::render_on_devices(&opts, scene, settings, Some(&cancel)))
+            .with_context(|| format!("rendering {} with {} on several devices", scene.name, a.algo.name()))?;
+    if out.iterations == 0 {
+        eprintln!("interrupted before the first iteration finished: nothing written");
+        return Ok(Some(Class::Interrupted));
+    }
+    provenance.device = shares.iter().map(|s| s.device.clone()).collect::<Vec<_>>().join(", ");
+    saved::write_render_exr(output, &out, settings, provenance)?;
+    if !a.quiet {
+        for s in &shares {
+            eprintln!("  {}: {} iterations in {} block(s), {:.2} s", s.device, s.iterations, s.blocks, s.seconds);
+        }
+        eprintln!("{} iterations; wrote {}", out.iterations, output.display());
+    }
+    if out.rejected_samples > 0 {
+        eprintln!("warning: {} sample(s) were NaN, infinite or negative and were rejected", out.rejected_samples);
+    }
+    if let Some(p) = &a.png {
+        let img = Image { width: out.width, height: out.height, data: out.pixels.clone() };
+        image::write_png(p, &img, a.exposure)?;
+    }
+    let interrupted = cancel.load(Ordering::SeqCst);
+    Ok(interrupted.then_some(Class::Interrupted))
 }

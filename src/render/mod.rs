@@ -10,6 +10,7 @@
 pub mod addresses;
 pub mod atomics;
 pub mod converge;
+pub mod devices;
 pub mod environment;
 pub mod estimators;
 pub mod features;
