@@ -32,6 +32,11 @@ cleanup() {
 }
 trap cleanup EXIT
 
+# A progress line, with the seconds since the start.
+say() {
+  echo "test-slurm.sh: [$(($(date +%s) - start)) s] $*"
+}
+
 fail() {
   echo "test-slurm.sh: FAIL: $*" >&2
   for f in "$work"/*.out "$work"/kill/*.out; do
@@ -69,7 +74,7 @@ wait_job() {
 export VK_DRIVER_FILES=${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.json}
 export VK_ICD_FILENAMES=${VK_ICD_FILENAMES:-$VK_DRIVER_FILES}
 eval "$(bash "$root/scripts/slurm/local-cluster.sh" start "$work/cluster")"
-echo "test-slurm.sh: one-node cluster up ($(sinfo -h -N -o '%N, %c CPUs'))"
+say "one-node cluster up ($(sinfo -h -N -o '%N, %c CPUs'))"
 
 # The render: tiny, and vcm (the default), whose merge radius follows the global iteration
 # index. 64 iterations per shard, so that a shard renders long enough (about a second
@@ -79,6 +84,7 @@ n=3
 render=(gbs_s --width 32 --height 32 --iterations 192 --seed 7)
 cd "$work"
 "$VKVCM" render "${render[@]}" -o one.exr --quiet
+say "one-process render done"
 
 submit_array=$(doc_line 'array=$(sbatch')
 submit_merge=$(doc_line 'merge=$(sbatch')
@@ -88,13 +94,14 @@ update_merge=$(doc_line 'scontrol update')
 # 1. The array and the merge as the doc submits them.
 eval "$submit_array"
 eval "$submit_merge"
-echo "test-slurm.sh: array job $array, merge job $merge"
+say "1. array job $array and merge job $merge submitted"
 wait_job "$merge" 120 COMPLETED
 for k in $(seq 0 $((n - 1))); do
   [ "$(job_field "${array}_$k" JobState)" = COMPLETED ] || fail "array task ${array}_$k did not complete"
 done
 [ -s merged.png ] || fail "the merge job wrote no merged.png"
 "$VKVCM" diff --exact merged.exr one.exr || fail "merged.exr differs from the one-process render"
+say "1. merged image bit-identical to the one-process render"
 
 # 2. The same, with array task 1 killed (SIGKILL) in the middle of its render.
 mkdir kill
@@ -111,6 +118,7 @@ for _ in $(seq 600); do
   sleep 0.05
 done
 scancel --batch --signal=KILL "$killed"
+say "2. array job $array: task 1 killed (SIGKILL) in the middle of its render"
 wait_job "$killed" 30 FAILED
 [ "$(job_field "$killed" ExitCode)" = 0:9 ] || fail "task $killed: exit $(job_field "$killed" ExitCode), expected 0:9 (SIGKILL)"
 grep -q 'wrote' "$log" && fail "task $killed wrote its shard before the kill (render longer)"
@@ -133,10 +141,11 @@ for f in shards/*; do
   fi
 done
 [ -e refused.exr ] && fail "a refused merge left refused.exr"
+say "2. no file left that a merge accepts; the merge job waits (DependencyNeverSatisfied)"
 k=1
 eval "$rerun_task"
 eval "$update_merge"
 wait_job "$merge" 120 COMPLETED
 "$VKVCM" diff --exact merged.exr ../one.exr || fail "merged.exr after the re-run differs from the one-process render"
-
-echo "test-slurm.sh: ok ($(($(date +%s) - start)) s)"
+say "2. task 1 run again ($rerun), merged image bit-identical to the one-process render"
+say "ok"

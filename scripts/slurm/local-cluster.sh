@@ -5,7 +5,8 @@
 #                                key, state, spool, logs, sockets) under DIR; prints the line
 #                                `export SLURM_CONF=DIR/slurm.conf` that sbatch, squeue and
 #                                scontrol need
-#   local-cluster.sh stop DIR    stops the three daemons that `start DIR` started
+#   local-cluster.sh stop DIR    cancels the cluster's jobs and stops the three daemons that
+#                                `start DIR` started
 # As root (the daemons run as root, and so do the jobs), with Debian 12's slurm-wlm and munge
 # (scripts/setup-debian.sh). No systemd and no cgroups: the daemons are started by hand,
 # processes are tracked through /proc (proctrack/linuxproc), tasks are not confined
@@ -20,16 +21,22 @@ dir=$(realpath -m "$2")
 ctld_port=${VKVCM_SLURMCTLD_PORT:-16817}
 slurmd_port=${VKVCM_SLURMD_PORT:-16818}
 
-# Stops the daemon whose pid file is $1, waiting up to 10 s for it to exit.
-stop_daemon() {
-  local pidfile=$1 pid
-  [ -f "$pidfile" ] || return 0
-  pid=$(cat "$pidfile")
-  if [ -n "$pid" ] && kill "$pid" 2>/dev/null; then
+# Stops the daemons whose pid files are the arguments: SIGTERM to all, then up to 10 s for
+# them to exit (each takes 1-2 s), then SIGKILL to any still there. Only a process whose
+# command line names DIR is signalled (a stale pid file may name another process by now).
+stop_daemons() {
+  local pids=() pid f
+  for f in "$@"; do
+    [ -f "$f" ] || continue
+    pid=$(cat "$f")
+    rm -f "$f"
+    [ -n "$pid" ] && tr '\0' ' ' <"/proc/$pid/cmdline" 2>/dev/null | grep -qF "$dir/" || continue
+    kill "$pid" 2>/dev/null && pids+=("$pid")
+  done
+  for pid in "${pids[@]}"; do
     for _ in $(seq 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
-    kill -0 "$pid" 2>/dev/null && kill -9 "$pid" 2>/dev/null
-  fi
-  rm -f "$pidfile"
+    kill -9 "$pid" 2>/dev/null || true
+  done
 }
 
 # Waits up to $1 seconds for the command after it to succeed.
@@ -88,7 +95,9 @@ JobCompType=jobcomp/none
 SwitchType=switch/none
 MpiDefault=none
 MailProg=/bin/true
-SchedulerType=sched/backfill
+SchedulerType=sched/builtin
+# Jobs start as soon as they are submitted (the default waits up to 3 s to batch them).
+SchedulerParameters=batch_sched_delay=0
 SelectType=select/cons_tres
 SelectTypeParameters=CR_CPU
 ReturnToService=2
@@ -109,9 +118,14 @@ CONF
 }
 
 stop() {
-  stop_daemon "$dir/slurmd.pid"
-  stop_daemon "$dir/slurmctld.pid"
-  stop_daemon "$dir/munge/munged.pid"
+  # Jobs still running (a test that failed half-way) are cancelled first: their processes
+  # belong to slurmd's step daemons, which would otherwise outlive the cluster.
+  if [ -f "$dir/slurmctld.pid" ]; then
+    export SLURM_CONF=$dir/slurm.conf
+    scancel --quiet --user "$(id -un)" 2>/dev/null || true
+    wait_for 10 bash -c '[ -z "$(squeue -h -o %i)" ]' || true
+  fi
+  stop_daemons "$dir/slurmd.pid" "$dir/slurmctld.pid" "$dir/munge/munged.pid"
 }
 
 case "$cmd" in
