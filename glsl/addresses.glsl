@@ -13,7 +13,7 @@
 layout(std430) readonly buffer frame_addresses { GpuAddresses addresses; };
 // Each frame buffer as an array of its element type (the splat sums' type depends on
 // SPLAT_ATOMICS_64: glsl/film.glsl).
-#define FRAME_FILM ARRAY_AT(Vec4s, addresses.film)
+#define FRAME_FILM ARRAY_AT(Uvec4s, addresses.film)
 #define FRAME_LIGHT_VERTICES_A ARRAY_AT(Vec4s, addresses.light_vertices_a)
 #define FRAME_LIGHT_VERTICES_B ARRAY_AT(Vec4s, addresses.light_vertices_b)
 #define FRAME_GRID_KEYS ARRAY_AT(Uvec2s, addresses.grid_keys)

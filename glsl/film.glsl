@@ -1,13 +1,23 @@
-// The film: per pixel a running sum of each iteration's value and a running sum of its
-// square (for per-pixel variance: error estimates and statistical tests), both float32
-// with Kahan compensation (Kahan 1965), so long renders lose no precision without float64.
-// Each pixel has one writer per dispatch, so the result is deterministic.
-// The film's sums (FILM_SUMS[]: vec4, four per pixel: sum, its compensation, sum of
-// squares, its compensation) are reached by device address (DEVICE_ADDRESSES,
-// glsl/addresses.glsl) or as the binding `film`; the binding `film_stats` (stats[], uint:
-// [0] rejected samples, [1] overflowing splats, [2..3] the 64-bit count of traced rays
-// when profiling: COUNT_RAYS in glsl/scene.glsl), src/render/film.rs; with HAS_SPLAT also
-// the splat sums (below).
+// The film: per pixel and colour channel, the sum of each iteration's value and the sum
+// of its square (for per-pixel variance: error estimates and statistical tests), each a
+// 128-bit unsigned fixed-point number with FILM_FRACTION_BITS = 32 bits after the point:
+// one uvec4, .x the least significant word, added word by word with uaddCarry (no 64-bit
+// integers, which SwiftShader lacks). Integer sums do not depend on the order of the adds,
+// so the shards of a render, rendered anywhere and added on the host, give the bits of one
+// render (docs/distributed.md). Each pixel has one writer per dispatch: no atomics.
+//
+// Range and resolution: a value (and its square, computed in float32) is rounded to the
+// nearest 2^-32 (roundEven: exact and the same on every device); a value at or above
+// FILM_MAX = 2^32 is rejected and counted in stats[4] (overflowing samples). Below it a
+// value adds < 2^64 units and a square < 2^96, and at most 2^32 iterations are added (the
+// iteration index is 32-bit), so neither sum reaches 2^128: they never wrap.
+//
+// FILM_SUMS[]: uvec4, FILM_UVEC4_PER_PIXEL = 6 per pixel (sums of R, G, B, then sums of
+// their squares), reached by device address (DEVICE_ADDRESSES, glsl/addresses.glsl) or as
+// the binding `film`; the binding `film_stats` (stats[], uint: [0] rejected samples, [1]
+// overflowing splats, [2..3] the 64-bit count of traced rays when profiling: COUNT_RAYS in
+// glsl/scene.glsl, [4] overflowing samples), src/render/film.rs; with HAS_SPLAT also the
+// splat sums (below).
 #ifndef FILM_GLSL
 #define FILM_GLSL
 #include "addresses.glsl"
@@ -15,34 +25,64 @@
 #if DEVICE_ADDRESSES
 #define FILM_SUMS FRAME_FILM
 #else
-layout(std430) buffer film { vec4 film_sums[]; };
+layout(std430) buffer film { uvec4 film_sums[]; };
 #define FILM_SUMS film_sums
 #endif
 layout(std430) buffer film_stats { uint stats[]; };
 
-// Kahan step: adds `v` to the sum at FILM_SUMS[i] with compensation at FILM_SUMS[i + 1].
-// `precise` forbids the compiler from reassociating these operations, which would cancel
-// the compensation to zero (seen on lavapipe: 2048 iterations of a constant 0.5294118
-// summed to 0.5294181 without it; tests/render_pt.rs catches this).
-void film_kahan_add(uint i, vec4 v) {
-    vec4 sum = FILM_SUMS[i];
-    vec4 c = FILM_SUMS[i + 1u];
-    precise vec4 y = v - c;
-    precise vec4 t = sum + y;
-    precise vec4 comp = (t - sum) - y;
-    FILM_SUMS[i + 1u] = comp;
-    FILM_SUMS[i] = t;
+#define FILM_UVEC4_PER_PIXEL 6u
+#define FILM_SCALE 4294967296.0
+#define FILM_MAX 4294967296.0
+
+// x (a whole number below 2^96 as a float) as 128-bit words, exactly: from 2^24 on,
+// x = m 2^shift with its 24-bit significand m, which spans at most two words.
+uvec4 film_fixed(float x) {
+    uvec4 w = uvec4(0u);
+    if (x < 16777216.0) {
+        w.x = uint(x);
+        return w;
+    }
+    uint bits = floatBitsToUint(x);
+    uint m = (bits & 0x7FFFFFu) | 0x800000u;
+    int shift = int(bits >> 23) - 150;  // 127 bias + 23 fraction bits; >= 1 here
+    int word = shift >> 5, bit = shift & 31;
+    w[word] = m << bit;
+    if (bit != 0 && word < 3) w[word + 1] = m >> (32 - bit);
+    return w;
+}
+
+// a + b in 128 bits (never carries out of .w: see the range above).
+uvec4 film_add128(uvec4 a, uvec4 b) {
+    uvec4 s;
+    uint c0, c1, c2, c3;
+    s.x = uaddCarry(a.x, b.x, c0);
+    s.y = uaddCarry(a.y, b.y, c1);
+    s.y = uaddCarry(s.y, c0, c0);
+    s.z = uaddCarry(a.z, b.z, c2);
+    s.z = uaddCarry(s.z, c1 + c0, c1);
+    s.w = a.w + b.w + c2 + c1;
+    return s;
 }
 
 // Adds this iteration's value `v` of `pixel`; rejects (and counts) NaN, Inf and negative
-// values instead of adding them.
+// values, and values out of the film's range, instead of adding them.
 void film_add(uint pixel, vec3 v) {
     if (!finite3(v) || any(lessThan(v, vec3(0.0)))) {
         atomicAdd(stats[0], 1u);
         return;
     }
-    film_kahan_add(4u * pixel, vec4(v, 0.0));
-    film_kahan_add(4u * pixel + 2u, vec4(v * v, 0.0));
+    if (max3(v) >= FILM_MAX) {
+        atomicAdd(stats[4], 1u);
+        return;
+    }
+    uint i = FILM_UVEC4_PER_PIXEL * pixel;
+    for (uint c = 0u; c < 3u; ++c) {
+        // `precise`: the products are rounded as written, on every device alike.
+        precise float q = roundEven(v[c] * FILM_SCALE);
+        precise float q2 = roundEven((v[c] * v[c]) * FILM_SCALE);
+        FILM_SUMS[i + c] = film_add128(FILM_SUMS[i + c], film_fixed(q));
+        FILM_SUMS[i + 3u + c] = film_add128(FILM_SUMS[i + 3u + c], film_fixed(q2));
+    }
 }
 
 // ---- Splats (light tracing's camera connections land on any pixel from any invocation):

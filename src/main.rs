@@ -24,6 +24,9 @@ enum Command {
     Devices,
     /// Render a scene to an EXR (and optionally a PNG).
     Render(Box<cli::render::RenderArgs>),
+    /// Merge the shards of a split render (`render --shard K/N`) into the whole render,
+    /// bit for bit what one device renders (docs/distributed.md).
+    Merge(cli::merge::MergeArgs),
     /// A reference image: a long render in two independent halves, with its own error
     /// estimate (RMS of the halves' difference / 2) stored in the EXR.
     Reference(cli::converge::ReferenceArgs),
@@ -53,6 +56,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Devices => done(devices()),
         Command::Render(args) => cli::render::render_cmd(*args),
+        Command::Merge(args) => done(cli::merge::merge_cmd(args)),
         Command::Reference(args) => done(cli::converge::reference_cmd(args)),
         Command::Converge(args) => done(cli::converge::converge_cmd(args)),
         Command::Diff(args) => done(cli::diff::diff_cmd(args)),

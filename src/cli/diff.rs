@@ -90,10 +90,13 @@ fn exact_cmd(a: &DiffArgs) -> Result<()> {
         bail!("{sa} is {}x{}, {sb} is {}x{}: not identical", ia.width, ia.height, ib.width, ib.height);
     }
     let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
-    let mut channels: Vec<(String, Vec<f32>, Vec<f32>)> = ["R", "G", "B"]
+    let mut channels: Vec<(String, Vec<u32>, Vec<u32>)> = ["R", "G", "B"]
         .iter()
         .enumerate()
-        .map(|(c, n)| (n.to_string(), ia.data.iter().map(|p| p[c]).collect(), ib.data.iter().map(|p| p[c]).collect()))
+        .map(|(c, n)| {
+            let plane = |img: &image::Image| bits(&img.data.iter().map(|p| p[c]).collect::<Vec<f32>>());
+            (n.to_string(), plane(&ia), plane(&ib))
+        })
         .collect();
     let names = |e: &[image::ExtraChannel]| {
         let mut v: Vec<String> = e.iter().map(|(n, _)| n.clone()).collect();
@@ -104,12 +107,12 @@ fn exact_cmd(a: &DiffArgs) -> Result<()> {
         bail!("{sa} has channels {:?}, {sb} has {:?}: not identical", names(&ea), names(&eb));
     }
     for (name, va) in ea {
-        let vb = eb.iter().find(|(n, _)| *n == name).map(|(_, v)| v.clone()).unwrap_or_default();
-        channels.push((name, va, vb));
+        let vb = eb.iter().find(|(n, _)| *n == name).map(|(_, v)| v.bits()).unwrap_or_default();
+        channels.push((name, va.bits(), vb));
     }
     let mut differing = Vec::new();
     for (name, va, vb) in &channels {
-        let n = bits(va).iter().zip(bits(vb)).filter(|(x, y)| *x != y).count();
+        let n = va.iter().zip(vb).filter(|(x, y)| x != y).count();
         if n > 0 {
             differing.push(format!("{name}: {n} of {} values", va.len()));
         }

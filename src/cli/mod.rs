@@ -4,8 +4,10 @@ pub mod converge;
 pub mod diff;
 pub mod exit;
 pub mod info;
+pub mod merge;
 pub mod progress;
 pub mod render;
+pub mod shard;
 pub mod trace;
 
 use anyhow::{bail, Context, Result};

@@ -176,6 +176,8 @@ pub struct RenderArgs {
     pub quiet: bool,
     #[command(flatten)]
     pub gpu: super::GpuArgs,
+    #[command(flatten)]
+    pub shards: super::shard::ShardArgs,
 }
 
 /// `X,Y,Z` as a vector of three finite numbers.
@@ -332,13 +334,14 @@ pub fn render_cmd(mut a: RenderArgs) -> Result<Option<Class>> {
     if let Some(p) = &a.png {
         check_writable(p).context("--png")?;
     }
-    let settings = render_settings(&a).class(Class::Usage)?;
+    let mut settings = render_settings(&a).class(Class::Usage)?;
+    let shard = a.shards.apply(a.iterations, &mut settings).class(Class::Usage)?;
     let reference = read_reference(&a).class(Class::Usage)?;
     if let Some(p) = &a.profile_json {
         check_writable(p).context("--profile-json")?;
     }
     let camera = a.camera.clone().unwrap_or_else(|| "default".into());
-    let mut provenance = saved::Provenance::new(&scene, &camera, "");
+    let mut provenance = saved::Provenance { shard, ..saved::Provenance::new(&scene, &camera, "") };
     let saved = read_resumed(&a, &output, &settings, &provenance).class(Class::Usage)?;
     if let (Some(s), Budget::Iterations(n)) = (&saved, settings.budget) {
         if s.iterations >= n {
@@ -370,6 +373,9 @@ pub fn render_cmd(mut a: RenderArgs) -> Result<Option<Class>> {
     };
     if a.profile_trace.is_some() {
         r.trace_dispatches();
+    }
+    if let (None, Some(sh)) = (&saved, shard) {
+        r.start_at(sh.shard.range(sh.total).start);
     }
     if let Some(s) = &saved {
         r.resume_saved(s)?;

@@ -63,14 +63,66 @@ pub fn write_exr_with(path: &Path, img: &Image, meta: &[(String, String)], compr
     write_exr_channels(path, img, &[], meta, compression)
 }
 
-/// A named float32 channel beside R, G and B (`data[y * width + x]`), for example
-/// `("moment2.R", ...)`.
-pub type ExtraChannel = (String, Vec<f32>);
+/// The samples of a channel beside R, G and B (`data[y * width + x]`): float32, or
+/// uint32 for values that must come back exactly (the film's fixed-point sums,
+/// src/render/saved.rs).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Samples {
+    F32(Vec<f32>),
+    U32(Vec<u32>),
+}
+
+impl Samples {
+    pub fn len(&self) -> usize {
+        match self {
+            Samples::F32(v) => v.len(),
+            Samples::U32(v) => v.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Each sample's 32 bits (a float's bit pattern): what bit-for-bit comparisons compare.
+    pub fn bits(&self) -> Vec<u32> {
+        match self {
+            Samples::F32(v) => v.iter().map(|x| x.to_bits()).collect(),
+            Samples::U32(v) => v.clone(),
+        }
+    }
+
+    /// The samples as float32 (a uint32 above 2^24 rounds).
+    pub fn to_f32(&self) -> Vec<f32> {
+        match self {
+            Samples::F32(v) => v.clone(),
+            Samples::U32(v) => v.iter().map(|&x| x as f32).collect(),
+        }
+    }
+
+    /// The EXR pixel type code: UINT 0, FLOAT 2.
+    fn pixel_type(&self) -> i32 {
+        match self {
+            Samples::F32(_) => 2,
+            Samples::U32(_) => 0,
+        }
+    }
+
+    fn push_le(&self, range: std::ops::Range<usize>, raw: &mut Vec<u8>) {
+        match self {
+            Samples::F32(v) => v[range].iter().for_each(|x| raw.extend_from_slice(&x.to_le_bytes())),
+            Samples::U32(v) => v[range].iter().for_each(|x| raw.extend_from_slice(&x.to_le_bytes())),
+        }
+    }
+}
+
+/// A named channel beside R, G and B, for example `("moment2.R", Samples::F32(..))`.
+pub type ExtraChannel = (String, Samples);
 
 /// `(key, value)` string attributes, sorted by key.
 pub type Metadata = Vec<(String, String)>;
 
-/// [`write_exr_with`] with `extra` float32 channels in the same part (channel names must
+/// [`write_exr_with`] with `extra` float32 or uint32 channels in the same part (channel names must
 /// be unique, 1 to 255 bytes without NUL, not R, G or B, with one value per pixel).
 /// Channels are stored in name order, as OpenEXR requires.
 pub fn write_exr_channels(
@@ -95,7 +147,8 @@ pub fn read_exr(path: &Path) -> Result<(Image, Vec<(String, String)>)> {
     Ok((img, meta))
 }
 
-/// [`read_exr`] that also returns the layer's other channels (as float32, sorted by name).
+/// [`read_exr`] that also returns the layer's other channels (sorted by name): uint32
+/// channels exactly as stored, the others as float32.
 pub fn read_exr_channels(path: &Path) -> Result<(Image, Vec<ExtraChannel>, Metadata)> {
     let bytes = std::fs::read(path).map_err(|e| anyhow!("cannot read EXR {}: {e}", path.display()))?;
     decode_exr_channels(&bytes, &path.display().to_string())
@@ -151,7 +204,10 @@ pub fn decode_exr_channels(bytes: &[u8], shown: &str) -> Result<(Image, Vec<Extr
         let height = u32::try_from(h).map_err(|_| anyhow!("cannot read EXR {shown}: too tall"))?;
         let mut extra = Vec::new();
         for c in list.iter().filter(|c| !(c.name.eq("R") || c.name.eq("G") || c.name.eq("B"))) {
-            let values: Vec<f32> = c.sample_data.values_as_f32().collect();
+            let values = match &c.sample_data {
+                ::exr::image::FlatSamples::U32(v) => Samples::U32(v.clone()),
+                other => Samples::F32(other.values_as_f32().collect()),
+            };
             if values.len() != n {
                 bail!("cannot read EXR {shown}: channel {} is subsampled (not supported)", c.name);
             }
@@ -181,7 +237,13 @@ pub(crate) fn encode_exr(
         bail!("image data has {} pixels, expected {}x{}", img.data.len(), img.width, img.height);
     }
     let channels = sorted_channels(img, extra)?;
-    let channel_names: Vec<&str> = channels.iter().map(|c| c.0).collect();
+    let channel_names: Vec<(&str, i32)> = channels
+        .iter()
+        .map(|c| match c.1 {
+            Channel::Rgb(_) => (c.0, 2),
+            Channel::Extra(i) => (c.0, extra[i].1.pixel_type()),
+        })
+        .collect();
     let meta = sorted_metadata(meta)?;
 
     let mut out = Vec::with_capacity(4096);
@@ -248,20 +310,20 @@ fn sorted_metadata(meta: &[(String, String)]) -> Result<Vec<&(String, String)>> 
 fn write_header(
     out: &mut Vec<u8>,
     img: &Image,
-    channel_names: &[&str],
+    channel_names: &[(&str, i32)],
     meta: &[&(String, String)],
     compression: ExrCompression,
 ) {
-    let long_names = meta.iter().any(|kv| kv.0.len() > 31) || channel_names.iter().any(|n| n.len() > 31);
+    let long_names = meta.iter().any(|kv| kv.0.len() > 31) || channel_names.iter().any(|n| n.0.len() > 31);
     out.extend_from_slice(&20000630i32.to_le_bytes()); // magic number
     let version: u32 = 2 | if long_names { 0x400 } else { 0 };
     out.extend_from_slice(&version.to_le_bytes());
 
     let mut chlist = Vec::new();
-    for name in channel_names {
+    for (name, pixel_type) in channel_names {
         chlist.extend_from_slice(name.as_bytes());
         chlist.push(0);
-        chlist.extend_from_slice(&2i32.to_le_bytes()); // pixel type FLOAT
+        chlist.extend_from_slice(&pixel_type.to_le_bytes()); // UINT 0, FLOAT 2
         chlist.extend_from_slice(&[0, 0, 0, 0]); // pLinear, reserved
         chlist.extend_from_slice(&1i32.to_le_bytes()); // x sampling
         chlist.extend_from_slice(&1i32.to_le_bytes()); // y sampling
@@ -311,9 +373,7 @@ fn encode_chunks(
                     Channel::Rgb(c) => {
                         img.data[row.clone()].iter().for_each(|p| raw.extend_from_slice(&p[c].to_le_bytes()))
                     }
-                    Channel::Extra(i) => {
-                        extra[i].1[row.clone()].iter().for_each(|v| raw.extend_from_slice(&v.to_le_bytes()))
-                    }
+                    Channel::Extra(i) => extra[i].1.push_le(row.clone(), &mut raw),
                 }
             }
         }
@@ -328,7 +388,17 @@ fn encode_chunks(
         }
     };
     let zip_header = match compression {
-        ExrCompression::Zip => Some(zip_header(w, h, &channels.iter().map(|c| c.0).collect::<Vec<_>>())),
+        ExrCompression::Zip => Some(zip_header(
+            w,
+            h,
+            &channels
+                .iter()
+                .map(|c| match c.1 {
+                    Channel::Rgb(_) => (c.0, false),
+                    Channel::Extra(i) => (c.0, matches!(extra[i].1, Samples::U32(_))),
+                })
+                .collect::<Vec<_>>(),
+        )),
         ExrCompression::None => None,
     };
     let threads = match compression {
@@ -373,9 +443,11 @@ fn attribute(out: &mut Vec<u8>, name: &str, ty: &str, value: &[u8]) {
 }
 
 /// The `exr` crate header its ZIP encoder needs: channel list and block size only.
-fn zip_header(w: usize, h: usize, names: &[&str]) -> ::exr::meta::header::Header {
+/// `names`: each channel's name and whether it is uint32.
+fn zip_header(w: usize, h: usize, names: &[(&str, bool)]) -> ::exr::meta::header::Header {
     use ::exr::meta::attribute::{ChannelDescription, LineOrder, SampleType, Text};
-    let channels = names.iter().map(|n| ChannelDescription::named(Text::new_or_panic(*n), SampleType::F32)).collect();
+    let ty = |u: bool| if u { SampleType::U32 } else { SampleType::F32 };
+    let channels = names.iter().map(|(n, u)| ChannelDescription::named(Text::new_or_panic(*n), ty(*u))).collect();
     ::exr::meta::header::Header::new(Text::new_or_panic("rgb"), (w, h), channels).with_encoding(
         ::exr::compression::Compression::ZIP16,
         ::exr::meta::BlockDescription::ScanLines,

@@ -17,7 +17,7 @@ mod png_io;
 
 pub use exr_io::{
     decode_exr_channels, read_exr, read_exr_channels, write_exr, write_exr_channels, write_exr_with, ExrCompression,
-    ExtraChannel,
+    ExtraChannel, Samples,
 };
 pub use metrics::{compare, error_ramp, false_color_error, false_color_error_scaled, Metrics, REL_MSE_EPSILON};
 pub use png_io::{linear_to_srgb, tonemap_srgb8, write_png};

@@ -188,7 +188,7 @@ pub fn warm_renderer(gpu: &Arc<Gpu>, scene: &Scene, settings: &RenderSettings) -
     let mut r = Renderer::new(gpu, scene, settings)?;
     r.run(Budget::Iterations(1), None, &mut |_| {})?;
     let pixels = settings.frame.width as usize * settings.frame.height as usize;
-    r.resume(&vec![[0.0; 3]; pixels], &vec![[0.0; 3]; pixels], 0, 0.0)?;
+    r.resume(&super::film::FilmSums::zero(pixels), &super::shard::IterationSet::new(), 0.0)?;
     Ok(r)
 }
 

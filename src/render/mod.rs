@@ -17,6 +17,7 @@ pub mod film;
 pub mod gpu_types;
 pub mod light_selection;
 pub mod light_vertex_store;
+pub mod merge;
 pub mod output;
 pub mod passes;
 pub mod plan;
@@ -26,6 +27,7 @@ pub mod regen;
 pub mod saved;
 pub mod scene_gpu;
 pub mod settings;
+pub mod shard;
 pub mod sizes;
 pub mod techniques;
 pub mod variants;
@@ -76,12 +78,16 @@ pub struct Renderer {
     batch: Batch,
     gpu: Arc<Gpu>,
     profile: Profile,
-    /// Iterations accumulated in the film (including resumed ones).
+    /// Iterations accumulated in the film (including resumed ones): `held.len()`.
     done: u64,
+    /// The global indices of the iterations in the film (src/render/shard.rs).
+    held: shard::IterationSet,
+    /// The global index of the next iteration to render.
+    next: u64,
     /// Iterations per submit, adapted to about a quarter second and kept between runs.
     per_batch: u64,
-    /// Rejected samples and overflowing splats of a resumed render (the film counts anew).
-    prior_rejected: (u64, u64),
+    /// What a resumed render rejected (the film counts anew).
+    prior_rejected: film::Rejected,
     /// Wall-clock seconds spent in `run` (plus those of a resumed render).
     seconds: f64,
     interrupted: bool,
@@ -120,8 +126,10 @@ impl Renderer {
             gpu: gpu.clone(),
             profile: Profile::default(),
             done: 0,
+            held: shard::IterationSet::new(),
+            next: 0,
             per_batch: 1,
-            prior_rejected: (0, 0),
+            prior_rejected: film::Rejected::default(),
             seconds: 0.0,
             interrupted: false,
         })
@@ -267,12 +275,14 @@ impl Renderer {
         &self.settings
     }
 
-    /// Replaces the film with saved per-pixel sums of `iterations` iterations (see
-    /// [`RenderOutput::sum`]); the next iteration continues the same random sequences and
-    /// radius schedule, so resuming gives the image an uninterrupted render would.
-    pub fn resume(&mut self, sum: &[[f64; 3]], sum_sq: &[[f64; 3]], iterations: u64, seconds: f64) -> Result<()> {
-        self.film.load_sums(sum, sum_sq)?;
-        self.done = iterations;
+    /// Replaces the film with saved sums of the iterations `held`; the next iteration is
+    /// the one after the last held, continuing the same random sequences and radius
+    /// schedule, so resuming gives the bits an uninterrupted render would.
+    pub fn resume(&mut self, sums: &film::FilmSums, held: &shard::IterationSet, seconds: f64) -> Result<()> {
+        self.film.load_sums(sums)?;
+        self.done = held.len();
+        self.held = held.clone();
+        self.next = held.end();
         self.seconds = seconds;
         Ok(())
     }
@@ -280,9 +290,20 @@ impl Renderer {
     /// Continues a render saved by [`saved::write_render_exr`]; the caller has checked
     /// [`saved::SavedRender::check_matches`].
     pub fn resume_saved(&mut self, saved: &saved::SavedRender) -> Result<()> {
-        self.resume(&saved.sum, &saved.sum_sq, saved.iterations, saved.seconds)?;
-        self.prior_rejected = (saved.rejected_samples, saved.overflow_splats);
+        self.resume(&saved.sums, &saved.held, saved.seconds)?;
+        self.prior_rejected = saved.rejected;
         Ok(())
+    }
+
+    /// Renders from the global iteration `index` on (a shard's first, or where a device
+    /// took its next block of iterations: src/render/shard.rs); the film keeps what it holds.
+    pub fn start_at(&mut self, index: u64) {
+        self.next = index;
+    }
+
+    /// The global indices of the iterations in the film.
+    pub fn held(&self) -> &shard::IterationSet {
+        &self.held
     }
 
     /// Renders more iterations until `budget` (counted from this call) is spent or
@@ -335,7 +356,7 @@ impl Renderer {
                 break;
             }
             let n = remaining.min(self.per_batch);
-            let first = self.done;
+            let first = self.next;
             if first + n > u32::MAX as u64 {
                 bail!("more than {} iterations: the iteration index would wrap", u32::MAX);
             }
@@ -363,6 +384,8 @@ impl Renderer {
             let BatchEnd { accepted, note } = self.est.finish_batch(&b, first, n).with_context(what)?;
             done += accepted;
             self.done += accepted;
+            self.held.insert(first..first + accepted).with_context(|| format!("{} already in the film", what()))?;
+            self.next += accepted;
             let dt = t0.elapsed().as_secs_f64().max(1e-6);
             self.seconds += dt;
             self.profile.add_iterations(n, dt);
@@ -384,11 +407,10 @@ impl Renderer {
 
     /// The image so far (reads the film back; the render can continue afterwards).
     pub fn output(&self) -> Result<RenderOutput> {
-        let (sum, sum_sq) = self.film.sums().context("reading the film back")?;
-        let k = 1.0 / self.done.max(1) as f64;
-        let pixels = sum.iter().map(|p| p.map(|v| (v * k) as f32)).collect();
-        let (rejected, overflow) = self.film.rejected().context("reading the film's counters back")?;
-        let (rejected_samples, overflow_splats) = (rejected + self.prior_rejected.0, overflow + self.prior_rejected.1);
+        let sums = self.film.sums().context("reading the film back")?;
+        let (sum, sum_sq) = sums.reals();
+        let pixels = sums.mean(self.done);
+        let rejected = self.film.rejected().context("reading the film's counters back")? + self.prior_rejected;
         let mut profile = self.profile.clone();
         if self.settings.count_rays {
             // glsl/scene.glsl COUNT_RAYS_FLUSH: a 64-bit count in film_stats[2..4].
@@ -401,10 +423,13 @@ impl Renderer {
             pixels,
             sum,
             sum_sq,
+            sums,
+            held: self.held.clone(),
             iterations: self.done,
             seconds: self.seconds,
-            rejected_samples,
-            overflow_splats,
+            rejected_samples: rejected.samples,
+            overflow_splats: rejected.overflow_splats,
+            overflow_samples: rejected.overflow_samples,
             profile,
             paths_per_invocation: self.plan.paths_per_invocation,
             reads: self.scene_gpu.reads(),

@@ -2,7 +2,9 @@
 //! ([`RenderOutput`]).
 
 use super::atomics::SplatAtomics;
+use super::film::FilmSums;
 use super::reads;
+use super::shard::IterationSet;
 use crate::gpu::Profile;
 
 /// Progress of a running render.
@@ -27,12 +29,18 @@ pub struct RenderOutput {
     /// `sum / iterations`, the variance of one iteration's value follows from both.
     pub sum: Vec<[f64; 3]>,
     pub sum_sq: Vec<[f64; 3]>,
+    /// The film's exact fixed-point sums (`sum` and `sum_sq` are these as float64).
+    pub sums: FilmSums,
+    /// The global indices of its iterations (src/render/shard.rs).
+    pub held: IterationSet,
     pub iterations: u64,
     pub seconds: f64,
     /// Samples that were NaN, infinite or negative (rejected, never added).
     pub rejected_samples: u64,
     /// Light-tracing splats rejected because they could overflow the fixed-point sum.
     pub overflow_splats: u64,
+    /// Samples rejected because they are above the film's range (2^32, glsl/film.glsl).
+    pub overflow_samples: u64,
     pub profile: Profile,
     /// Paths per kernel invocation the render ran with ([`regen`]).
     pub paths_per_invocation: u32,

@@ -1,27 +1,48 @@
-//! Renders saved as EXR files that can be resumed: the mean in R, G, B, the per-pixel
-//! second moment (sum of squares / iterations) in `moment2.R/G/B`, and as `vkvcm:*` string
-//! attributes every setting that shapes the image plus the iteration count and seconds.
+//! Renders saved as EXR files that can be resumed and merged: the mean in R, G, B, the
+//! per-pixel second moment (sum of squares / iterations) in `moment2.R/G/B` (float32, for
+//! other tools), the film's exact fixed-point sums as uint32 channels (`film.sum.R.0` ..
+//! `film.sum.B.3`, `film.sq.R.0` .. `film.sq.B.3`: word 0 the least significant of each
+//! 128-bit sum, src/render/film.rs), and as `vkvcm:*` string attributes every setting that
+//! shapes the image, the iterations (`iterations`, and their global indices in
+//! `iteration_set`), the seconds, the rejected samples, and a shard's `shard` (K/N) and
+//! `shard_of` (the split render's iterations).
 //!
-//! Precision: both are stored as float32. The film itself keeps float32 Kahan sums, and
-//! the mean and second moment are the sums divided by the iteration count, so storing
-//! them rounds each value once more by at most 2^-24 relative (6e-8): a resumed render
-//! differs from an uninterrupted one by about that much (tests/render_resume.rs), far
-//! below any Monte Carlo noise. The variance M2 - mean^2 loses precision where it is tiny
-//! next to mean^2, as it already does in the float32 film.
+//! The sums are stored exactly, so a resumed render or a merge of shards is bit for bit
+//! the uninterrupted render (tests/render_resume.rs, tests/shards.rs). Files of the
+//! float32 film (`vkvcm-render-1`) are still resumed, from their float32 moments: that
+//! resumption is close (2^-24 relative), not exact.
 
 use std::path::Path;
 
 use anyhow::{anyhow, bail, Result};
 
+use super::film::{FilmSums, Rejected};
 use super::output::RenderOutput;
 use super::settings::{Algorithm, RenderSettings};
-use crate::image::{self, ExrCompression, Image};
+use super::shard::{IterationSet, Shard};
+use crate::image::{self, ExrCompression, Image, Samples};
 use crate::scene::Scene;
 
 /// Names of the second-moment channels, for R, G, B.
 pub const MOMENT2_CHANNELS: [&str; 3] = ["moment2.R", "moment2.G", "moment2.B"];
 /// Value of `vkvcm:format` in resumable files.
-pub const FORMAT: &str = "vkvcm-render-1";
+pub const FORMAT: &str = "vkvcm-render-2";
+/// The format of the float32 film, still resumed (not merged).
+const FORMAT_FLOAT_FILM: &str = "vkvcm-render-1";
+
+/// The uint32 channel of word `w` (0: least significant) of channel `c` (0..3: R, G, B)
+/// of the film's sums (`square`: of the sums of squares).
+pub fn sum_channel(square: bool, c: usize, w: usize) -> String {
+    format!("film.{}.{}.{w}", if square { "sq" } else { "sum" }, ["R", "G", "B"][c])
+}
+
+/// Which shard of which render a file holds (`--shard`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ShardOf {
+    pub shard: Shard,
+    /// The iterations of the whole render that is split.
+    pub total: u64,
+}
 
 /// Where a render came from, besides its settings.
 #[derive(Clone, Debug)]
@@ -34,6 +55,8 @@ pub struct Provenance {
     pub device: String,
     /// [`Scene::fingerprint`]: a resumed render must have the same.
     pub scene_fingerprint: String,
+    /// `--shard`: which part of which render this is.
+    pub shard: Option<ShardOf>,
 }
 
 impl Provenance {
@@ -43,6 +66,7 @@ impl Provenance {
             camera: camera.to_string(),
             device: device.to_string(),
             scene_fingerprint: scene.fingerprint(),
+            shard: None,
         }
     }
 }
@@ -72,24 +96,31 @@ pub struct SavedRender {
     /// Light subpaths per iteration (renders saved before the option: one per pixel).
     pub light_paths: u32,
     pub iterations: u64,
+    /// The global indices of its iterations (`0..iterations` in files without them).
+    pub held: IterationSet,
+    /// `--shard` renders: which shard of which render.
+    pub shard: Option<ShardOf>,
     pub seconds: f64,
-    pub rejected_samples: u64,
-    pub overflow_splats: u64,
-    /// Per-pixel sums of the iterations' values and of their squares.
-    pub sum: Vec<[f64; 3]>,
-    pub sum_sq: Vec<[f64; 3]>,
+    pub rejected: Rejected,
+    /// The film's sums.
+    pub sums: FilmSums,
+    /// False for files of the float32 film, whose sums are rounded: resumed, never merged.
+    pub exact: bool,
+    /// Every `vkvcm:*` attribute, for merges to compare.
+    pub metadata: Vec<(String, String)>,
 }
 
 /// The `vkvcm:*` attributes of a render.
 pub fn render_metadata(out: &RenderOutput, s: &RenderSettings, p: &Provenance) -> Vec<(String, String)> {
     let kv = |k: &str, v: String| (format!("vkvcm:{k}"), v);
-    vec![
+    let mut meta = vec![
         kv("format", FORMAT.to_string()),
         kv("scene", p.scene.clone()),
         kv("scene_fingerprint", p.scene_fingerprint.clone()),
         kv("camera", p.camera.clone()),
         kv("estimator", s.algorithm.name().to_string()),
         kv("iterations", out.iterations.to_string()),
+        kv("iteration_set", out.held.to_string()),
         kv("seconds", format!("{:.3}", out.seconds)),
         kv("seed", s.frame.seed.to_string()),
         kv("max_path_length", s.frame.max_path_length.to_string()),
@@ -105,7 +136,13 @@ pub fn render_metadata(out: &RenderOutput, s: &RenderSettings, p: &Provenance) -
         kv("device", p.device.clone()),
         kv("rejected_samples", out.rejected_samples.to_string()),
         kv("overflow_splats", out.overflow_splats.to_string()),
-    ]
+        kv("overflow_samples", out.overflow_samples.to_string()),
+    ];
+    if let Some(sh) = p.shard {
+        meta.push(kv("shard", sh.shard.to_string()));
+        meta.push(kv("shard_of", sh.total.to_string()));
+    }
+    meta
 }
 
 /// Writes `out` (atomically) with everything [`read_render_exr`] needs to resume it.
@@ -123,14 +160,80 @@ pub fn write_render_exr_with(
 ) -> Result<()> {
     let mut meta = render_metadata(out, s, p);
     meta.extend_from_slice(more);
-    let img = Image { width: out.width, height: out.height, data: out.pixels.clone() };
-    let k = 1.0 / out.iterations.max(1) as f64;
-    let extra: Vec<image::ExtraChannel> = MOMENT2_CHANNELS
+    write_sums_exr(path, out.width, out.height, &out.sums, out.iterations, &meta)
+}
+
+/// Writes (atomically) a render of `iterations` iterations from its film's sums: the mean
+/// and second moment computed from them on the host, the sums' words, and `meta`. The
+/// channels are a function of the sums and the count alone: merged shards and one render
+/// give the same bits.
+pub fn write_sums_exr(
+    path: &Path,
+    width: u32,
+    height: u32,
+    sums: &FilmSums,
+    iterations: u64,
+    meta: &[(String, String)],
+) -> Result<()> {
+    let img = Image { width, height, data: sums.mean(iterations) };
+    let k = 1.0 / iterations.max(1) as f64;
+    let mut extra: Vec<image::ExtraChannel> = MOMENT2_CHANNELS
         .iter()
         .enumerate()
-        .map(|(c, name)| (name.to_string(), out.sum_sq.iter().map(|q| (q[c] * k) as f32).collect()))
+        .map(|(c, name)| {
+            (name.to_string(), Samples::F32(sums.sum_sq.iter().map(|q| (FilmSums::real(q[c]) * k) as f32).collect()))
+        })
         .collect();
-    image::write_exr_channels(path, &img, &extra, &meta, ExrCompression::Zip)
+    for (square, sums) in [(false, &sums.sum), (true, &sums.sum_sq)] {
+        for c in 0..3 {
+            for w in 0..4 {
+                let words = sums.iter().map(|p| FilmSums::words(p[c])[w]).collect();
+                extra.push((sum_channel(square, c, w), Samples::U32(words)));
+            }
+        }
+    }
+    image::write_exr_channels(path, &img, &extra, meta, ExrCompression::Zip)
+}
+
+/// The film's sums from a file's channels: exactly from the uint32 words (format 2), or
+/// rounded from the float32 mean and second moment (format 1). Errors name what is missing.
+fn saved_sums(
+    shown: &std::path::Display,
+    img: &Image,
+    extra: &[image::ExtraChannel],
+    exact: bool,
+    iterations: u64,
+) -> Result<FilmSums> {
+    let channel = |name: &str| -> Result<&Samples> {
+        extra.iter().find(|(n, _)| n == name).map(|(_, d)| d).ok_or_else(|| {
+            anyhow!("{shown} has no {name} channel: truncated, or not a render that vkvcm can resume or merge")
+        })
+    };
+    let n = img.data.len();
+    let mut sums = FilmSums::zero(n);
+    if exact {
+        for (square, out) in [(false, &mut sums.sum), (true, &mut sums.sum_sq)] {
+            for c in 0..3 {
+                for w in 0..4 {
+                    let Samples::U32(words) = channel(&sum_channel(square, c, w))? else {
+                        bail!("{shown}: channel {} is not uint32", sum_channel(square, c, w));
+                    };
+                    for (p, &x) in out.iter_mut().zip(words) {
+                        p[c] |= (x as u128) << (32 * w);
+                    }
+                }
+            }
+        }
+        return Ok(sums);
+    }
+    let m2: Vec<Vec<f32>> =
+        MOMENT2_CHANNELS.iter().map(|name| channel(name).map(Samples::to_f32)).collect::<Result<_>>()?;
+    let k = iterations as f64;
+    for (i, p) in img.data.iter().enumerate() {
+        sums.sum[i] = p.map(|v| FilmSums::fixed(v as f64 * k));
+        sums.sum_sq[i] = [0, 1, 2].map(|c| FilmSums::fixed(m2[c][i] as f64 * k));
+    }
+    Ok(sums)
 }
 
 /// Reads a render written by [`write_render_exr`]. Errors name the file and what is
@@ -148,24 +251,41 @@ pub fn read_render_exr(path: &Path) -> Result<SavedRender> {
         v.trim().parse().map_err(|_| anyhow!("{shown}: attribute vkvcm:{key} = {v:?} is malformed"))
     }
     let format = get("format")?;
-    if format != FORMAT {
-        bail!("{shown}: vkvcm:format is {format:?}, this version resumes {FORMAT:?}");
+    if format != FORMAT && format != FORMAT_FLOAT_FILM {
+        bail!("{shown}: vkvcm:format is {format:?}, this version reads {FORMAT:?}");
     }
-    let mut m2 = Vec::new();
-    for name in MOMENT2_CHANNELS {
-        match extra.iter().find(|(n, _)| n == name) {
-            Some((_, d)) => m2.push(d),
-            None => bail!("{shown} has no {name} channel: cannot resume it"),
-        }
-    }
+    let exact = format == FORMAT;
     let iterations: u64 = parse(&shown, "iterations", get("iterations")?)?;
     if iterations == 0 {
         bail!("{shown}: vkvcm:iterations is 0, nothing to resume");
     }
-    let n = iterations as f64;
-    let sum = img.data.iter().map(|p| p.map(|v| v as f64 * n)).collect();
-    let sum_sq = (0..img.data.len()).map(|i| [0, 1, 2].map(|c| m2[c][i] as f64 * n)).collect();
+    let held = match get("iteration_set") {
+        Ok(v) => IterationSet::parse(v).map_err(|e| anyhow!("{shown}: vkvcm:iteration_set: {e}"))?,
+        Err(_) => IterationSet::of(0..iterations),
+    };
+    if held.len() != iterations {
+        bail!(
+            "{shown}: vkvcm:iteration_set {held} holds {} iterations, vkvcm:iterations says {iterations}",
+            held.len()
+        );
+    }
+    let shard = match get("shard") {
+        Ok(v) => Some(ShardOf {
+            shard: Shard::parse(v).map_err(|e| anyhow!("{shown}: vkvcm:shard: {e}"))?,
+            total: parse(&shown, "shard_of", get("shard_of")?)?,
+        }),
+        Err(_) => None,
+    };
+    let sums = saved_sums(&shown, &img, &extra, exact, iterations)?;
     let seconds: f64 = parse(&shown, "seconds", get("seconds")?)?;
+    let rejected = Rejected {
+        samples: parse(&shown, "rejected_samples", get("rejected_samples")?)?,
+        overflow_splats: parse(&shown, "overflow_splats", get("overflow_splats")?)?,
+        overflow_samples: match get("overflow_samples") {
+            Ok(v) => parse(&shown, "overflow_samples", v)?,
+            Err(_) => 0,
+        },
+    };
     Ok(SavedRender {
         scene: get("scene")?.to_string(),
         scene_fingerprint: get("scene_fingerprint").ok().map(str::to_string),
@@ -191,11 +311,13 @@ pub fn read_render_exr(path: &Path) -> Result<SavedRender> {
             Err(_) => img.width.saturating_mul(img.height),
         },
         iterations,
+        held,
+        shard,
         seconds: if seconds.is_finite() && seconds >= 0.0 { seconds } else { 0.0 },
-        rejected_samples: parse(&shown, "rejected_samples", get("rejected_samples")?)?,
-        overflow_splats: parse(&shown, "overflow_splats", get("overflow_splats")?)?,
-        sum,
-        sum_sq,
+        rejected,
+        sums,
+        exact,
+        metadata: meta.iter().filter(|(k, _)| k.starts_with("vkvcm:")).cloned().collect(),
     })
 }
 
@@ -234,6 +356,17 @@ impl SavedRender {
         diff("--alpha", self.alpha.to_string(), s.alpha.to_string())?;
         diff("--connect", self.connect.clone(), s.connect.name())?;
         diff("--light-paths", self.light_paths.to_string(), s.light_paths().to_string())?;
+        let shard = |sh: Option<ShardOf>| sh.map_or("(none)".to_string(), |x| format!("{} of {}", x.shard, x.total));
+        diff("--shard", shard(self.shard), shard(p.shard))?;
+        // A render continues after its last iteration: the film must hold every one
+        // before it (a partial merge does not).
+        let first = p.shard.map_or(0, |x| x.shard.range(x.total).start);
+        if self.held != IterationSet::of(first..self.held.end()) {
+            bail!("it holds iterations {} with gaps (a partial merge?): it cannot be continued", self.held);
+        }
+        if !self.exact && self.shard.is_some() {
+            bail!("it holds a float32 film of an older vkvcm");
+        }
         Ok(())
     }
 
