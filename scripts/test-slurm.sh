@@ -105,11 +105,12 @@ eval "$(bash "$root/scripts/slurm/local-cluster.sh" start "$work/cluster")"
 say "one-node cluster up ($(sinfo -h -N -o '%N, %c CPUs'))"
 
 # The render: tiny, and vcm (the default), whose merge radius follows the global iteration
-# index. 96 iterations per shard, so that a shard renders long enough (0.5-1 s here) to be
-# stopped in the middle.
+# index. 128 iterations per shard, so that a shard renders long enough (0.5-1 s on a quiet
+# machine) to be stopped in the middle: the signal follows its first progress line within
+# about 20 ms.
 repo=$root
 n=3
-render=(gbs_s --width 32 --height 32 --iterations 288 --seed 7)
+render=(gbs_s --width 32 --height 32 --iterations 384 --seed 7)
 cd "$work"
 "$VKVCM" render "${render[@]}" -o one.exr --quiet
 say "one-process render done"
@@ -139,10 +140,10 @@ cd failures
 eval "$submit_array"
 eval "$submit_merge"
 pid=$(rendering_pid "${array}_1")
-kill -KILL "$pid"
+kill -KILL "$pid" || fail "task ${array}_1 finished before the SIGKILL reached it (a machine this loaded needs longer shards)"
 say "2. array job $array: task 1 killed (SIGKILL) in the middle of its render"
 pid=$(rendering_pid "${array}_2")
-kill -TERM "$pid"
+kill -TERM "$pid" || fail "task ${array}_2 finished before the SIGTERM reached it (a machine this loaded needs longer shards)"
 say "2. task 2 sent SIGTERM in the middle of its render"
 wait_job "${array}_0" 60 COMPLETED
 wait_job "${array}_1" 30 FAILED
