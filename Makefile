@@ -1,7 +1,7 @@
 # vkvcm: the two set-up commands of README.md.
 #   make render  - install what is missing (Debian 12, as root), build, render the default scene
 #   make test    - install what is missing, build, run the whole test suite (validation on)
-#                  on lavapipe, a set on SwiftShader, and gpu-check --quick
+#                  on lavapipe, a set on SwiftShader, gpu-check --quick, and the Slurm test
 #   make gpu-check - on a machine with a GPU: devices, the statistical tests, a benchmark
 #                  matrix at 1920x1080 (scripts/gpu-check.sh; about ten minutes)
 # Tests run on lavapipe unless VKVCM_TEST_DEVICE names another device.
@@ -29,7 +29,9 @@ TEST_KERNEL_CACHE := $(CURDIR)/target/test-kernel-cache
 #
 # Then a set of the tests on SwiftShader, a second Vulkan implementation with other limits
 # (scripts/test-swiftshader.sh says which and why), and the GPU check's quick mode on
-# lavapipe with the binary the tests built, so that it cannot rot.
+# lavapipe with the binary the tests built, so that it cannot rot; last, with that binary,
+# the Slurm job array and merge of docs/distributed.md on a one-node Slurm cluster
+# (scripts/test-slurm.sh).
 test: setup
 	rm -rf $(TEST_KERNEL_CACHE)
 	VK_DRIVER_FILES=$(LVP_ICD) VK_ICD_FILENAMES=$(LVP_ICD) VKVCM_TEST_KERNEL_CACHE=$(TEST_KERNEL_CACHE) \
@@ -38,6 +40,8 @@ test: setup
 	rm -rf target/gpu-check-quick
 	VK_DRIVER_FILES=$(LVP_ICD) VK_ICD_FILENAMES=$(LVP_ICD) VKVCM=target/debug/vkvcm VKVCM_CACHE_DIR=$(TEST_KERNEL_CACHE) \
 		bash scripts/gpu-check.sh --quick target/gpu-check-quick
+	VK_DRIVER_FILES=$(LVP_ICD) VK_ICD_FILENAMES=$(LVP_ICD) VKVCM=target/debug/vkvcm VKVCM_CACHE_DIR=$(TEST_KERNEL_CACHE) \
+		bash scripts/test-slurm.sh
 
 test-swiftshader:
 	LVP_ICD=$(LVP_ICD) VKVCM_TEST_KERNEL_CACHE=$(TEST_KERNEL_CACHE) bash scripts/test-swiftshader.sh

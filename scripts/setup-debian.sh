@@ -32,6 +32,8 @@ if ! grep -rqs 'bookworm-backports' /etc/apt/sources.list.d/ /etc/apt/sources.li
 fi
 
 pkgs="libvulkan1 libvulkan-dev vulkan-tools vulkan-validationlayers glslang-tools glslc libshaderc-dev spirv-tools"
+# slurm-wlm and munge: the one-node Slurm cluster of scripts/test-slurm.sh (docs/distributed.md).
+pkgs="$pkgs slurm-wlm munge"
 need=0
 for p in $pkgs; do dpkg -s "$p" >/dev/null 2>&1 || need=1; done
 mesa_ver=$(dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null || true)
