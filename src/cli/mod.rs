@@ -6,6 +6,7 @@ pub mod exit;
 pub mod info;
 pub mod progress;
 pub mod render;
+pub mod submission;
 pub mod trace;
 
 use anyhow::{bail, Context, Result};
