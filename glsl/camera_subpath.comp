@@ -247,16 +247,20 @@ bool continue_path(inout SubpathState st, Bsdf b, Surface s, inout PathSampler p
 
 // This iteration's light vertices did not all fit the store: it is rendered again once
 // the store has grown, so nothing of it may reach the film, splats included.
-void leave_iteration_out(uint pixel, uint stride) {
-    for (; pixel < push.count; pixel += stride) splat_take(pixel);
+void leave_iteration_out(uint pixel, uint stride, uint end) {
+    for (; pixel < end; pixel += stride) splat_take(pixel);
 }
 
 void main() {
+    // Pixels push.first_path .. + push.count: a submission budget splits the pass
+    // (src/gpu/batch.rs); each pixel keeps its index, so the image does not change.
     uint stride = regen_stride(push.count, push.paths_per_invocation);
-    uint pixel = invocation_index();
-    if (pixel >= stride) return;
+    uint q = invocation_index();
+    if (q >= stride) return;
+    uint pixel = push.first_path + q;
+    uint end = push.first_path + push.count;
     if (lv_first_overflow <= push.iteration) {
-        leave_iteration_out(pixel, stride);
+        leave_iteration_out(pixel, stride, end);
         return;
     }
     uint max_len = max_path_length();
@@ -272,7 +276,7 @@ void main() {
         if (!alive) {
             film_add(pixel, L + splat_take(pixel));
             pixel += stride;
-            if (pixel >= push.count) break;
+            if (pixel >= end) break;
             start_path(pixel, st, ps);
             L = vec3(0.0);
         }

@@ -139,9 +139,13 @@ bool continue_path(inout PtPath path, Surface s, Bsdf b, inout PathSampler ps) {
 }
 
 void main() {
+    // Pixels push.first_path .. + push.count: a submission budget splits the pass
+    // (src/gpu/batch.rs); each pixel keeps its index, so the image does not change.
     uint stride = regen_stride(push.count, push.paths_per_invocation);
-    uint pixel = invocation_index();
-    if (pixel >= stride) return;
+    uint q = invocation_index();
+    if (q >= stride) return;
+    uint pixel = push.first_path + q;
+    uint end = push.first_path + push.count;
     uint max_len = max_path_length();
     PtPath path;
     PathSampler ps;
@@ -154,7 +158,7 @@ void main() {
         if (!alive) {
             film_add(pixel, L);
             pixel += stride;
-            if (pixel >= push.count) break;
+            if (pixel >= end) break;
             start_path(pixel, path, ps);
             L = vec3(0.0);
         }

@@ -113,7 +113,7 @@ struct GpuPush {
     uint light_paths;  // N_L, light subpaths per iteration
     uint grid_buckets; // buckets of the light-vertex hash grid (merging estimators)
     uint paths_per_invocation; // path regeneration (common.glsl regen_stride); 0 = 1
-    uint first_path;   // light-subpaths pass: the chunk's first light subpath
+    uint first_path;   // the dispatch's first path: a light chunk's, or a camera piece's pixel
 };
 
 #endif

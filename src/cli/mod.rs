@@ -8,6 +8,7 @@ pub mod merge;
 pub mod progress;
 pub mod render;
 pub mod shard;
+pub mod submission;
 pub mod trace;
 
 use anyhow::{bail, Context, Result};

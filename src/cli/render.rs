@@ -178,6 +178,7 @@ pub struct RenderArgs {
     pub gpu: super::GpuArgs,
     #[command(flatten)]
     pub shards: super::shard::ShardArgs,
+    pub submission: super::submission::SubmissionArgs,
 }
 
 /// `X,Y,Z` as a vector of three finite numbers.
@@ -474,6 +475,7 @@ fn render_settings(a: &RenderArgs) -> Result<RenderSettings> {
     settings.connect = connect_setting(a.algo, a.connect, a.cache_connections)?;
     settings.light_paths = a.light_paths;
     settings.count_rays = a.profile || a.profile_json.is_some();
+    a.submission.apply(&mut settings);
     Ok(settings)
 }
 
@@ -722,6 +724,10 @@ fn write_outputs(
     }
     if let (true, Some(u)) = (a.verbose, r.light_vertex_store_use()) {
         eprintln!("{}", store_use_line(&u));
+    }
+    if a.verbose {
+        let budget = if r.has_submission_budget() { "within the submission budget" } else { "no submission budget" };
+        eprintln!("{} queue submission(s), {budget}", r.submissions());
     }
     if let Some(p) = &a.png {
         let img = Image { width: out.width, height: out.height, data: out.pixels.clone() };

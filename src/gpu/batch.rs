@@ -1,6 +1,12 @@
 //! Command batches: record dispatches (each wrapped in timestamp queries when the device
-//! supports them), submit, wait, and fold the timings into a `Profile`.
+//! supports them), submit, wait, and fold the timings into a `Profile`. A batch with a
+//! submission budget ([`Batch::set_budget`]) submits what it holds before the next
+//! dispatch would take it past the budget, from each kernel's time per path measured by
+//! the timestamps of earlier submissions, and splits passes over paths into pieces
+//! ([`Batch::record_paths`]): display GPUs reset a device whose submission runs for more
+//! than about two seconds (docs/robustness.md, "Watchdog resets").
 
+use std::collections::HashMap;
 use std::sync::Arc;
 
 use anyhow::{anyhow, bail, Context, Result};
@@ -45,6 +51,40 @@ pub struct Batch {
     /// Kernels recorded since the last submit, each once, for error messages.
     kernels: Vec<String>,
     recording: bool,
+    /// Paths (or 1) of each timed dispatch: the unit of its kernel's rate.
+    timed_units: Vec<u64>,
+    budget: Budget,
+    /// Queue submissions so far.
+    submissions: u64,
+}
+
+/// A submission's time budget and what it has learned: each kernel's nanoseconds per unit
+/// (per path for [`Batch::dispatch_paths`], else per dispatch).
+#[derive(Default)]
+struct Budget {
+    /// Nanoseconds a submission may take; `None`: no budget.
+    ns: Option<f64>,
+    rates: HashMap<String, f64>,
+    /// Predicted nanoseconds of what is recorded.
+    predicted: f64,
+    /// A kernel of unknown rate was recorded: submit before the next dispatch, so that
+    /// its time is measured alone.
+    submit_next: bool,
+    /// Timings of the submissions the budget made, for the caller's next `submit_wait`.
+    held: Profile,
+}
+
+/// Paths of the first piece of a kernel whose rate is not known yet (a probe: a few
+/// milliseconds of work on a laptop GPU).
+const PROBE_PATHS: u32 = 1 << 16;
+
+/// The fewest paths of a piece (smaller pieces cost more in submissions than they save).
+const MIN_PIECE_PATHS: u32 = 64;
+
+/// The default submission budget on `device_type`: half a second on GPUs, which may drive
+/// a display and its watchdog; none on CPU devices, which have no watchdog.
+pub fn default_submission_budget_ms(device_type: vk::PhysicalDeviceType) -> Option<f64> {
+    (device_type != vk::PhysicalDeviceType::CPU).then_some(500.0)
 }
 
 impl Gpu {
@@ -64,6 +104,12 @@ impl Gpu {
                 pass: UNNAMED_PASS.to_string(),
                 kernels: Vec::new(),
                 recording: false,
+                timed_units: Vec::new(),
+                budget: Budget {
+                    held: Profile { dispatches: Some(Vec::new()), ..Default::default() },
+                    ..Default::default()
+                },
+                submissions: 0,
             };
             b.pool = dev.create_command_pool(
                 &vk::CommandPoolCreateInfo::default()
@@ -105,7 +151,9 @@ impl Batch {
         }
         self.timed.clear();
         self.timed_groups.clear();
+        self.timed_units.clear();
         self.kernels.clear();
+        self.budget.predicted = 0.0;
         self.recording = true;
         Ok(())
     }
@@ -144,14 +192,74 @@ impl Batch {
         self.iteration = Some(iteration);
     }
 
+    /// Keeps each submission within `ms` milliseconds of GPU time (`None`: no budget). It
+    /// needs timestamp queries; without them it is ignored.
+    pub fn set_budget(&mut self, ms: Option<f64>) {
+        self.budget.ns = ms.filter(|&m| m > 0.0 && self.queries != vk::QueryPool::null()).map(|m| m * 1e6);
+    }
+
+    /// Whether a submission budget is in force.
+    pub fn has_budget(&self) -> bool {
+        self.budget.ns.is_some()
+    }
+
+    /// Queue submissions so far (those a budget made included).
+    pub fn submissions(&self) -> u64 {
+        self.submissions
+    }
+
+    /// Records a pass over paths `0 .. paths` in pieces of at most `max_piece` paths that
+    /// keep each submission within the budget, by `kernel`'s time per path: `record(batch,
+    /// first, count)` records one piece (with [`Batch::dispatch_paths`]). Without a budget,
+    /// pieces of `max_piece`.
+    pub fn record_paths(
+        &mut self,
+        kernel: &Kernel,
+        paths: u32,
+        max_piece: u32,
+        mut record: impl FnMut(&mut Batch, u32, u32) -> Result<()>,
+    ) -> Result<()> {
+        let mut first = 0;
+        while first < paths {
+            let count = self.piece_paths(kernel.name(), paths - first)?.min(max_piece.max(1));
+            record(self, first, count)?;
+            first += count;
+        }
+        Ok(())
+    }
+
+    /// Paths of the next piece of a pass of `kernel` with `left` paths to go: what fits the
+    /// room left in this submission, or else (after submitting what it holds) a whole
+    /// budget's worth.
+    fn piece_paths(&mut self, kernel: &str, left: u32) -> Result<u32> {
+        let Some(budget) = self.budget.ns else { return Ok(left) };
+        let Some(&rate) = self.budget.rates.get(kernel) else { return Ok(left.min(PROBE_PATHS)) };
+        let fits = |room: f64| (room / rate.max(1e-3)).min(left as f64) as u32;
+        if fits(budget - self.budget.predicted) < MIN_PIECE_PATHS.min(left) && self.recording {
+            self.submit_held()?;
+        }
+        Ok(fits(budget - self.budget.predicted).clamp(MIN_PIECE_PATHS.min(left), left))
+    }
+
     /// Records `kernel` over `groups` workgroups with `push` as push constants.
     pub fn dispatch(&mut self, kernel: &Kernel, groups: [u32; 3], push: &[u8]) -> Result<()> {
+        self.dispatch_units(kernel, groups, push, 1)
+    }
+
+    /// [`Batch::dispatch`] of a kernel that traces `paths` paths: its time per path keeps
+    /// the pieces of [`Batch::record_paths`] within the budget.
+    pub fn dispatch_paths(&mut self, kernel: &Kernel, groups: [u32; 3], push: &[u8], paths: u32) -> Result<()> {
+        self.dispatch_units(kernel, groups, push, paths as u64)
+    }
+
+    fn dispatch_units(&mut self, kernel: &Kernel, groups: [u32; 3], push: &[u8], units: u64) -> Result<()> {
         if push.len() as u32 > PUSH_CONSTANT_BYTES {
             bail!("kernel {}: {} push-constant bytes, at most {PUSH_CONSTANT_BYTES}", kernel.name(), push.len());
         }
         if groups.contains(&0) {
             return Ok(());
         }
+        self.keep_within_budget(kernel.name(), units)?;
         self.begin()?;
         self.barrier();
         let dev = &self.gpu.device;
@@ -186,6 +294,7 @@ impl Batch {
         if timed {
             self.timed.push((self.pass.clone(), kernel.name().to_string()));
             self.timed_groups.push((groups, self.iteration));
+            self.timed_units.push(units);
         }
         if !self.kernels.iter().any(|k| k == kernel.name()) {
             self.kernels.push(kernel.name().to_string());
@@ -193,8 +302,26 @@ impl Batch {
         Ok(())
     }
 
+    /// Before a dispatch of `units` of `kernel`: submits what is recorded when the dispatch
+    /// would take the submission past the budget (or follows one of unknown time).
+    fn keep_within_budget(&mut self, kernel: &str, units: u64) -> Result<()> {
+        let Some(budget) = self.budget.ns else { return Ok(()) };
+        let rate = self.budget.rates.get(kernel).copied();
+        let ns = rate.map_or(0.0, |r| r * units as f64);
+        let full = self.timed.len() as u32 >= MAX_TIMED;
+        if self.recording && (self.budget.submit_next || full || self.budget.predicted + ns > budget) {
+            self.submit_held()?;
+        }
+        self.budget.predicted += ns;
+        self.budget.submit_next = rate.is_none();
+        Ok(())
+    }
+
     /// Records a fill of the whole buffer with the 32-bit `value`.
     pub fn fill(&mut self, buffer: &Buffer, value: u32) -> Result<()> {
+        if self.budget.submit_next && self.recording {
+            self.submit_held()?;
+        }
         self.begin()?;
         self.barrier();
         // SAFETY: recording; the buffer has TRANSFER_DST usage.
@@ -202,8 +329,30 @@ impl Batch {
         Ok(())
     }
 
-    /// Submits what was recorded, waits for it, and adds the kernel timings to `profile`.
+    /// Submits what was recorded, waits for it, and adds the kernel timings to `profile`
+    /// (those of the submissions a budget made since the last call included).
     pub fn submit_wait(&mut self, profile: Option<&mut Profile>) -> Result<()> {
+        let r = self.submit(profile.as_deref().is_some());
+        let held =
+            std::mem::replace(&mut self.budget.held, Profile { dispatches: Some(Vec::new()), ..Default::default() });
+        if let Some(p) = profile {
+            p.absorb(&held);
+            if let (Some(d), Some(h)) = (&mut p.dispatches, held.dispatches) {
+                d.extend(h);
+            }
+        }
+        r
+    }
+
+    /// Submits what is recorded in the middle of a batch (the budget's split), keeping its
+    /// timings for the caller's next [`Batch::submit_wait`].
+    fn submit_held(&mut self) -> Result<()> {
+        self.submit(true)
+    }
+
+    /// Submits what was recorded and waits for it; with `timings`, adds the kernel timings
+    /// to the held profile. Each kernel's rate is updated where a budget is in force.
+    fn submit(&mut self, timings: bool) -> Result<()> {
         if !self.recording {
             return Ok(());
         }
@@ -219,41 +368,42 @@ impl Batch {
             let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
             fault_injection::simulated_device_loss(true).map_err(|e| fail("vkQueueSubmit", e))?;
             submitted_us = super::profile::trace_clock_us();
+            self.submissions += 1;
             dev.queue_submit(self.gpu.queue, &submit, self.fence).map_err(|e| fail("vkQueueSubmit", e))?;
             dev.wait_for_fences(&[self.fence], true, u64::MAX).map_err(|e| fail("waiting for the GPU", e))?;
             dev.reset_fences(&[self.fence]).map_err(|e| fail("vkResetFences", e))?;
         }
-        if let Some(p) = profile {
-            if !self.timed.is_empty() {
-                let mut ts = vec![0u64; 2 * self.timed.len()];
-                // SAFETY: the queries were written by the completed submission.
-                unsafe {
-                    dev.get_query_pool_results(
-                        self.queries,
-                        0,
-                        &mut ts,
-                        vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-                    )
-                }
-                .context("reading timestamps failed")?;
-                let period = self.gpu.timestamp_period_ns;
-                for (i, (pass, kernel)) in self.timed.iter().enumerate() {
-                    let ns = ts[2 * i + 1].saturating_sub(ts[2 * i]) as f64 * period;
-                    p.add(pass, kernel, ns);
-                    if let Some(d) = &mut p.dispatches {
-                        // GPU ticks have their own epoch: the batch starts at its submission
-                        // on the host clock, so batches follow each other on the trace.
-                        let (groups, iteration) = self.timed_groups[i];
-                        d.push(DispatchEvent {
-                            pass: pass.clone(),
-                            kernel: kernel.clone(),
-                            groups,
-                            iteration,
-                            start_us: submitted_us + ts[2 * i].saturating_sub(ts[0]) as f64 * period * 1e-3,
-                            duration_us: ns * 1e-3,
-                        });
-                    }
-                }
+        if self.timed.is_empty() || !(timings || self.has_budget()) {
+            return Ok(());
+        }
+        let ts = self.last_timestamps().context("reading timestamps failed")?;
+        let period = self.gpu.timestamp_period_ns;
+        for (i, (pass, kernel)) in self.timed.iter().enumerate() {
+            let ns = ts[2 * i + 1].saturating_sub(ts[2 * i]) as f64 * period;
+            if self.budget.ns.is_some() {
+                // Up at once, down by halves: a piece of sky after a piece of geometry
+                // must not make the next piece too long.
+                let rate = ns / self.timed_units[i].max(1) as f64;
+                let old = self.budget.rates.get(kernel).copied().unwrap_or(0.0);
+                self.budget.rates.insert(kernel.clone(), rate.max(0.5 * old));
+            }
+            if !timings {
+                continue;
+            }
+            let p = &mut self.budget.held;
+            p.add(pass, kernel, ns);
+            if let Some(d) = &mut p.dispatches {
+                // GPU ticks have their own epoch: the batch starts at its submission
+                // on the host clock, so batches follow each other on the trace.
+                let (groups, iteration) = self.timed_groups[i];
+                d.push(DispatchEvent {
+                    pass: pass.clone(),
+                    kernel: kernel.clone(),
+                    groups,
+                    iteration,
+                    start_us: submitted_us + ts[2 * i].saturating_sub(ts[0]) as f64 * period * 1e-3,
+                    duration_us: ns * 1e-3,
+                });
             }
         }
         Ok(())

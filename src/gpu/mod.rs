@@ -14,7 +14,7 @@ pub mod reflect;
 pub mod shader;
 mod validation;
 
-pub use batch::Batch;
+pub use batch::{default_submission_budget_ms, Batch};
 pub use buffer::Buffer;
 pub use context::{
     list_devices, DeviceInfo, FeatureStatus, Gpu, GpuArgs, GpuOptions, BUFFER_DEVICE_ADDRESS, SHADER_INT64,

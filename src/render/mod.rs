@@ -117,13 +117,17 @@ impl Renderer {
         // Every kernel of the render exists now: keep their pipelines for later processes
         // even if this one does not end normally.
         gpu.save_pipeline_cache();
+        let mut batch = gpu.batch()?;
+        let budget =
+            settings.submission_budget_ms.or_else(|| crate::gpu::default_submission_budget_ms(gpu.info.device_type));
+        batch.set_budget(budget);
         Ok(Renderer {
             settings: settings.clone(),
             est,
             film,
             scene_gpu,
             plan,
-            batch: gpu.batch()?,
+            batch,
             gpu: gpu.clone(),
             profile: Profile::default(),
             done: 0,
@@ -201,6 +205,18 @@ impl Renderer {
     /// Wall-clock seconds rendered so far.
     pub fn seconds(&self) -> f64 {
         self.seconds
+    }
+
+    /// Queue submissions so far: one per batch of iterations, more where the submission
+    /// budget split them (src/gpu/batch.rs).
+    pub fn submissions(&self) -> u64 {
+        self.batch.submissions()
+    }
+
+    /// Whether a submission budget is in force ([`RenderSettings::submission_budget_ms`]; it
+    /// needs timestamp queries).
+    pub fn has_submission_budget(&self) -> bool {
+        self.batch.has_budget()
     }
 
     /// Paths per kernel invocation (path regeneration, [`regen`]).

@@ -460,6 +460,10 @@ pub struct RenderSettings {
     /// The light-vertex store's first capacity in vertices; `None`: an estimate from N_L.
     /// The store grows when an iteration needs more; the image does not depend on it.
     pub light_vertex_capacity: Option<u64>,
+    /// The most GPU time of one queue submission, in milliseconds (src/gpu/batch.rs: passes
+    /// split into pieces of paths to fit); `None` chooses by device (500 on GPUs, none on
+    /// CPU devices), 0 turns it off. The image does not depend on it.
+    pub submission_budget_ms: Option<f64>,
 }
 
 impl RenderSettings {
@@ -489,6 +493,7 @@ impl RenderSettings {
             light_paths: None,
             light_chunk_paths: None,
             light_vertex_capacity: None,
+            submission_budget_ms: None,
         }
     }
 

@@ -76,6 +76,8 @@ pub struct CameraSubpaths {
     pixels: u32,
     /// Paths per invocation (1 for el).
     paths_per_invocation: u32,
+    /// The kernel traces pixels `first_path ..` (pt, camera_subpath): it may be split.
+    pieces: bool,
     detail: String,
 }
 
@@ -89,6 +91,7 @@ impl CameraSubpaths {
             kernel,
             pixels: b.pixels,
             paths_per_invocation: 1,
+            pieces: false,
             detail: "el.comp: first hit, |cos| with the shading normal; film".into(),
         })
     }
@@ -104,6 +107,7 @@ impl CameraSubpaths {
             kernel,
             pixels: b.pixels,
             paths_per_invocation: b.paths_per_invocation,
+            pieces: true,
             detail: format!("pt.comp: {what}; film"),
         })
     }
@@ -128,6 +132,7 @@ impl CameraSubpaths {
             kernel,
             pixels: b.pixels,
             paths_per_invocation: b.paths_per_invocation,
+            pieces: true,
             detail: format!("camera_subpath.comp: {}", describe(variant)),
         })
     }
@@ -137,10 +142,20 @@ impl CameraSubpaths {
         self.pixels
     }
 
+    /// Records the pass for the iteration of `push`: its pixels in pieces that keep each
+    /// submission within the batch's budget (el.comp, one short ray per pixel, in one).
     pub fn record(&self, batch: &mut Batch, push: &GpuPush) -> Result<()> {
         batch.begin_pass(NAME);
-        let invocations = regen::invocations(self.pixels, self.paths_per_invocation);
-        batch.dispatch(&self.kernel, self.kernel.groups_for(invocations), bytemuck::bytes_of(push))
+        let k = self.paths_per_invocation;
+        if !self.pieces {
+            let groups = self.kernel.groups_for(regen::invocations(self.pixels, k));
+            return batch.dispatch(&self.kernel, groups, bytemuck::bytes_of(push));
+        }
+        batch.record_paths(&self.kernel, self.pixels, u32::MAX, |batch, first, count| {
+            let p = GpuPush { first_path: first, count, ..*push };
+            let groups = self.kernel.groups_for(regen::invocations(count, k));
+            batch.dispatch_paths(&self.kernel, groups, bytemuck::bytes_of(&p), count)
+        })
     }
 
     pub fn info(&self) -> PassInfo {

@@ -155,29 +155,33 @@ impl LightSubpaths {
     /// invocation are the pass's own).
     pub fn record(&self, batch: &mut Batch, push: &GpuPush) -> Result<()> {
         batch.begin_pass(NAME);
-        let mut first = 0u32;
-        while first < self.light_paths {
-            let count = (self.light_paths - first).min(self.chunk_paths);
-            let p = GpuPush { first_path: first, count, paths_per_invocation: self.paths_per_invocation, ..*push };
-            let invocations = regen::invocations(count, self.paths_per_invocation);
-            if let Some(c) = &self.compaction {
-                batch.fill(&c.chunk_counts, 0)?;
-            }
-            batch.dispatch(&self.kernel, self.kernel.groups_for(invocations), bytemuck::bytes_of(&p))?;
-            if let Some(c) = &self.compaction {
-                c.scan.record(batch)?;
-                let cp = CompactPush {
-                    first_path: first,
-                    count,
-                    light_paths: self.light_paths,
-                    capacity: c.capacity,
-                    slots: self.slots,
-                    b_stride: c.b_stride,
-                    iteration: push.iteration,
-                };
-                batch.dispatch(&c.kernel, c.kernel.groups_for(count), bytemuck::bytes_of(&cp))?;
-            }
-            first += count;
+        // Chunks of at most chunk_paths, shorter where the batch's budget asks: the image
+        // does not depend on the chunk size.
+        batch.record_paths(&self.kernel, self.light_paths, self.chunk_paths, |batch, first, count| {
+            self.record_chunk(batch, push, first, count)
+        })
+    }
+
+    /// One chunk: light subpaths `first .. first + count`.
+    fn record_chunk(&self, batch: &mut Batch, push: &GpuPush, first: u32, count: u32) -> Result<()> {
+        let p = GpuPush { first_path: first, count, paths_per_invocation: self.paths_per_invocation, ..*push };
+        let invocations = regen::invocations(count, self.paths_per_invocation);
+        if let Some(c) = &self.compaction {
+            batch.fill(&c.chunk_counts, 0)?;
+        }
+        batch.dispatch_paths(&self.kernel, self.kernel.groups_for(invocations), bytemuck::bytes_of(&p), count)?;
+        if let Some(c) = &self.compaction {
+            c.scan.record(batch)?;
+            let cp = CompactPush {
+                first_path: first,
+                count,
+                light_paths: self.light_paths,
+                capacity: c.capacity,
+                slots: self.slots,
+                b_stride: c.b_stride,
+                iteration: push.iteration,
+            };
+            batch.dispatch_paths(&c.kernel, c.kernel.groups_for(count), bytemuck::bytes_of(&cp), count)?;
         }
         Ok(())
     }
