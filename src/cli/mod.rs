@@ -3,6 +3,7 @@
 pub mod converge;
 pub mod diff;
 pub mod exit;
+pub mod extras;
 pub mod info;
 pub mod progress;
 pub mod render;

@@ -175,6 +175,8 @@ pub struct RenderArgs {
     #[arg(long, short = 'q')]
     pub quiet: bool,
     #[command(flatten)]
+    pub extras: super::extras::ExtrasArgs,
+    #[command(flatten)]
     pub gpu: super::GpuArgs,
 }
 
@@ -465,6 +467,7 @@ fn render_settings(a: &RenderArgs) -> Result<RenderSettings> {
     settings.connect = connect_setting(a.algo, a.connect, a.cache_connections)?;
     settings.light_paths = a.light_paths;
     settings.count_rays = a.profile || a.profile_json.is_some();
+    settings.aov = a.extras.aov_set();
     Ok(settings)
 }
 

@@ -122,6 +122,9 @@ pub fn write_render_exr_with(
     more: &[(String, String)],
 ) -> Result<()> {
     let mut meta = render_metadata(out, s, p);
+    if s.aov.any() {
+        meta.push(("vkvcm:aov".into(), s.aov.names()));
+    }
     meta.extend_from_slice(more);
     let img = Image { width: out.width, height: out.height, data: out.pixels.clone() };
     let k = 1.0 / out.iterations.max(1) as f64;
@@ -129,6 +132,7 @@ pub fn write_render_exr_with(
         .iter()
         .enumerate()
         .map(|(c, name)| (name.to_string(), out.sum_sq.iter().map(|q| (q[c] * k) as f32).collect()))
+        .chain(out.aov.iter().flat_map(|a| a.channels()))
         .collect();
     image::write_exr_channels(path, &img, &extra, &meta, ExrCompression::Zip)
 }

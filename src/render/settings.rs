@@ -184,6 +184,14 @@ impl EstimatorInfo {
         if s.light_vertex_capacity == Some(0) {
             bail!("the light-vertex store's capacity must be at least 1");
         }
+        // The AOVs come from camera paths, which light tracing does not trace.
+        if s.aov.any() && self.techniques.light_trace_only {
+            bail!(
+                "--aov: {} traces no camera paths to take AOVs from; render them with the same \
+                 camera and frame with --algo pt (or el, first hits only)",
+                self.name
+            );
+        }
         Ok(())
     }
 }
@@ -460,6 +468,8 @@ pub struct RenderSettings {
     /// The light-vertex store's first capacity in vertices; `None`: an estimate from N_L.
     /// The store grows when an iteration needs more; the image does not depend on it.
     pub light_vertex_capacity: Option<u64>,
+    /// AOV layers to sum beside the image (`--aov`, src/render/aov.rs); none by default.
+    pub aov: super::aov::AovSet,
 }
 
 impl RenderSettings {
@@ -489,6 +499,7 @@ impl RenderSettings {
             light_paths: None,
             light_chunk_paths: None,
             light_vertex_capacity: None,
+            aov: Default::default(),
         }
     }
 
