@@ -1,6 +1,7 @@
 //! The subcommands of the `vkvcm` binary, one module each.
 
 pub mod converge;
+pub mod denoise;
 pub mod diff;
 pub mod exit;
 pub mod extras;

@@ -468,6 +468,8 @@ fn render_settings(a: &RenderArgs) -> Result<RenderSettings> {
     settings.light_paths = a.light_paths;
     settings.count_rays = a.profile || a.profile_json.is_some();
     settings.aov = a.extras.aov_set();
+    // Settings an estimator refuses are a usage error, found before the device opens.
+    settings.check()?;
     Ok(settings)
 }
 
