@@ -3,6 +3,7 @@
 pub mod converge;
 pub mod denoise;
 pub mod diff;
+pub mod display;
 pub mod exit;
 pub mod extras;
 pub mod info;

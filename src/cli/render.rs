@@ -377,8 +377,14 @@ pub fn render_cmd(mut a: RenderArgs) -> Result<Option<Class>> {
         r.resume_saved(s)?;
         say(&a, &format!("resuming {} at iteration {} ({:.1} s rendered)", output.display(), s.iterations, s.seconds));
     }
-    let file =
-        OutputFile { path: &output, settings: &settings, provenance: &provenance, reference: reference.as_ref() };
+    let display = a.extras.start_display(&output, a.width, a.height).class(Class::Usage)?;
+    let file = OutputFile {
+        path: &output,
+        settings: &settings,
+        provenance: &provenance,
+        reference: reference.as_ref(),
+        display: display.as_ref(),
+    };
     let on_disk = saved.as_ref().map_or(0, |s| s.iterations);
     let out = render_slices(&a, &mut r, &scene.name, &file, on_disk)?;
     if out.iterations == 0 {
@@ -386,6 +392,9 @@ pub fn render_cmd(mut a: RenderArgs) -> Result<Option<Class>> {
         return Ok(Some(Class::Interrupted));
     }
     write_outputs(&a, &r, &scene, &file, &out, saved.as_ref())?;
+    if let Some(d) = display {
+        d.finish(&out.pixels);
+    }
     if let Some(p) = &a.profile_trace {
         super::trace::write(p).context("--profile-trace")?;
         say(&a, &format!("wrote {}", p.display()));
@@ -541,6 +550,8 @@ struct OutputFile<'a> {
     provenance: &'a saved::Provenance,
     /// --reference: the image the render is measured against.
     reference: Option<&'a Image>,
+    /// --display: where images read back during the render are shown.
+    display: Option<&'a super::display::Display>,
 }
 
 impl OutputFile<'_> {
@@ -644,6 +655,9 @@ fn render_slices(
                         "rmse {:.4e}, rel_mse {:.4e} (at {} it)",
                         m.rmse, m.rel_mse, out.iterations
                     ));
+                }
+                if let Some(d) = file.display {
+                    d.offer(&out.pixels);
                 }
                 last = Some(out);
             }
