@@ -112,6 +112,9 @@ struct Bsdf {
     bool delta;      // only specular components
     bool from_light; // fixed direction belongs to a light subpath (adjoint BSDF)
     Tint tint;       // the surface point's tint (glsl/textures.glsl)
+#if defined(AOV) && AOV
+    vec3 albedo;     // the components' colours summed (the AOV albedo, glsl/aov.glsl)
+#endif
 #if HAS_PARTIAL_TRANSMISSION
     float interface_weight;  // a dielectric's glass weight; 1 on opaque materials
     float lobes_weight;      // 1 - the glass weight on a dielectric; 1 on opaque materials
@@ -365,6 +368,9 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint t
         b.prob_rough = 1.0;
         b.cont_prob = 1.0;
         b.delta = false;
+#if defined(AOV) && AOV
+        b.albedo = vec3(1.0);
+#endif
         return b;
     }
     float total = a_d + a_p + a_g + a_r + a_t;
@@ -387,6 +393,10 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint t
     b.cont_prob = clamp(max3(albedo) + (1.0 - b.fresnel), 0.0, 1.0);
 #endif
     b.delta = b.prob_diffuse == 0.0 && b.prob_phong == 0.0 && b.prob_glossy == 0.0 && b.prob_rough == 0.0;
+#if defined(AOV) && AOV
+    // Rough glass beside other lobes and transmission count as colour 1 (OIDN's glass).
+    b.albedo = albedo + vec3(a_t + a_rough);
+#endif
     return b;
 }
 

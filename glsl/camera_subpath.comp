@@ -11,7 +11,8 @@
 // sum to the film.
 // bpt: VERTEX_CONNECTION; bpm: VERTEX_MERGING; vcm: both; ppm: VERTEX_MERGING with
 // MERGE_FIRST_VERTEX_ONLY (merging at the first non-specular vertex, without MIS). The
-// switches are the fields of CameraKernel (src/render/passes/camera_subpaths.rs).
+// switches are the fields of CameraKernel (src/render/passes/camera_subpaths.rs); AOV
+// (AovKernel) also sums the AOVs (glsl/aov.glsl).
 #extension GL_GOOGLE_include_directive : require
 
 #if !defined(VERTEX_CONNECTION) || !defined(VERTEX_MERGING) || !defined(MERGE_FIRST_VERTEX_ONLY) || \
@@ -29,6 +30,7 @@ layout(local_size_x = WORKGROUP_SIZE) in;
 #include "subpath.glsl"
 #include "mis_weights.glsl"
 #include "path_sampler.glsl"
+#include "aov.glsl"
 
 // Set by light_vertex_compact.comp (layout there): the earliest iteration of the batch
 // whose light vertices did not fit the store.
@@ -268,6 +270,9 @@ void main() {
     PathSampler ps;
     start_path(pixel, st, ps);
     vec3 L = vec3(0.0);
+#if AOV
+    AovSample aov = aov_start();
+#endif
     bool alive = true;
     // One loop iteration = one vertex of the current subpath; a subpath that ends adds
     // its pixel's value (and splats) to the film, and the next one starts in the same
@@ -275,6 +280,10 @@ void main() {
     while (true) {
         if (!alive) {
             film_add(pixel, L + splat_take(pixel));
+#if AOV
+            aov_add(pixel, aov);
+            aov = aov_start();
+#endif
             pixel += stride;
             if (pixel >= end) break;
             start_path(pixel, st, ps);
@@ -291,6 +300,10 @@ void main() {
         add_emission(st, h, s, L);
         if (st.len >= max_len) continue;
         Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, false, s.tint);
+#if AOV
+        if (st.len == 1u) aov_first_hit(aov, h.t, s.p);
+        aov_surface(aov, b, st.thr);
+#endif
         if (!b.valid) continue;
 #if VERTEX_CONNECTION
         if (!b.delta) add_connections(st, s, b, pixel, ps, L);

@@ -12,7 +12,7 @@
 // the contribution of every light sample by their transmittance; no pdf has it.
 // Variants (PtKernel, src/render/passes/camera_subpaths.rs): NEE=1 the estimator, NEE=0 pure BSDF
 // sampling (emitter hits only, weight 1), for tests; SOBOL: where the random numbers come
-// from (glsl/path_sampler.glsl; `--sampler`).
+// from (glsl/path_sampler.glsl; `--sampler`); AOV: the AOVs are summed too (glsl/aov.glsl).
 #extension GL_GOOGLE_include_directive : require
 
 #if !defined(NEE) || !defined(SOBOL)
@@ -31,6 +31,7 @@ const uint RR_MIN_LENGTH = 3u;
 #include "push.glsl"
 #include "film.glsl"
 #include "path_sampler.glsl"
+#include "aov.glsl"
 
 // The state of the path being traced.
 struct PtPath {
@@ -151,12 +152,19 @@ void main() {
     PathSampler ps;
     start_path(pixel, path, ps);
     vec3 L = vec3(0.0);
+#if AOV
+    AovSample aov = aov_start();
+#endif
     bool alive = true;
     // One loop iteration = one vertex of the current path; a path that ends adds its
     // pixel's value to the film, and the next one starts in the same iteration.
     while (true) {
         if (!alive) {
             film_add(pixel, L);
+#if AOV
+            aov_add(pixel, aov);
+            aov = aov_start();
+#endif
             pixel += stride;
             if (pixel >= end) break;
             start_path(pixel, path, ps);
@@ -173,6 +181,10 @@ void main() {
         add_emission(path, h, s, L);
         if (path.len >= max_len) continue;
         Bsdf b = bsdf_init(s.material, s.ng, s.ns, -path.d, false, s.tint);
+#if AOV
+        if (path.len == 1u) aov_first_hit(aov, h.t, s.p);
+        aov_surface(aov, b, path.thr);
+#endif
         if (!b.valid) continue;
 #if NEE
         if (!b.delta && path.len + 1u >= min_path_length()) connect_to_lights(path, s, b, ps, L);

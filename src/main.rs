@@ -34,6 +34,9 @@ enum Command {
     Converge(cli::converge::ConvergeArgs),
     /// RMSE, relative MSE, mean bias and max error of a.exr against b.exr (the reference).
     Diff(cli::diff::DiffArgs),
+    /// Denoise a render's EXR with Intel Open Image Denoise, guided by its albedo and
+    /// normal AOVs (`render --aov albedo,normal`; docs/denoising.md).
+    Denoise(cli::denoise::DenoiseArgs),
     /// What a render of a scene would hold and need, before rendering: what the importer
     /// read and skipped, the kernels' features, and each buffer's memory on the device.
     Info(cli::info::InfoArgs),
@@ -61,6 +64,7 @@ fn main() -> ExitCode {
         Command::Converge(args) => done(cli::converge::converge_cmd(args)),
         Command::Diff(args) => done(cli::diff::diff_cmd(args)),
         Command::Info(args) => cli::info::info_cmd(args),
+        Command::Denoise(args) => done(cli::denoise::denoise_cmd(args)),
         Command::Completions { shell } => {
             clap_complete::generate(shell, &mut Cli::command(), "vkvcm", &mut std::io::stdout());
             Ok(None)

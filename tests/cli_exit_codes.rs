@@ -33,6 +33,9 @@ fn each_class_of_failure_has_its_code() {
     render_exits(d, &["--no-such-option"], 2);
     render_exits(d, &["--width", "0", "--height", "8"], 2);
     render_exits(d, &["--width", "8", "--height", "8", "--connect", "cache"], 2);
+    // Settings the estimator refuses (lt traces no camera paths for AOVs).
+    render_exits(d, &[&["--algo", "lt", "--aov", "albedo"][..], &small].concat(), 2);
+    render_exits(d, &[&["--algo", "pt", "--light-paths", "4"][..], &small].concat(), 2);
     // 3: the scene cannot be read: missing, malformed, or an unknown camera.
     render_exits(d, &[&["no_such_scene.gltf"][..], &small].concat(), 3);
     let malformed = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/malformed/bad_json.gltf");

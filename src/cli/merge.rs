@@ -49,7 +49,7 @@ pub fn merge_cmd(a: MergeArgs) -> Result<()> {
         anyhow::Error::new(super::exit::Classified(class, anyhow::anyhow!("{}", r.message)))
     })?;
     drop(files);
-    saved::write_sums_exr(&a.output, m.width, m.height, &m.sums, m.iterations(), &m.metadata)?;
+    saved::write_sums_exr(&a.output, m.width, m.height, &m.sums, m.iterations(), &m.metadata, Vec::new())?;
     let missing = m.missing();
     if !missing.is_empty() {
         eprintln!(

@@ -1,8 +1,11 @@
 //! The subcommands of the `vkvcm` binary, one module each.
 
 pub mod converge;
+pub mod denoise;
 pub mod diff;
+pub mod display;
 pub mod exit;
+pub mod extras;
 pub mod info;
 pub mod merge;
 pub mod progress;

@@ -175,9 +175,12 @@ pub struct RenderArgs {
     #[arg(long, short = 'q')]
     pub quiet: bool,
     #[command(flatten)]
+    pub extras: super::extras::ExtrasArgs,
+    #[command(flatten)]
     pub gpu: super::GpuArgs,
     #[command(flatten)]
     pub shards: super::shard::ShardArgs,
+    #[command(flatten)]
     pub submission: super::submission::SubmissionArgs,
 }
 
@@ -385,8 +388,14 @@ pub fn render_cmd(mut a: RenderArgs) -> Result<Option<Class>> {
         r.resume_saved(s)?;
         say(&a, &format!("resuming {} at iteration {} ({:.1} s rendered)", output.display(), s.iterations, s.seconds));
     }
-    let file =
-        OutputFile { path: &output, settings: &settings, provenance: &provenance, reference: reference.as_ref() };
+    let display = a.extras.start_display(&output, a.width, a.height).class(Class::Usage)?;
+    let file = OutputFile {
+        path: &output,
+        settings: &settings,
+        provenance: &provenance,
+        reference: reference.as_ref(),
+        display: display.as_ref(),
+    };
     let on_disk = saved.as_ref().map_or(0, |s| s.iterations);
     let out = render_slices(&a, &mut r, &scene.name, &file, on_disk)?;
     if out.iterations == 0 {
@@ -394,6 +403,9 @@ pub fn render_cmd(mut a: RenderArgs) -> Result<Option<Class>> {
         return Ok(Some(Class::Interrupted));
     }
     write_outputs(&a, &r, &scene, &file, &out, saved.as_ref())?;
+    if let Some(d) = display {
+        d.finish(&out.pixels);
+    }
     if let Some(p) = &a.profile_trace {
         super::trace::write(p).context("--profile-trace")?;
         say(&a, &format!("wrote {}", p.display()));
@@ -476,6 +488,9 @@ fn render_settings(a: &RenderArgs) -> Result<RenderSettings> {
     settings.light_paths = a.light_paths;
     settings.count_rays = a.profile || a.profile_json.is_some();
     a.submission.apply(&mut settings);
+    settings.aov = a.extras.aov_set();
+    // Settings an estimator refuses are a usage error, found before the device opens.
+    settings.check()?;
     Ok(settings)
 }
 
@@ -547,6 +562,8 @@ struct OutputFile<'a> {
     provenance: &'a saved::Provenance,
     /// --reference: the image the render is measured against.
     reference: Option<&'a Image>,
+    /// --display: where images read back during the render are shown.
+    display: Option<&'a super::display::Display>,
 }
 
 impl OutputFile<'_> {
@@ -650,6 +667,9 @@ fn render_slices(
                         "rmse {:.4e}, rel_mse {:.4e} (at {} it)",
                         m.rmse, m.rel_mse, out.iterations
                     ));
+                }
+                if let Some(d) = file.display {
+                    d.offer(&out.pixels);
                 }
                 last = Some(out);
             }

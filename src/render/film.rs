@@ -103,6 +103,8 @@ pub struct FilmPlan {
     pub sums: BufferSize,
     /// [`STATS_WORDS`] u32 counters.
     pub stats: BufferSize,
+    /// The AOV sums (`--aov`, src/render/aov.rs).
+    pub aov: Option<BufferSize>,
 }
 
 impl FilmPlan {
@@ -114,11 +116,18 @@ impl FilmPlan {
             height,
             sums: BufferSize::new("film", px.saturating_mul(16 * FILM_UVEC4_PER_PIXEL as u64)).reached(access),
             stats: BufferSize::new("film_stats", 4 * STATS_WORDS as u64),
+            aov: None,
         }
     }
 
+    /// This film with the AOV sums when `on`.
+    pub fn with_aov(self, on: bool) -> FilmPlan {
+        let aov = on.then(|| super::aov::plan(self.width as u64 * self.height as u64));
+        FilmPlan { aov, ..self }
+    }
+
     pub fn buffers(&self) -> Vec<BufferSize> {
-        vec![self.sums, self.stats]
+        [self.sums, self.stats].into_iter().chain(self.aov).collect()
     }
 }
 
@@ -134,6 +143,8 @@ pub struct Film {
     /// The device addresses of the frame's large buffers: the film's own, and those the
     /// passes register (src/render/addresses.rs).
     pub addresses: FrameAddresses,
+    /// The AOV sums, when asked for (set by the renderer, which knows the scene's origin).
+    pub aov: Option<super::aov::Aovs>,
 }
 
 /// Counters of samples the film did not add.
@@ -163,7 +174,7 @@ impl Film {
         let accum = plan.sums.zeroed(gpu)?;
         let addresses = FrameAddresses::new(gpu)?;
         addresses.set(|a| &mut a.film, &accum)?;
-        Ok(Film { width: plan.width, height: plan.height, accum, stats: plan.stats.zeroed(gpu)?, addresses })
+        Ok(Film { width: plan.width, height: plan.height, accum, stats: plan.stats.zeroed(gpu)?, addresses, aov: None })
     }
 
     /// The bindings `film` (bound without device addresses), `film_stats` and

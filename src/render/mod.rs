@@ -8,6 +8,7 @@
 //! * [`Renderer`] runs a render in batches of iterations and reads the film back.
 
 pub mod addresses;
+pub mod aov;
 pub mod atomics;
 pub mod converge;
 pub mod devices;
@@ -106,7 +107,10 @@ impl Renderer {
         let reads = plan.reads;
         let atomics = atomics::SplatAtomics::resolve(gpu, settings.atomics)?;
         let scene_gpu = SceneGpu::with_features(gpu, scene, frame, &features, reads, atomics, plan.scene.chunk_bytes)?;
-        let film = Film::new(gpu, &plan.film)?;
+        let mut film = Film::new(gpu, &plan.film)?;
+        if let Some(size) = &plan.film.aov {
+            film.aov = Some(aov::Aovs::new(gpu, settings.aov, size, scene.report.origin)?);
+        }
         let est = settings.algorithm.build(&estimators::Build {
             gpu,
             scene: &scene_gpu,
@@ -283,6 +287,7 @@ impl Renderer {
     pub fn buffers(&self) -> Vec<(String, u64)> {
         let mut b: Vec<&crate::gpu::Buffer> = self.scene_gpu.buffers.iter().chain(&self.scene_gpu.chunks).collect();
         b.extend([&self.film.accum, &self.film.stats]);
+        b.extend(self.film.aov.as_ref().map(|a| &a.sums));
         b.extend(self.est.buffers());
         b.iter().map(|b| (b.name().to_string(), b.size())).collect()
     }
@@ -434,7 +439,9 @@ impl Renderer {
             let s = self.film.stats.read::<u32>().context("reading the ray count back")?;
             profile.rays = Some(s[2] as u64 | (s[3] as u64) << 32);
         }
+        let aov = self.film.aov.as_ref().map(|a| a.read()).transpose()?;
         Ok(RenderOutput {
+            aov,
             width: self.settings.frame.width,
             height: self.settings.frame.height,
             pixels,

@@ -50,4 +50,6 @@ pub struct RenderOutput {
     pub atomics: SplatAtomics,
     /// True when stopped early by the cancel flag.
     pub interrupted: bool,
+    /// The AOV layers asked for (`--aov`).
+    pub aov: Option<super::aov::AovImage>,
 }

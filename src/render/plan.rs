@@ -119,7 +119,7 @@ impl FramePlan {
             reads_chosen: false,
             device_addresses,
             scene: ScenePlan::new(scene, reads, device_addresses),
-            film: FilmPlan::new(s.frame.width, s.frame.height, frame_access),
+            film: FilmPlan::new(s.frame.width, s.frame.height, frame_access).with_aov(s.aov.any()),
             light_vertices,
             grid,
         };

@@ -159,14 +159,18 @@ pub fn write_render_exr_with(
     more: &[(String, String)],
 ) -> Result<()> {
     let mut meta = render_metadata(out, s, p);
+    if s.aov.any() {
+        meta.push(("vkvcm:aov".into(), s.aov.names()));
+    }
     meta.extend_from_slice(more);
-    write_sums_exr(path, out.width, out.height, &out.sums, out.iterations, &meta)
+    let aovs = out.aov.iter().flat_map(|a| a.channels()).collect();
+    write_sums_exr(path, out.width, out.height, &out.sums, out.iterations, &meta, aovs)
 }
 
 /// Writes (atomically) a render of `iterations` iterations from its film's sums: the mean
 /// and second moment computed from them on the host, the sums' words, and `meta`. The
 /// channels are a function of the sums and the count alone: merged shards and one render
-/// give the same bits.
+/// give the same bits. `more_channels` (the AOV layers) are written beside them.
 pub fn write_sums_exr(
     path: &Path,
     width: u32,
@@ -174,6 +178,7 @@ pub fn write_sums_exr(
     sums: &FilmSums,
     iterations: u64,
     meta: &[(String, String)],
+    more_channels: Vec<image::ExtraChannel>,
 ) -> Result<()> {
     let img = Image { width, height, data: sums.mean(iterations) };
     let k = 1.0 / iterations.max(1) as f64;
@@ -183,6 +188,7 @@ pub fn write_sums_exr(
         .map(|(c, name)| {
             (name.to_string(), Samples::F32(sums.sum_sq.iter().map(|q| (FilmSums::real(q[c]) * k) as f32).collect()))
         })
+        .chain(more_channels)
         .collect();
     for (square, sums) in [(false, &sums.sum), (true, &sums.sum_sq)] {
         for c in 0..3 {

@@ -184,6 +184,14 @@ impl EstimatorInfo {
         if s.light_vertex_capacity == Some(0) {
             bail!("the light-vertex store's capacity must be at least 1");
         }
+        // The AOVs come from camera paths, which light tracing does not trace.
+        if s.aov.any() && self.techniques.light_trace_only {
+            bail!(
+                "--aov: {} traces no camera paths to take AOVs from; render them with the same \
+                 camera and frame with --algo pt (or el, first hits only)",
+                self.name
+            );
+        }
         Ok(())
     }
 }
@@ -464,6 +472,8 @@ pub struct RenderSettings {
     /// split into pieces of paths to fit); `None` chooses by device (500 on GPUs, none on
     /// CPU devices), 0 turns it off. The image does not depend on it.
     pub submission_budget_ms: Option<f64>,
+    /// AOV layers to sum beside the image (`--aov`, src/render/aov.rs); none by default.
+    pub aov: super::aov::AovSet,
 }
 
 impl RenderSettings {
@@ -494,6 +504,7 @@ impl RenderSettings {
             light_chunk_paths: None,
             light_vertex_capacity: None,
             submission_budget_ms: None,
+            aov: Default::default(),
         }
     }
 

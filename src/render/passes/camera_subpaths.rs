@@ -11,6 +11,7 @@ use anyhow::Result;
 use super::hash_grid::HashGrid;
 use super::{PassContext, PassInfo};
 use crate::gpu::{Batch, Bind, Defines, Kernel};
+use crate::render::aov::AovKernel;
 use crate::render::gpu_types::GpuPush;
 use crate::render::light_vertex_store::LightVertexStore;
 use crate::render::reads::Reads;
@@ -84,9 +85,8 @@ pub struct CameraSubpaths {
 impl CameraSubpaths {
     /// el.comp: |cos| at the first hit, one pixel per invocation.
     pub fn eye_light(b: &PassContext) -> Result<CameraSubpaths> {
-        let mut binds = b.scene.binds();
-        binds.extend(b.film.binds());
-        let kernel = b.gpu.kernel("el.comp", &b.scene.variant.defines().pairs(), &binds)?;
+        let binds = camera_binds(b);
+        let kernel = b.gpu.kernel("el.comp", &camera_defines(b).pairs(), &binds)?;
         Ok(CameraSubpaths {
             kernel,
             pixels: b.pixels,
@@ -98,9 +98,8 @@ impl CameraSubpaths {
 
     /// pt.comp in `variant`.
     pub fn path_tracer(b: &PassContext, variant: PtKernel) -> Result<CameraSubpaths> {
-        let mut binds = b.scene.binds();
-        binds.extend(b.film.binds());
-        let defines = b.scene.variant.defines().with(&variant.defines());
+        let binds = camera_binds(b);
+        let defines = camera_defines(b).with(&variant.defines());
         let kernel = b.gpu.kernel("pt.comp", &defines.pairs(), &binds)?;
         let what = if variant.nee { "BSDF sampling + next-event estimation, MIS" } else { "BSDF sampling only" };
         Ok(CameraSubpaths {
@@ -120,9 +119,8 @@ impl CameraSubpaths {
         grid: Option<&HashGrid>,
         variant: CameraKernel,
     ) -> Result<CameraSubpaths> {
-        let defines: Defines = b.scene.variant.defines().with(&variant.defines());
-        let mut binds = b.scene.binds();
-        binds.extend(b.film.binds());
+        let defines: Defines = camera_defines(b).with(&variant.defines());
+        let mut binds = camera_binds(b);
         binds.extend(store.binds());
         if let Some(g) = grid {
             binds.extend([Bind::u32("grid_start", &g.cell_start), Bind::vec4("grid_points", &g.cell_points)]);
@@ -161,6 +159,19 @@ impl CameraSubpaths {
     pub fn info(&self) -> PassInfo {
         PassInfo { name: NAME, detail: self.detail.clone() }
     }
+}
+
+/// What every camera kernel is compiled with: the scene's part and the AOV switch.
+fn camera_defines(b: &PassContext) -> Defines {
+    b.scene.variant.defines().with(&AovKernel { aov: b.film.aov.is_some() }.defines())
+}
+
+/// What every camera kernel binds: the scene, the film and the AOV sums when asked for.
+fn camera_binds<'a>(b: &PassContext<'a>) -> Vec<Bind<'a>> {
+    let mut binds = b.scene.binds();
+    binds.extend(b.film.binds());
+    binds.extend(b.film.aov.as_ref().map(|a| a.bind()));
+    binds
 }
 
 fn describe(v: CameraKernel) -> String {
