@@ -148,7 +148,7 @@ fn render_cli(
 #[cfg_attr(not(feature = "fault-injection"), ignore = "needs --features fault-injection")]
 fn frame_buffers_larger_than_one_binding_render() {
     let dir = tempfile::tempdir().unwrap();
-    // 48 x 48: the film (64 bytes per pixel, 147 KiB) exceeds a 128 KiB binding; every
+    // 48 x 48: the film (96 bytes per pixel, 216 KiB) exceeds a 128 KiB binding; every
     // buffer still bound (the hash grid's bucket starts, the cache's index) fits.
     // lt at 64 x 64 with 64 KiB: the splat sums (24 bytes per pixel, 96 KiB) exceed it too.
     let mut cases: Vec<(&str, u32, u64)> =

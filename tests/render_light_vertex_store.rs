@@ -14,7 +14,7 @@
 //!   with the same image, and the progress reports name the iterations rendered again;
 //! * where the device cannot hold the store an iteration needs (a binding limit capped to
 //!   150,000 bytes, no device addresses: the store starts at what fits, 4687 vertices, and
-//!   glm_c's bpt stores about 4900 per iteration at 48 x 48), the render stops with a
+//!   glm_c's bpt stores about 4900 per iteration with 2304 light subpaths), the render stops with a
 //!   message that names the buffer, the numbers and what to lower; at 200,000 bytes it
 //!   renders.
 //!
@@ -146,7 +146,10 @@ fn a_store_the_device_cannot_hold_is_refused_with_what_to_lower() {
         if std::env::var_os("VK_DRIVER_FILES").is_none() {
             c.env("VK_DRIVER_FILES", "/usr/share/vulkan/icd.d/lvp_icd.json");
         }
-        c.args(["render", "glm_c", "--algo", "bpt", "--width", "48", "--height", "48", "-i", "3", "-o", "out.exr"]);
+        // 36 x 36 with 2304 light subpaths: the film (96 bytes per pixel, 124 KB) fits both
+        // caps, the store's first half (about 4900 vertices of 32 bytes) only the larger.
+        let frame = ["--width", "36", "--height", "36", "--light-paths", "2304"];
+        c.args(["render", "glm_c", "--algo", "bpt", "-i", "3", "-o", "out.exr"]).args(frame);
         c.output().unwrap()
     };
     let refused = run("150000");

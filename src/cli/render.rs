@@ -362,7 +362,15 @@ pub fn render_cmd(mut a: RenderArgs) -> Result<Option<Class>> {
     }
 
     if let Some(list) = &a.shards.devices {
-        return super::shard::render_on_devices(&a, list, &scene, &settings, &mut provenance, &output);
+        let cancel = install_interrupt();
+        let o = super::shard::DevicesOutput {
+            path: &output,
+            png: a.png.as_deref(),
+            exposure: a.exposure,
+            quiet: a.quiet,
+            cancel: &cancel,
+        };
+        return super::shard::render_on_devices(list, &a.gpu.options(), &scene, &settings, &mut provenance, &o);
     }
     let gpu = {
         let _p = super::trace::phase("device open");

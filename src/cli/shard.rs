@@ -2,13 +2,12 @@
 //! (a render split over this machine's devices): docs/distributed.md.
 
 use std::path::Path;
-use std::sync::atomic::Ordering;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 
 use super::exit::{Class, ClassifyExt};
-use super::render::RenderArgs;
 use vkvcm::gpu::GpuOptions;
 use vkvcm::image::{self, Image};
 use vkvcm::render::saved::{self, Provenance, ShardOf};
@@ -82,18 +81,27 @@ fn device_options(list: &str, base: &GpuOptions) -> Result<Vec<GpuOptions>> {
     Ok(indices.into_iter().map(|i| GpuOptions { device: Some(i.to_string()), ..base.clone() }).collect())
 }
 
+/// Where `render --devices` writes, and how it reports.
+pub struct DevicesOutput<'a> {
+    pub path: &'a Path,
+    pub png: Option<&'a Path>,
+    pub exposure: f32,
+    pub quiet: bool,
+    /// Set by Ctrl-C: the devices stop after their current block.
+    pub cancel: &'a AtomicBool,
+}
+
 /// `render --devices`: the render on every device named, merged, written as one render.
 pub fn render_on_devices(
-    a: &RenderArgs,
     list: &str,
+    gpu: &GpuOptions,
     scene: &Scene,
     settings: &RenderSettings,
     provenance: &mut Provenance,
-    output: &Path,
+    o: &DevicesOutput,
 ) -> Result<Option<Class>> {
-    let opts = device_options(list, &a.gpu.options()).class(Class::Usage)?;
-    let cancel = super::render::install_interrupt();
-    if !a.quiet {
+    let opts = device_options(list, gpu).class(Class::Usage)?;
+    if !o.quiet {
         let Budget::Iterations(total) = settings.budget else { unreachable!("--devices conflicts with --time") };
         eprintln!(
             "rendering on {} device(s), blocks of {} iterations from a shared queue",
@@ -102,27 +110,28 @@ pub fn render_on_devices(
         );
     }
     let (out, shares) =
-        super::exit::memory_if_out_of_memory(devices::render_on_devices(&opts, scene, settings, Some(&cancel)))
-            .with_context(|| format!("rendering {} with {} on several devices", scene.name, a.algo.name()))?;
+        super::exit::memory_if_out_of_memory(devices::render_on_devices(&opts, scene, settings, Some(o.cancel)))
+            .with_context(|| {
+                format!("rendering {} with {} on several devices", scene.name, settings.algorithm.name())
+            })?;
     if out.iterations == 0 {
         eprintln!("interrupted before the first iteration finished: nothing written");
         return Ok(Some(Class::Interrupted));
     }
     provenance.device = shares.iter().map(|s| s.device.clone()).collect::<Vec<_>>().join(", ");
-    saved::write_render_exr(output, &out, settings, provenance)?;
-    if !a.quiet {
+    saved::write_render_exr(o.path, &out, settings, provenance)?;
+    if !o.quiet {
         for s in &shares {
             eprintln!("  {}: {} iterations in {} block(s), {:.2} s", s.device, s.iterations, s.blocks, s.seconds);
         }
-        eprintln!("{} iterations; wrote {}", out.iterations, output.display());
+        eprintln!("{} iterations; wrote {}", out.iterations, o.path.display());
     }
     if out.rejected_samples > 0 {
         eprintln!("warning: {} sample(s) were NaN, infinite or negative and were rejected", out.rejected_samples);
     }
-    if let Some(p) = &a.png {
+    if let Some(p) = o.png {
         let img = Image { width: out.width, height: out.height, data: out.pixels.clone() };
-        image::write_png(p, &img, a.exposure)?;
+        image::write_png(p, &img, o.exposure)?;
     }
-    let interrupted = cancel.load(Ordering::SeqCst);
-    Ok(interrupted.then_some(Class::Interrupted))
+    Ok(o.cancel.load(Ordering::SeqCst).then_some(Class::Interrupted))
 }

@@ -3,7 +3,7 @@
 //! grid's keys and entries ([`GpuAddresses`]).
 //!
 //! A buffer bound through a descriptor is limited to `maxStorageBufferRange` (128 MiB on
-//! lavapipe), which a 4K film (64 bytes per pixel) exceeds. A buffer reached through its
+//! lavapipe), which a 4K film (96 bytes per pixel) exceeds. A buffer reached through its
 //! device address (Vulkan 1.2 `bufferDeviceAddress`, GLSL `GL_EXT_buffer_reference`) is
 //! limited only by `maxMemoryAllocationSize` and memory. On devices with the feature the
 //! kernels reach these buffers through the addresses held in one small storage buffer,
