@@ -31,7 +31,7 @@ if ! grep -rqs 'bookworm-backports' /etc/apt/sources.list.d/ /etc/apt/sources.li
   } > "$bp"
 fi
 
-pkgs="libvulkan1 libvulkan-dev vulkan-tools vulkan-validationlayers glslang-tools glslc libshaderc-dev spirv-tools"
+pkgs="libvulkan1 libvulkan-dev vulkan-tools vulkan-validationlayers glslang-tools glslc libshaderc-dev spirv-tools g++"
 need=0
 for p in $pkgs; do dpkg -s "$p" >/dev/null 2>&1 || need=1; done
 mesa_ver=$(dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null || true)
