@@ -31,7 +31,7 @@ if ! grep -rqs 'bookworm-backports' /etc/apt/sources.list.d/ /etc/apt/sources.li
   } > "$bp"
 fi
 
-pkgs="libvulkan1 libvulkan-dev vulkan-tools vulkan-validationlayers glslang-tools glslc libshaderc-dev spirv-tools"
+pkgs="libvulkan1 libvulkan-dev vulkan-tools vulkan-validationlayers glslang-tools glslc libshaderc-dev spirv-tools g++"
 # slurm-wlm and munge: the one-node Slurm cluster of scripts/test-slurm.sh (docs/distributed.md).
 pkgs="$pkgs slurm-wlm munge"
 need=0

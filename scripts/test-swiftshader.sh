@@ -11,9 +11,18 @@
 #   the light-vertex store's growth     the limit), second_device (the real limit)
 #   the compute basics, subgroups of 4  gpu_core, hash_grid                              25
 #   the environment map                 render_environment (one filtered test)           43
-#   lavapipe and SwiftShader agree      second_device (both ICDs, a per-pixel z-test)    19
+#   lavapipe and SwiftShader agree,     second_device (both ICDs, per-pixel z-tests:     37
+#   textures included                   vcm on gbs_b; pt on the textured glTF asset
+#                                       tests/khronos/BoxTextured.gltf)
 #   one render on both devices          render_devices (--devices, a per-pixel z-test)   17
-# Left out for their cost on SwiftShader: render_textures (one test alone > 1 min).
+# How the set was chosen: each fallback SwiftShader takes (32-bit splats, storage reads past
+# its texel limit, no 64-bit kernels) and each kind of kernel (every estimator's passes, the
+# compute primitives, textures, the environment map) runs once, at the lavapipe tests'
+# sizes, with the test that costs least for it. Textures come from the cheapest such test:
+# one 16x16 pt render of a textured glTF asset per device in second_device (which checks
+# it against lavapipe, where render_textures checks textures against a CPU sampler);
+# render_textures itself is left out for its cost on SwiftShader (one test alone > 1 min).
+# The textured case made second_device's z-test 36 s instead of 19 (load 16, 2026-12-06).
 # Tests needing what SwiftShader lacks print `skipped: ...`; they are counted at the end.
 # Environment as `make test` sets it: VKVCM_TEST_KERNEL_CACHE; LVP_ICD and
 # SWIFTSHADER_ICD override the ICD files.

@@ -6,18 +6,21 @@
 //!   pass, hash grid, camera kernel with connections and merging) on gbs_b, 16x16, 512
 //!   independent iterations per device at different seeds. Per-pixel Welch test (t
 //!   converted to z, tests/render_bidir.rs), Šidák-corrected over pixels and channels so
-//!   that one run fails by chance with probability ALPHA = 1e-3. Not bit-exact: the
+//!   that one run fails by chance with probability ALPHA = 1e-3 per case. Not bit-exact: the
 //!   implementations compile the same SPIR-V to different float code (contraction,
 //!   transcendentals), so paths diverge after a few bounces and only the distributions
 //!   must agree. gbs_b is lit by its background, which every technique samples well,
-//!   so each pixel's variance estimate is meaningful at this count.
+//!   so each pixel's variance estimate is meaningful at this count. And textures: pt on
+//!   tests/khronos/BoxTextured.gltf (a textured glTF asset under the default studio
+//!   environment), 16x16, one bounce, 256 iterations per device.
 //! * At the device's own texel limit (SwiftShader: 65536 texels) the reads chosen for it
 //!   render: the frame whose hash grid's `grid_start` is one texel over (128x128 vcm), the
 //!   case that failed before reads were chosen per limit (src/render/reads.rs).
 //!
 //! Each test is skipped, with a printed and counted reason (tests/common `skip`), where
-//! its devices are not there. Sabotage check (done by hand, not kept): rendering the
-//! second device's side with --max-path-length 3 fails the first test.
+//! its devices are not there. Sabotage checks (done by hand, not kept): rendering the
+//! second device's side with --max-path-length 3 fails the first test; without its
+//! texture (the material's base colour texture dropped) the textured case fails.
 
 mod common;
 
@@ -33,9 +36,21 @@ const ALPHA: f64 = 1e-3;
 /// lavapipe's device name starts with this.
 const REFERENCE: &str = "llvmpipe";
 
-fn render_on(gpu: &Arc<Gpu>, seed: u32) -> render::RenderOutput {
-    let scene = vkvcm::scene::load_named("gbs_b").unwrap();
-    let mut s = RenderSettings::new(Algorithm::Vcm, 16, 16, Budget::Iterations(512));
+/// The renders compared: vcm on gbs_b, and pt on a textured glTF asset (the texture
+/// reads; one bounce, where the texture is most of the image).
+const CASES: [&str; 2] = ["vcm gbs_b", "pt tests/khronos/BoxTextured.gltf"];
+
+fn render_on(gpu: &Arc<Gpu>, case: &str, seed: u32) -> render::RenderOutput {
+    let (scene, mut s) = if case == CASES[0] {
+        let scene = vkvcm::scene::load_named("gbs_b").unwrap();
+        (scene, RenderSettings::new(Algorithm::Vcm, 16, 16, Budget::Iterations(512)))
+    } else {
+        let scene = vkvcm::scene::load(std::path::Path::new("tests/khronos/BoxTextured.gltf")).unwrap();
+        assert!(!scene.images.is_empty(), "BoxTextured has its texture");
+        let mut s = RenderSettings::new(Algorithm::Pt, 16, 16, Budget::Iterations(256));
+        s.frame.max_path_length = 2;
+        (scene, s)
+    };
     s.frame.seed = seed;
     // Independent iterations, which the Welch test assumes (Sobol's are stratified).
     s.sampler = Some(Sampler::Independent);
@@ -57,14 +72,16 @@ fn the_same_render_agrees_with_lavapipe() {
     }
     let on = |name: &str, seed| {
         let opts = GpuOptions { device: Some(name.to_string()), ..GpuOptions::for_tests() };
-        with_gpu_options(&opts, |gpu| render_on(gpu, seed))
+        with_gpu_options(&opts, |gpu| CASES.map(|case| render_on(gpu, case, seed)))
     };
     let reference = on(REFERENCE, 1);
     let second = on(&device, 2);
-    let (a, b) = (render_stats(&reference, None), render_stats(&second, None));
-    assert!(common::image_mean(&a) > 0.0, "black image");
-    let z = welch_test(&a, &b, ALPHA).unwrap();
-    z.assert_passed(&format!("vcm gbs_b, lavapipe against {device}"));
+    for (case, (r, d)) in CASES.iter().zip(reference.iter().zip(&second)) {
+        let (a, b) = (render_stats(r, None), render_stats(d, None));
+        assert!(common::image_mean(&a) > 0.0, "{case}: black image");
+        let z = welch_test(&a, &b, ALPHA).unwrap();
+        z.assert_passed(&format!("{case}, lavapipe against {device}"));
+    }
 }
 
 #[test]

@@ -233,6 +233,9 @@ impl Batch {
     /// budget's worth.
     fn piece_paths(&mut self, kernel: &str, left: u32) -> Result<u32> {
         let Some(budget) = self.budget.ns else { return Ok(left) };
+        if self.budget.submit_next && self.recording {
+            self.submit_held()?;
+        }
         let Some(&rate) = self.budget.rates.get(kernel) else { return Ok(left.min(PROBE_PATHS)) };
         let fits = |room: f64| (room / rate.max(1e-3)).min(left as f64) as u32;
         if fits(budget - self.budget.predicted) < MIN_PIECE_PATHS.min(left) && self.recording {
@@ -306,10 +309,13 @@ impl Batch {
     /// would take the submission past the budget (or follows one of unknown time).
     fn keep_within_budget(&mut self, kernel: &str, units: u64) -> Result<()> {
         let Some(budget) = self.budget.ns else { return Ok(()) };
+        if self.recording && self.budget.submit_next {
+            self.submit_held()?;
+        }
         let rate = self.budget.rates.get(kernel).copied();
         let ns = rate.map_or(0.0, |r| r * units as f64);
         let full = self.timed.len() as u32 >= MAX_TIMED;
-        if self.recording && (self.budget.submit_next || full || self.budget.predicted + ns > budget) {
+        if self.recording && (full || self.budget.predicted + ns > budget) {
             self.submit_held()?;
         }
         self.budget.predicted += ns;
@@ -357,6 +363,7 @@ impl Batch {
             return Ok(());
         }
         self.recording = false;
+        self.budget.submit_next = false;
         let dev = &self.gpu.device;
         let kernels = if self.kernels.is_empty() { "transfers".to_string() } else { self.kernels.join(", ") };
         let fail = |step: &str, e: vk::Result| anyhow!("{step} of a batch ({kernels}): {}", vk_error_text(e));

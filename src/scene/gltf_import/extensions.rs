@@ -19,6 +19,9 @@ pub const EXT_MESH_GPU_INSTANCING: &str = "EXT_mesh_gpu_instancing";
 /// Offset, rotation and scale of texture coordinates (read on `baseColorTexture`).
 pub const KHR_TEXTURE_TRANSFORM: &str = "KHR_texture_transform";
 
+/// WebP texture images (`textures[i].extensions.EXT_texture_webp.source`).
+pub const EXT_TEXTURE_WEBP: &str = "EXT_texture_webp";
+
 /// All extensions the importer interprets; any other one in `extensionsUsed` or
 /// `extensionsRequired` is reported as a warning.
 pub const SUPPORTED_EXTENSIONS: &[&str] = &[
@@ -31,6 +34,8 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     KHR_MESH_QUANTIZATION,
     KHR_TEXTURE_TRANSFORM,
     EXT_MESH_GPU_INSTANCING,
+    super::meshopt_views::EXT_MESHOPT_COMPRESSION,
+    EXT_TEXTURE_WEBP,
     EXT_SPHERES,
     EXT_MATERIALS_PHONG,
     EXT_BACKGROUND,
@@ -39,22 +44,15 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
 
 /// Compression extensions that vkvcm does not decode, each with what it compresses and a
 /// tool that writes the file without it (the message of a file that requires one).
+/// Draco: no well-kept Rust decoder (docs/scene-format.md, "glTF extensions").
 pub const REFUSED_COMPRESSION: &[(&str, &str)] = &[
     (
         "KHR_draco_mesh_compression",
         "Draco-compressed meshes are not decoded: decompress the file with `gltf-transform cp IN OUT` (glTF-Transform decodes Draco as it reads)",
     ),
     (
-        "EXT_meshopt_compression",
-        "meshopt-compressed buffers are not decoded: decompress the file with `gltfpack -i IN -o OUT` (without -c; gltfpack reads meshopt input from version 0.21)",
-    ),
-    (
         "KHR_texture_basisu",
         "KTX2 / Basis Universal textures are not decoded: convert them to PNG or JPEG (e.g. with KTX-Software's `ktx extract`; glTF-Transform cannot decode KTX2)",
-    ),
-    (
-        "EXT_texture_webp",
-        "WebP textures are not decoded: convert them to PNG with `gltf-transform png IN OUT`",
     ),
 ];
 

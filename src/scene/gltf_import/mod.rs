@@ -42,6 +42,7 @@ mod geometry;
 mod instancing;
 mod lights;
 mod materials;
+mod meshopt_views;
 mod skins;
 mod sources;
 mod tangents;
@@ -121,7 +122,8 @@ fn import_bytes(bytes: &[u8], base_dir: &Path, name: String, options: &LoadOptio
     let mut warnings = Warnings::default();
     let parsed = document::parse_document(bytes, &mut warnings)?;
     let doc = gltf::Document::from_json_without_validation(parsed.root);
-    let buffers = sources::load_buffers(&doc, parsed.blob, base_dir)?;
+    let mut buffers = sources::load_buffers(&doc, parsed.blob, base_dir)?;
+    meshopt_views::decode_views(&doc, &mut buffers)?;
     let morph_attributes = parsed.morph_attributes;
     let mut importer = Importer {
         doc: &doc,

@@ -105,7 +105,8 @@ fn check_glb_header(bytes: &[u8]) -> Result<()> {
 }
 
 /// The contents of every buffer of `doc`, in order: the GLB binary chunk for the (first)
-/// buffer without a URI, otherwise the buffer's URI resolved in `base_dir`. Each buffer is
+/// buffer without a URI, otherwise the buffer's URI resolved in `base_dir`; zeros for an
+/// EXT_meshopt_compression fallback buffer (src/scene/gltf_import/meshopt_views.rs). Each buffer is
 /// at least as long as its declared `byteLength`.
 pub(super) fn load_buffers(doc: &gltf::Document, blob: Option<Vec<u8>>, base_dir: &Path) -> Result<Vec<Vec<u8>>> {
     let mut blob = blob;
@@ -113,6 +114,8 @@ pub(super) fn load_buffers(doc: &gltf::Document, blob: Option<Vec<u8>>, base_dir
     for buffer in doc.buffers() {
         let i = buffer.index();
         let data = match buffer.source() {
+            // EXT_meshopt_compression: its compressed views decode into it.
+            _ if super::meshopt_views::is_fallback(&buffer) => super::meshopt_views::fallback_bytes(&buffer)?,
             gltf::buffer::Source::Bin => blob
                 .take()
                 .ok_or_else(|| anyhow!("buffer {i} has no uri and there is no (unused) GLB binary chunk for it"))?,

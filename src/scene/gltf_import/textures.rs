@@ -3,7 +3,7 @@
 //! and JPEG, from files in the scene's folder, `data:` URIs or buffer views).
 
 use super::accessors::view_slice;
-use super::extensions::{ext_f32, KHR_TEXTURE_TRANSFORM};
+use super::extensions::{ext_f32, EXT_TEXTURE_WEBP, KHR_TEXTURE_TRANSFORM};
 use super::{sources, Importer};
 use crate::scene::{Filter, TextureImage, TextureRef, Wrap};
 use anyhow::{anyhow, bail, Context, Result};
@@ -17,11 +17,25 @@ pub const MAX_IMAGE_SIDE: u32 = 16384;
 pub const MAX_IMAGE_TEXELS: u64 = 1 << 28;
 
 /// Texture extensions that give a texture's image in a format other than PNG/JPEG
-/// (`textures[i].extensions.<name>.source`); none is supported. A texture that has such
-/// a source and a core `source` uses the core one (the extensions' fallback rule); one
-/// with only the extension's source is ignored (warning).
+/// (`textures[i].extensions.<name>.source`); those of [`DECODED_IMAGE_FORMATS`] are
+/// read. For the others, a texture that has such a source and a core `source` uses the
+/// core one (the extensions' fallback rule); one with only the extension's source is
+/// ignored (warning).
 pub(super) const IMAGE_FORMAT_EXTENSIONS: &[&str] =
     &["KHR_texture_basisu", "EXT_texture_webp", "EXT_texture_avif", "MSFT_texture_dds"];
+
+/// Image-format extensions that are decoded: a texture's image is their `source`.
+pub(super) const DECODED_IMAGE_FORMATS: &[&str] = &[EXT_TEXTURE_WEBP];
+
+/// The image index of a texture's decoded image-format extension ([`DECODED_IMAGE_FORMATS`])
+/// in its JSON `extensions`, if it has one; `ctx` names the texture in errors.
+fn extension_source(ext: Option<&serde_json::Map<String, Value>>, ctx: &str) -> Result<Option<usize>> {
+    let Some((name, v)) = ext.and_then(|e| DECODED_IMAGE_FORMATS.iter().find_map(|n| Some((*n, e.get(*n)?)))) else {
+        return Ok(None);
+    };
+    let source = v.get("source").and_then(Value::as_u64).and_then(|s| usize::try_from(s).ok());
+    source.map(Some).ok_or_else(|| anyhow!("{ctx}: extensions.{name}.source must be an image index"))
+}
 
 /// The name of the first image-format extension (of [`IMAGE_FORMAT_EXTENSIONS`]) of a
 /// texture, from its JSON `extensions`, if any.
@@ -86,9 +100,12 @@ impl Importer<'_> {
         let ti = texture.index();
         let ctx = format!("{label} {slot} (texture {ti})");
         let json = &self.doc.as_json().textures[ti];
+        // A supported image-format extension's source comes first (the core `source` is
+        // its fallback for viewers without it).
+        let decoded = extension_source(json.extensions.as_ref().map(|e| &e.others), &ctx)?;
         // Without `allow_empty_texture`, gltf's `Texture::source` unwraps the image index;
         // an extension-only texture has none (document.rs lets it through validation).
-        if json.source.value() == u32::MAX as usize {
+        if decoded.is_none() && json.source.value() == u32::MAX as usize {
             let ext = image_format_extension(json.extensions.as_ref().map(|e| &e.others)).unwrap_or("an extension");
             self.warnings.warn(
                 format!("texture images given only by {ext} are not supported (the texture is ignored; the constant factor is used)"),
@@ -128,7 +145,8 @@ impl Importer<'_> {
             _ => Filter::Linear,
         };
 
-        let image = texture.source();
+        let image = decoded.unwrap_or_else(|| texture.source().index());
+        let image = self.doc.images().nth(image).ok_or_else(|| anyhow!("{ctx}: image {image} does not exist"))?;
         let image = self.texture_image(&image).with_context(|| ctx.clone())?;
         Ok(Some(TextureRef {
             image,
@@ -226,7 +244,8 @@ pub(super) fn texture_transform(v: &Value, ctx: &str) -> Result<([[f32; 3]; 2], 
     Ok(([[c * sx, s * sy, ox], [-s * sx, c * sy, oy]], tex_coord))
 }
 
-/// Decodes a PNG or JPEG image (the formats glTF 2.0 allows, section 3.8.2) to RGBA8
+/// Decodes a PNG or JPEG image (the formats glTF 2.0 allows, section 3.8.2; WebP for
+/// EXT_texture_webp) to RGBA8
 /// texels, row by row from the top-left corner; `mime` is the image's `mimeType`. The
 /// format is recognised from the data's signature, else from `mime`. Images larger than
 /// [`MAX_IMAGE_SIDE`] on a side or [`MAX_IMAGE_TEXELS`] in all are refused before their
@@ -236,18 +255,22 @@ pub(super) fn decode_image(bytes: &[u8], mime: Option<&str>) -> Result<(u32, u32
     use std::io::Cursor;
     let format = image::guess_format(bytes).ok().or_else(|| mime.and_then(ImageFormat::from_mime_type));
     let format = match format {
-        Some(f @ (ImageFormat::Png | ImageFormat::Jpeg)) => f,
+        Some(f @ (ImageFormat::Png | ImageFormat::Jpeg | ImageFormat::WebP)) => f,
         Some(f) => bail!(
-            "{} images are not supported as textures (glTF images are PNG or JPEG)",
+            "{} images are not supported as textures (glTF images are PNG or JPEG; WebP with EXT_texture_webp)",
             f.extensions_str().first().copied().unwrap_or("?").to_uppercase()
         ),
         None => bail!(
-            "the data is not a PNG or JPEG image ({} bytes{})",
+            "the data is not a PNG or JPEG image, nor WebP ({} bytes{})",
             bytes.len(),
             mime.map(|m| format!(", mimeType {m}")).unwrap_or_default()
         ),
     };
-    let kind = if format == ImageFormat::Png { "PNG" } else { "JPEG" };
+    let kind = match format {
+        ImageFormat::Png => "PNG",
+        ImageFormat::Jpeg => "JPEG",
+        _ => "WebP",
+    };
     let (w, h) = ImageReader::with_format(Cursor::new(bytes), format)
         .into_dimensions()
         .map_err(|e| anyhow!("cannot decode the {kind} image: {e}"))?;
@@ -304,7 +327,10 @@ mod tests {
 
     #[test]
     fn image_limits_and_formats() {
-        assert!(decode_image(b"not an image", None).unwrap_err().to_string().contains("not a PNG or JPEG"));
+        assert!(decode_image(b"not an image", None)
+            .unwrap_err()
+            .to_string()
+            .contains("not a PNG or JPEG image, nor WebP"));
         let e = decode_image(b"#?RADIANCE\n", Some("image/png")).unwrap_err().to_string();
         assert!(e.contains("HDR images are not supported"), "{e}");
         // A PNG header declaring 20000 x 1 texels: refused before decoding.
