@@ -289,7 +289,9 @@ impl Batch {
                 padded[..push.len()].copy_from_slice(push);
                 dev.cmd_push_constants(self.cmd, kernel.layout, vk::ShaderStageFlags::COMPUTE, 0, &padded);
             }
+            self.gpu.debug.begin_label(self.cmd, &self.pass, kernel.name());
             dev.cmd_dispatch(self.cmd, groups[0], groups[1], groups[2]);
+            self.gpu.debug.end_label(self.cmd);
             if timed {
                 dev.cmd_write_timestamp(self.cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, self.queries, q + 1);
             }

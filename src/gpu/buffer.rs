@@ -62,6 +62,7 @@ impl Gpu {
             let _ = self.allocator.lock().map(|mut a| a.free(allocation));
             bail!("cannot bind memory to buffer {name:?} ({size} bytes): {}", vk_error_text(e));
         }
+        self.debug.name(raw, name);
         Ok(Buffer { gpu: self.clone(), raw, allocation: Some(allocation), size, name: name.to_string() })
     }
 

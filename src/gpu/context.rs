@@ -163,6 +163,8 @@ pub struct Gpu {
     /// maxMemoryAllocationSize: the largest buffer (a buffer lies in one allocation).
     pub max_allocation_bytes: u64,
     validation: Option<Validation>,
+    /// VK_EXT_debug_utils names and labels (src/gpu/debug_names.rs).
+    pub(crate) debug: super::debug_names::DebugNames,
 }
 
 const API_VERSION: u32 = vk::API_VERSION_1_2;
@@ -195,6 +197,9 @@ fn create_instance(entry: &ash::Entry, validation: bool) -> Result<ash::Instance
             bail!("validation requested but VK_LAYER_KHRONOS_validation is not installed (apt-get install vulkan-validationlayers)");
         }
         layers.push(name.as_ptr());
+    }
+    // Validation's messenger and the objects' names (src/gpu/debug_names.rs) need it.
+    if super::debug_names::available(entry) {
         exts.push(ash::ext::debug_utils::NAME.as_ptr());
     }
     let info = vk::InstanceCreateInfo::default()
@@ -575,8 +580,10 @@ impl Gpu {
                 kernel_cache,
             })
         };
+        let debug_utils = super::debug_names::available(&entry);
         match step() {
             Ok(p) => Ok(Gpu {
+                debug: super::debug_names::DebugNames::new(&instance, &p.device, debug_utils),
                 entry,
                 instance,
                 physical: p.physical,
@@ -612,6 +619,12 @@ impl Gpu {
 
     pub fn validation_enabled(&self) -> bool {
         self.validation.is_some()
+    }
+
+    /// VK_EXT_debug_utils objects named and dispatch labels recorded so far; `None` where
+    /// the instance has no VK_EXT_debug_utils.
+    pub fn debug_name_counts(&self) -> Option<(u64, u64)> {
+        self.debug.counts()
     }
 
     /// Size in bytes of the largest device-local memory heap (the largest heap if none is

@@ -177,6 +177,7 @@ impl Gpu {
                 .map_err(|(_, e)| e)
                 .with_context(|| format!("cannot create the pipeline of kernel {source}"))?[0];
             self.pipelines.note_created();
+            self.debug.name(k.pipeline, source);
             if !chosen.is_empty() {
                 let sizes: Vec<_> = [vk::DescriptorType::STORAGE_BUFFER, vk::DescriptorType::UNIFORM_TEXEL_BUFFER]
                     .into_iter()

@@ -5,6 +5,7 @@
 mod batch;
 mod buffer;
 mod context;
+mod debug_names;
 pub mod fault_injection;
 mod kernel;
 pub mod kernel_cache;
