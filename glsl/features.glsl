@@ -47,6 +47,10 @@
 #if HAS_ROUGH_DIELECTRIC && !HAS_DIELECTRIC
 #error "HAS_ROUGH_DIELECTRIC needs HAS_DIELECTRIC (a rough dielectric is a dielectric)"
 #endif
+// A clear coat over some material (KHR_materials_clearcoat; glsl/lobes/clearcoat.glsl).
+#ifndef HAS_CLEARCOAT
+#define HAS_CLEARCOAT 1
+#endif
 // Light kinds (glsl/lights.glsl).
 #ifndef HAS_AREA_LIGHTS
 #define HAS_AREA_LIGHTS 1

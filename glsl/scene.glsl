@@ -93,7 +93,7 @@ GpuSphere sphere_at(uint i) {
     return s;
 }
 // GpuMaterial's vec4s, in field order.
-#define MATERIAL_TEXELS 11u
+#define MATERIAL_TEXELS 12u
 GpuMaterial material_at(uint i) {
     GpuMaterial m;
     uint k = MATERIAL_TEXELS * i;
@@ -108,6 +108,7 @@ GpuMaterial material_at(uint i) {
     m.f0_roughness = texel_vec4(materials, k + 8u);
     m.medium = texel_vec4(materials, k + 9u);
     m.transmission = texel_vec4(materials, k + 10u);
+    m.coat = texel_vec4(materials, k + 11u);
     return m;
 }
 vec4 material_surface(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 5u); }

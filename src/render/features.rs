@@ -40,6 +40,9 @@ pub struct FeatureSet {
     /// Some dielectric bounds an absorbing medium (`Material::medium_attenuation`,
     /// glsl/medium.glsl): path segments inside it are attenuated (Beer-Lambert).
     pub volume: bool,
+    /// Some material has a clear coat (`Material::clearcoat` > 0,
+    /// glsl/lobes/clearcoat.glsl).
+    pub clearcoat: bool,
     /// Light kinds.
     pub area_lights: bool,
     pub point_lights: bool,
@@ -125,6 +128,7 @@ impl FeatureSet {
             partial_transmission: g || any_mat(&|m| m.has_partial_transmission()),
             rough_dielectric: g || any_mat(&|m| m.is_rough_dielectric()),
             volume: g || any_mat(&|m| nonzero(m.medium_attenuation())),
+            clearcoat: g || any_mat(&|m| m.clearcoat > 0.0),
             area_lights: g || any_light(&|l| matches!(l, Light::Area { .. })),
             point_lights: g || any_light(&|l| matches!(l, Light::Point { .. })),
             spot_lights: g || any_light(&|l| matches!(l, Light::Spot { .. })),
@@ -168,6 +172,7 @@ impl FeatureSet {
             ("HAS_PARTIAL_TRANSMISSION", self.partial_transmission),
             ("HAS_ROUGH_DIELECTRIC", self.rough_dielectric),
             ("HAS_VOLUME", self.volume),
+            ("HAS_CLEARCOAT", self.clearcoat),
             ("HAS_AREA_LIGHTS", self.area_lights),
             ("HAS_POINT_LIGHTS", self.point_lights),
             ("HAS_SPOT_LIGHTS", self.spot_lights),
@@ -220,6 +225,7 @@ impl fmt::Display for FeatureSet {
             ("partial transmission", self.partial_transmission),
             ("rough dielectric", self.rough_dielectric),
             ("absorbing volume", self.volume),
+            ("clear coat", self.clearcoat),
         ];
         writeln!(f, "  materials: {}", list(&mats))?;
         let lights = [

@@ -396,9 +396,19 @@ fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 
                 f0_roughness,
                 medium: v4(m.medium_attenuation(), f32::from_bits(if m.one_sided { MATERIAL_ONE_SIDED } else { 0 })),
                 transmission: v4(m.transmission, 1.0 - m.lobes_weight()),
+                coat: gpu_coat(m, features),
             }
         })
         .collect()
+}
+
+/// GpuMaterial.coat of `m` (glsl/types.glsl): zero where the kernels have no clear coat.
+fn gpu_coat(m: &crate::scene::Material, features: &FeatureSet) -> [f32; 4] {
+    if !features.clearcoat || m.clearcoat <= 0.0 {
+        return [0.0; 4];
+    }
+    let r = m.clearcoat_roughness.clamp(0.0, 1.0);
+    [m.clearcoat.min(1.0), (r * r).max(MIN_GGX_ALPHA), 0.0, 0.0]
 }
 
 /// Uploads the [`CHUNKED`] arrays: whole, each one buffer added to `buffers`, or with
