@@ -114,6 +114,7 @@ GpuMaterial material_at(uint i) {
 vec4 material_surface(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 5u); }
 vec4 material_maps(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 6u); }
 vec4 material_medium(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 9u); }
+vec4 material_coat(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 11u); }
 GpuLight light_at(uint i) {
     GpuLight l;
     l.a = texel_vec4(lights, 5u * i);
@@ -138,6 +139,7 @@ GpuMaterial material_at(uint i) { return material_data[i]; }
 vec4 material_surface(uint i) { return material_data[i].surface; }
 vec4 material_maps(uint i) { return material_data[i].maps; }
 vec4 material_medium(uint i) { return material_data[i].medium; }
+vec4 material_coat(uint i) { return material_data[i].coat; }
 GpuLight light_at(uint i) { return light_data[i]; }
 #endif
 

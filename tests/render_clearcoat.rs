@@ -232,3 +232,64 @@ fn clearcoat_estimators_agree() {
         }
     });
 }
+
+/// glossy_floor_scene with `left` and `right` on floors whose triangles carry texture
+/// coordinates (the texel is the same everywhere: a 1 x 1 image).
+fn textured_floor_scene(left: Material, right: Material) -> Scene {
+    let mut sc = glossy_floor_scene(left, right);
+    for t in sc.triangles.iter_mut().filter(|t| t.material < 2) {
+        t.attributes = Some(Box::new(vkvcm::scene::VertexAttributes {
+            uv: [Some([glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y]), None],
+            color: None,
+            tangent: None,
+        }));
+    }
+    sc.images =
+        vec![vkvcm::scene::TextureImage { name: "coat".into(), width: 1, height: 1, texels: vec![[64, 204, 0, 255]] }];
+    sc
+}
+
+/// clearcoatTexture (R) and clearcoatRoughnessTexture (G) multiply the factors per point:
+/// floors coated with factor 1 and roughness 0.5 under a texel (R, G) = (64, 204) / 255
+/// must render as floors coated with factor 64/255 and roughness 0.5 x 204/255 = 0.4
+/// without textures (PT, per pixel), and BPT on the textured floors must agree with PT
+/// (light vertices carry the point's coat). Sabotage: the texel's G read as the factor
+/// fails it (93 pixels); the coat left out of the stored light vertex (read back as 1) is
+/// not caught (BPT's connections to stored vertices carry too little of the coat here).
+#[test]
+fn clearcoat_textures_scale_the_factors() {
+    let base = |c: Vec3, m: f32| Material::metallic_roughness(c, m, 0.6);
+    let t = vkvcm::scene::TextureRef {
+        image: 0,
+        wrap_s: vkvcm::scene::Wrap::Repeat,
+        wrap_t: vkvcm::scene::Wrap::Repeat,
+        filter: vkvcm::scene::Filter::Nearest,
+        tex_coord: 0,
+        transform: vkvcm::scene::TextureRef::IDENTITY,
+    };
+    let textured = |name: &str, b: Material| Material {
+        clearcoat_texture: Some(t.clone()),
+        clearcoat_roughness_texture: Some(t.clone()),
+        ..coated(name, b, 1.0, 0.5)
+    };
+    let red = Vec3::new(0.8, 0.2, 0.1);
+    let gold = Vec3::new(0.9, 0.7, 0.3);
+    let tex = textured_floor_scene(textured("red", base(red, 0.0)), textured("gold", base(gold, 1.0)));
+    let (f, r) = (64.0 / 255.0, 0.5 * 204.0 / 255.0);
+    let plain = textured_floor_scene(coated("red", base(red, 0.0), f, r), coated("gold", base(gold, 1.0), f, r));
+    with_gpu(|gpu| {
+        let pt_tex = stats(gpu, &tex, Algorithm::Pt, true, 1024, 81, 4);
+        let pt_plain = stats(gpu, &plain, Algorithm::Pt, true, 1024, 82, 4);
+        let bpt_tex = stats(gpu, &tex, Algorithm::Bpt, true, 1024, 83, 4);
+        eprintln!(
+            "image mean PT textured {:.5}, PT factors {:.5}, BPT textured {:.5}",
+            image_mean(&pt_tex),
+            image_mean(&pt_plain),
+            image_mean(&bpt_tex)
+        );
+        let t = welch_test(&pt_tex, &pt_plain, ALPHA).unwrap();
+        assert!(t.passed(), "textured coat vs its factors: {t}");
+        let t = welch_test(&pt_plain, &bpt_tex, ALPHA).unwrap();
+        assert!(t.passed(), "PT vs BPT on the textured coat: {t}");
+    });
+}

@@ -2043,7 +2043,7 @@ fn singular_placements_and_mismatched_instancing_attributes() {
 }
 
 /// KHR_materials_clearcoat: its factors reach the material (clamped to [0, 1]), its
-/// textures are warned of, and the extension is no longer an unsupported one.
+/// normal texture is warned of, a texture index out of range is an error, and the extension is no longer an unsupported one.
 #[test]
 fn clearcoat_factors_are_read() {
     let mut d = Doc::triangle();
@@ -2052,13 +2052,17 @@ fn clearcoat_factors_are_read() {
         |f: f64, r: f64| json!({"KHR_materials_clearcoat": {"clearcoatFactor": f, "clearcoatRoughnessFactor": r}});
     d.json["materials"] = json!([
         {"name": "a", "extensions": coat(0.7, 0.25)},
-        {"name": "b", "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 2.0, "clearcoatTexture": {"index": 0}}}},
+        {"name": "b", "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 2.0, "clearcoatNormalTexture": {"index": 0}}}},
     ]);
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
     let s = d.load().unwrap();
     assert_eq!((s.materials[0].clearcoat, s.materials[0].clearcoat_roughness), (0.7, 0.25));
     assert_eq!((s.materials[1].clearcoat, s.materials[1].clearcoat_roughness), (1.0, 0.0));
     let w = &s.report.warnings;
-    assert!(w.iter().any(|x| x.contains("KHR_materials_clearcoat.clearcoatTexture")), "{w:?}");
+    assert!(w.iter().any(|x| x.contains("KHR_materials_clearcoat.clearcoatNormalTexture")), "{w:?}");
     assert!(!w.iter().any(|x| x.contains("extension KHR_materials_clearcoat is not supported")), "{w:?}");
+    // A clearcoatTexture naming no texture is an error that names it.
+    d.json["materials"][1]["extensions"]["KHR_materials_clearcoat"]["clearcoatTexture"] = json!({"index": 7});
+    let e = format!("{:#}", d.load().unwrap_err());
+    assert!(e.contains("clearcoatTexture.index"), "{e}");
 }

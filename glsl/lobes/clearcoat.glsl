@@ -59,6 +59,14 @@ float coat_base_albedo(GpuMaterial m, Tint tint) {
 void clearcoat_init(inout Bsdf b, GpuMaterial m) {
     b.coat_weight = m.coat.x;
     b.coat_alpha = m.coat.y;
+#if HAS_CLEARCOAT_TEXTURES
+    // The point's texels (glsl/textures.glsl): alpha = max((r t)^2, MIN_GGX_ALPHA), which
+    // the stored max(r^2, MIN_GGX_ALPHA) times t^2 gives in both of max's cases.
+    b.coat_weight *= b.tint.coat;
+    if (b.tint.coat_roughness != 1.0) {
+        b.coat_alpha = max(b.coat_alpha * b.tint.coat_roughness * b.tint.coat_roughness, MIN_GGX_ALPHA);
+    }
+#endif
     b.prob_coat = 0.0;
     b.coat_base_albedo = 0.0;
     if (b.coat_weight <= 0.0) return;

@@ -75,7 +75,8 @@ pub struct GpuMaterial {
     pub transmission: [f32; 4],
     /// The clear coat (`Material::clearcoat`, glsl/lobes/clearcoat.glsl): x: clearcoat
     /// factor (0: none, also where the kernels lack HAS_CLEARCOAT); y: the coat's GGX alpha;
-    /// z, w: reserved (0).
+    /// z, w: indices of its clearcoat and clearcoat-roughness textures, or `NO_TEXTURE`
+    /// (bits).
     pub coat: [f32; 4],
 }
 

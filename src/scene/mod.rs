@@ -241,6 +241,11 @@ pub struct Material {
     /// clearcoatRoughnessFactor: the coat's GGX alpha is its square (at least
     /// `MIN_GGX_ALPHA`).
     pub clearcoat_roughness: f32,
+    /// clearcoatTexture and clearcoatRoughnessTexture (linear): where a triangle has their
+    /// texture coordinates, the factors are multiplied by the texel's R and G channel
+    /// respectively (glsl/textures.glsl, `surface_tint`).
+    pub clearcoat_texture: Option<TextureRef>,
+    pub clearcoat_roughness_texture: Option<TextureRef>,
 }
 
 /// glTF 2.0's metallicRoughnessTexture (section 3.9.2, "Metallic-Roughness Material"),
@@ -292,6 +297,8 @@ impl Default for Material {
             glass_weight: 1.0,
             clearcoat: 0.0,
             clearcoat_roughness: 0.0,
+            clearcoat_texture: None,
+            clearcoat_roughness_texture: None,
         }
     }
 }

@@ -238,7 +238,8 @@ impl Importer<'_> {
     }
 
     /// Sets the clear coat of `out` from `m`'s KHR_materials_clearcoat: clearcoatFactor and
-    /// clearcoatRoughnessFactor (both default 0, clamped to [0, 1] as glTF's factors).
+    /// clearcoatRoughnessFactor (both default 0, clamped to [0, 1] as glTF's factors) and
+    /// their textures; clearcoatNormalTexture is warned of.
     fn set_clearcoat(&mut self, m: &gltf::Material, out: &mut Material, label: &str) -> Result<()> {
         let Some(v) = m.extensions().and_then(|e| e.get(KHR_MATERIALS_CLEARCOAT)) else {
             return Ok(());
@@ -249,13 +250,18 @@ impl Importer<'_> {
         }
         out.clearcoat = ext_f32(v, "clearcoatFactor", 0.0, &ctx)?.clamp(0.0, 1.0);
         out.clearcoat_roughness = ext_f32(v, "clearcoatRoughnessFactor", 0.0, &ctx)?.clamp(0.0, 1.0);
-        for t in ["clearcoatTexture", "clearcoatRoughnessTexture", "clearcoatNormalTexture"] {
-            if v.get(t).is_some() {
-                self.warnings.warn(
-                    "textures are not supported (the constant factors are used)",
-                    format!("{label} {KHR_MATERIALS_CLEARCOAT}.{t}"),
-                );
-            }
+        if let Some(info) = v.get("clearcoatTexture") {
+            out.clearcoat_texture = self.json_texture(info, label, "KHR_materials_clearcoat.clearcoatTexture")?;
+        }
+        if let Some(info) = v.get("clearcoatRoughnessTexture") {
+            let slot = "KHR_materials_clearcoat.clearcoatRoughnessTexture";
+            out.clearcoat_roughness_texture = self.json_texture(info, label, slot)?;
+        }
+        if v.get("clearcoatNormalTexture").is_some() {
+            self.warnings.warn(
+                "textures are not supported (the coat shades with the base's normal)",
+                format!("{label} {KHR_MATERIALS_CLEARCOAT}.clearcoatNormalTexture"),
+            );
         }
         Ok(())
     }
