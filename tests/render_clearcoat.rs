@@ -293,3 +293,29 @@ fn clearcoat_textures_scale_the_factors() {
         assert!(t.passed(), "PT vs BPT on the textured coat: {t}");
     });
 }
+
+/// The feature set compiles the coat in only where a primitive's material has one, and its
+/// textures only where they apply (a generic-vs-specialised render of a coated scene was
+/// left out: compiling the generic kernels took 71 s of CPU here; tests/render_features.rs
+/// compares them on the reference scenes).
+#[test]
+fn coat_features() {
+    use vkvcm::render::features::FeatureSet;
+    let plain = glossy_floor_scene(Material::metallic_roughness(Vec3::ONE, 0.0, 0.5), Material::default());
+    let f = FeatureSet::new(&plain, false);
+    assert!(!f.clearcoat && !f.clearcoat_textures, "{f}");
+    let coat = |name: &str| coated(name, Material::metallic_roughness(Vec3::new(0.8, 0.2, 0.1), 0.0, 0.6), 0.9, 0.3);
+    let f = FeatureSet::new(&glossy_floor_scene(coat("a"), coat("b")), false);
+    assert!(f.clearcoat && !f.clearcoat_textures && f.to_string().contains("clear coat"), "{f}");
+    let t = vkvcm::scene::TextureRef {
+        image: 0,
+        wrap_s: vkvcm::scene::Wrap::Repeat,
+        wrap_t: vkvcm::scene::Wrap::Repeat,
+        filter: vkvcm::scene::Filter::Nearest,
+        tex_coord: 0,
+        transform: vkvcm::scene::TextureRef::IDENTITY,
+    };
+    let sc = textured_floor_scene(Material { clearcoat_texture: Some(t), ..coat("textured") }, coat("b"));
+    let f = FeatureSet::new(&sc, false);
+    assert!(f.clearcoat && f.clearcoat_textures, "{f}");
+}
