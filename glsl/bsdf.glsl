@@ -89,6 +89,10 @@
 // is a property of the point, so bsdf_init, bsdf_eval and bsdf_sample all see the same
 // lobes, and the component probabilities and pdfs stay exact.
 //
+// Layers over the whole material (the clear coat, glsl/lobes/clearcoat.glsl) wrap the
+// base at the end of this file: bsdf_init, bsdf_eval and bsdf_sample are the base's
+// (base_bsdf_*) with the layers applied.
+//
 // Requires: `material_at(i)` (GpuMaterial) declared by the kernel (scene.glsl), common.glsl, types.glsl,
 // textures.glsl (Tint).
 #ifndef BSDF_GLSL
@@ -118,6 +122,11 @@ struct Bsdf {
 #if HAS_PARTIAL_TRANSMISSION
     float interface_weight;  // a dielectric's glass weight; 1 on opaque materials
     float lobes_weight;      // 1 - the glass weight on a dielectric; 1 on opaque materials
+#endif
+#if HAS_CLEARCOAT
+    // The clear coat (glsl/lobes/clearcoat.glsl): its factor, GGX alpha, its sampling
+    // probability at wo, and the base's albedo its sampling probabilities use.
+    float coat_weight, coat_alpha, prob_coat, coat_base_albedo;
 #endif
 };
 
@@ -266,7 +275,7 @@ float diffuse_fresnel_weight(float f0, float cos_o, float cos_i) {
 
 // `ng`: geometric normal (for a dielectric it must point outwards); `ns`: shading normal
 // on the same side as ng (== ng for flat shading); `tint`: the point's tint (Surface.tint).
-Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint tint) {
+Bsdf base_bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint tint) {
     Bsdf b;
     GpuMaterial m = point_material(material, tint);
     float ior = m.phong.w;
@@ -538,7 +547,7 @@ vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
 // and wo given wi (rev), both including the component probability but not Russian
 // roulette. Zero when either direction is below the surface (but for the rough
 // dielectric, which transmits).
-vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
+vec3 base_bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
 #if HAS_ROUGH_DIELECTRIC
     if (b.prob_rough > 0.0) {
         vec3 f = rough_dielectric_eval(b, wi, pdf_fwd, pdf_rev);
@@ -584,7 +593,10 @@ struct BsdfSample {
     bool ok;
 };
 
-BsdfSample bsdf_sample(Bsdf b, vec3 u) {
+// The whole BSDF, the coat included (below); the base's sampling values its samples by it.
+vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev);
+
+BsdfSample base_bsdf_sample(Bsdf b, vec3 u) {
     BsdfSample s;
     s.ok = false;
     s.specular = false;
@@ -719,6 +731,43 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
 #endif
     }
     s.ok = s.pdf > 0.0;
+    return s;
+}
+
+// The material's BSDF: the base above (the lobes of this file) under the layers of
+// glsl/lobes/ that the material has. Without such layers, the base's, bit for bit.
+#include "lobes/clearcoat.glsl"
+
+Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint tint) {
+    Bsdf b = base_bsdf_init(material, ng, ns, wo, from_light, tint);
+#if HAS_CLEARCOAT
+    clearcoat_init(b, point_material(material, tint));
+#endif
+    return b;
+}
+
+// f(wo, wi) of the non-specular part and the solid-angle pdfs of sampling wi given wo
+// (fwd) and wo given wi (rev), both including the component probability but not Russian
+// roulette.
+vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
+    vec3 f = base_bsdf_eval(b, wi, pdf_fwd, pdf_rev);
+#if HAS_CLEARCOAT
+    if (b.coat_weight > 0.0) f = clearcoat_eval(b, wi, f, pdf_fwd, pdf_rev);
+#endif
+    return f;
+}
+
+BsdfSample bsdf_sample(Bsdf b, vec3 u) {
+#if HAS_CLEARCOAT
+    if (b.prob_coat > 0.0) {
+        if (u.z < b.prob_coat) return clearcoat_sample(b, u.xy);
+        u.z = (u.z - b.prob_coat) / (1.0 - b.prob_coat);
+    }
+#endif
+    BsdfSample s = base_bsdf_sample(b, u);
+#if HAS_CLEARCOAT
+    if (s.ok && s.specular && b.coat_weight > 0.0) clearcoat_specular(b, s);
+#endif
     return s;
 }
 

@@ -47,6 +47,18 @@
 #if HAS_ROUGH_DIELECTRIC && !HAS_DIELECTRIC
 #error "HAS_ROUGH_DIELECTRIC needs HAS_DIELECTRIC (a rough dielectric is a dielectric)"
 #endif
+// A clear coat over some material (KHR_materials_clearcoat; glsl/lobes/clearcoat.glsl).
+#ifndef HAS_CLEARCOAT
+#define HAS_CLEARCOAT 1
+#endif
+// Coated materials whose coat factor or roughness a texture varies per point
+// (glsl/textures.glsl `surface_tint`; light vertices carry the point's values).
+#ifndef HAS_CLEARCOAT_TEXTURES
+#define HAS_CLEARCOAT_TEXTURES 1
+#endif
+#if HAS_CLEARCOAT_TEXTURES && !HAS_CLEARCOAT
+#error "HAS_CLEARCOAT_TEXTURES needs HAS_CLEARCOAT"
+#endif
 // Light kinds (glsl/lights.glsl).
 #ifndef HAS_AREA_LIGHTS
 #define HAS_AREA_LIGHTS 1

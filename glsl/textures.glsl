@@ -151,9 +151,11 @@ struct Tint {
     vec3 rgb;
     float roughness;
     float metallic;
+    float coat;            // multiplies the clear coat factor (clearcoatTexture's R)
+    float coat_roughness;  // multiplies its roughness (clearcoatRoughnessTexture's G)
 };
 
-Tint no_tint() { return Tint(vec3(1.0), 1.0, 1.0); }
+Tint no_tint() { return Tint(vec3(1.0), 1.0, 1.0, 1.0, 1.0); }
 
 // The tint (rgb) and alpha (times the material's alpha factor) of triangle `tri` with
 // material `material` at barycentric weights (u, v): (1, 1, 1, factor) where it has no
@@ -197,6 +199,21 @@ Tint surface_tint(uint tri, uint material, float u, float v) {
         vec4 texel = texture_sample(ref, uv);
         t.roughness = texel.g;
         t.metallic = texel.b;
+    }
+#endif
+#if HAS_CLEARCOAT_TEXTURES
+    // KHR_materials_clearcoat: factor x clearcoatTexture's R, roughness x
+    // clearcoatRoughnessTexture's G (linear texels).
+    vec4 coat = material_coat(material);
+    GpuVertexAttributes c0, c1, c2;
+    vec2 cuv;
+    if (triangle_attributes(tri, c0, c1, c2)) {
+        uint cref = floatBitsToUint(coat.z);
+        if (cref != NO_TEXTURE && texture_uv(cref, c0, c1, c2, 1.0 - u - v, u, v, cuv)) t.coat = texture_sample(cref, cuv).r;
+        cref = floatBitsToUint(coat.w);
+        if (cref != NO_TEXTURE && texture_uv(cref, c0, c1, c2, 1.0 - u - v, u, v, cuv)) {
+            t.coat_roughness = texture_sample(cref, cuv).g;
+        }
     }
 #endif
     return t;

@@ -36,6 +36,8 @@ struct GpuMaterial {
     vec4 medium;         // rgb: attenuation coefficient inside a transmissive volume (0: none),
                          // w: flag bits (MATERIAL_ONE_SIDED)
     vec4 transmission;   // rgb: colour of a dielectric's transmitted part (1: clear); w: its glass weight (glsl/bsdf.glsl)
+    vec4 coat;           // x: clear coat factor (0: none), y: its GGX alpha (glsl/lobes/clearcoat.glsl),
+                         // z, w: its factor's and roughness's textures or NO_TEXTURE (bits)
 };
 
 struct GpuTextureRef {

@@ -82,7 +82,8 @@ fn rust_and_glsl_layouts_match() {
             base_metallic,
             f0_roughness,
             medium,
-            transmission
+            transmission,
+            coat
         }),
         rust_layout!(GpuTextureRef { image, row0, row1 }),
         rust_layout!(GpuVertexAttributes { uv, color, tangent }),

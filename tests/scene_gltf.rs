@@ -399,7 +399,7 @@ fn glb_round_trip() {
 #[test]
 fn unsupported_features_warn_once_per_kind() {
     let mut d = Doc::triangle();
-    d.json["extensionsUsed"] = json!(["KHR_materials_clearcoat", "VKVCM_spheres", "KHR_lights_punctual"]);
+    d.json["extensionsUsed"] = json!(["KHR_materials_unlit", "VKVCM_spheres", "KHR_lights_punctual"]);
     d.json["images"] = json!([{"uri": "never_loaded.png"}]);
     d.json["textures"] = json!([{"source": 0}]);
     // Glass does not read metallicRoughnessTexture (its image is never loaded).
@@ -415,7 +415,7 @@ fn unsupported_features_warn_once_per_kind() {
     let s = d.load().unwrap();
     let w = &s.report.warnings;
     let count = |needle: &str| w.iter().filter(|x| x.contains(needle)).count();
-    assert_eq!(count("KHR_materials_clearcoat"), 1, "{w:?}");
+    assert_eq!(count("KHR_materials_unlit"), 1, "{w:?}");
     // (An unsupported extension in extensionsRequired is an error: tests/malformed/.)
     assert_eq!(count("VKVCM_spheres"), 0, "{w:?}");
     assert_eq!(count("KHR_lights_punctual"), 0, "{w:?}");
@@ -2040,4 +2040,29 @@ fn singular_placements_and_mismatched_instancing_attributes() {
     j["nodes"][9]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["TRANSLATION"] = json!(1);
     let e = err_of(load_json(&j, &LoadOptions::default()));
     assert!(e.contains("node 9 EXT_mesh_gpu_instancing") && e.contains("different counts"), "{e}");
+}
+
+/// KHR_materials_clearcoat: its factors reach the material (clamped to [0, 1]), its
+/// normal texture is warned of, a texture index out of range is an error, and the extension is no longer an unsupported one.
+#[test]
+fn clearcoat_factors_are_read() {
+    let mut d = Doc::triangle();
+    d.json["extensionsUsed"] = json!(["KHR_materials_clearcoat"]);
+    let coat =
+        |f: f64, r: f64| json!({"KHR_materials_clearcoat": {"clearcoatFactor": f, "clearcoatRoughnessFactor": r}});
+    d.json["materials"] = json!([
+        {"name": "a", "extensions": coat(0.7, 0.25)},
+        {"name": "b", "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 2.0, "clearcoatNormalTexture": {"index": 0}}}},
+    ]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let s = d.load().unwrap();
+    assert_eq!((s.materials[0].clearcoat, s.materials[0].clearcoat_roughness), (0.7, 0.25));
+    assert_eq!((s.materials[1].clearcoat, s.materials[1].clearcoat_roughness), (1.0, 0.0));
+    let w = &s.report.warnings;
+    assert!(w.iter().any(|x| x.contains("KHR_materials_clearcoat.clearcoatNormalTexture")), "{w:?}");
+    assert!(!w.iter().any(|x| x.contains("extension KHR_materials_clearcoat is not supported")), "{w:?}");
+    // A clearcoatTexture naming no texture is an error that names it.
+    d.json["materials"][1]["extensions"]["KHR_materials_clearcoat"]["clearcoatTexture"] = json!({"index": 7});
+    let e = format!("{:#}", d.load().unwrap_err());
+    assert!(e.contains("clearcoatTexture.index"), "{e}");
 }

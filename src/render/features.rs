@@ -40,6 +40,13 @@ pub struct FeatureSet {
     /// Some dielectric bounds an absorbing medium (`Material::medium_attenuation`,
     /// glsl/medium.glsl): path segments inside it are attenuated (Beer-Lambert).
     pub volume: bool,
+    /// Some material has a clear coat (`Material::clearcoat` > 0,
+    /// glsl/lobes/clearcoat.glsl).
+    pub clearcoat: bool,
+    /// Some coated material has a clearcoat or clearcoat-roughness texture and some
+    /// triangle texture coordinates: surfaces and light vertices carry the point's coat
+    /// factor and roughness multipliers (glsl/textures.glsl, `surface_tint`).
+    pub clearcoat_textures: bool,
     /// Light kinds.
     pub area_lights: bool,
     pub point_lights: bool,
@@ -105,6 +112,10 @@ impl FeatureSet {
         let normal_maps = tangents && any_mat(&|m| m.normal_texture.is_some());
         let emissive_textures = vertex_attributes && any_mat(&|m| m.emissive_texture.is_some() && nonzero(m.emission));
         let metallic_roughness_textures = vertex_attributes && any_mat(&|m| m.metallic_roughness_texture.is_some());
+        let clearcoat_textures = vertex_attributes
+            && any_mat(&|m| {
+                m.clearcoat > 0.0 && (m.clearcoat_texture.is_some() || m.clearcoat_roughness_texture.is_some())
+            });
         // A metallic-roughness texture can give a point the lobes its factors lack: diffuse
         // where the base is not black (metallic below 1), GGX where base or dielectric is not.
         let textured = |m: &crate::scene::Material, f: &dyn Fn(&crate::scene::MetallicRoughnessTexture) -> bool| {
@@ -125,6 +136,8 @@ impl FeatureSet {
             partial_transmission: g || any_mat(&|m| m.has_partial_transmission()),
             rough_dielectric: g || any_mat(&|m| m.is_rough_dielectric()),
             volume: g || any_mat(&|m| nonzero(m.medium_attenuation())),
+            clearcoat: g || any_mat(&|m| m.clearcoat > 0.0),
+            clearcoat_textures: g || clearcoat_textures,
             area_lights: g || any_light(&|l| matches!(l, Light::Area { .. })),
             point_lights: g || any_light(&|l| matches!(l, Light::Point { .. })),
             spot_lights: g || any_light(&|l| matches!(l, Light::Spot { .. })),
@@ -140,7 +153,8 @@ impl FeatureSet {
                 || (vertex_attributes && any_mat(&|m| m.base_color_texture.is_some()))
                 || normal_maps
                 || emissive_textures
-                || metallic_roughness_textures,
+                || metallic_roughness_textures
+                || clearcoat_textures,
             alpha_mask: g || any_mat(&|m| m.alpha_mode != crate::scene::AlphaMode::Opaque),
             one_sided: g || any_mat(&|m| m.one_sided),
             normal_maps: g || normal_maps,
@@ -168,6 +182,8 @@ impl FeatureSet {
             ("HAS_PARTIAL_TRANSMISSION", self.partial_transmission),
             ("HAS_ROUGH_DIELECTRIC", self.rough_dielectric),
             ("HAS_VOLUME", self.volume),
+            ("HAS_CLEARCOAT", self.clearcoat),
+            ("HAS_CLEARCOAT_TEXTURES", self.clearcoat_textures),
             ("HAS_AREA_LIGHTS", self.area_lights),
             ("HAS_POINT_LIGHTS", self.point_lights),
             ("HAS_SPOT_LIGHTS", self.spot_lights),
@@ -220,6 +236,7 @@ impl fmt::Display for FeatureSet {
             ("partial transmission", self.partial_transmission),
             ("rough dielectric", self.rough_dielectric),
             ("absorbing volume", self.volume),
+            ("clear coat", self.clearcoat),
         ];
         writeln!(f, "  materials: {}", list(&mats))?;
         let lights = [
@@ -250,6 +267,7 @@ impl fmt::Display for FeatureSet {
             ("normal maps", self.normal_maps),
             ("emissive textures", self.emissive_textures),
             ("metallic-roughness textures", self.metallic_roughness_textures),
+            ("clear-coat textures", self.clearcoat_textures),
         ];
         writeln!(f, "  surface detail: {}", list(&surface))?;
         write!(f, "  ray counter: {}", if self.count_rays { "on (--profile)" } else { "off" })

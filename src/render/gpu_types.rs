@@ -73,6 +73,11 @@ pub struct GpuMaterial {
     /// (1 - `Material::lobes_weight`: the glass weight clamped to [0, 1]; 0 on opaque
     /// materials, where it is unused).
     pub transmission: [f32; 4],
+    /// The clear coat (`Material::clearcoat`, glsl/lobes/clearcoat.glsl): x: clearcoat
+    /// factor (0: none, also where the kernels lack HAS_CLEARCOAT); y: the coat's GGX alpha;
+    /// z, w: indices of its clearcoat and clearcoat-roughness textures, or `NO_TEXTURE`
+    /// (bits).
+    pub coat: [f32; 4],
 }
 
 /// A texture as a material uses it (`scene::TextureRef`): where its image's texels are,

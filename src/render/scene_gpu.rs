@@ -166,10 +166,11 @@ fn vertex_attributes(a: Option<&VertexAttributes>, k: usize) -> GpuVertexAttribu
 
 /// The scene's textures on the GPU: the texture references of the materials (each
 /// material's base-colour texture, normal map, emissive texture and metallic-roughness
-/// texture, in material order), per material the indices of its four (or `NO_TEXTURE`),
+/// texture, clearcoat and clearcoat-roughness textures, in material order), per material
+/// the indices of its six (or `NO_TEXTURE`),
 /// and the texels of the scene's images (RGBA8 packed little-endian, R lowest; four to a
 /// 16-byte element).
-type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 4]>, Vec<[u32; 4]>);
+type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 6]>, Vec<[u32; 4]>);
 
 fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     let mut first = Vec::with_capacity(scene.images.len());
@@ -191,13 +192,15 @@ fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     let mut refs = Vec::new();
     let mut indices = Vec::with_capacity(scene.materials.len());
     for (i, m) in scene.materials.iter().enumerate() {
-        let mut index = [NO_TEXTURE; 4];
+        let mut index = [NO_TEXTURE; 6];
         // Normal maps and metallic-roughness textures hold linear values, not sRGB colours.
         let slots = [
             (m.base_color_texture.as_ref(), false),
             (m.normal_texture.as_ref(), true),
             (m.emissive_texture.as_ref(), false),
             (m.metallic_roughness_texture.as_ref().map(|t| &t.texture), true),
+            (m.clearcoat_texture.as_ref(), true),
+            (m.clearcoat_roughness_texture.as_ref(), true),
         ];
         for (slot, (t, linear)) in slots.into_iter().enumerate() {
             let Some(t) = t else { continue };
@@ -361,12 +364,12 @@ fn gpu_triangles(scene: &Scene, features: &FeatureSet) -> GpuGeometry {
 
 /// The materials as the kernels read them, with the texture indices of each
 /// (`texture_indices`, [`gpu_textures`]) where `features` has the textures' kind.
-fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 4]]) -> Vec<GpuMaterial> {
+fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 6]]) -> Vec<GpuMaterial> {
     scene
         .materials
         .iter()
         .zip(texture_indices)
-        .map(|(m, &[texture, normal_map, emissive, metallic_roughness])| {
+        .map(|(m, &[texture, normal_map, emissive, metallic_roughness, coat, coat_roughness])| {
             let normal_map = if features.normal_maps { normal_map } else { NO_TEXTURE };
             let emissive = if features.emissive_textures { emissive } else { NO_TEXTURE };
             let (metallic_roughness, base_metallic, f0_roughness) =
@@ -396,9 +399,21 @@ fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 
                 f0_roughness,
                 medium: v4(m.medium_attenuation(), f32::from_bits(if m.one_sided { MATERIAL_ONE_SIDED } else { 0 })),
                 transmission: v4(m.transmission, 1.0 - m.lobes_weight()),
+                coat: gpu_coat(m, features, [coat, coat_roughness]),
             }
         })
         .collect()
+}
+
+/// GpuMaterial.coat of `m` (glsl/types.glsl) with the indices of its two textures:
+/// zero where the kernels have no clear coat.
+fn gpu_coat(m: &crate::scene::Material, features: &FeatureSet, textures: [u32; 2]) -> [f32; 4] {
+    if !features.clearcoat || m.clearcoat <= 0.0 {
+        return [0.0, 0.0, bits(NO_TEXTURE), bits(NO_TEXTURE)];
+    }
+    let t = |i: u32| bits(if features.clearcoat_textures { i } else { NO_TEXTURE });
+    let r = m.clearcoat_roughness.clamp(0.0, 1.0);
+    [m.clearcoat.min(1.0), (r * r).max(MIN_GGX_ALPHA), t(textures[0]), t(textures[1])]
 }
 
 /// Uploads the [`CHUNKED`] arrays: whole, each one buffer added to `buffers`, or with
@@ -506,7 +521,7 @@ impl SceneGpu {
         let (texture_refs, texture_indices, texels) = if features.textures {
             gpu_textures(scene)?
         } else {
-            (Vec::new(), vec![[NO_TEXTURE; 4]; scene.materials.len()], Vec::new())
+            (Vec::new(), vec![[NO_TEXTURE; 6]; scene.materials.len()], Vec::new())
         };
         let materials = gpu_materials(scene, features, &texture_indices);
         let env = match environment_map(scene) {

@@ -234,6 +234,18 @@ pub struct Material {
     /// 1 - w ([`Material::lobes_weight`]), on both sides of the surface. One (clear glass,
     /// the default): the other lobes have no weight. Unused by opaque materials.
     pub glass_weight: f32,
+    /// KHR_materials_clearcoat's clearcoatFactor in [0, 1] (0: no coat): a GGX layer of
+    /// F0 0.04 (IOR 1.5) over the rest of the material, blended as the extension writes
+    /// it, f = mix(base, coat, clearcoat x F_coat(n.v)) (glsl/lobes/clearcoat.glsl).
+    pub clearcoat: f32,
+    /// clearcoatRoughnessFactor: the coat's GGX alpha is its square (at least
+    /// `MIN_GGX_ALPHA`).
+    pub clearcoat_roughness: f32,
+    /// clearcoatTexture and clearcoatRoughnessTexture (linear): where a triangle has their
+    /// texture coordinates, the factors are multiplied by the texel's R and G channel
+    /// respectively (glsl/textures.glsl, `surface_tint`).
+    pub clearcoat_texture: Option<TextureRef>,
+    pub clearcoat_roughness_texture: Option<TextureRef>,
 }
 
 /// glTF 2.0's metallicRoughnessTexture (section 3.9.2, "Metallic-Roughness Material"),
@@ -283,6 +295,10 @@ impl Default for Material {
             attenuation: Vec3::ZERO,
             transmission: Vec3::ONE,
             glass_weight: 1.0,
+            clearcoat: 0.0,
+            clearcoat_roughness: 0.0,
+            clearcoat_texture: None,
+            clearcoat_roughness_texture: None,
         }
     }
 }

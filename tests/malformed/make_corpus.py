@@ -152,7 +152,7 @@ case("uri_drive_letter.gltf", doc(set_(["buffers", 0, "uri"], "C:\\\\x.bin")), "
 case("uri_directory.gltf", doc(set_(["buffers", 0, "uri"], ".")), "buffer 0")
 
 # Features, structure, content.
-case("required_extension.gltf", doc(set_(["extensionsRequired"], ["KHR_materials_clearcoat"])), "unsupported required extension(s) KHR_materials_clearcoat")
+case("required_extension.gltf", doc(set_(["extensionsRequired"], ["KHR_materials_unlit"])), "unsupported required extension(s) KHR_materials_unlit")
 # Compression extensions: refused with the tool that removes them.
 case("required_draco.gltf", doc(set_(["extensionsRequired"], ["KHR_draco_mesh_compression"])), "KHR_draco_mesh_compression is not supported: Draco-compressed meshes are not decoded: decompress the file with `gltf-transform cp")
 # EXT_meshopt_compression and EXT_texture_webp are decoded: a view whose bytes are not a

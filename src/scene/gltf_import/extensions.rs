@@ -16,6 +16,8 @@ pub const EXT_ENVIRONMENT: &str = "VKVCM_environment";
 pub const KHR_MESH_QUANTIZATION: &str = "KHR_mesh_quantization";
 /// Per-node instance transforms (src/scene/gltf_import/instancing.rs).
 pub const EXT_MESH_GPU_INSTANCING: &str = "EXT_mesh_gpu_instancing";
+/// A clear coat layer over a material (src/scene/gltf_import/materials.rs).
+pub const KHR_MATERIALS_CLEARCOAT: &str = "KHR_materials_clearcoat";
 /// Offset, rotation and scale of texture coordinates (read on `baseColorTexture`).
 pub const KHR_TEXTURE_TRANSFORM: &str = "KHR_texture_transform";
 
@@ -31,6 +33,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_emissive_strength",
     "KHR_materials_specular",
     "KHR_materials_volume",
+    KHR_MATERIALS_CLEARCOAT,
     KHR_MESH_QUANTIZATION,
     KHR_TEXTURE_TRANSFORM,
     EXT_MESH_GPU_INSTANCING,

@@ -148,6 +148,12 @@ impl Importer<'_> {
                 mat.metallic_roughness_texture.as_ref().map(|t| &t.texture),
                 "the metallic and roughness factors alone apply",
             ),
+            ("clearcoatTexture", mat.clearcoat_texture.as_ref(), "the clear coat factor alone applies"),
+            (
+                "clearcoatRoughnessTexture",
+                mat.clearcoat_roughness_texture.as_ref(),
+                "the clear coat roughness alone applies",
+            ),
         ];
         for (slot, texture, what) in textures {
             if let Some(k) = texture.map(|t| t.tex_coord).filter(|&k| uvs[k as usize].is_none()) {

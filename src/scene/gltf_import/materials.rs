@@ -2,9 +2,9 @@
 //! (+ mirror), `KHR_materials_transmission`/`KHR_materials_ior` to smooth or rough glass
 //! (beside diffuse + GGX where it transmits partially),
 //! `KHR_materials_emissive_strength`, `KHR_materials_volume` (absorption inside
-//! transmissive meshes), and vkvcm's own `VKVCM_materials_phong`.
+//! transmissive meshes), `KHR_materials_clearcoat`, and vkvcm's own `VKVCM_materials_phong`.
 
-use super::extensions::{ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG};
+use super::extensions::{ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG, KHR_MATERIALS_CLEARCOAT};
 use super::Importer;
 use crate::scene::{AlphaMode, Material, GLTF_DIELECTRIC_F0};
 use anyhow::{bail, Result};
@@ -110,6 +110,9 @@ impl Importer<'_> {
         }
         (out.alpha, out.alpha_mode) = alpha(m, bc[3], &label)?;
         self.set_emission(m, &mut out, &label)?;
+        if phong_ext.is_none() {
+            self.set_clearcoat(m, &mut out, &label)?;
+        }
         // glTF's doubleSided false (the default) is back-face culling: the camera does not
         // see the back side of such a surface (glsl/scene.glsl, trace_camera_segment and
         // visible_to_camera; light meets both sides). A dielectric stays two-sided: its
@@ -232,6 +235,35 @@ impl Importer<'_> {
         for t in textures {
             self.warnings.warn("textures are not supported (the constant factors are used)", format!("{label} {t}"));
         }
+    }
+
+    /// Sets the clear coat of `out` from `m`'s KHR_materials_clearcoat: clearcoatFactor and
+    /// clearcoatRoughnessFactor (both default 0, clamped to [0, 1] as glTF's factors) and
+    /// their textures; clearcoatNormalTexture is warned of.
+    fn set_clearcoat(&mut self, m: &gltf::Material, out: &mut Material, label: &str) -> Result<()> {
+        let Some(v) = m.extensions().and_then(|e| e.get(KHR_MATERIALS_CLEARCOAT)) else {
+            return Ok(());
+        };
+        let ctx = format!("{label}: {KHR_MATERIALS_CLEARCOAT}");
+        if !v.is_object() {
+            bail!("{ctx} must be an object");
+        }
+        out.clearcoat = ext_f32(v, "clearcoatFactor", 0.0, &ctx)?.clamp(0.0, 1.0);
+        out.clearcoat_roughness = ext_f32(v, "clearcoatRoughnessFactor", 0.0, &ctx)?.clamp(0.0, 1.0);
+        if let Some(info) = v.get("clearcoatTexture") {
+            out.clearcoat_texture = self.json_texture(info, label, "KHR_materials_clearcoat.clearcoatTexture")?;
+        }
+        if let Some(info) = v.get("clearcoatRoughnessTexture") {
+            let slot = "KHR_materials_clearcoat.clearcoatRoughnessTexture";
+            out.clearcoat_roughness_texture = self.json_texture(info, label, slot)?;
+        }
+        if v.get("clearcoatNormalTexture").is_some() {
+            self.warnings.warn(
+                "textures are not supported (the coat shades with the base's normal)",
+                format!("{label} {KHR_MATERIALS_CLEARCOAT}.clearcoatNormalTexture"),
+            );
+        }
+        Ok(())
     }
 
     /// Sets the emission of `out` from `m`'s emissive factor, strength and texture.

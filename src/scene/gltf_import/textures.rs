@@ -85,6 +85,26 @@ impl Importer<'_> {
         Ok(t.map(|t| (t, info.scale())))
     }
 
+    /// A texture named by an extension's raw textureInfo JSON `info` (`index`, `texCoord`,
+    /// `extensions.KHR_texture_transform`) for the material `label`'s `slot`, read as
+    /// `base_color_texture` reads a base-colour texture.
+    pub(super) fn json_texture(&mut self, info: &Value, label: &str, slot: &str) -> Result<Option<TextureRef>> {
+        let index = info.get("index").and_then(Value::as_u64);
+        let texture = index.and_then(|i| self.doc.textures().nth(i as usize));
+        let Some(texture) = texture else {
+            anyhow::bail!("{label}: {slot}.index must name one of the file's textures, is {:?}", info.get("index"));
+        };
+        let tex_coord = match info.get("texCoord") {
+            None => 0,
+            Some(k) => k
+                .as_u64()
+                .and_then(|k| u32::try_from(k).ok())
+                .ok_or_else(|| anyhow::anyhow!("{label}: {slot}.texCoord must be a non-negative integer, is {k}"))?,
+        };
+        let transform = info.get("extensions").and_then(|e| e.get(KHR_TEXTURE_TRANSFORM));
+        self.texture_ref(texture, tex_coord, transform, label, slot)
+    }
+
     /// The texture reference of `texture` read through texture coordinate set `tex_coord`
     /// with an optional KHR_texture_transform payload, for the material `label`'s `slot`
     /// (`baseColorTexture`, `normalTexture`, ...); `None` (with a warning) when it cannot

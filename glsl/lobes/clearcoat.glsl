@@ -1,0 +1,142 @@
+// The clear coat (glTF KHR_materials_clearcoat): a GGX microfacet layer of F0 0.04 (IOR
+// 1.5) and width alpha = clearcoatRoughness^2 over the rest of the material (the base:
+// everything of glsl/bsdf.glsl), layered as the extension writes it:
+//   f = (1 - c(v)) f_base + c(v) f_coat,   c(v) = clearcoat x F_coat(|n.v|),
+// with F_coat Schlick's Fresnel of F0 0.04 and f_coat = D G2 / (4 |n.wo| |n.wi|), the GGX
+// lobe of glsl/bsdf.glsl (`ggx_eval`) with F = 1 (glTF's specular_brdf: V D). v is the
+// direction towards the viewer: wo on camera subpaths and wi on light subpaths (the
+// adjoint BSDF, Veach 1997, 3.7: f is not symmetric, so the light subpath evaluates
+// f(wi, wo)). Since f_coat alone reflects at most what it receives and the base too, the
+// blend never adds energy (tests/render_clearcoat.rs). The coat faces the outside of a
+// dielectric (the side of its outward normal) and both sides of an opaque surface; on a
+// dielectric seen from inside c is 0. The coat uses the Bsdf's shading normal (the base's,
+// normal-mapped where the base has a normal map); emission is not dimmed by it.
+//
+// Sampling: the coat with probability p(d) = c(d) / (c(d) + (1 - c(d)) A), the base with
+// 1 - p(d), where d is the fixed direction and A a direction-free luminance albedo of the
+// base (`coat_base_albedo`); the base then picks among its own components as without a
+// coat. p depends on d alone, so the reverse pdf (the density of drawing wo from wi) is
+// p(wi) pdf_coat(wo | wi) + (1 - p(wi)) pdf_base(wo | wi), exactly what a vertex with
+// fixed direction wi draws. A base of zero albedo leaves the coat alone (p = 1).
+//
+// Requires: glsl/bsdf.glsl up to its wrappers (Bsdf, point_material, the colour
+// functions, schlick, ggx_eval, ggx_sample_h, bsdf_cos, bsdf_cos_geometric, BsdfSample,
+// and bsdf_eval declared).
+#ifndef CLEARCOAT_GLSL
+#define CLEARCOAT_GLSL
+
+#if HAS_CLEARCOAT
+
+#define COAT_F0 0.04
+
+// c(d): the coat's blend factor seen from unit direction d (0 where the coat does not
+// face d: the inside of a dielectric, or d off the side that the normals face).
+float coat_blend(Bsdf b, vec3 d) {
+    // bsdf_init turns an opaque material's normals to wo's side and leaves a dielectric's
+    // outward: in both cases the coat faces the side of b.ng.
+    if (dot(b.ng, d) <= 0.0) return 0.0;
+    return b.coat_weight * schlick(COAT_F0, min(abs(dot(b.n, d)), 1.0));
+}
+
+// The probability of sampling the coat at a vertex whose fixed direction is d.
+float coat_prob(Bsdf b, vec3 d) {
+    float c = coat_blend(b, d);
+    float den = c + (1.0 - c) * b.coat_base_albedo;
+    return den > 0.0 ? c / den : 0.0;
+}
+
+// A luminance albedo of the base that does not depend on directions (sampling only): its
+// lobes' colours, plus the glass weight of a dielectric's interface (which reflects and
+// transmits all it receives) or the mirror colour of an opaque material.
+float coat_base_albedo(GpuMaterial m, Tint tint) {
+    float lobes = luminance(diffuse_colour(m, tint.rgb) + m.phong.rgb + glossy_colour(m, tint.rgb));
+    if (m.phong.w >= 0.0) return lobes * (1.0 - m.transmission.w) + m.transmission.w;
+    return lobes + luminance(mirror_colour(m, tint.rgb));
+}
+
+// Adds the coat to the base's Bsdf `b` (bsdf_init): its weight, the coat's sampling
+// probability at wo, and the continuation probability and delta flag of the blend.
+void clearcoat_init(inout Bsdf b, GpuMaterial m) {
+    b.coat_weight = m.coat.x;
+    b.coat_alpha = m.coat.y;
+#if HAS_CLEARCOAT_TEXTURES
+    // The point's texels (glsl/textures.glsl): alpha = max((r t)^2, MIN_GGX_ALPHA), which
+    // the stored max(r^2, MIN_GGX_ALPHA) times t^2 gives in both of max's cases.
+    b.coat_weight *= b.tint.coat;
+    if (b.tint.coat_roughness != 1.0) {
+        b.coat_alpha = max(b.coat_alpha * b.tint.coat_roughness * b.tint.coat_roughness, MIN_GGX_ALPHA);
+    }
+#endif
+    b.prob_coat = 0.0;
+    b.coat_base_albedo = 0.0;
+    if (b.coat_weight <= 0.0) return;
+    // bsdf_init's geometric validity (wo off the geometric surface and above the shading
+    // one on that side): the base may be invalid for its zero albedo alone.
+    float c = dot(b.ng, b.wo);
+    bool seen = abs(c) >= EPS_COSINE && (c >= 0.0 ? dot(b.n, b.wo) : -dot(b.n, b.wo)) >= EPS_COSINE;
+    if (!seen) return;
+    b.coat_base_albedo = b.valid ? coat_base_albedo(m, b.tint) : 0.0;
+    b.prob_coat = coat_prob(b, b.wo);
+    if (b.prob_coat > 0.0) {
+        b.valid = true;
+        b.delta = false;
+    }
+    float cw = coat_blend(b, b.wo);
+    b.cont_prob = clamp(b.cont_prob * (1.0 - cw) + cw, 0.0, 1.0);
+}
+
+// The blend of the base's f and pdfs (bsdf_eval's, without the coat) with the coat's.
+vec3 clearcoat_eval(Bsdf b, vec3 wi, vec3 f_base, inout float pdf_fwd, inout float pdf_rev) {
+    float p_o = b.prob_coat;
+    float p_i = coat_prob(b, wi);
+    float c = coat_blend(b, b.from_light ? wi : b.wo);
+    vec3 f = f_base * (1.0 - c);
+    pdf_fwd *= 1.0 - p_o;
+    pdf_rev *= 1.0 - p_i;
+    float cos_o = dot(b.n, b.wo);
+    float cos_i = dot(b.n, wi);
+    // A reflection on the coat's side: both directions on it, geometrically too.
+    if (c > 0.0 && cos_o >= EPS_COSINE && cos_i >= EPS_COSINE && dot(b.ng, b.wo) > 0.0 && dot(b.ng, wi) > 0.0) {
+        float pf, pr;
+        f += c * ggx_eval(b.n, b.wo, wi, cos_o, cos_i, vec3(1.0), b.coat_alpha, pf, pr);
+        pdf_fwd += p_o * pf;
+        pdf_rev += p_i * pr;
+    }
+    return f;
+}
+
+// Draws wi from the coat's GGX lobe (h from D(h) cos(theta_h) about the normal, wo
+// reflected about it), valued by the whole blend.
+BsdfSample clearcoat_sample(Bsdf b, vec2 u) {
+    BsdfSample s;
+    s.ok = false;
+    s.specular = false;
+    s.pdf = 0.0;
+    s.pdf_rev = 0.0;
+    s.weight = vec3(0.0);
+    s.wi = vec3(0.0);
+    s.cos_wi = 0.0;
+    vec3 h = ggx_sample_h(b.n, b.coat_alpha, u);
+    float oh = dot(b.wo, h);
+    if (oh <= 0.0) return s;
+    s.wi = 2.0 * oh * h - b.wo;
+    if (dot(b.n, s.wi) < EPS_COSINE) return s;
+    vec3 f = bsdf_eval(b, s.wi, s.pdf, s.pdf_rev);
+    if (s.pdf <= 0.0) return s;
+    s.cos_wi = bsdf_cos_geometric(b, s.wi);
+    s.weight = f * (bsdf_cos(b, s.wi) / s.pdf);
+    s.ok = true;
+    return s;
+}
+
+// A specular sample of the base (mirror or refraction, drawn with probability 1 - p(wo)
+// times its own): the coat's (1 - c) on its weight, the coat's choice on its pdfs.
+void clearcoat_specular(Bsdf b, inout BsdfSample s) {
+    float c = coat_blend(b, b.from_light ? s.wi : b.wo);
+    s.weight *= (1.0 - c) / (1.0 - b.prob_coat);
+    s.pdf *= 1.0 - b.prob_coat;
+    s.pdf_rev *= 1.0 - coat_prob(b, s.wi);
+}
+
+#endif
+#endif
