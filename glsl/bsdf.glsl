@@ -12,10 +12,12 @@
 // G2 = 1 / (1 + Lambda(wo) + Lambda(wi)) as in Heitz, "Understanding the Masking-
 // Shadowing Function in Microfacet-Based BRDFs" (JCGT 2014); Schlick's Fresnel with
 // F0 = the lobe's colour (a metal's colour, or 0.04 for a dielectric coat). It is
-// sampled by D(h) cos(theta_h) (Walter 2007), not by the visible normals (Heitz 2018):
-// pdf(wi | wo) = D(h) cos(theta_h) / (4 |wo.h|), and since wo.h = wi.h for a reflection
-// the reverse pdf has the same form with wi.h. f, being reciprocal, needs no adjoint
-// correction.
+// sampled by the normals visible from wo, D_wo(h) = G1(wo) D(h) max(0, wo.h) / (n.wo)
+// (Heitz, "Sampling the GGX Distribution of Visible Normals", JCGT 2018), drawn as
+// Dupuy & Benyoub's spherical caps ("Sampling Visible GGX Normals with Spherical Caps",
+// HPG 2023): pdf(wi | wo) = D_wo(h) / (4 wo.h) = G1(wo) D(h) / (4 n.wo), and the reverse
+// pdf, sampling wo from wi, G1(wi) D(h) / (4 n.wi). f, being reciprocal, needs no
+// adjoint correction.
 //
 // Shading normals (interpolated vertex normals) follow Veach's thesis (1997), ch. 5.3:
 // every lobe is evaluated and sampled about the shading normal n, while the geometric
@@ -41,15 +43,17 @@
 // NEE reaches it and photons are stored on it and merged. With eta = eta_o / eta_i (the
 // IORs on wo's and on wi's side), the half vector is h = wo + wi (reflection) or
 // eta wo + wi (transmission, Walter's generalised h_t), normalised and turned to wo's side:
-//   reflection:   f = F D G / (4 |n.wo| |n.wi|), pdf = F D (n.h) / (4 |wo.h|)
+//   reflection:   f = F D G / (4 |n.wo| |n.wi|), pdf = F G1(wo) D / (4 |n.wo|)
 //   transmission: f = (1 - F) D G |wo.h| |wi.h| s / (|n.wo| |n.wi| (eta wo.h + wi.h)^2),
-//                 pdf = (1 - F) D (n.h) |wi.h| / (eta wo.h + wi.h)^2
-// (Walter's eq. 21 and 17 divided through by eta_i^2), where s = eta^2 for radiance and 1
+//                 pdf = (1 - F) G1(wo) D |wo.h| |wi.h| / (|n.wo| (eta wo.h + wi.h)^2)
+// (Walter's eq. 21 and 17 divided through by eta_i^2, with h drawn from the normals
+// visible from wo as the GGX lobe), where s = eta^2 for radiance and 1
 // for importance (light subpaths: the adjoint BSDF, Veach 1997, 5.2; the same rule as the
-// smooth refraction's `scale`). The reverse pdfs swap wo and wi: for reflection |wi.h| in
-// place of |wo.h|, for transmission eta^2 |wo.h| in place of |wi.h| (the Fresnel term of a
-// refracted pair is the same both ways). Sampling: h from D(h) (n.h) about n (as the GGX
-// lobe), then reflection with probability F(wo.h), else refraction about h. The geometric
+// smooth refraction's `scale`). The reverse pdfs swap wo and wi: for reflection G1(wi) /
+// |n.wi| in place of G1(wo) / |n.wo|, for transmission G1(wi) |wi.h| / |n.wi| times
+// eta^2 |wo.h| (the Fresnel term of a refracted pair is the same both ways). Sampling: h
+// from the normals visible from wo (as the GGX lobe), then reflection with probability
+// F(wo.h), else refraction about h. The geometric
 // normal decides reflection or transmission (the shading-normal rules above: a direction
 // on wo's side is a reflection, on the other side a transmission, and the shading normal
 // must agree or the BSDF is 0); a sample whose side is not the event drawn is rejected, so
@@ -214,19 +218,27 @@ float ggx_lambda(float c, float a) {
     return 0.5 * (sqrt(1.0 + a * a * tan2) - 1.0);
 }
 
-// A half vector drawn from D(h) cos(theta_h) about n for width `a` and uniform `u`:
-// tan^2(theta_h) = a^2 u.x / (1 - u.x), phi = 2 pi u.y (Walter et al. 2007, eq. 35-36).
-vec3 ggx_sample_h(vec3 n, float a, vec2 u) {
-    float t2 = a * a * u.x / max(1.0 - u.x, 1e-7);
-    float ch = 1.0 / sqrt(1.0 + t2);
-    float sh = sqrt(max(0.0, 1.0 - ch * ch));
-    float phi = 2.0 * PI * u.y;
-    return to_world(vec3(sh * cos(phi), sh * sin(phi), ch), n);
+// A half vector drawn from the GGX normals visible from `wo` (n.wo > 0), width `a`,
+// uniform `u`: density D_wo(h) = G1(wo) D(h) max(0, wo.h) / (n.wo) (the header). Dupuy &
+// Benyoub 2023: in the configuration stretched to a = 1 the visible normals are h = c +
+// wo', with c uniform on the spherical cap z >= -wo'.z of the unit sphere; unstretch.
+vec3 ggx_sample_h(vec3 n, vec3 wo, float a, vec2 u) {
+    vec3 t, b;
+    make_frame(n, t, b);
+    vec3 v = normalize(vec3(a * dot(wo, t), a * dot(wo, b), dot(wo, n)));
+    float phi = 2.0 * PI * u.x;
+    float z = (1.0 - u.y) * (1.0 + v.z) - v.z;
+    float r = sqrt(clamp(1.0 - z * z, 0.0, 1.0));
+    vec3 h = vec3(r * cos(phi), r * sin(phi), z) + v;
+    return normalize(a * h.x * t + a * h.y * b + max(h.z, 0.0) * n);
 }
 
+// Smith's G1 = 1 / (1 + Lambda) for GGX at |cos(theta)| = `c` > 0.
+float ggx_g1(float c, float a) { return 1.0 / (1.0 + ggx_lambda(c, a)); }
+
 // The GGX lobe for unit wo, wi above the surface (cos_o, cos_i > 0): f, and the pdfs of
-// sampling wi given wo (fwd) and wo given wi (rev) by D(h) cos(theta_h), without the
-// component probability.
+// sampling wi given wo (fwd) and wo given wi (rev) by the visible normals (ggx_sample_h),
+// without the component probability.
 vec3 ggx_eval(vec3 n, vec3 wo, vec3 wi, float cos_o, float cos_i, vec3 f0, float a, out float pdf_fwd,
               out float pdf_rev) {
     pdf_fwd = 0.0;
@@ -242,8 +254,8 @@ vec3 ggx_eval(vec3 n, vec3 wo, vec3 wi, float cos_o, float cos_i, vec3 f0, float
     float d = ggx_d(ch, a);
     float g2 = 1.0 / (1.0 + ggx_lambda(cos_o, a) + ggx_lambda(cos_i, a));
     vec3 fr = schlick(f0, oh);
-    pdf_fwd = d * ch / (4.0 * oh);
-    pdf_rev = d * ch / (4.0 * ih);
+    pdf_fwd = ggx_g1(cos_o, a) * d / (4.0 * cos_o);
+    pdf_rev = ggx_g1(cos_i, a) * d / (4.0 * cos_i);
     return fr * (d * g2 / (4.0 * cos_o * cos_i));
 }
 
@@ -391,9 +403,6 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint t
 }
 
 #if HAS_ROUGH_DIELECTRIC
-// Smith's G1 = 1 / (1 + Lambda) for GGX at |cos(theta)| = `c` > 0.
-float ggx_g1(float c, float a) { return 1.0 / (1.0 + ggx_lambda(c, a)); }
-
 // The rough dielectric (the header): f(wo, wi) for wi on either side of the surface, with
 // the pdfs of sampling wi given wo (fwd) and wo given wi (rev).
 vec3 rough_dielectric_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
@@ -424,8 +433,9 @@ vec3 rough_dielectric_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev
         if (ch < EPS_COSINE || oh < EPS_COSINE || ih < EPS_COSINE) return vec3(0.0);
         float fr = fresnel_dielectric(side * oh, ior);
         float d = ggx_d(ch, a);
-        pdf_fwd = fr * d * ch / (4.0 * oh);
-        pdf_rev = fr * d * ch / (4.0 * ih);
+        // Visible normals from wo (fwd) or from wi (rev), as the GGX lobe.
+        pdf_fwd = fr * ggx_g1(cos_o, a) * d / (4.0 * cos_o);
+        pdf_rev = fr * ggx_g1(cos_i, a) * d / (4.0 * cos_i);
         return vec3(fr * d * g / (4.0 * cos_o * cos_i));
     }
     // Transmission: wi on the other side, below the shading surface too.
@@ -447,8 +457,11 @@ vec3 rough_dielectric_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev
     // without the cancellation of the sum of two terms of opposite signs.
     float den2 = hl * hl;
     float d = ggx_d(ch, a);
-    pdf_fwd = t * d * ch * -ih / den2;
-    pdf_rev = t * d * ch * eta * eta * oh / den2;
+    // h drawn from the normals visible from wo, D_wo(h) = G1(wo) D(h) wo.h / (n.wo), times
+    // the refraction's Jacobian |wi.h| / den2; the reverse draws -h from those visible from
+    // wi, G1(wi) D(h) |wi.h| / |n.wi|, times eta^2 |wo.h| / den2.
+    pdf_fwd = t * ggx_g1(cos_o, a) * d * oh / cos_o * -ih / den2;
+    pdf_rev = t * ggx_g1(-cos_i, a) * d * -ih / -cos_i * eta * eta * oh / den2;
     // Radiance is scaled by (eta_o / eta_i)^2 crossing the boundary; importance is not.
     float scale = b.from_light ? 1.0 : eta * eta;
     return transmission_colour(m, b.tint.rgb) * (t * d * g * oh * -ih * scale / (cos_o * -cos_i * den2));
@@ -590,13 +603,13 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
     // The rough dielectric is drawn for x in [p_nonspec, 1) (all of it without partial
     // transmission, where p_nonspec is 0), the lobes below.
     if (b.prob_rough > 0.0 && x >= p_nonspec) {
-        // The rough dielectric (the header): h from D(h) cos(theta_h) about the normal on
-        // wo's side, then reflection with probability F(wo.h) (x rescaled to [0, 1)), else
-        // refraction.
+        // The rough dielectric (the header): h from the normals visible from wo about the
+        // normal on wo's side, then reflection with probability F(wo.h) (x rescaled to
+        // [0, 1)), else refraction.
         float x_rough = (x - p_nonspec) / b.prob_rough;
         GpuMaterial mr = material_at(b.material);
         float side = dot(b.ng, b.wo) >= 0.0 ? 1.0 : -1.0;
-        vec3 h = ggx_sample_h(side * b.n, mr.emission.w, u.xy);
+        vec3 h = ggx_sample_h(side * b.n, b.wo, mr.emission.w, u.xy);
         float oh = dot(b.wo, h);
         if (oh < EPS_COSINE) return s;
         bool reflect_h = x_rough < fresnel_dielectric(side * oh, mr.phong.w);
@@ -632,8 +645,8 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
 #endif
 #if HAS_GGX
         if (x >= b.prob_diffuse + b.prob_phong) {
-            // GGX: half vector from D(h) cos(theta_h), then reflect wo about it.
-            vec3 h = ggx_sample_h(n, m.glossy.w, u.xy);
+            // GGX: half vector from the normals visible from wo, then reflect wo about it.
+            vec3 h = ggx_sample_h(n, b.wo, m.glossy.w, u.xy);
             float oh = dot(b.wo, h);
             if (oh <= 0.0) return s;
             s.wi = 2.0 * oh * h - b.wo;
