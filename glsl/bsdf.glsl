@@ -273,6 +273,21 @@ float diffuse_fresnel_weight(float f0, float cos_o, float cos_i) {
     return (1.0 - schlick(f0, cos_o)) * (1.0 - schlick(f0, cos_i)) / (1.0 - (f0 + (1.0 - f0) / 21.0));
 }
 
+#if HAS_GGX
+// The selection weights of an opaque material's diffuse and GGX lobes when the fixed
+// direction has cos(theta) = `c` (> 0, shading normal): estimates of their directional
+// albedos, Schlick's F(c) for the GGX lobe (Fresnel at the half vector averages near it)
+// and (1 - F_d(c)) base for the diffuse lobe under the dielectric interface (exact:
+// diffuse_fresnel_weight's cosine-weighted integral over wi is 1 - F_d(c)), instead of
+// SmallVCM's luminance albedos, which pick the 4% coat as seldom at grazing angles as at
+// normal incidence, where it reflects most. A lobe that is absent stays at 0.
+void fresnel_lobe_weights(GpuMaterial m, vec3 tint, float c, inout float a_d, inout float a_g) {
+    if (a_g > 0.0) a_g = luminance(schlick(glossy_colour(m, tint), c));
+    float f0 = m.mirror.w;
+    if (f0 > 0.0) a_d *= 1.0 - schlick(f0, c);
+}
+#endif
+
 // `ng`: geometric normal (for a dielectric it must point outwards); `ns`: shading normal
 // on the same side as ng (== ng for flat shading); `tint`: the point's tint (Surface.tint).
 Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint tint) {
@@ -319,6 +334,9 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint t
     vec3 glossy = glossy_colour(m, tint.rgb);
     a_g = luminance(glossy);
     albedo += glossy;
+    // Opaque materials only: a dielectric's interface components also change with the
+    // direction, and lobes_eval's reverse probabilities assume only these two do.
+    if (ior < 0.0 && b.valid) fresnel_lobe_weights(m, tint.rgb, dot(b.n, wo), a_d, a_g);
 #endif
 #if HAS_PARTIAL_TRANSMISSION
     // Partial transmission (the header): the lobes so far carry 1 - the glass weight, the
@@ -480,6 +498,30 @@ float lobe_side(Bsdf b) {
 #endif
 }
 
+#if HAS_GGX
+// An opaque material's diffuse and GGX selection probabilities with `c` the fixed
+// direction's cosine (fresnel_lobe_weights), for the reverse pdfs; the other components'
+// weights (Phong, mirror: luminance albedos) do not depend on it.
+void lobe_probs_at(Bsdf b, GpuMaterial m, float c, inout float p_d, inout float p_g) {
+    float a_d = 0.0, a_g = 0.0, rest = 0.0;
+#if HAS_DIFFUSE
+    a_d = luminance(diffuse_colour(m, b.tint.rgb));
+#endif
+    a_g = luminance(glossy_colour(m, b.tint.rgb));
+#if HAS_PHONG
+    rest += luminance(m.phong.rgb);
+#endif
+#if HAS_MIRROR
+    rest += luminance(mirror_colour(m, b.tint.rgb));
+#endif
+    fresnel_lobe_weights(m, b.tint.rgb, c, a_d, a_g);
+    float total = a_d + a_g + rest;
+    if (total < 1e-9) return;
+    p_d = a_d / total;
+    p_g = a_g / total;
+}
+#endif
+
 // The diffuse, Phong and GGX lobes: f(wo, wi) and the pdfs with their component
 // probabilities (bsdf_eval).
 vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
@@ -497,6 +539,12 @@ vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
 #endif
     GpuMaterial m = point_material(b.material, b.tint);
     vec3 f = vec3(0.0);
+    // The component probabilities of sampling wo from wi (the reverse pdf): bsdf_init's,
+    // but for the lobes whose selection weight depends on the fixed direction.
+    float rev_d = b.prob_diffuse, rev_g = b.prob_glossy;
+#if HAS_GGX
+    if (m.phong.w < 0.0) lobe_probs_at(b, m, cos_i, rev_d, rev_g);
+#endif
 #if HAS_DIFFUSE
     if (b.prob_diffuse > 0.0) {
         float f0 = m.mirror.w;
@@ -506,7 +554,7 @@ vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
             f += diffuse_colour(m, b.tint.rgb) * INV_PI;
         }
         pdf_fwd += b.prob_diffuse * cos_i * INV_PI;
-        pdf_rev += b.prob_diffuse * cos_o * INV_PI;
+        pdf_rev += rev_d * cos_o * INV_PI;
     }
 #endif
 #if HAS_PHONG
@@ -528,7 +576,7 @@ vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
         float pf, pr;
         f += ggx_eval(n, b.wo, wi, cos_o, cos_i, glossy_colour(m, b.tint.rgb), m.glossy.w, pf, pr);
         pdf_fwd += b.prob_glossy * pf;
-        pdf_rev += b.prob_glossy * pr;
+        pdf_rev += rev_g * pr;
     }
 #endif
 #if HAS_PARTIAL_TRANSMISSION
