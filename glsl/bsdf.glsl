@@ -2,7 +2,9 @@
 // lobe + GGX microfacet reflection + Fresnel-weighted mirror / smooth dielectric.
 // Component choice and Russian roulette follow SmallVCM (Georgiev & Davidovic), as
 // docs/smallvcm.md 2.4 states: component probabilities proportional to luminance
-// albedo, continuation probability = clamp(max RGB of (diffuse + phong + glossy +
+// albedo (but for an opaque material's GGX lobe and the diffuse lobe under its coat,
+// weighted by Fresnel at the fixed direction: fresnel_lobe_weights; SmallVCM's
+// materials have neither, so their rule is unchanged), continuation probability = clamp(max RGB of (diffuse + phong + glossy +
 // F mirror) + (1 - F), 0, 1) (glossy is zero for SmallVCM's materials, so their rule is
 // unchanged). pt.comp does not use this continuation probability (pbrt-v4's rule there).
 //

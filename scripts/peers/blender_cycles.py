@@ -74,11 +74,11 @@ def cmd_setup(args):
 # Rendering, each one a child process charged its CPU time.
 
 
-def run_charged(cmd, log_path):
+def run_charged(cmd, log_path, env=None):
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.monotonic()
     with open(log_path, "w") as out:
-        p = subprocess.run([str(c) for c in cmd], stdout=out, stderr=subprocess.STDOUT)
+        p = subprocess.run([str(c) for c in cmd], stdout=out, stderr=subprocess.STDOUT, env=env)
     wall = time.monotonic() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
@@ -89,22 +89,22 @@ def run_charged(cmd, log_path):
 
 
 class Vkvcm:
-    name = "vkvcm"
-
-    def __init__(self, binary, size, sampler=None):
-        self.binary, self.size, self.sampler = binary, size, sampler
+    def __init__(self, binary, size, name="vkvcm", glsl=None):
+        # `glsl`: render with the shaders of that folder (VKVCM_GLSL_DIR), e.g. a commit's
+        # glsl/ for a before/after row; such a row is scored against vkvcm's reference.
+        self.binary, self.size, self.name, self.glsl = binary, size, name, glsl
+        self.ref_of = "vkvcm" if glsl else None
 
     def render(self, scene, seed, spp, out):
         cmd = [self.binary, "render", scene, "--algo", "pt", "--camera", cycles_assets.CAMERA, "--env", "white",
                "--max-path-length", "10", "--width", self.size, "--height", self.size, "--seed", seed,
                "--iterations", spp, "-o", out, "--quiet"]
-        if self.sampler:
-            cmd += ["--sampler", self.sampler]
-        return run_charged(cmd, str(out) + ".log")
+        return run_charged(cmd, str(out) + ".log", env=dict(os.environ, VKVCM_GLSL_DIR=self.glsl) if self.glsl else None)
 
 
 class Cycles:
     name = "cycles"
+    ref_of = None
 
     def __init__(self, cache, size, threads):
         self.python, self.size, self.threads = venv_python(cache), size, threads
@@ -255,6 +255,9 @@ def run_asset(args, name, progs, out):
     res = {"asset": name, "scene": str(scene), "view": view, "programs": {}}
     for prog in progs:
         startup, per = calibrate(prog, scene, adir, args.probe_spp)
+        if prog.ref_of:
+            res["programs"][prog.name] = {"startup": startup, "cpu_per_spp": per, "ref_of": prog.ref_of, "runs": []}
+            continue
         ref_spp = spp_for(args.ref_cpu / args.ref_chunks, startup, per)
         log(f"{name} {prog.name}: start-up {startup:.1f} CPU-s, {per * 1e3:.1f} CPU-ms per sample; "
             f"reference {args.ref_chunks} x {ref_spp} spp")
@@ -282,9 +285,12 @@ def run_asset(args, name, progs, out):
 def measure(res, adir):
     import numpy as np
     refs = {}
-    for pname, r in res["programs"].items():
-        ref, var = reference(r["ref_chunks"])
-        refs[pname] = ref
+    for pname, r in sorted(res["programs"].items(), key=lambda kv: "ref_of" in kv[1]):
+        if "ref_of" in r:
+            ref, var = refs[r["ref_of"]]
+        else:
+            ref, var = reference(r["ref_chunks"])
+            refs[pname] = ref, var
         w = 1.0 / (ref * ref + REL_MSE_EPSILON)
         r["ref_floor"] = float(np.mean(var * w))
         for run in r["runs"]:
@@ -294,7 +300,7 @@ def measure(res, adir):
             run["relmse_cpu"] = rel * run["cpu"]
             run["spp_per_cpu"] = run["spp"] / run["cpu"]
     if "vkvcm" in refs and "cycles" in refs:
-        a, b = refs["vkvcm"], refs["cycles"]
+        a, b = refs["vkvcm"][0], refs["cycles"][0]
         m = object_mask(a, b)
         res["mean_ratio_image"] = float(a.mean() / b.mean())
         res["mean_ratio_object"] = float(a[m].mean() / b[m].mean()) if m.any() else None
@@ -321,11 +327,15 @@ def table(results, header):
             continue
         med = {k: {q: median([run[q] for run in p[k]["runs"]]) for q in
                    ("var_per_spp", "spp_per_cpu", "relmse_cpu")} for k in p}
-        ratio = {q: med["vkvcm"][q] / med["cycles"][q] for q in med["vkvcm"]}
         obj = res.get("mean_ratio_object")
-        lines.append(f"| {res['asset']} | {res['mean_ratio_image']:.3f} ({obj:.3f}) | {ratio['var_per_spp']:.2f} | "
-                     f"{ratio['spp_per_cpu']:.2f} | {ratio['relmse_cpu']:.2f} | "
-                     f"{med['vkvcm']['var_per_spp']:.3g}, {med['cycles']['var_per_spp']:.3g} |")
+        for k in sorted(med, key=lambda k: (k != "vkvcm-before", k)):
+            if k == "cycles":
+                continue
+            ratio = {q: med[k][q] / med["cycles"][q] for q in med[k]}
+            label = res["asset"] + (" (before)" if k != "vkvcm" else "")
+            lines.append(f"| {label} | {res['mean_ratio_image']:.3f} ({obj:.3f}) | {ratio['var_per_spp']:.2f} | "
+                         f"{ratio['spp_per_cpu']:.2f} | {ratio['relmse_cpu']:.2f} | "
+                         f"{med[k]['var_per_spp']:.3g}, {med['cycles']['var_per_spp']:.3g} |")
     lines += ["", "Medians over the seeds; variance per sample = relMSE x spp against the renderer's own",
               "reference, less that reference's noise floor; CPU = whole process (user + sys)."]
     return "\n".join(lines)
@@ -350,6 +360,8 @@ def cmd_run(args):
     progs = []
     if "vkvcm" in args.programs:
         progs.append(Vkvcm(binary, args.size))
+        if args.before_glsl:
+            progs.append(Vkvcm(binary, args.size, "vkvcm-before", str(Path(args.before_glsl).resolve())))
     if "cycles" in args.programs:
         progs.append(Cycles(cache, args.size, args.threads))
     stamp = datetime.now(timezone.utc).strftime("%Y%m%d-%H%M%S")
@@ -360,7 +372,9 @@ def cmd_run(args):
               f"commit {git('rev-parse', '--short', 'HEAD')}{' (dirty)' if git('status', '--porcelain') else ''}, "
               f"{os.uname().nodename}, {os.cpu_count()} CPUs, load {load[0]:.1f} at start; "
               f"{args.size}x{args.size}, {args.cpu:g} CPU-s x {args.seeds} seeds per renderer, "
-              f"references {args.ref_chunks} x {args.ref_cpu / args.ref_chunks:g} CPU-s")
+              f"references {args.ref_chunks} x {args.ref_cpu / args.ref_chunks:g} CPU-s"
+              + (f"; VKVCM_GLSL_DIR={os.environ['VKVCM_GLSL_DIR']}" if os.environ.get("VKVCM_GLSL_DIR") else "")
+              + (f"; before: {args.before_glsl}" if args.before_glsl else ""))
     log(header)
     results = []
     for name in assets:
@@ -411,6 +425,8 @@ def main():
     r.add_argument("--ref-chunks", type=int, default=4)
     r.add_argument("--probe-spp", type=int, default=8)
     r.add_argument("--threads", type=int, default=os.cpu_count() or 2, help="Cycles' threads")
+    r.add_argument("--before-glsl", help="also render vkvcm with the shaders of this folder (e.g. `git archive "
+                   "COMMIT glsl | tar -x -C DIR`, then DIR/glsl), a 'before' row scored against the same reference")
     r.add_argument("--vkvcm", help="the vkvcm binary (default target/release/vkvcm or $VKVCM_BIN)")
     r.add_argument("--out", default=str(REPO / "target" / "cycles"))
     t = sub.add_parser("table")
