@@ -36,6 +36,8 @@ REQUIREMENTS = ["bpy==5.3.0", "numpy>=1.26,<3", "OpenEXR>=3.3,<4"]
 CACHE = Path(os.environ.get("VKVCM_CYCLES_CACHE", Path.home() / ".cache" / "vkvcm-cycles"))
 # Same as peers' imgtool.REL_MSE_EPSILON and `vkvcm diff`.
 REL_MSE_EPSILON = 1e-2
+# CPU-s the calibration's probe samples must cost beyond the start-up.
+PROBE_CPU = 1.5
 
 
 class HarnessError(Exception):
@@ -235,12 +237,17 @@ def object_mask(*refs):
 
 def calibrate(prog, scene, work, spp_probe):
     """(start-up CPU-s, CPU-s per sample): a 1-sample run twice (the second counted, so
-    kernel caches are warm as for any second render) and a run of spp_probe samples."""
+    kernel caches are warm as for any second render) and probe runs from spp_probe
+    samples up, 4x more each time until the samples cost at least PROBE_CPU CPU-s more
+    than the start-up (else a noisy start-up swamps the difference)."""
     prog.render(scene, 999, 1, work / f"{prog.name}_warm.exr")
     startup, _ = prog.render(scene, 998, 1, work / f"{prog.name}_warm.exr")
-    cpu, _ = prog.render(scene, 997, spp_probe, work / f"{prog.name}_probe.exr")
-    per = max((cpu - startup) / max(spp_probe - 1, 1), 1e-4)
-    return startup, per
+    spp = max(spp_probe, 2)
+    while True:
+        cpu, _ = prog.render(scene, 997, spp, work / f"{prog.name}_probe.exr")
+        if cpu - startup >= PROBE_CPU or spp >= 65536:
+            return startup, max((cpu - startup) / (spp - 1), 1e-6)
+        spp *= 4
 
 
 def spp_for(budget, startup, per):
