@@ -33,6 +33,7 @@ TEST_KERNEL_CACHE := $(CURDIR)/target/test-kernel-cache
 # the Slurm job array and merge of docs/distributed.md on a one-node Slurm cluster
 # (scripts/test-slurm.sh).
 test: setup
+	bash scripts/setup-oidn.sh
 	rm -rf $(TEST_KERNEL_CACHE)
 	VK_DRIVER_FILES=$(LVP_ICD) VK_ICD_FILENAMES=$(LVP_ICD) VKVCM_TEST_KERNEL_CACHE=$(TEST_KERNEL_CACHE) \
 		cargo test --workspace --features vkvcm/fault-injection -- --test-threads=2

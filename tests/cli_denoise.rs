@@ -2,7 +2,7 @@
 //! Denoise; where scripts/setup-oidn.sh installed it (or $VKVCM_OIDN_DENOISE names its
 //! oidnDenoise), a noisy render with albedo and normal AOVs comes out closer to a longer
 //! render of the same frame, with the guides used, the AOV layers kept and the resume data
-//! dropped. CI does not install OIDN (180 MB): there the second test is skipped and says so.
+//! dropped. `make test` installs OIDN; without it the second test is skipped and says so.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
