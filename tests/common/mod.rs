@@ -109,8 +109,19 @@ pub fn render_stats(out: &vkvcm::render::RenderOutput, mask: Option<&[bool]>) ->
             }
         }
     }
-    vkvcm_tools::stats::PixelStats::from_sums(out.width, out.height, out.iterations as usize, &sum, &sum_sq)
-        .expect("render statistics")
+    let mut stats =
+        vkvcm_tools::stats::PixelStats::from_sums(out.width, out.height, out.iterations as usize, &sum, &sum_sq)
+            .expect("render statistics");
+    // The film rounds each iteration's value and its square to 2^-FILM_FRACTION_BITS
+    // (src/render/film.rs), so the second moment is known only to within half that per
+    // iteration: a pixel whose samples are all below ~2^-16 shows zero variance (then any
+    // two different means fail at z = inf). Add the bound, so such near-black pixels are
+    // compared with their real uncertainty; next to a visible pixel's variance it is nothing.
+    let bound = (-vkvcm::render::film::FILM_FRACTION_BITS as f64).exp2();
+    for v in &mut stats.variance {
+        *v = v.map(|x| x + bound);
+    }
+    stats
 }
 
 /// The reference-scene x estimator cases of the tests that check an image does not depend
