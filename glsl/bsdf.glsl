@@ -596,7 +596,8 @@ struct BsdfSample {
 // The whole BSDF, the coat included (below); the base's sampling values its samples by it.
 vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev);
 
-BsdfSample base_bsdf_sample(Bsdf b, vec3 u) {
+// A failed sample (ok false, zero weight and pdfs), filled in by the samplers.
+BsdfSample no_sample() {
     BsdfSample s;
     s.ok = false;
     s.specular = false;
@@ -605,6 +606,11 @@ BsdfSample base_bsdf_sample(Bsdf b, vec3 u) {
     s.weight = vec3(0.0);
     s.wi = vec3(0.0);
     s.cos_wi = 0.0;
+    return s;
+}
+
+BsdfSample base_bsdf_sample(Bsdf b, vec3 u) {
+    BsdfSample s = no_sample();
     if (!b.valid) return s;
     float x = u.z;
     float p_nonspec = b.prob_diffuse + b.prob_phong + b.prob_glossy;

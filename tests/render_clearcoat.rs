@@ -17,9 +17,9 @@
 
 mod common;
 
-use std::f64::consts::PI;
 use std::sync::Arc;
 
+use common::ggx::ggx_albedo;
 use common::scenes::*;
 use common::{image_mean, render_checked, render_stats, with_gpu};
 use glam::Vec3;
@@ -60,44 +60,6 @@ fn sphere_scene(mat: Material) -> Scene {
     sc
 }
 
-fn ggx_d(ch: f64, a: f64) -> f64 {
-    let a2 = a * a;
-    let t = ch * ch * (a2 - 1.0) + 1.0;
-    a2 / (PI * t * t)
-}
-
-fn ggx_lambda(c: f64, a: f64) -> f64 {
-    let tan2 = (1.0 - c * c).max(0.0) / (c * c);
-    0.5 * ((1.0 + a * a * tan2).sqrt() - 1.0)
-}
-
-/// Directional albedo of the F = 1 GGX lobe (height-correlated Smith) at cos = `mu`, by a
-/// midpoint rule over the half vector (tests/render_ggx.rs explains the substitution).
-fn ggx_albedo(mu: f64, a: f64) -> f64 {
-    let wo = [(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu];
-    let (nt, np) = (600, 160);
-    let mut sum = 0.0;
-    for i in 0..nt {
-        let s = (i as f64 + 0.5) / nt as f64 * std::f64::consts::FRAC_PI_2;
-        let th = (a * s.tan()).atan();
-        let dth_ds = a / (s.cos().powi(2) + a * a * s.sin().powi(2));
-        let (st, ct) = (th.sin(), th.cos());
-        for j in 0..np {
-            let phi = (j as f64 + 0.5) / np as f64 * 2.0 * PI;
-            let h = [st * phi.cos(), st * phi.sin(), ct];
-            let oh = wo[0] * h[0] + wo[2] * h[2];
-            let ci = 2.0 * oh * h[2] - wo[2];
-            if oh <= 0.0 || ci <= 0.0 {
-                continue;
-            }
-            let g2 = 1.0 / (1.0 + ggx_lambda(mu, a) + ggx_lambda(ci, a));
-            let f_cos_jac = ggx_d(ct, a) * g2 / (4.0 * mu * ci) * ci * 4.0 * oh;
-            sum += f_cos_jac * st * dth_ds * (std::f64::consts::FRAC_PI_2 / nt as f64) * (2.0 * PI / np as f64);
-        }
-    }
-    sum
-}
-
 fn schlick(f0: f64, c: f64) -> f64 {
     f0 + (1.0 - f0) * (1.0 - c).powi(5)
 }
@@ -130,7 +92,7 @@ fn coat_alone_matches_quadrature() {
     with_gpu(|gpu| {
         for roughness in [0.3f32, 0.7] {
             let a = (roughness as f64).powi(2);
-            let table: Vec<f64> = (0..=64).map(|i| ggx_albedo((i as f64 / 64.0).max(1e-3), a)).collect();
+            let table: Vec<f64> = (0..=64).map(|i| ggx_albedo((i as f64 / 64.0).max(1e-3), a, 600, 160)).collect();
             let albedo = |mu: f64| {
                 let t = mu.clamp(0.0, 1.0) * 64.0;
                 let i = (t.floor() as usize).min(63);

@@ -12,6 +12,7 @@ mod common;
 
 use std::sync::Arc;
 
+use common::ggx::ggx_albedo;
 use common::scenes::*;
 use common::{image_mean, render_checked, render_stats, with_gpu};
 use glam::Vec3;
@@ -79,54 +80,6 @@ fn ggx_bpt_matches_pt() {
     });
 }
 
-// ---- CPU model of the GGX lobe (the formulas of glsl/bsdf.glsl) for the energy test.
-
-fn ggx_d(ch: f64, a: f64) -> f64 {
-    let a2 = a * a;
-    let t = ch * ch * (a2 - 1.0) + 1.0;
-    a2 / (std::f64::consts::PI * t * t)
-}
-
-fn ggx_lambda(c: f64, a: f64) -> f64 {
-    let tan2 = (1.0 - c * c).max(0.0) / (c * c);
-    0.5 * ((1.0 + a * a * tan2).sqrt() - 1.0)
-}
-
-/// Directional albedo of the F0 = 1 GGX lobe at cos(theta_o) = `mu`: the integral of
-/// f cos(theta_i) over the hemisphere, by a midpoint rule over the half-vector
-/// (importance-free, so it checks the normalisation of D independently of sampling):
-/// f cos_i dw_i = D G2 / (4 cos_o) * 4 (wo.h) ... / (4 wo.h) dw_h, i.e.
-/// integrand in h: D(h) G2 / (4 cos_o) * 4 (wo.h) with dw_i = 4 (wo.h) dw_h.
-fn ggx_albedo(mu: f64, a: f64) -> f64 {
-    let wo = [(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu];
-    let (nt, np) = (2000, 400);
-    let mut sum = 0.0;
-    for i in 0..nt {
-        // theta_h in [0, pi/2); substitute theta_h = atan(a tan(s)) to resolve narrow lobes.
-        let s = (i as f64 + 0.5) / nt as f64 * std::f64::consts::FRAC_PI_2;
-        let th = (a * s.tan()).atan();
-        let dth_ds = a / (s.cos().powi(2) + a * a * s.sin().powi(2));
-        let (st, ct) = (th.sin(), th.cos());
-        for j in 0..np {
-            let phi = (j as f64 + 0.5) / np as f64 * 2.0 * std::f64::consts::PI;
-            let h = [st * phi.cos(), st * phi.sin(), ct];
-            let oh = wo[0] * h[0] + wo[2] * h[2];
-            if oh <= 0.0 {
-                continue;
-            }
-            let ci = 2.0 * oh * h[2] - wo[2];
-            if ci <= 0.0 {
-                continue;
-            }
-            let g2 = 1.0 / (1.0 + ggx_lambda(mu, a) + ggx_lambda(ci, a));
-            let f_cos_jac = ggx_d(ct, a) * g2 / (4.0 * mu * ci) * ci * 4.0 * oh;
-            let dw = st * dth_ds * (std::f64::consts::FRAC_PI_2 / nt as f64) * (2.0 * std::f64::consts::PI / np as f64);
-            sum += f_cos_jac * dw;
-        }
-    }
-    sum
-}
-
 /// A closed box whose walls emit Le and reflect with a GGX lobe of F0 = 1 only. With
 /// directional albedos E(mu) in [e_min, e_max] (CPU quadrature of the same formulas),
 /// the radiance with at most K segments lies between Le sum_{k<K} e_min^k and
@@ -138,12 +91,12 @@ fn ggx_furnace_conserves_energy() {
     with_gpu(|gpu| {
         for roughness in [0.2f32, 0.5, 0.9] {
             let a = (roughness as f64).powi(2);
-            let albedos: Vec<f64> = (1..=16).map(|i| ggx_albedo(i as f64 / 16.0, a)).collect();
+            let albedos: Vec<f64> = (1..=16).map(|i| ggx_albedo(i as f64 / 16.0, a, 2000, 400)).collect();
             for (i, e) in albedos.iter().enumerate() {
                 assert!(*e <= 1.0 + 1e-3, "roughness {roughness}: albedo {e} > 1 at mu = {}", (i + 1) as f64 / 16.0);
             }
             // Grazing directions (mu < 1/16) lose the most; the box's corners see them.
-            let e_min = ggx_albedo(0.02, a).min(albedos.iter().cloned().fold(1.0, f64::min));
+            let e_min = ggx_albedo(0.02, a, 2000, 400).min(albedos.iter().cloned().fold(1.0, f64::min));
             let e_max = albedos.iter().cloned().fold(0.0, f64::max);
             let series = |e: f64| le * (0..k_max).map(|k| e.powi(k as i32)).sum::<f64>();
             let (lo, hi) = (series(e_min), series(e_max));

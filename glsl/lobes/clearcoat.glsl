@@ -20,7 +20,7 @@
 // fixed direction wi draws. A base of zero albedo leaves the coat alone (p = 1).
 //
 // Requires: glsl/bsdf.glsl up to its wrappers (Bsdf, point_material, the colour
-// functions, schlick, ggx_eval, ggx_sample_h, bsdf_cos, bsdf_cos_geometric, BsdfSample,
+// functions, schlick, ggx_eval, ggx_sample_h, bsdf_cos, bsdf_cos_geometric, BsdfSample, no_sample,
 // and bsdf_eval declared).
 #ifndef CLEARCOAT_GLSL
 #define CLEARCOAT_GLSL
@@ -108,14 +108,7 @@ vec3 clearcoat_eval(Bsdf b, vec3 wi, vec3 f_base, inout float pdf_fwd, inout flo
 // Draws wi from the coat's GGX lobe (h from D(h) cos(theta_h) about the normal, wo
 // reflected about it), valued by the whole blend.
 BsdfSample clearcoat_sample(Bsdf b, vec2 u) {
-    BsdfSample s;
-    s.ok = false;
-    s.specular = false;
-    s.pdf = 0.0;
-    s.pdf_rev = 0.0;
-    s.weight = vec3(0.0);
-    s.wi = vec3(0.0);
-    s.cos_wi = 0.0;
+    BsdfSample s = no_sample();
     vec3 h = ggx_sample_h(b.n, b.coat_alpha, u);
     float oh = dot(b.wo, h);
     if (oh <= 0.0) return s;

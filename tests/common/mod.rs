@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod corpus;
+pub mod ggx;
 pub mod instanced_gltf;
 pub mod scenes;
 
