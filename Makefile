@@ -23,7 +23,8 @@ render: build
 # Tests force lavapipe so results do not depend on the machine's GPU. The suite shares a
 # kernel cache of its own, emptied first, so each kernel variant is compiled once per run
 # (GpuOptions::for_tests). It covers the workspace (the renderer and tools/) with the
-# fault-injection feature, which the tests of device loss and device limits need.
+# fault-injection feature, which the tests of device loss and device limits need, and runs
+# every test binary even after a failure, so that one CI run names every failing test.
 TEST_KERNEL_CACHE := $(CURDIR)/target/test-kernel-cache
 
 #
@@ -36,7 +37,7 @@ test: setup
 	bash scripts/setup-oidn.sh
 	rm -rf $(TEST_KERNEL_CACHE)
 	VK_DRIVER_FILES=$(LVP_ICD) VK_ICD_FILENAMES=$(LVP_ICD) VKVCM_TEST_KERNEL_CACHE=$(TEST_KERNEL_CACHE) \
-		cargo test --workspace --features vkvcm/fault-injection -- --test-threads=2
+		cargo test --workspace --features vkvcm/fault-injection --no-fail-fast -- --test-threads=2
 	$(MAKE) --no-print-directory test-swiftshader
 	rm -rf target/gpu-check-quick
 	VK_DRIVER_FILES=$(LVP_ICD) VK_ICD_FILENAMES=$(LVP_ICD) VKVCM=target/debug/vkvcm VKVCM_CACHE_DIR=$(TEST_KERNEL_CACHE) \

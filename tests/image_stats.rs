@@ -315,6 +315,21 @@ fn zero_variance_pixels() {
     let mut beyond = white.clone();
     beyond.set(1, 2, [1.0 - 2e-5, 0.5, 0.0]);
     assert!(!z_test(&same, &[beyond.clone(), beyond.clone()], 0.01).passed());
+    // The same when one side carries only a rounding-sized variance (vkvcm's film adds its
+    // 2^-32 bound; seen: 0.9 +- 3.4e-7 against Mitsuba's exact 0.8999979), and no further.
+    let film_like = |value: f64| {
+        let k = 2048usize;
+        let sum = vec![[value * k as f64; 3]; 16];
+        let sum_sq = vec![[(value * value + 2f64.powi(-32)) * k as f64; 3]; 16];
+        PixelStats::from_sums(4, 4, k, &sum, &sum_sq).unwrap()
+    };
+    let exact = |value: f64| {
+        let sum = vec![[value * 16.0; 3]; 16];
+        let sum_sq = vec![[value * value * 16.0; 3]; 16];
+        PixelStats::from_sums(4, 4, 16, &sum, &sum_sq).unwrap()
+    };
+    assert!(welch_test(&film_like(0.9), &exact(0.8999979), 0.01).unwrap().passed());
+    assert!(!welch_test(&film_like(0.9), &exact(0.89998), 0.01).unwrap().passed());
     let mut off = white.clone();
     off.set(1, 2, [1.0, 0.5 + 1e-3, 0.0]);
     let t = z_test(&same, &[off.clone(), off.clone()], 0.01);
