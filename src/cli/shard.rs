@@ -35,7 +35,7 @@ pub struct ShardArgs {
     pub devices: Option<String>,
 }
 
-fn parse_shard(s: &str) -> std::result::Result<Shard, String> {
+pub(super) fn parse_shard(s: &str) -> std::result::Result<Shard, String> {
     Shard::parse(s).map_err(|e| format!("{e:#}"))
 }
 

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use super::film::{FilmSums, Rejected};
-use super::saved::SavedRender;
+use super::saved::{HalfB, SavedRender};
 use super::shard::IterationSet;
 
 /// Attributes that differ between shards of one render; every other `vkvcm:*` attribute
@@ -42,10 +42,15 @@ pub struct Merged {
     pub width: u32,
     pub height: u32,
     pub sums: FilmSums,
+    /// Shards of a reference (src/render/reference.rs): the second half's sums, of the
+    /// same iterations `held`.
+    pub half_b: Option<HalfB>,
     pub held: IterationSet,
     /// The split render's iterations.
     pub total: u64,
     pub rejected: Rejected,
+    /// The shards' render seconds in all.
+    pub seconds: f64,
     /// The attributes to write (those of the shards, with the merged counts).
     pub metadata: Vec<(String, String)>,
 }
@@ -78,12 +83,26 @@ pub fn merge(files: &[(PathBuf, SavedRender)], partial: bool) -> std::result::Re
     let sh0 = shard_of(p0, first)?;
     let mut held = IterationSet::new();
     let mut sums = FilmSums::zero(first.sums.pixels());
+    let mut half_b = first.half_b.as_ref().map(|h| HalfB { seed: h.seed, sums: FilmSums::zero(h.sums.pixels()) });
     let mut rejected = Rejected::default();
     let mut seconds = 0.0;
     let mut devices: Vec<String> = Vec::new();
     let mut seen: Vec<Option<&PathBuf>> = vec![None; sh0.shard.count as usize];
     for (p, s) in files {
         let sh = shard_of(p, s)?;
+        if s.half_b.is_some() != first.half_b.is_some() {
+            let kind = |r: &SavedRender| match r.half_b {
+                Some(_) => "a reference (`vkvcm reference --shard`, two halves)",
+                None => "a render (`vkvcm render --shard`)",
+            };
+            return Err(refuse(format!(
+                "{} is a shard of {}, {} of {}: they cannot be merged",
+                p.display(),
+                kind(s),
+                p0.display(),
+                kind(first)
+            )));
+        }
         check_same(p0, first, p, s)?;
         if sh.shard.count != sh0.shard.count || sh.total != sh0.total {
             return Err(refuse(format!(
@@ -114,6 +133,9 @@ pub fn merge(files: &[(PathBuf, SavedRender)], partial: bool) -> std::result::Re
         }
         held.union(&s.held).map_err(|e| refuse(format!("{}: {e:#} it and an earlier file", p.display())))?;
         sums.add(&s.sums).map_err(|e| refuse(format!("{}: {e:#}", p.display())))?;
+        if let (Some(total), Some(b)) = (&mut half_b, &s.half_b) {
+            total.sums.add(&b.sums).map_err(|e| refuse(format!("{}: {e:#}", p.display())))?;
+        }
         rejected = rejected + s.rejected;
         seconds += s.seconds;
         let device = attribute(s, "device").unwrap_or_default().to_string();
@@ -134,12 +156,14 @@ pub fn merge(files: &[(PathBuf, SavedRender)], partial: bool) -> std::result::Re
         width: first.width,
         height: first.height,
         sums,
+        half_b,
         total: sh0.total,
         rejected,
+        seconds,
         metadata: Vec::new(),
         held,
     };
-    let metadata = merged_metadata(first, &merged, seconds, &devices);
+    let metadata = merged_metadata(first, &merged, &devices);
     Ok(Merged { metadata, ..merged })
 }
 
@@ -198,7 +222,7 @@ fn check_same(p0: &Path, first: &SavedRender, p: &Path, s: &SavedRender) -> std:
 }
 
 /// The merged file's attributes: the shards' shared ones, and its own counts.
-fn merged_metadata(first: &SavedRender, m: &Merged, seconds: f64, devices: &[String]) -> Vec<(String, String)> {
+fn merged_metadata(first: &SavedRender, m: &Merged, devices: &[String]) -> Vec<(String, String)> {
     let mut meta: Vec<(String, String)> = first
         .metadata
         .iter()
@@ -209,7 +233,7 @@ fn merged_metadata(first: &SavedRender, m: &Merged, seconds: f64, devices: &[Str
     meta.extend([
         kv("iterations", m.iterations().to_string()),
         kv("iteration_set", m.held.to_string()),
-        kv("seconds", format!("{seconds:.3}")),
+        kv("seconds", format!("{:.3}", m.seconds)),
         kv("device", devices.join(", ")),
         kv("rejected_samples", m.rejected.samples.to_string()),
         kv("overflow_splats", m.rejected.overflow_splats.to_string()),
