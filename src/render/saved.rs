@@ -5,7 +5,8 @@
 //! 128-bit sum, src/render/film.rs), and as `vkvcm:*` string attributes every setting that
 //! shapes the image, the iterations (`iterations`, and their global indices in
 //! `iteration_set`), the seconds, the rejected samples, and a shard's `shard` (K/N) and
-//! `shard_of` (the split render's iterations).
+//! `shard_of` (the split render's iterations). A shard of a reference
+//! (src/render/reference.rs) adds `seed_b` and its second half's sums in the `half_b.` layer.
 //!
 //! The sums are stored exactly, so a resumed render or a merge of shards is bit for bit
 //! the uninterrupted render (tests/render_resume.rs, tests/shards.rs). Files of the
