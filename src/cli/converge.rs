@@ -313,9 +313,7 @@ fn load_reference(paths: &[PathBuf]) -> Result<(Image, Vec<(String, String)>)> {
             return Ok((img, meta));
         }
     }
-    let files = super::merge::read_shards(paths)?;
-    let m = super::merge::merge_shards(&files, false)?;
-    drop(files);
+    let m = super::merge::merge_files(paths, false)?;
     if m.half_b.is_some() {
         let (r, meta) = reference::from_merged(m)?;
         return Ok((r.image, meta));
