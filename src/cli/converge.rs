@@ -313,7 +313,7 @@ fn load_reference(paths: &[PathBuf]) -> Result<(Image, Vec<(String, String)>)> {
             return Ok((img, meta));
         }
     }
-    let m = super::merge::merge_files(paths, false)?;
+    let m = super::shard::merge_files(paths, false)?;
     if m.half_b.is_some() {
         let (r, meta) = reference::from_merged(m)?;
         return Ok((r.image, meta));

@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use clap::Args;
 
 use super::exit::{Class, ClassifyExt};
@@ -35,33 +35,12 @@ pub struct MergeArgs {
     pub quiet: bool,
 }
 
-/// The shards `paths` merged, read one at a time (the merge holds the running sums and
-/// one shard's). An unreadable, truncated or foreign file is a usage error naming it; a
-/// refusal exits 3 for another scene, 2 otherwise.
-pub(super) fn merge_files(paths: &[PathBuf], partial: bool) -> Result<merge::Merged> {
-    let refused = |r: merge::Refusal| {
-        let class = if r.scene { Class::Scene } else { Class::Usage };
-        anyhow::Error::new(super::exit::Classified(class, anyhow::anyhow!("{}", r.message)))
-    };
-    let mut merger: Option<merge::Merger> = None;
-    for p in paths {
-        let s =
-            saved::read_render_exr(p).with_context(|| format!("cannot merge {}", p.display())).class(Class::Usage)?;
-        match &mut merger {
-            None => merger = Some(merge::Merger::new(p.clone(), s, partial).map_err(refused)?),
-            Some(m) => m.add(p, &s).map_err(refused)?,
-        }
-    }
-    let Some(m) = merger else { bail!("no files to merge") };
-    m.finish().map_err(refused)
-}
-
 pub fn merge_cmd(a: MergeArgs) -> Result<()> {
     super::render::check_writable(&a.output).context("--output")?;
     if let Some(p) = &a.png {
         super::render::check_writable(p).context("--png")?;
     }
-    let m = merge_files(&a.inputs, a.partial)?;
+    let m = super::shard::merge_files(&a.inputs, a.partial)?;
     if m.half_b.is_some() {
         return write_reference(&a, m);
     }
