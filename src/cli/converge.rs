@@ -313,7 +313,8 @@ fn load_reference(paths: &[PathBuf]) -> Result<(Image, Vec<(String, String)>)> {
             return Ok((img, meta));
         }
     }
-    let m = super::shard::merge_files(paths, false)?;
+    let m = super::shard::merge_files(paths, false)
+        .context("--reference (converge merges complete sets only: `vkvcm merge --partial` merges the others)")?;
     if m.half_b.is_some() {
         let (r, meta) = reference::from_merged(m)?;
         return Ok((r.image, meta));
