@@ -10,6 +10,10 @@
 #      that the merge job waits (DependencyNeverSatisfied), and that running the two tasks
 #      again as the doc says completes the set: the merge job then runs, and its image is
 #      again bit-identical to the one-process render.
+#   3. A reference as a job array and its merge, then a convergence study against it as a job
+#      array (one estimator a task) and the job that joins the rows, again with the command
+#      lines of docs/distributed.md; checks the merged reference against the one-process
+#      reference bit for bit, and that the joined CSV and plot are there.
 # The cluster is stopped, and its folder removed, on every exit (KEEP=1 keeps the folder).
 # VKVCM names the binary (default: target/debug/vkvcm, the one `make test` built).
 set -euo pipefail
@@ -180,4 +184,26 @@ eval "$update_merge"
 wait_job "$merge" 120 COMPLETED
 "$VKVCM" diff --exact merged.exr ../one.exr || fail "merged.exr after the re-run differs from the one-process render"
 say "2. tasks 1 and 2 run again (job $rerun); merged image bit-identical to the one-process render"
+
+# 3. A reference split over an array and merged, then a convergence study split over its
+# estimators and joined, with the lines of docs/distributed.md ("References and convergence
+# studies"), tiny: 2 reference shards of 3 iterations per half, 2 estimators of 0.2 s each.
+mkdir "$work/study"
+cd "$work/study"
+n=2
+ref=(glm_c --width 16 --height 16 --algo pt --iterations 12 --seed 7)
+m=2
+study=(glm_c --reference ref.exr --algos pt,bpt --time 0.2 --checkpoints 2)
+"$VKVCM" reference "${ref[@]}" -o one-ref.exr >one-ref.txt 2>&1 || fail "vkvcm reference: $(cat one-ref.txt)"
+eval "$(doc_line 'refs=$(sbatch')"
+eval "$(doc_line 'refmerge=$(sbatch')"
+eval "$(doc_line 'rows=$(sbatch')"
+eval "$(doc_line 'plot=$(sbatch')"
+say "3. reference array $refs, merge $refmerge, converge array $rows and rows job $plot submitted"
+wait_job "$plot" 180 COMPLETED
+"$VKVCM" diff --exact ref.exr one-ref.exr || fail "the merged reference differs from the one-process reference"
+[ -s converge.png ] || fail "the rows job wrote no converge.png"
+[ "$(cut -d, -f1 converge.csv | tr '\n' ' ')" = "estimator pt pt bpt bpt " ] ||
+  fail "converge.csv holds $(cut -d, -f1 converge.csv | tr '\n' ' '), expected the rows of pt and bpt"
+say "3. merged reference bit-identical to the one-process reference; converge.csv and converge.png written"
 say "ok"

@@ -9,6 +9,10 @@
 //!   file's channels bit for bit (vcm, 3 shards, fresh processes); and each refusal
 //!   (different seed, shard count, scene; a shard twice; a missing shard unless
 //!   --partial; a truncated or foreign EXR) exits with its code and names the file.
+//! * A reference split with `reference --shard K/N` and merged is the one-machine
+//!   reference bit for bit, its two-halves errors included (N = 1, 2, 3); merge's
+//!   refusals and --partial for reference shards; `converge` on reference shards, on
+//!   their merge, and split over its estimators (--shard, --rows).
 //! * The film's precision: a constant value summed 600 times gives that value back
 //!   exactly (a float32 sum drifts: docs/distributed.md).
 
@@ -176,4 +180,112 @@ fn cli_merge_is_exact_and_refuses_what_it_cannot_merge() {
     assert!(err.contains("holds 3 of the render's 5 iterations") && err.contains("missing: 1-2"), "{err}");
     let part = vkvcm::render::saved::read_render_exr(&d.join("part.exr")).unwrap();
     assert_eq!(part.held.to_string(), "0,3-4");
+}
+
+/// `vkvcm` in `dir`: exit code, stdout, stderr.
+fn run_out(dir: &Path, args: &[&str]) -> (i32, String, String) {
+    let out = vkvcm_in(dir).args(args).output().unwrap();
+    let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
+    (out.status.code().unwrap_or(-1), text(&out.stdout), text(&out.stderr))
+}
+
+/// The line of `text` with the reference's two-halves error estimate.
+fn error_line(text: &str) -> &str {
+    text.lines().find(|l| l.starts_with("its own error estimate")).unwrap_or_else(|| panic!("none in {text:?}"))
+}
+
+/// The EXR's R, G, B bits and its attributes but the (per-run) seconds.
+fn reference_bits(p: &Path) -> (Vec<u32>, Vec<(String, String)>) {
+    let (img, meta) = vkvcm::image::read_exr(p).unwrap();
+    let meta = meta.into_iter().filter(|(k, _)| k != "vkvcm:seconds").collect();
+    (img.data.iter().flatten().map(|v| v.to_bits()).collect(), meta)
+}
+
+/// `vkvcm reference --shard K/N` and `vkvcm merge`: the merge of all N shards is the file
+/// `vkvcm reference` writes on one machine, pixels and attributes (its two-halves
+/// errors among them) bit for bit, and so is what both print, for N = 1, 2, 3 (vcm,
+/// whose merge radius follows the global iteration index). Then the refusals, a partial
+/// merge, and `vkvcm converge` on reference shards, on their merge, and split with
+/// --shard and joined with --rows.
+#[test]
+fn cli_reference_shards_merge_into_the_one_machine_reference() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let base = ["reference", "gbs_s", "-a", "vcm", "--width", "8", "--height", "8", "-i", "6", "--seed", "5"];
+    let (code, one_out, err) = run_out(d, &[&base[..], &["-o", "one.exr"]].concat());
+    assert_eq!(code, 0, "{err}");
+    let one = reference_bits(&d.join("one.exr"));
+    assert!(one.1.iter().any(|(k, _)| k == "vkvcm:reference_rmse"), "{:?}", one.1);
+    for n in 1..=3 {
+        let names: Vec<String> = (0..n).map(|k| format!("r{k}of{n}.exr")).collect();
+        for (k, name) in names.iter().enumerate() {
+            let shard = format!("{k}/{n}");
+            let (code, _, err) = run_out(d, &[&base[..], &["--shard", &shard, "-o", name]].concat());
+            assert_eq!(code, 0, "reference --shard {shard}: {err}");
+        }
+        let out = format!("m{n}.exr");
+        let mut args = vec!["merge"];
+        args.extend(names.iter().rev().map(String::as_str));
+        args.extend(["-o", &out]);
+        let (code, merged_out, err) = run_out(d, &args);
+        assert_eq!(code, 0, "{err}");
+        let merged = reference_bits(&d.join(&out));
+        assert!(merged.0 == one.0, "{n} shards: the merged reference's pixels differ from one machine's");
+        assert_eq!(merged.1, one.1, "{n} shards: attributes differ");
+        assert_eq!(error_line(&merged_out), error_line(&one_out), "{n} shards");
+    }
+
+    // Refusals, each naming the file; nothing written.
+    render_cli(d, "render1.exr", &["--algo", "vcm", "-i", "3", "--seed", "5", "--shard", "1/3"]);
+    let cases: [(&[&str], &[&str]); 2] = [
+        (&["r0of3.exr", "render1.exr", "r2of3.exr"], &["render1.exr", "a render", "a reference"]),
+        (&["r0of3.exr", "r2of3.exr"], &["1/3", "missing", "--partial"]),
+    ];
+    for (files, needles) in cases {
+        let (code, _, err) = run_out(d, &[&["merge"], files, &["-o", "bad.exr"]].concat());
+        assert_eq!(code, 2, "merge {files:?}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "merge {files:?}: {n:?} not in {err:?}");
+        }
+        assert!(!d.join("bad.exr").exists(), "merge {files:?} wrote an output");
+    }
+    let (code, _, err) = run_out(d, &["render", "gbs_s", "-o", "res.exr", "--resume", "r0of3.exr", "-i", "4"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("r0of3.exr") && err.contains("shard of a reference"), "{err}");
+    // --partial: the reference of the iterations there are, with its own errors, saying
+    // which are missing.
+    let (code, out, err) = run_out(d, &["merge", "r0of3.exr", "r2of3.exr", "-o", "part.exr", "--partial"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("holds 2 of each half's 3 iterations; missing: 1"), "{err}");
+    let (_, meta) = reference_bits(&d.join("part.exr"));
+    let attr = |k: &str| meta.iter().find(|(m, _)| m == k).map(|(_, v)| v.as_str());
+    assert_eq!((attr("vkvcm:iterations"), attr("vkvcm:missing")), (Some("4"), Some("1")));
+    assert!(error_line(&out) != error_line(&one_out));
+
+    // converge: on the shards (merged in memory) and on their merge, one estimator each
+    // (--shard over --algos), then the two runs' rows joined.
+    let conv = ["converge", "gbs_s", "--algos", "pt,bpt", "--time", "0.05", "-k", "1", "--seed", "77"];
+    let runs: [(&str, &[&str]); 2] = [("0/2", &["r0of2.exr", "r1of2.exr"]), ("1/2", &["m2.exr"])];
+    for (k, (shard, refs)) in runs.iter().enumerate() {
+        let csv = format!("rows{k}.csv");
+        let (code, _, err) = run_out(d, &[&conv[..], &["--shard", shard, "--csv", &csv, "-r"], refs].concat());
+        assert_eq!(code, 0, "converge --shard {shard} -r {refs:?}: {err}");
+    }
+    let (code, _, err) =
+        run_out(d, &[&conv[..], &["-r", "m2.exr", "--csv", "all.csv", "--rows", "rows1.csv", "rows0.csv"]].concat());
+    assert_eq!(code, 0, "{err}");
+    let rows = vkvcm::render::converge::read_csv(&std::fs::read_to_string(d.join("all.csv")).unwrap()).unwrap();
+    let rmse: f64 = attr_of(&one.1, "vkvcm:reference_rmse").parse().unwrap();
+    let names: Vec<&str> = rows.iter().map(|r| r.estimator.as_str()).collect();
+    assert_eq!(names, ["pt", "bpt"], "the rows in --algos' order");
+    for r in &rows {
+        assert_eq!(r.reference_rmse, Some(rmse), "{} measured against another reference", r.estimator);
+    }
+    let (code, _, err) = run_out(d, &[&conv[..], &["-r", "m2.exr", "--rows", "rows0.csv"]].concat());
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("no file holds estimator bpt"), "{err}");
+}
+
+fn attr_of<'a>(meta: &'a [(String, String)], key: &str) -> &'a str {
+    meta.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str()).unwrap_or_else(|| panic!("no {key}"))
 }

@@ -1,5 +1,6 @@
 //! `vkvcm merge`: the shards of a split render (`render --shard K/N`) added into the
-//! whole render (docs/distributed.md).
+//! whole render, or those of a reference (`reference --shard K/N`) into the reference
+//! (docs/distributed.md).
 
 use std::path::PathBuf;
 
@@ -8,14 +9,15 @@ use clap::Args;
 
 use super::exit::{Class, ClassifyExt};
 use vkvcm::image::{self, Image};
-use vkvcm::render::{merge, saved};
+use vkvcm::render::{merge, reference, saved};
 
 #[derive(Args)]
 pub struct MergeArgs {
-    /// The shards' EXR files, in any order.
+    /// The shards' EXR files, in any order: all of a render, or all of a reference.
     #[arg(required = true, value_name = "SHARD.exr")]
     pub inputs: Vec<PathBuf>,
-    /// The merged render's EXR (resumable like a render's).
+    /// The merged render's EXR (resumable like a render's), or the reference's (the
+    /// file `vkvcm reference` writes).
     #[arg(long, short = 'o')]
     pub output: PathBuf,
     /// Also write a tone-mapped sRGB PNG.
@@ -38,17 +40,10 @@ pub fn merge_cmd(a: MergeArgs) -> Result<()> {
     if let Some(p) = &a.png {
         super::render::check_writable(p).context("--png")?;
     }
-    let mut files = Vec::with_capacity(a.inputs.len());
-    for p in &a.inputs {
-        let s =
-            saved::read_render_exr(p).with_context(|| format!("cannot merge {}", p.display())).class(Class::Usage)?;
-        files.push((p.clone(), s));
+    let m = super::shard::merge_files(&a.inputs, a.partial)?;
+    if m.half_b.is_some() {
+        return write_reference(&a, m);
     }
-    let m = merge::merge(&files, a.partial).map_err(|r| {
-        let class = if r.scene { Class::Scene } else { Class::Usage };
-        anyhow::Error::new(super::exit::Classified(class, anyhow::anyhow!("{}", r.message)))
-    })?;
-    drop(files);
     saved::write_sums_exr(&a.output, m.width, m.height, &m.sums, m.iterations(), &m.metadata, Vec::new())?;
     let missing = m.missing();
     if !missing.is_empty() {
@@ -74,6 +69,31 @@ pub fn merge_cmd(a: MergeArgs) -> Result<()> {
     if let Some(p) = &a.png {
         let img = Image { width: m.width, height: m.height, data: m.sums.mean(m.iterations()) };
         image::write_png(p, &img, a.exposure)?;
+        if !a.quiet {
+            eprintln!("wrote {}", p.display());
+        }
+    }
+    Ok(())
+}
+
+/// The reference of merged reference shards, written as `vkvcm reference` writes it.
+fn write_reference(a: &MergeArgs, m: merge::Merged) -> Result<()> {
+    let (missing, total) = (m.missing(), m.total);
+    let (r, meta) = reference::from_merged(m).class(Class::Usage)?;
+    image::write_exr(&a.output, &r.image, &meta)?;
+    if !missing.is_empty() {
+        eprintln!(
+            "warning: partial merge: {} holds {} of each half's {total} iterations; missing: {missing}",
+            a.output.display(),
+            r.iterations / 2
+        );
+    }
+    if !a.quiet {
+        eprintln!("merged {} reference shard(s) into {}", a.inputs.len(), a.output.display());
+    }
+    super::converge::report_reference(&a.output, &r);
+    if let Some(p) = &a.png {
+        image::write_png(p, &r.image, a.exposure)?;
         if !a.quiet {
             eprintln!("wrote {}", p.display());
         }

@@ -1,7 +1,7 @@
 //! `render --shard K/N` (one shard of a render split over machines) and `render --devices`
 //! (a render split over this machine's devices): docs/distributed.md.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::{anyhow, bail, Context, Result};
@@ -10,6 +10,7 @@ use clap::Args;
 use super::exit::{Class, ClassifyExt};
 use vkvcm::gpu::GpuOptions;
 use vkvcm::image::{self, Image};
+use vkvcm::render::merge;
 use vkvcm::render::saved::{self, Provenance, ShardOf};
 use vkvcm::render::shard::Shard;
 use vkvcm::render::{devices, Budget, RenderSettings};
@@ -35,7 +36,7 @@ pub struct ShardArgs {
     pub devices: Option<String>,
 }
 
-fn parse_shard(s: &str) -> std::result::Result<Shard, String> {
+pub(super) fn parse_shard(s: &str) -> std::result::Result<Shard, String> {
     Shard::parse(s).map_err(|e| format!("{e:#}"))
 }
 
@@ -134,4 +135,25 @@ pub fn render_on_devices(
         image::write_png(p, &img, o.exposure)?;
     }
     Ok(o.cancel.load(Ordering::SeqCst).then_some(Class::Interrupted))
+}
+
+/// The shards `paths` merged, read one at a time (the merge holds the running sums and
+/// one shard's). An unreadable, truncated or foreign file is a usage error naming it; a
+/// refusal exits 3 for another scene, 2 otherwise.
+pub(super) fn merge_files(paths: &[PathBuf], partial: bool) -> Result<merge::Merged> {
+    let refused = |r: merge::Refusal| {
+        let class = if r.scene { Class::Scene } else { Class::Usage };
+        anyhow::Error::new(super::exit::Classified(class, anyhow::anyhow!("{}", r.message)))
+    };
+    let mut merger: Option<merge::Merger> = None;
+    for p in paths {
+        let s =
+            saved::read_render_exr(p).with_context(|| format!("cannot merge {}", p.display())).class(Class::Usage)?;
+        match &mut merger {
+            None => merger = Some(merge::Merger::new(p.clone(), s, partial).map_err(refused)?),
+            Some(m) => m.add(p, &s).map_err(refused)?,
+        }
+    }
+    let Some(m) = merger else { bail!("no files to merge") };
+    m.finish().map_err(refused)
 }

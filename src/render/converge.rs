@@ -1,20 +1,14 @@
-//! Convergence measurements: a reference render from two independent halves (with its own
-//! error estimate), and error-vs-time curves of estimators against it (`vkvcm reference`,
-//! `vkvcm converge`, `vkvcm-bench equal-time`).
-//!
-//! The error estimate of a reference follows the usual split-sample trick: if `a` and `b`
-//! are independent unbiased renders with the same variance, `(a - b) / 2` has the variance
-//! of `(a + b) / 2` around its expectation, so RMS((a - b) / 2) estimates the RMS error of
-//! their average. It sees noise only: a bias both halves share (VCM's merging at finite
-//! time, paths neither half can sample) stays invisible.
+//! Convergence measurements: error-vs-time curves of estimators against a reference
+//! (`vkvcm converge`, `vkvcm-bench equal-time`); the reference and its own error estimate
+//! from two halves are in src/render/reference.rs.
 
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 use anyhow::{anyhow, bail, Result};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
-use super::{Algorithm, Budget, Connect, Progress, RenderOutput, RenderSettings, Renderer, Sampler};
+use super::{Algorithm, Budget, Connect, RenderOutput, RenderSettings, Renderer, Sampler};
 use crate::gpu::Gpu;
 use crate::image::{compare, Image, Metrics};
 use crate::scene::Scene;
@@ -111,54 +105,6 @@ impl Variant {
     }
 }
 
-/// A reference image with its own error estimate.
-#[derive(Clone, Debug)]
-pub struct Reference {
-    /// The average of the two halves.
-    pub image: Image,
-    pub algorithm: Algorithm,
-    /// Iterations in all (both halves; each has half).
-    pub iterations: u64,
-    /// Render seconds in all.
-    pub seconds: f64,
-    /// Seeds of the two halves.
-    pub seeds: [u32; 2],
-    /// RMS over pixels and channels of (a - b) / 2: an estimate of the RMS error of `image`.
-    pub rmse: f64,
-    /// mean(((a - b) / 2)^2 / (image^2 + 1e-2)): the same for the relative MSE
-    /// ([`crate::image::REL_MSE_EPSILON`]).
-    pub rel_mse: f64,
-    /// RMS over pixels and channels of the standard error of the per-pixel mean, from the
-    /// per-iteration variance of both halves: a second estimate of the same quantity.
-    pub stderr_rms: f64,
-    /// Samples rejected as NaN, infinite or negative, both halves.
-    pub rejected_samples: u64,
-}
-
-impl Reference {
-    /// EXR metadata (`vkvcm:*`) describing the reference and its error estimate.
-    pub fn metadata(&self, scene: &str, settings: &RenderSettings) -> Vec<(String, String)> {
-        let kv = |k: &str, v: String| (format!("vkvcm:{k}"), v);
-        vec![
-            kv("scene", scene.to_string()),
-            kv("estimator", self.algorithm.name().to_string()),
-            kv("iterations", self.iterations.to_string()),
-            kv("seconds", format!("{:.3}", self.seconds)),
-            kv("seed", self.seeds[0].to_string()),
-            kv("seed_b", self.seeds[1].to_string()),
-            kv("max_path_length", settings.frame.max_path_length.to_string()),
-            kv("light_selection", settings.frame.light_selection.name().to_string()),
-            kv("sampler", settings.sampler().name().to_string()),
-            kv("radius_factor", settings.radius_factor.to_string()),
-            kv("alpha", settings.alpha.to_string()),
-            kv("rejected_samples", self.rejected_samples.to_string()),
-            kv("reference_rmse", format!("{:e}", self.rmse)),
-            kv("reference_rel_mse", format!("{:e}", self.rel_mse)),
-            kv("reference_stderr_rms", format!("{:e}", self.stderr_rms)),
-        ]
-    }
-}
-
 /// The reference's own error estimate read back from EXR metadata (absent fields: `None`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ReferenceError {
@@ -196,71 +142,8 @@ fn output_image(out: &RenderOutput) -> Image {
     Image { width: out.width, height: out.height, data: out.pixels.clone() }
 }
 
-/// Renders `settings.budget` in two independent halves: the first with
-/// `settings.frame.seed` and half the budget, the second with the seed + 1 and exactly as
-/// many iterations as the first got (so their average is the pooled mean). The budget
-/// is the total: [`Budget::Iterations`] must be at least 2.
-pub fn render_reference(
-    gpu: &Arc<Gpu>,
-    scene: &Scene,
-    settings: &RenderSettings,
-    cancel: Option<&AtomicBool>,
-    progress: &mut dyn FnMut(usize, &Progress),
-) -> Result<Reference> {
-    let half_budget = match settings.budget {
-        Budget::Iterations(n) if n < 2 => bail!("a reference needs at least 2 iterations (one per half)"),
-        Budget::Iterations(n) => Budget::Iterations(n / 2),
-        Budget::Seconds(t) if !(t > 0.0 && t.is_finite()) => bail!("the reference time must be positive"),
-        Budget::Seconds(t) => Budget::Seconds(t / 2.0),
-    };
-    let seeds = [settings.frame.seed, settings.frame.seed.wrapping_add(1)];
-    let mut sa = settings.clone();
-    sa.budget = half_budget;
-    let mut ra = warm_renderer(gpu, scene, &sa)?;
-    ra.run(half_budget, cancel, &mut |p| progress(0, p))?;
-    let a = ra.output()?;
-    drop(ra);
-    let mut sb = sa.clone();
-    sb.frame.seed = seeds[1];
-    sb.budget = Budget::Iterations(a.iterations);
-    let mut rb = warm_renderer(gpu, scene, &sb)?;
-    rb.run(sb.budget, cancel, &mut |p| progress(1, p))?;
-    let b = rb.output()?;
-    drop(rb);
-    if b.iterations != a.iterations {
-        bail!("reference interrupted: the second half has {} of {} iterations", b.iterations, a.iterations);
-    }
-
-    let (ia, ib) = (output_image(&a), output_image(&b));
-    let image = Image::average(&[ia.clone(), ib])?;
-    // a - (a + b) / 2 = (a - b) / 2, and `compare` divides by the second image's square.
-    let m = compare(&ia, &image)?;
-    let n = (a.iterations + b.iterations) as f64;
-    let mut acc = 0.0;
-    for i in 0..a.sum.len() {
-        for c in 0..3 {
-            let (s, q) = (a.sum[i][c] + b.sum[i][c], a.sum_sq[i][c] + b.sum_sq[i][c]);
-            let mean = s / n;
-            let var = ((q / n - mean * mean) * n / (n - 1.0).max(1.0)).max(0.0);
-            acc += var / n;
-        }
-    }
-    let stderr_rms = (acc / (3 * a.sum.len()).max(1) as f64).sqrt();
-    Ok(Reference {
-        image,
-        algorithm: settings.algorithm,
-        iterations: a.iterations + b.iterations,
-        seconds: a.seconds + b.seconds,
-        seeds,
-        rmse: m.rmse,
-        rel_mse: m.rel_mse,
-        stderr_rms,
-        rejected_samples: a.rejected_samples + b.rejected_samples,
-    })
-}
-
 /// One row of `vkvcm converge`'s CSV: an estimator's error at one checkpoint.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ConvergeRow {
     pub estimator: String,
     /// 1-based checkpoint index.
@@ -299,6 +182,12 @@ pub fn csv_string(rows: &[ConvergeRow]) -> Result<String> {
     }
     let bytes = w.into_inner().map_err(|e| anyhow::anyhow!("CSV: {e}"))?;
     Ok(String::from_utf8(bytes)?)
+}
+
+/// The rows of [`csv_string`]'s text (`vkvcm converge --rows`).
+pub fn read_csv(text: &str) -> Result<Vec<ConvergeRow>> {
+    let mut r = csv::Reader::from_reader(text.as_bytes());
+    r.deserialize().map(|row| row.map_err(|e| anyhow!("CSV: {e}"))).collect()
 }
 
 /// The image [`converge_one`] measures against, and its own error estimate.

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use super::film::{FilmSums, Rejected};
-use super::saved::SavedRender;
+use super::saved::{HalfB, SavedRender, ShardOf};
 use super::shard::IterationSet;
 
 /// Attributes that differ between shards of one render; every other `vkvcm:*` attribute
@@ -42,10 +42,15 @@ pub struct Merged {
     pub width: u32,
     pub height: u32,
     pub sums: FilmSums,
+    /// Shards of a reference (src/render/reference.rs): the second half's sums, of the
+    /// same iterations `held`.
+    pub half_b: Option<HalfB>,
     pub held: IterationSet,
     /// The split render's iterations.
     pub total: u64,
     pub rejected: Rejected,
+    /// The shards' render seconds in all.
+    pub seconds: f64,
     /// The attributes to write (those of the shards, with the merged counts).
     pub metadata: Vec<(String, String)>,
 }
@@ -61,29 +66,87 @@ impl Merged {
     }
 }
 
-/// Merges `files` (path, contents), refusing files of different renders, a shard given
-/// twice, files that are not shards, and (unless `partial`) missing shards or shards
-/// that do not hold all their iterations.
-pub fn merge(files: &[(PathBuf, SavedRender)], partial: bool) -> std::result::Result<Merged, Refusal> {
-    let Some((p0, first)) = files.first() else { return Err(refuse("no files to merge".into())) };
-    let shard_of = |p: &PathBuf, s: &SavedRender| {
-        if !s.exact {
+/// A merge in progress: shards are added one at a time, so that it holds the running sums
+/// and one shard's, however many shards there are.
+pub struct Merger {
+    p0: PathBuf,
+    /// The first file without its sums: what every other file must match.
+    first: SavedRender,
+    sh0: ShardOf,
+    partial: bool,
+    sums: FilmSums,
+    half_b: Option<HalfB>,
+    held: IterationSet,
+    rejected: Rejected,
+    seconds: f64,
+    devices: Vec<String>,
+    seen: Vec<Option<PathBuf>>,
+}
+
+fn shard_of(p: &Path, s: &SavedRender) -> std::result::Result<ShardOf, Refusal> {
+    if !s.exact {
+        return Err(refuse(format!(
+            "{}: a float32 film of an older vkvcm, whose sums cannot be merged exactly",
+            p.display()
+        )));
+    }
+    s.shard.ok_or_else(|| refuse(format!("{} is not a shard (it was rendered without --shard K/N)", p.display())))
+}
+
+impl Merger {
+    /// A merge that starts with `first` (whose sums it takes over). With `partial`,
+    /// missing shards and shards that do not hold all their iterations are merged too.
+    pub fn new(p0: PathBuf, mut first: SavedRender, partial: bool) -> std::result::Result<Merger, Refusal> {
+        let sh0 = shard_of(&p0, &first)?;
+        let empty = || FilmSums::zero(0);
+        let sums = std::mem::replace(&mut first.sums, empty());
+        let half_b =
+            first.half_b.as_mut().map(|h| HalfB { seed: h.seed, sums: std::mem::replace(&mut h.sums, empty()) });
+        let mut m = Merger {
+            p0: p0.clone(),
+            sh0,
+            partial,
+            sums,
+            half_b,
+            held: IterationSet::new(),
+            rejected: Rejected::default(),
+            seconds: 0.0,
+            devices: Vec::new(),
+            seen: vec![None; sh0.shard.count as usize],
+            first: first.clone(),
+        };
+        m.note(&p0, &first)?;
+        Ok(m)
+    }
+
+    /// Adds the shard `s` read from `p`, refusing it (naming the file) when it is not a
+    /// shard of the same render as the first, is given twice, or is unfinished.
+    pub fn add(&mut self, p: &Path, s: &SavedRender) -> std::result::Result<(), Refusal> {
+        self.note(p, s)?;
+        self.sums.add(&s.sums).map_err(|e| refuse(format!("{}: {e:#}", p.display())))?;
+        if let (Some(total), Some(b)) = (&mut self.half_b, &s.half_b) {
+            total.sums.add(&b.sums).map_err(|e| refuse(format!("{}: {e:#}", p.display())))?;
+        }
+        Ok(())
+    }
+
+    /// Checks `s` against the first file and counts all of it but its sums.
+    fn note(&mut self, p: &Path, s: &SavedRender) -> std::result::Result<(), Refusal> {
+        let (p0, first, sh0) = (&self.p0, &self.first, self.sh0);
+        let sh = shard_of(p, s)?;
+        if s.half_b.is_some() != first.half_b.is_some() {
+            let kind = |r: &SavedRender| match r.half_b {
+                Some(_) => "a reference (`vkvcm reference --shard`, two halves)",
+                None => "a render (`vkvcm render --shard`)",
+            };
             return Err(refuse(format!(
-                "{}: a float32 film of an older vkvcm, whose sums cannot be merged exactly",
-                p.display()
+                "{} is a shard of {}, {} of {}: they cannot be merged",
+                p.display(),
+                kind(s),
+                p0.display(),
+                kind(first)
             )));
         }
-        s.shard.ok_or_else(|| refuse(format!("{} is not a shard (it was rendered without --shard K/N)", p.display())))
-    };
-    let sh0 = shard_of(p0, first)?;
-    let mut held = IterationSet::new();
-    let mut sums = FilmSums::zero(first.sums.pixels());
-    let mut rejected = Rejected::default();
-    let mut seconds = 0.0;
-    let mut devices: Vec<String> = Vec::new();
-    let mut seen: Vec<Option<&PathBuf>> = vec![None; sh0.shard.count as usize];
-    for (p, s) in files {
-        let sh = shard_of(p, s)?;
         check_same(p0, first, p, s)?;
         if sh.shard.count != sh0.shard.count || sh.total != sh0.total {
             return Err(refuse(format!(
@@ -96,13 +159,13 @@ pub fn merge(files: &[(PathBuf, SavedRender)], partial: bool) -> std::result::Re
                 sh0.total
             )));
         }
-        let slot = &mut seen[sh.shard.index as usize];
+        let slot = &mut self.seen[sh.shard.index as usize];
         if let Some(other) = slot {
             return Err(refuse(format!("{} and {} are both shard {}", other.display(), p.display(), sh.shard)));
         }
-        *slot = Some(p);
+        *slot = Some(p.to_path_buf());
         let range = sh.shard.range(sh.total);
-        if s.held != IterationSet::of(range.clone()) && !partial {
+        if s.held != IterationSet::of(range.clone()) && !self.partial {
             return Err(refuse(format!(
                 "{}: shard {} holds iterations {} of its {}-{}: unfinished (use --partial to merge it anyway)",
                 p.display(),
@@ -112,35 +175,42 @@ pub fn merge(files: &[(PathBuf, SavedRender)], partial: bool) -> std::result::Re
                 range.end - 1
             )));
         }
-        held.union(&s.held).map_err(|e| refuse(format!("{}: {e:#} it and an earlier file", p.display())))?;
-        sums.add(&s.sums).map_err(|e| refuse(format!("{}: {e:#}", p.display())))?;
-        rejected = rejected + s.rejected;
-        seconds += s.seconds;
+        self.held.union(&s.held).map_err(|e| refuse(format!("{}: {e:#} it and an earlier file", p.display())))?;
+        self.rejected = self.rejected + s.rejected;
+        self.seconds += s.seconds;
         let device = attribute(s, "device").unwrap_or_default().to_string();
-        if !devices.contains(&device) {
-            devices.push(device);
+        if !self.devices.contains(&device) {
+            self.devices.push(device);
         }
+        Ok(())
     }
-    let missing: Vec<String> =
-        seen.iter().enumerate().filter(|(_, p)| p.is_none()).map(|(k, _)| format!("{k}/{}", sh0.shard.count)).collect();
-    if !missing.is_empty() && !partial {
-        return Err(refuse(format!(
-            "shard(s) {} of the render of {} are missing (use --partial to merge the others)",
-            missing.join(", "),
-            p0.display()
-        )));
+
+    /// The merged render; refuses (unless partial) when shards are missing.
+    pub fn finish(self) -> std::result::Result<Merged, Refusal> {
+        let count = self.sh0.shard.count;
+        let missing: Vec<String> =
+            self.seen.iter().enumerate().filter(|(_, p)| p.is_none()).map(|(k, _)| format!("{k}/{count}")).collect();
+        if !missing.is_empty() && !self.partial {
+            return Err(refuse(format!(
+                "shard(s) {} of the render of {} are missing (use --partial to merge the others)",
+                missing.join(", "),
+                self.p0.display()
+            )));
+        }
+        let merged = Merged {
+            width: self.first.width,
+            height: self.first.height,
+            sums: self.sums,
+            half_b: self.half_b,
+            total: self.sh0.total,
+            rejected: self.rejected,
+            seconds: self.seconds,
+            metadata: Vec::new(),
+            held: self.held,
+        };
+        let metadata = merged_metadata(&self.first, &merged, &self.devices);
+        Ok(Merged { metadata, ..merged })
     }
-    let merged = Merged {
-        width: first.width,
-        height: first.height,
-        sums,
-        total: sh0.total,
-        rejected,
-        metadata: Vec::new(),
-        held,
-    };
-    let metadata = merged_metadata(first, &merged, seconds, &devices);
-    Ok(Merged { metadata, ..merged })
 }
 
 fn attribute<'a>(s: &'a SavedRender, key: &str) -> Option<&'a str> {
@@ -198,7 +268,7 @@ fn check_same(p0: &Path, first: &SavedRender, p: &Path, s: &SavedRender) -> std:
 }
 
 /// The merged file's attributes: the shards' shared ones, and its own counts.
-fn merged_metadata(first: &SavedRender, m: &Merged, seconds: f64, devices: &[String]) -> Vec<(String, String)> {
+fn merged_metadata(first: &SavedRender, m: &Merged, devices: &[String]) -> Vec<(String, String)> {
     let mut meta: Vec<(String, String)> = first
         .metadata
         .iter()
@@ -209,7 +279,7 @@ fn merged_metadata(first: &SavedRender, m: &Merged, seconds: f64, devices: &[Str
     meta.extend([
         kv("iterations", m.iterations().to_string()),
         kv("iteration_set", m.held.to_string()),
-        kv("seconds", format!("{seconds:.3}")),
+        kv("seconds", format!("{:.3}", m.seconds)),
         kv("device", devices.join(", ")),
         kv("rejected_samples", m.rejected.samples.to_string()),
         kv("overflow_splats", m.rejected.overflow_splats.to_string()),

@@ -25,6 +25,7 @@ pub mod passes;
 pub mod plan;
 pub mod radius;
 pub mod reads;
+pub mod reference;
 pub mod regen;
 pub mod saved;
 pub mod scene_gpu;

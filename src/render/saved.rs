@@ -5,7 +5,8 @@
 //! 128-bit sum, src/render/film.rs), and as `vkvcm:*` string attributes every setting that
 //! shapes the image, the iterations (`iterations`, and their global indices in
 //! `iteration_set`), the seconds, the rejected samples, and a shard's `shard` (K/N) and
-//! `shard_of` (the split render's iterations).
+//! `shard_of` (the split render's iterations). A shard of a reference
+//! (src/render/reference.rs) adds `seed_b` and its second half's sums in the `half_b.` layer.
 //!
 //! The sums are stored exactly, so a resumed render or a merge of shards is bit for bit
 //! the uninterrupted render (tests/render_resume.rs, tests/shards.rs). Files of the
@@ -30,10 +31,28 @@ pub const FORMAT: &str = "vkvcm-render-2";
 /// The format of the float32 film, still resumed (not merged).
 const FORMAT_FLOAT_FILM: &str = "vkvcm-render-1";
 
+/// The layer of a reference shard's second half (`half_b.film.sum.R.0`, ...:
+/// src/render/reference.rs); the film of an ordinary render is in no layer (`""`).
+pub const HALF_B_LAYER: &str = "half_b.";
+
 /// The uint32 channel of word `w` (0: least significant) of channel `c` (0..3: R, G, B)
-/// of the film's sums (`square`: of the sums of squares).
-pub fn sum_channel(square: bool, c: usize, w: usize) -> String {
-    format!("film.{}.{}.{w}", if square { "sq" } else { "sum" }, ["R", "G", "B"][c])
+/// of the film's sums (`square`: of the sums of squares) in `layer`.
+pub fn sum_channel(layer: &str, square: bool, c: usize, w: usize) -> String {
+    format!("{layer}film.{}.{}.{w}", if square { "sq" } else { "sum" }, ["R", "G", "B"][c])
+}
+
+/// The uint32 channels of `sums`' words in `layer`.
+pub fn sum_channels(layer: &str, sums: &FilmSums) -> Vec<image::ExtraChannel> {
+    let mut channels = Vec::with_capacity(24);
+    for (square, sums) in [(false, &sums.sum), (true, &sums.sum_sq)] {
+        for c in 0..3 {
+            for w in 0..4 {
+                let words = sums.iter().map(|p| FilmSums::words(p[c])[w]).collect();
+                channels.push((sum_channel(layer, square, c, w), Samples::U32(words)));
+            }
+        }
+    }
+    channels
 }
 
 /// Which shard of which render a file holds (`--shard`).
@@ -104,10 +123,21 @@ pub struct SavedRender {
     pub rejected: Rejected,
     /// The film's sums.
     pub sums: FilmSums,
+    /// A shard of a reference (`reference --shard`): its second half, of the same
+    /// iterations (`held`) as the film above, which is the first.
+    pub half_b: Option<HalfB>,
     /// False for files of the float32 film, whose sums are rounded: resumed, never merged.
     pub exact: bool,
     /// Every `vkvcm:*` attribute, for merges to compare.
     pub metadata: Vec<(String, String)>,
+}
+
+/// The second half of a reference shard (src/render/reference.rs).
+#[derive(Clone, Debug)]
+pub struct HalfB {
+    /// `vkvcm:seed_b`.
+    pub seed: u32,
+    pub sums: FilmSums,
 }
 
 /// The `vkvcm:*` attributes of a render.
@@ -190,21 +220,16 @@ pub fn write_sums_exr(
         })
         .chain(more_channels)
         .collect();
-    for (square, sums) in [(false, &sums.sum), (true, &sums.sum_sq)] {
-        for c in 0..3 {
-            for w in 0..4 {
-                let words = sums.iter().map(|p| FilmSums::words(p[c])[w]).collect();
-                extra.push((sum_channel(square, c, w), Samples::U32(words)));
-            }
-        }
-    }
+    extra.extend(sum_channels("", sums));
     image::write_exr_channels(path, &img, &extra, meta, ExrCompression::Zip)
 }
 
-/// The film's sums from a file's channels: exactly from the uint32 words (format 2), or
-/// rounded from the float32 mean and second moment (format 1). Errors name what is missing.
+/// The film's sums from a file's channels: exactly from the uint32 words in `layer`
+/// (format 2), or rounded from the float32 mean and second moment (format 1). Errors name
+/// what is missing.
 fn saved_sums(
     shown: &std::path::Display,
+    layer: &str,
     img: &Image,
     extra: &[image::ExtraChannel],
     exact: bool,
@@ -221,8 +246,9 @@ fn saved_sums(
         for (square, out) in [(false, &mut sums.sum), (true, &mut sums.sum_sq)] {
             for c in 0..3 {
                 for w in 0..4 {
-                    let Samples::U32(words) = channel(&sum_channel(square, c, w))? else {
-                        bail!("{shown}: channel {} is not uint32", sum_channel(square, c, w));
+                    let name = sum_channel(layer, square, c, w);
+                    let Samples::U32(words) = channel(&name)? else {
+                        bail!("{shown}: channel {name} is not uint32");
                     };
                     for (p, &x) in out.iter_mut().zip(words) {
                         p[c] |= (x as u128) << (32 * w);
@@ -282,7 +308,14 @@ pub fn read_render_exr(path: &Path) -> Result<SavedRender> {
         }),
         Err(_) => None,
     };
-    let sums = saved_sums(&shown, &img, &extra, exact, iterations)?;
+    let sums = saved_sums(&shown, "", &img, &extra, exact, iterations)?;
+    let half_b = match get("seed_b") {
+        Ok(v) if exact => Some(HalfB {
+            seed: parse(&shown, "seed_b", v)?,
+            sums: saved_sums(&shown, HALF_B_LAYER, &img, &extra, exact, iterations)?,
+        }),
+        _ => None,
+    };
     let seconds: f64 = parse(&shown, "seconds", get("seconds")?)?;
     let rejected = Rejected {
         samples: parse(&shown, "rejected_samples", get("rejected_samples")?)?,
@@ -322,6 +355,7 @@ pub fn read_render_exr(path: &Path) -> Result<SavedRender> {
         seconds: if seconds.is_finite() && seconds >= 0.0 { seconds } else { 0.0 },
         rejected,
         sums,
+        half_b,
         exact,
         metadata: meta.iter().filter(|(k, _)| k.starts_with("vkvcm:")).cloned().collect(),
     })
@@ -338,6 +372,9 @@ impl SavedRender {
             }
             Ok(())
         };
+        if self.half_b.is_some() {
+            bail!("it is a shard of a reference (two halves, `vkvcm reference --shard`), not of a render");
+        }
         diff("scene", self.scene.clone(), p.scene.clone())?;
         if let Some(f) = &self.scene_fingerprint {
             if *f != p.scene_fingerprint {

@@ -203,10 +203,10 @@ pub struct Reference {
     pub noise_rms: f64,
 }
 
-/// `iterations` in all, in two independent halves ([`vkvcm::render::converge::render_reference`]).
+/// `iterations` in all, in two independent halves ([`vkvcm::render::reference::render_reference`]).
 pub fn reference(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, size: u32, iterations: u64) -> Result<Reference> {
     let s = RenderSettings::new(algo, size, size, Budget::Iterations(iterations));
-    let r = vkvcm::render::converge::render_reference(gpu, scene, &s, None, &mut |_, _| {})?;
+    let r = vkvcm::render::reference::render_reference(gpu, scene, &s, None, &mut |_, _| {})?;
     Ok(Reference { image: r.image, algorithm: algo, iterations: r.iterations, noise_rms: r.stderr_rms })
 }
 
