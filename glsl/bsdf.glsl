@@ -172,15 +172,38 @@ vec3 transmission_colour(GpuMaterial m, vec3 tint) {
 // the factors): diffuse (1 - metallic) base, GGX F0 mix(dielectric F0, base, metallic)
 // of which mean(dielectric F0) (1 - metallic) is untinted, GGX alpha roughness^2 (at
 // least MIN_GGX_ALPHA). The diffuse lobe's interface F0 (mirror.w) does not depend on
-// them. Elsewhere the material's own values, bit for bit.
+// them. Where KHR_materials_specular's textures vary the dielectric F0
+// (HAS_SPECULAR_TEXTURES), it is min(F0(IOR) x specularColorFactor x colour texel, 1) x
+// specularFactor x texel A, and the interface F0 its largest component
+// (Material::metallic_roughness_with_f0). Where a transmissionTexture varies the glass
+// weight (HAS_TRANSMISSION_TEXTURES), w = (1 - metallic) transmissionFactor x texel R
+// and the lobes beside it have metallic / (1 - w) (Material::transmissive). Elsewhere
+// the material's own values, bit for bit.
 GpuMaterial point_material(uint material, Tint tint) {
     GpuMaterial m = material_at(material);
-#if HAS_METALLIC_ROUGHNESS_TEXTURES
-    if (tint.roughness != 1.0 || tint.metallic != 1.0) {
+#if HAS_METALLIC_ROUGHNESS_TEXTURES || HAS_TRANSMISSION_TEXTURES || HAS_SPECULAR_TEXTURES
+    if (tint.roughness != 1.0 || tint.metallic != 1.0 || tint.transmission != 1.0 || tint.specular != vec4(1.0)) {
         vec3 base = m.base_metallic.rgb;
         vec3 f0 = m.f0_roughness.rgb;
         float metallic = m.base_metallic.w * tint.metallic;
         float roughness = m.f0_roughness.w * tint.roughness;
+#if HAS_SPECULAR_TEXTURES
+        if (tint.specular != vec4(1.0)) {
+            f0 = min(m.specular.rgb * tint.specular.rgb, vec3(1.0)) * (m.specular.w * tint.specular.a);
+            m.mirror.w = max3(f0);
+        }
+#endif
+#if HAS_PARTIAL_TRANSMISSION
+        // A transmissive material's factors are the file's: its glass weight at the point
+        // (tint.transmission is 1 without a transmission texture), then the metallic of
+        // the lobes beside the glass.
+        if (m.phong.w >= 0.0) {
+            float w = m.transmission.w * tint.transmission;
+            m.transmission.w = w;
+            metallic = w < 1.0 ? min(metallic / (1.0 - w), 1.0) : 0.0;
+            m.mirror.w = max3(f0);
+        }
+#endif
         m.diffuse.rgb = base * (1.0 - metallic);
         m.glossy.rgb = f0 + (base - f0) * metallic;
         m.glossy.w = max(roughness * roughness, MIN_GGX_ALPHA);

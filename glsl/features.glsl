@@ -114,6 +114,18 @@
 #ifndef HAS_METALLIC_ROUGHNESS_TEXTURES
 #define HAS_METALLIC_ROUGHNESS_TEXTURES 1
 #endif
+// Materials whose glass weight a transmissionTexture (KHR_materials_transmission) or
+// whose dielectric F0 KHR_materials_specular's textures vary per point (glsl/textures.glsl
+// `surface_tint`, glsl/bsdf.glsl `point_material`; light vertices carry the point's values).
+#ifndef HAS_TRANSMISSION_TEXTURES
+#define HAS_TRANSMISSION_TEXTURES 1
+#endif
+#if HAS_TRANSMISSION_TEXTURES && !HAS_PARTIAL_TRANSMISSION
+#error "HAS_TRANSMISSION_TEXTURES needs HAS_PARTIAL_TRANSMISSION"
+#endif
+#ifndef HAS_SPECULAR_TEXTURES
+#define HAS_SPECULAR_TEXTURES 1
+#endif
 // Profiling: count traced rays into stats[2..3] (glsl/scene.glsl, COUNT_RAYS_FLUSH).
 #ifndef COUNT_RAYS
 #define COUNT_RAYS 0

@@ -59,14 +59,18 @@ layout(std430) writeonly buffer light_vertex_chunk_counts { uint lv_chunk_count[
 //                                 b[Bi+2] = (shading normal, tint.metallic)
 //   with HAS_VERTEX_ATTRIBUTES:   b[Bi+LV_TINT] = (tint.rgb, tint.roughness)
 //   with HAS_CLEARCOAT_TEXTURES:  b[Bi+LV_COAT] = (tint.coat, tint.coat_roughness, 0, 0)
-// B = 2 + the two (src/render/light_vertex_store.rs, LightVertexPlan, sizes the store
+//   with HAS_TRANSMISSION_TEXTURES: b[Bi+LV_TRANSMISSION] = (tint.transmission, 0, 0, 0)
+//   with HAS_SPECULAR_TEXTURES:   b[Bi+LV_SPECULAR] = tint.specular
+// B = 2 + the others (src/render/light_vertex_store.rs, LightVertexPlan, sizes the store
 // the same way; light_vertex_compact.comp copies B vec4 per vertex). The point's metallic
 // and roughness (a metallic-roughness texture's texel) fill the two vec4s' spare w, so a
 // scene with that texture needs the normal slot even without shading normals.
 #define LV_NORMAL_SLOTS ((HAS_SHADING_NORMALS != 0 || HAS_METALLIC_ROUGHNESS_TEXTURES != 0) ? 1u : 0u)
 #define LV_TINT (2u + LV_NORMAL_SLOTS)
 #define LV_COAT (LV_TINT + (HAS_VERTEX_ATTRIBUTES != 0 ? 1u : 0u))
-#define LV_B_STRIDE (LV_COAT + (HAS_CLEARCOAT_TEXTURES != 0 ? 1u : 0u))
+#define LV_TRANSMISSION (LV_COAT + (HAS_CLEARCOAT_TEXTURES != 0 ? 1u : 0u))
+#define LV_SPECULAR (LV_TRANSMISSION + (HAS_TRANSMISSION_TEXTURES != 0 ? 1u : 0u))
+#define LV_B_STRIDE (LV_SPECULAR + (HAS_SPECULAR_TEXTURES != 0 ? 1u : 0u))
 struct LightVertex {
     vec3 p;
     vec3 thr;
@@ -99,6 +103,12 @@ void lv_store(uint slot, LightVertex v) {
 #if HAS_CLEARCOAT_TEXTURES
     lv_scratch_b[LV_B_STRIDE * slot + LV_COAT] = vec4(v.tint.coat, v.tint.coat_roughness, 0.0, 0.0);
 #endif
+#if HAS_TRANSMISSION_TEXTURES
+    lv_scratch_b[LV_B_STRIDE * slot + LV_TRANSMISSION] = vec4(v.tint.transmission, 0.0, 0.0, 0.0);
+#endif
+#if HAS_SPECULAR_TEXTURES
+    lv_scratch_b[LV_B_STRIDE * slot + LV_SPECULAR] = v.tint.specular;
+#endif
 }
 #endif
 
@@ -127,6 +137,12 @@ LightVertex lv_load(uint slot) {
 #if HAS_CLEARCOAT_TEXTURES
     v.tint.coat = lv_b_at(LV_B_STRIDE * slot + LV_COAT).x;
     v.tint.coat_roughness = lv_b_at(LV_B_STRIDE * slot + LV_COAT).y;
+#endif
+#if HAS_TRANSMISSION_TEXTURES
+    v.tint.transmission = lv_b_at(LV_B_STRIDE * slot + LV_TRANSMISSION).x;
+#endif
+#if HAS_SPECULAR_TEXTURES
+    v.tint.specular = lv_b_at(LV_B_STRIDE * slot + LV_SPECULAR);
 #endif
     uint info = floatBitsToUint(b1.w);
     v.material = info & 0xffffffu;

@@ -93,7 +93,7 @@ GpuSphere sphere_at(uint i) {
     return s;
 }
 // GpuMaterial's vec4s, in field order.
-#define MATERIAL_TEXELS 12u
+#define MATERIAL_TEXELS 14u
 GpuMaterial material_at(uint i) {
     GpuMaterial m;
     uint k = MATERIAL_TEXELS * i;
@@ -109,12 +109,15 @@ GpuMaterial material_at(uint i) {
     m.medium = texel_vec4(materials, k + 9u);
     m.transmission = texel_vec4(materials, k + 10u);
     m.coat = texel_vec4(materials, k + 11u);
+    m.layers = texel_vec4(materials, k + 12u);
+    m.specular = texel_vec4(materials, k + 13u);
     return m;
 }
 vec4 material_surface(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 5u); }
 vec4 material_maps(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 6u); }
 vec4 material_medium(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 9u); }
 vec4 material_coat(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 11u); }
+vec4 material_layers(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 12u); }
 GpuLight light_at(uint i) {
     GpuLight l;
     l.a = texel_vec4(lights, 5u * i);
@@ -140,6 +143,7 @@ vec4 material_surface(uint i) { return material_data[i].surface; }
 vec4 material_maps(uint i) { return material_data[i].maps; }
 vec4 material_medium(uint i) { return material_data[i].medium; }
 vec4 material_coat(uint i) { return material_data[i].coat; }
+vec4 material_layers(uint i) { return material_data[i].layers; }
 GpuLight light_at(uint i) { return light_data[i]; }
 #endif
 

@@ -153,9 +153,12 @@ struct Tint {
     float metallic;
     float coat;            // multiplies the clear coat factor (clearcoatTexture's R)
     float coat_roughness;  // multiplies its roughness (clearcoatRoughnessTexture's G)
+    float transmission;    // multiplies transmissionFactor (transmissionTexture's R)
+    vec4 specular;         // rgb: multiplies specularColorFactor (specularColorTexture's RGB),
+                           // a: specularFactor (specularTexture's A)
 };
 
-Tint no_tint() { return Tint(vec3(1.0), 1.0, 1.0, 1.0, 1.0); }
+Tint no_tint() { return Tint(vec3(1.0), 1.0, 1.0, 1.0, 1.0, 1.0, vec4(1.0)); }
 
 // The tint (rgb) and alpha (times the material's alpha factor) of triangle `tri` with
 // material `material` at barycentric weights (u, v): (1, 1, 1, factor) where it has no
@@ -214,6 +217,29 @@ Tint surface_tint(uint tri, uint material, float u, float v) {
         if (cref != NO_TEXTURE && texture_uv(cref, c0, c1, c2, 1.0 - u - v, u, v, cuv)) {
             t.coat_roughness = texture_sample(cref, cuv).g;
         }
+    }
+#endif
+#if HAS_TRANSMISSION_TEXTURES || HAS_SPECULAR_TEXTURES
+    // KHR_materials_transmission: factor x transmissionTexture's R (linear);
+    // KHR_materials_specular: colour factor x specularColorTexture's RGB (sRGB), factor x
+    // specularTexture's A (linear).
+    vec4 layers = material_layers(material);
+    GpuVertexAttributes l0, l1, l2;
+    vec2 luv;
+    if (triangle_attributes(tri, l0, l1, l2)) {
+        float w0 = 1.0 - u - v;
+#if HAS_TRANSMISSION_TEXTURES
+        uint lref = floatBitsToUint(layers.x);
+        if (lref != NO_TEXTURE && texture_uv(lref, l0, l1, l2, w0, u, v, luv)) t.transmission = texture_sample(lref, luv).r;
+#endif
+#if HAS_SPECULAR_TEXTURES
+        uint sref = floatBitsToUint(layers.y);
+        if (sref != NO_TEXTURE && texture_uv(sref, l0, l1, l2, w0, u, v, luv)) t.specular.a = texture_sample(sref, luv).a;
+        sref = floatBitsToUint(layers.z);
+        if (sref != NO_TEXTURE && texture_uv(sref, l0, l1, l2, w0, u, v, luv)) {
+            t.specular.rgb = texture_sample(sref, luv).rgb;
+        }
+#endif
     }
 #endif
     return t;

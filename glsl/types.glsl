@@ -38,6 +38,8 @@ struct GpuMaterial {
     vec4 transmission;   // rgb: colour of a dielectric's transmitted part (1: clear); w: its glass weight (glsl/bsdf.glsl)
     vec4 coat;           // x: clear coat factor (0: none), y: its GGX alpha (glsl/lobes/clearcoat.glsl),
                          // z, w: its factor's and roughness's textures or NO_TEXTURE (bits)
+    vec4 layers;         // transmission, specular and specular colour textures or NO_TEXTURE (bits), w reserved
+    vec4 specular;       // rgb: F0 of the IOR x specularColorFactor, w: specularFactor (glsl/bsdf.glsl, point_material)
 };
 
 struct GpuTextureRef {

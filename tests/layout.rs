@@ -83,7 +83,9 @@ fn rust_and_glsl_layouts_match() {
             f0_roughness,
             medium,
             transmission,
-            coat
+            coat,
+            layers,
+            specular
         }),
         rust_layout!(GpuTextureRef { image, row0, row1 }),
         rust_layout!(GpuVertexAttributes { uv, color, tangent }),

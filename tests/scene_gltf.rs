@@ -2066,3 +2066,34 @@ fn clearcoat_factors_are_read() {
     let e = format!("{:#}", d.load().unwrap_err());
     assert!(e.contains("clearcoatTexture.index"), "{e}");
 }
+
+/// KHR_materials_transmission's transmissionTexture and KHR_materials_specular's
+/// specularTexture and specularColorTexture reach the material (`LayerTextures`) with the
+/// factors they multiply, without a texture warning; a transmissionTexture on a fully
+/// metallic material (which transmits nothing) is not read, and a specularTexture naming
+/// no texture is an error that names it.
+#[test]
+fn transmission_and_specular_textures_are_read() {
+    let mut d = Doc::textured();
+    d.json["materials"][0]["pbrMetallicRoughness"]["metallicFactor"] = json!(0.25);
+    d.json["materials"][0]["extensions"] = json!({
+        "KHR_materials_transmission": {"transmissionFactor": 0.5, "transmissionTexture": {"index": 0}},
+        "KHR_materials_specular": {"specularFactor": 1.0, "specularColorFactor": [2.0, 1.0, 0.5],
+                                   "specularTexture": {"index": 0}, "specularColorTexture": {"index": 0}},
+    });
+    let s = d.load().unwrap();
+    let l = s.materials[0].layer_textures.as_deref().expect("layer textures");
+    assert!(l.transmission.is_some() && l.specular.is_some() && l.specular_color.is_some());
+    assert_eq!((l.metallic, l.roughness, l.specular_factor), (0.25, 1.0, 1.0));
+    assert!(close(l.specular_f0, Vec3::new(0.08, 0.04, 0.02)) && close(l.dielectric_f0, l.specular_f0));
+    assert_eq!(s.materials[0].glass_weight, 0.75 * 0.5);
+    assert!(s.report.warnings.iter().all(|w| !w.contains("texture")), "{:?}", s.report.warnings);
+    // An opaque material reads the specular textures alone.
+    d.json["materials"][0]["pbrMetallicRoughness"]["metallicFactor"] = json!(1.0);
+    let s = d.load().unwrap();
+    let l = s.materials[0].layer_textures.as_deref().expect("layer textures");
+    assert!(l.transmission.is_none() && l.specular.is_some() && !s.materials[0].is_dielectric());
+    d.json["materials"][0]["extensions"]["KHR_materials_specular"]["specularTexture"] = json!({"index": 9});
+    let e = err_of(d.load());
+    assert!(e.contains("specularTexture"), "{e}");
+}

@@ -85,6 +85,15 @@ pub struct FeatureSet {
     /// coordinates: surfaces and light vertices carry the point's metallic and roughness,
     /// which vary its lobes (glsl/bsdf.glsl, `point_material`).
     pub metallic_roughness_textures: bool,
+    /// Some dielectric has a transmissionTexture and some triangle texture coordinates:
+    /// surfaces and light vertices carry the point's transmission multiplier, which varies
+    /// its glass weight and lobes (glsl/bsdf.glsl, `point_material`; partial transmission
+    /// is compiled in).
+    pub transmission_textures: bool,
+    /// Some material has a KHR_materials_specular texture and some triangle texture
+    /// coordinates: surfaces and light vertices carry the point's specular multipliers,
+    /// which vary the dielectric F0 of its lobes (glsl/bsdf.glsl, `point_material`).
+    pub specular_textures: bool,
 }
 
 fn nonzero(v: Vec3) -> bool {
@@ -116,6 +125,18 @@ impl FeatureSet {
             && any_mat(&|m| {
                 m.clearcoat > 0.0 && (m.clearcoat_texture.is_some() || m.clearcoat_roughness_texture.is_some())
             });
+        let transmission_textured = |m: &crate::scene::Material| {
+            m.is_dielectric() && m.layer_textures.as_deref().is_some_and(|l| l.transmission.is_some())
+        };
+        let transmission_textures = vertex_attributes && any_mat(&transmission_textured);
+        let specular_textures = vertex_attributes
+            && any_mat(&|m| {
+                m.layer_textures.as_deref().is_some_and(|l| l.specular.is_some() || l.specular_color.is_some())
+            });
+        // A transmission texture can give clear glass's points the lobes of its factors.
+        let glass_lobes = |m: &crate::scene::Material, f: &dyn Fn(&crate::scene::LayerTextures) -> bool| {
+            transmission_textures && transmission_textured(m) && m.layer_textures.as_deref().is_some_and(f)
+        };
         // A metallic-roughness texture can give a point the lobes its factors lack: diffuse
         // where the base is not black (metallic below 1), GGX where base or dielectric is not.
         let textured = |m: &crate::scene::Material, f: &dyn Fn(&crate::scene::MetallicRoughnessTexture) -> bool| {
@@ -127,13 +148,21 @@ impl FeatureSet {
         FeatureSet {
             generic,
             count_rays: false,
-            diffuse: g || any_mat(&|m| lobe(m, m.diffuse) || textured(m, &|t| nonzero(t.base))),
+            diffuse: g
+                || any_mat(&|m| {
+                    lobe(m, m.diffuse) || textured(m, &|t| nonzero(t.base)) || glass_lobes(m, &|l| nonzero(l.base))
+                }),
             phong: g || any_mat(&|m| lobe(m, m.phong)),
-            ggx: g || any_mat(&|m| lobe(m, m.glossy) || textured(m, &|t| nonzero(t.base) || nonzero(t.dielectric_f0))),
+            ggx: g
+                || any_mat(&|m| {
+                    lobe(m, m.glossy)
+                        || textured(m, &|t| nonzero(t.base) || nonzero(t.dielectric_f0))
+                        || glass_lobes(m, &|l| nonzero(l.base) || nonzero(l.dielectric_f0))
+                }),
             mirror: g || any_mat(&|m| nonzero(m.mirror)),
             // The kernels treat every IOR that is not negative (NaN included) as a dielectric.
             dielectric: g || any_mat(&|m| m.is_dielectric()),
-            partial_transmission: g || any_mat(&|m| m.has_partial_transmission()),
+            partial_transmission: g || transmission_textures || any_mat(&|m| m.has_partial_transmission()),
             rough_dielectric: g || any_mat(&|m| m.is_rough_dielectric()),
             volume: g || any_mat(&|m| nonzero(m.medium_attenuation())),
             clearcoat: g || any_mat(&|m| m.clearcoat > 0.0),
@@ -154,12 +183,16 @@ impl FeatureSet {
                 || normal_maps
                 || emissive_textures
                 || metallic_roughness_textures
-                || clearcoat_textures,
+                || clearcoat_textures
+                || transmission_textures
+                || specular_textures,
             alpha_mask: g || any_mat(&|m| m.alpha_mode != crate::scene::AlphaMode::Opaque),
             one_sided: g || any_mat(&|m| m.one_sided),
             normal_maps: g || normal_maps,
             emissive_textures: g || emissive_textures,
             metallic_roughness_textures: g || metallic_roughness_textures,
+            transmission_textures: g || transmission_textures,
+            specular_textures: g || specular_textures,
         }
     }
 
@@ -199,6 +232,8 @@ impl FeatureSet {
             ("HAS_NORMAL_MAPS", self.normal_maps),
             ("HAS_EMISSIVE_TEXTURES", self.emissive_textures),
             ("HAS_METALLIC_ROUGHNESS_TEXTURES", self.metallic_roughness_textures),
+            ("HAS_TRANSMISSION_TEXTURES", self.transmission_textures),
+            ("HAS_SPECULAR_TEXTURES", self.specular_textures),
             ("COUNT_RAYS", self.count_rays),
         ] {
             d = d.flag(name, on);
@@ -268,6 +303,8 @@ impl fmt::Display for FeatureSet {
             ("emissive textures", self.emissive_textures),
             ("metallic-roughness textures", self.metallic_roughness_textures),
             ("clear-coat textures", self.clearcoat_textures),
+            ("transmission textures", self.transmission_textures),
+            ("specular textures", self.specular_textures),
         ];
         writeln!(f, "  surface detail: {}", list(&surface))?;
         write!(f, "  ray counter: {}", if self.count_rays { "on (--profile)" } else { "off" })

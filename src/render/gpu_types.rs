@@ -78,6 +78,12 @@ pub struct GpuMaterial {
     /// z, w: indices of its clearcoat and clearcoat-roughness textures, or `NO_TEXTURE`
     /// (bits).
     pub coat: [f32; 4],
+    /// Indices in `texture_refs` (bits, or `NO_TEXTURE`) of x: its transmissionTexture,
+    /// y: specularTexture, z: specularColorTexture (`scene::LayerTextures`); w: reserved.
+    pub layers: [f32; 4],
+    /// With such textures (glsl/bsdf.glsl, `point_material`): rgb: the F0 of the IOR
+    /// times specularColorFactor (not clamped); w: specularFactor. Zero without them.
+    pub specular: [f32; 4],
 }
 
 /// A texture as a material uses it (`scene::TextureRef`): where its image's texels are,

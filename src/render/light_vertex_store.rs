@@ -35,11 +35,19 @@ pub const LIGHT_VERTEX_A_BYTES: u64 = 32;
 /// Bytes of one light vertex in `light_vertices_b` for kernels compiled with `features`:
 /// (wo, dVM) and (normal, material and length), with shading normals or
 /// metallic-roughness textures a vec4 holding the shading normal and the point's metallic,
-/// with vertex attributes one holding the tint and its roughness, with clear-coat textures
-/// one holding the point's coat multipliers (glsl/light_vertex_store.glsl, LV_B_STRIDE).
+/// with vertex attributes one holding the tint and its roughness, with clear-coat,
+/// transmission and specular textures one each holding the point's multipliers
+/// (glsl/light_vertex_store.glsl, LV_B_STRIDE).
 pub fn light_vertex_b_bytes(features: &FeatureSet) -> u64 {
     let normal_slot = features.shading_normals || features.metallic_roughness_textures;
-    32 + 16 * normal_slot as u64 + 16 * features.vertex_attributes as u64 + 16 * features.clearcoat_textures as u64
+    let slots = [
+        normal_slot,
+        features.vertex_attributes,
+        features.clearcoat_textures,
+        features.transmission_textures,
+        features.specular_textures,
+    ];
+    32 + 16 * slots.iter().filter(|&&s| s).count() as u64
 }
 
 /// Light vertices per light subpath the store is first sized for: the reference scenes

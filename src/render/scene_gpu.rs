@@ -66,6 +66,13 @@ impl ScenePlan {
                     + m.normal_texture.is_some() as u64
                     + m.emissive_texture.is_some() as u64
                     + m.metallic_roughness_texture.is_some() as u64
+                    + m.clearcoat_texture.is_some() as u64
+                    + m.clearcoat_roughness_texture.is_some() as u64
+                    + m.layer_textures.as_ref().map_or(0, |l| {
+                        l.transmission.is_some() as u64
+                            + l.specular.is_some() as u64
+                            + l.specular_color.is_some() as u64
+                    })
             })
             .sum::<u64>();
         let texels: u64 = scene.images.iter().map(|i| i.texels.len() as u64).sum();
@@ -166,11 +173,12 @@ fn vertex_attributes(a: Option<&VertexAttributes>, k: usize) -> GpuVertexAttribu
 
 /// The scene's textures on the GPU: the texture references of the materials (each
 /// material's base-colour texture, normal map, emissive texture and metallic-roughness
-/// texture, clearcoat and clearcoat-roughness textures, in material order), per material
-/// the indices of its six (or `NO_TEXTURE`),
+/// texture, clearcoat and clearcoat-roughness textures, transmission, specular and
+/// specular-colour textures, in material order), per material the indices of its nine
+/// (or `NO_TEXTURE`),
 /// and the texels of the scene's images (RGBA8 packed little-endian, R lowest; four to a
 /// 16-byte element).
-type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 6]>, Vec<[u32; 4]>);
+type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 9]>, Vec<[u32; 4]>);
 
 fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     let mut first = Vec::with_capacity(scene.images.len());
@@ -192,7 +200,8 @@ fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     let mut refs = Vec::new();
     let mut indices = Vec::with_capacity(scene.materials.len());
     for (i, m) in scene.materials.iter().enumerate() {
-        let mut index = [NO_TEXTURE; 6];
+        let mut index = [NO_TEXTURE; 9];
+        let layers = m.layer_textures.as_deref();
         // Normal maps and metallic-roughness textures hold linear values, not sRGB colours.
         let slots = [
             (m.base_color_texture.as_ref(), false),
@@ -201,6 +210,10 @@ fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
             (m.metallic_roughness_texture.as_ref().map(|t| &t.texture), true),
             (m.clearcoat_texture.as_ref(), true),
             (m.clearcoat_roughness_texture.as_ref(), true),
+            (layers.and_then(|l| l.transmission.as_ref()), true),
+            (layers.and_then(|l| l.specular.as_ref()), true),
+            // KHR_materials_specular: specularColorTexture is sRGB, specularTexture linear.
+            (layers.and_then(|l| l.specular_color.as_ref()), false),
         ];
         for (slot, (t, linear)) in slots.into_iter().enumerate() {
             let Some(t) = t else { continue };
@@ -364,19 +377,30 @@ fn gpu_triangles(scene: &Scene, features: &FeatureSet) -> GpuGeometry {
 
 /// The materials as the kernels read them, with the texture indices of each
 /// (`texture_indices`, [`gpu_textures`]) where `features` has the textures' kind.
-fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 6]]) -> Vec<GpuMaterial> {
+fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 9]]) -> Vec<GpuMaterial> {
     scene
         .materials
         .iter()
         .zip(texture_indices)
-        .map(|(m, &[texture, normal_map, emissive, metallic_roughness, coat, coat_roughness])| {
+        .map(|(m, &[texture, normal_map, emissive, metallic_roughness, coat, coat_roughness, t, s, sc])| {
             let normal_map = if features.normal_maps { normal_map } else { NO_TEXTURE };
             let emissive = if features.emissive_textures { emissive } else { NO_TEXTURE };
-            let (metallic_roughness, base_metallic, f0_roughness) =
+            let (metallic_roughness, mut base_metallic, mut f0_roughness) =
                 match (&m.metallic_roughness_texture, features.metallic_roughness_textures) {
                     (Some(t), true) => (metallic_roughness, v4(t.base, t.metallic), v4(t.dielectric_f0, t.roughness)),
                     _ => (NO_TEXTURE, [0.0; 4], [0.0; 4]),
                 };
+            let (layers, specular) = match m.layer_textures.as_deref() {
+                Some(l) if features.transmission_textures || features.specular_textures => {
+                    // The same factors as a metallic-roughness texture's, where it has one.
+                    base_metallic = v4(l.base, l.metallic);
+                    f0_roughness = v4(l.dielectric_f0, l.roughness);
+                    let on = |i: u32, f: bool| bits(if f { i } else { NO_TEXTURE });
+                    let (ft, fs) = (features.transmission_textures, features.specular_textures);
+                    ([on(t, ft), on(s, fs), on(sc, fs), 0.0], v4(l.specular_f0, l.specular_factor))
+                }
+                _ => ([bits(NO_TEXTURE), bits(NO_TEXTURE), bits(NO_TEXTURE), 0.0], [0.0; 4]),
+            };
             // glsl/types.glsl, GpuMaterial.surface.z.
             let cutoff = match m.alpha_mode {
                 AlphaMode::Mask { cutoff } if features.alpha_mask => cutoff,
@@ -400,6 +424,8 @@ fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 
                 medium: v4(m.medium_attenuation(), f32::from_bits(if m.one_sided { MATERIAL_ONE_SIDED } else { 0 })),
                 transmission: v4(m.transmission, 1.0 - m.lobes_weight()),
                 coat: gpu_coat(m, features, [coat, coat_roughness]),
+                layers,
+                specular,
             }
         })
         .collect()
@@ -521,7 +547,7 @@ impl SceneGpu {
         let (texture_refs, texture_indices, texels) = if features.textures {
             gpu_textures(scene)?
         } else {
-            (Vec::new(), vec![[NO_TEXTURE; 6]; scene.materials.len()], Vec::new())
+            (Vec::new(), vec![[NO_TEXTURE; 9]; scene.materials.len()], Vec::new())
         };
         let materials = gpu_materials(scene, features, &texture_indices);
         let env = match environment_map(scene) {

@@ -246,6 +246,35 @@ pub struct Material {
     /// respectively (glsl/textures.glsl, `surface_tint`).
     pub clearcoat_texture: Option<TextureRef>,
     pub clearcoat_roughness_texture: Option<TextureRef>,
+    /// KHR_materials_transmission's transmissionTexture and KHR_materials_specular's
+    /// specularTexture and specularColorTexture, with the factors the kernels recompute the
+    /// lobes from where a triangle has their texture coordinates ([`LayerTextures`]).
+    pub layer_textures: Option<Box<LayerTextures>>,
+}
+
+/// Textures that vary a glTF material's transmission and specular factors per point, and
+/// what the kernels recompute the metallic/roughness lobes from there (glsl/bsdf.glsl,
+/// `point_material`, the twin of [`Material::metallic_roughness_with_f0`] and
+/// [`Material::transmissive`]). Linear texels but for specularColorTexture (sRGB).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LayerTextures {
+    /// transmissionTexture: its R multiplies transmissionFactor (the glass weight).
+    pub transmission: Option<TextureRef>,
+    /// specularTexture: its A multiplies specularFactor.
+    pub specular: Option<TextureRef>,
+    /// specularColorTexture: its RGB (sRGB) multiplies specularColorFactor.
+    pub specular_color: Option<TextureRef>,
+    /// baseColorFactor (RGB), metallicFactor and roughnessFactor.
+    pub base: Vec3,
+    pub metallic: f32,
+    pub roughness: f32,
+    /// The dielectric's F0 of the factors (KHR_materials_ior and _specular).
+    pub dielectric_f0: Vec3,
+    /// The F0 of the IOR times specularColorFactor, not clamped, and specularFactor
+    /// (clamped to [0, 1]): the dielectric's F0 at a point is
+    /// min(specular_f0 x colour texel, 1) x specular_factor x specular texel.
+    pub specular_f0: Vec3,
+    pub specular_factor: f32,
 }
 
 /// glTF 2.0's metallicRoughnessTexture (section 3.9.2, "Metallic-Roughness Material"),
@@ -299,6 +328,7 @@ impl Default for Material {
             clearcoat_roughness: 0.0,
             clearcoat_texture: None,
             clearcoat_roughness_texture: None,
+            layer_textures: None,
         }
     }
 }

@@ -140,6 +140,7 @@ impl Importer<'_> {
         // find that set missing (NaN) and use the factors alone, while the material's
         // other textures on the set it has still apply.
         let mat = &self.scene.materials[material as usize];
+        let layers = mat.layer_textures.as_deref();
         let textures = [
             ("baseColorTexture", mat.base_color_texture.as_ref(), "the texture is not applied"),
             ("emissiveTexture", mat.emissive_texture.as_ref(), "the emissive factor alone applies"),
@@ -153,6 +154,17 @@ impl Importer<'_> {
                 "clearcoatRoughnessTexture",
                 mat.clearcoat_roughness_texture.as_ref(),
                 "the clear coat roughness alone applies",
+            ),
+            (
+                "transmissionTexture",
+                layers.and_then(|l| l.transmission.as_ref()),
+                "the transmission factor alone applies",
+            ),
+            ("specularTexture", layers.and_then(|l| l.specular.as_ref()), "the specular factor alone applies"),
+            (
+                "specularColorTexture",
+                layers.and_then(|l| l.specular_color.as_ref()),
+                "the specular colour factor alone applies",
             ),
         ];
         for (slot, texture, what) in textures {

@@ -6,7 +6,7 @@
 
 use super::extensions::{ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG, KHR_MATERIALS_CLEARCOAT};
 use super::Importer;
-use crate::scene::{AlphaMode, Material, GLTF_DIELECTRIC_F0};
+use crate::scene::{AlphaMode, LayerTextures, Material, GLTF_DIELECTRIC_F0};
 use anyhow::{bail, Result};
 use glam::Vec3;
 
@@ -94,6 +94,13 @@ impl Importer<'_> {
                 glass.base_color_texture = self.base_color_texture(&info, &label)?;
                 read.base_color = true;
             }
+            let transmission = match t.transmission_texture() {
+                Some(info) => self.info_texture(&info, &label, "KHR_materials_transmission.transmissionTexture")?,
+                None => None,
+            };
+            let factors =
+                LayerTextures { transmission, base, metallic, roughness, dielectric_f0, ..Default::default() };
+            glass.layer_textures = self.layer_textures(m, factors, &label)?;
             glass
         } else {
             self.metallic_roughness_material(m, base, metallic, roughness, &mut read, &label)?
@@ -204,6 +211,11 @@ impl Importer<'_> {
             Some(t) => Material::metallic_roughness_textured(base, metallic, roughness, dielectric_f0, t),
             None => Material::metallic_roughness_with_f0(base, metallic, roughness, dielectric_f0),
         };
+        // A smooth metal (a mirror) has no dielectric part for the specular textures to vary.
+        if mr.mirror == Vec3::ZERO {
+            let factors = LayerTextures { base, metallic, roughness, dielectric_f0, ..Default::default() };
+            mr.layer_textures = self.layer_textures(m, factors, label)?;
+        }
         if let Some(info) = pbr.base_color_texture() {
             mr.base_color_texture = self.base_color_texture(&info, label)?;
             read.base_color = true;
@@ -229,9 +241,8 @@ impl Importer<'_> {
         // occlusionTexture is read silently as nothing: ambient occlusion is what light
         // transport computes from the geometry, and a baked map would darken it twice, so
         // there is nothing missing to warn about.
-        if m.transmission().and_then(|t| t.transmission_texture()).is_some() {
-            textures.push("transmissionTexture");
-        }
+        // transmissionTexture is read wherever transmission applies (a material that is
+        // not fully metallic); elsewhere, as its factor, it has nothing to vary.
         for t in textures {
             self.warnings.warn("textures are not supported (the constant factors are used)", format!("{label} {t}"));
         }
@@ -319,13 +330,9 @@ impl Importer<'_> {
     /// specularColorFactor (the product clamped to 1) and specularFactor (the extension's
     /// `dielectric_f0`). Its f90 = specularFactor is taken as 1 (vkvcm's Schlick terms
     /// reach 1 at grazing angles), which is exact for specularFactor 0 and 1 and
-    /// approximated, with a warning, in between; its textures are not read (warning).
+    /// approximated, with a warning, in between; its textures are read by `layer_textures`.
     fn dielectric_f0(&mut self, m: &gltf::Material, label: &str) -> Result<Vec3> {
-        let f0 = match ior(m, label)? {
-            // 0.04 exactly (((1.5 - 1) / (1.5 + 1))^2 rounds to another f32).
-            None => GLTF_DIELECTRIC_F0,
-            Some(ior) => ((ior - 1.0) / (ior + 1.0)).powi(2),
-        };
+        let f0 = ior_f0(m, label)?;
         let Some(sp) = m.specular() else { return Ok(Vec3::splat(f0)) };
         let factor = sp.specular_factor();
         let color = Vec3::from_array(sp.specular_color_factor());
@@ -339,14 +346,48 @@ impl Importer<'_> {
                 label.to_string(),
             );
         }
-        if sp.specular_texture().is_some() || sp.specular_color_texture().is_some() {
-            self.warnings.warn(
-                "KHR_materials_specular textures are not read (the constant factors are used)",
-                label.to_string(),
-            );
-        }
         Ok((Vec3::splat(f0) * color).min(Vec3::ONE) * factor)
     }
+
+    /// `factors` (a material's factors, and its transmissionTexture where the transmissive
+    /// mapping read one) with `m`'s KHR_materials_specular specularTexture (A) and
+    /// specularColorTexture (RGB, sRGB) and the factors they multiply; `None` without any
+    /// of these textures.
+    fn layer_textures(
+        &mut self,
+        m: &gltf::Material,
+        factors: LayerTextures,
+        label: &str,
+    ) -> Result<Option<Box<LayerTextures>>> {
+        let mut out = factors;
+        // dielectric_f0 has checked the IOR and the factors.
+        out.specular_f0 = Vec3::splat(ior_f0(m, label)?);
+        out.specular_factor = 1.0;
+        if let Some(sp) = m.specular() {
+            if let Some(info) = sp.specular_texture() {
+                out.specular = self.info_texture(&info, label, "KHR_materials_specular.specularTexture")?;
+            }
+            if let Some(info) = sp.specular_color_texture() {
+                let slot = "KHR_materials_specular.specularColorTexture";
+                out.specular_color = self.info_texture(&info, label, slot)?;
+            }
+            out.specular_f0 *= Vec3::from_array(sp.specular_color_factor());
+            out.specular_factor = sp.specular_factor().min(1.0);
+        }
+        if out.transmission.is_none() && out.specular.is_none() && out.specular_color.is_none() {
+            return Ok(None);
+        }
+        Ok(Some(Box::new(out)))
+    }
+}
+
+/// The F0 of the material's IOR: 0.04, or ((ior - 1) / (ior + 1))^2 with KHR_materials_ior.
+fn ior_f0(m: &gltf::Material, label: &str) -> Result<f32> {
+    Ok(match ior(m, label)? {
+        // 0.04 exactly (((1.5 - 1) / (1.5 + 1))^2 rounds to another f32).
+        None => GLTF_DIELECTRIC_F0,
+        Some(ior) => ((ior - 1.0) / (ior + 1.0)).powi(2),
+    })
 }
 
 /// The material's KHR_materials_ior ior, if it has one; an error unless it is finite and

@@ -67,6 +67,19 @@ impl Importer<'_> {
         self.texture_ref(info.texture(), info.tex_coord(), transform, label, "metallicRoughnessTexture")
     }
 
+    /// A material's texture `info` in `slot` (an extension's, e.g.
+    /// `KHR_materials_transmission.transmissionTexture`), as `base_color_texture` reads a
+    /// base-colour texture.
+    pub(super) fn info_texture(
+        &mut self,
+        info: &gltf::texture::Info,
+        label: &str,
+        slot: &str,
+    ) -> Result<Option<TextureRef>> {
+        let transform = info.extension_value(KHR_TEXTURE_TRANSFORM);
+        self.texture_ref(info.texture(), info.tex_coord(), transform, label, slot)
+    }
+
     /// The material's `emissiveTexture`, as `base_color_texture` reads a base-colour texture.
     pub(super) fn emissive_texture(&mut self, info: &gltf::texture::Info, label: &str) -> Result<Option<TextureRef>> {
         let transform = info.extension_value(KHR_TEXTURE_TRANSFORM);
