@@ -226,6 +226,16 @@ fn absorbing_bulb_estimators_agree() {
 /// vertices to light vertices on the glass, segments that lie inside the medium: their
 /// transmittance must be the traced segments'. Per pixel against pt (dropping that
 /// transmittance fails 24 pixels and raises bpt's mean by a quarter).
+///
+/// Known defect: the Šidák threshold is not honest here. pt's red channel is heavy-tailed
+/// in this scene (rare large samples from the rough glass itself: the tail stays without
+/// the ball and grows with the floor and wall black), so a pixel whose pt samples missed
+/// them is low with a small variance. Over 22 seed pairs (pt 41 + 2k, bpt 42 + 2k, these
+/// counts) 6 fail, at z -5.0 to -6.8, with the shaders before visible-normal GGX sampling
+/// as with it (the same pairs, the same pixels); this pair gives -4.6 before and -4.9
+/// with it (pixel (3, 4), red), and the 22 pairs pooled no pixel beyond |z| 4.2. Four
+/// times the iterations still fail (pair 41/42: -5.0). Picking a seed would hide it: the
+/// test needs a reference without the tail.
 #[test]
 fn ball_in_an_absorbing_sphere_bpt_agrees_with_pt() {
     let size = (16u32, 16u32);
