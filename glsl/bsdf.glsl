@@ -2,7 +2,9 @@
 // lobe + GGX microfacet reflection + Fresnel-weighted mirror / smooth dielectric.
 // Component choice and Russian roulette follow SmallVCM (Georgiev & Davidovic), as
 // docs/smallvcm.md 2.4 states: component probabilities proportional to luminance
-// albedo, continuation probability = clamp(max RGB of (diffuse + phong + glossy +
+// albedo (but for an opaque material's GGX lobe and the diffuse lobe under its coat,
+// weighted by Fresnel at the fixed direction: fresnel_lobe_weights; SmallVCM's
+// materials have neither, so their rule is unchanged), continuation probability = clamp(max RGB of (diffuse + phong + glossy +
 // F mirror) + (1 - F), 0, 1) (glossy is zero for SmallVCM's materials, so their rule is
 // unchanged). pt.comp does not use this continuation probability (pbrt-v4's rule there).
 //
@@ -12,10 +14,12 @@
 // G2 = 1 / (1 + Lambda(wo) + Lambda(wi)) as in Heitz, "Understanding the Masking-
 // Shadowing Function in Microfacet-Based BRDFs" (JCGT 2014); Schlick's Fresnel with
 // F0 = the lobe's colour (a metal's colour, or 0.04 for a dielectric coat). It is
-// sampled by D(h) cos(theta_h) (Walter 2007), not by the visible normals (Heitz 2018):
-// pdf(wi | wo) = D(h) cos(theta_h) / (4 |wo.h|), and since wo.h = wi.h for a reflection
-// the reverse pdf has the same form with wi.h. f, being reciprocal, needs no adjoint
-// correction.
+// sampled by the normals visible from wo, D_wo(h) = G1(wo) D(h) max(0, wo.h) / (n.wo)
+// (Heitz, "Sampling the GGX Distribution of Visible Normals", JCGT 2018), drawn as
+// Dupuy & Benyoub's spherical caps ("Sampling Visible GGX Normals with Spherical Caps",
+// HPG 2023): pdf(wi | wo) = D_wo(h) / (4 wo.h) = G1(wo) D(h) / (4 n.wo), and the reverse
+// pdf, sampling wo from wi, G1(wi) D(h) / (4 n.wi). f, being reciprocal, needs no
+// adjoint correction.
 //
 // Shading normals (interpolated vertex normals) follow Veach's thesis (1997), ch. 5.3:
 // every lobe is evaluated and sampled about the shading normal n, while the geometric
@@ -48,8 +52,9 @@
 // for importance (light subpaths: the adjoint BSDF, Veach 1997, 5.2; the same rule as the
 // smooth refraction's `scale`). The reverse pdfs swap wo and wi: for reflection |wi.h| in
 // place of |wo.h|, for transmission eta^2 |wo.h| in place of |wi.h| (the Fresnel term of a
-// refracted pair is the same both ways). Sampling: h from D(h) (n.h) about n (as the GGX
-// lobe), then reflection with probability F(wo.h), else refraction about h. The geometric
+// refracted pair is the same both ways). Sampling: h from D(h) (n.h) about n (Walter
+// 2007, ggx_sample_h_d; not yet by the visible normals as the GGX lobe), then reflection
+// with probability F(wo.h), else refraction about h. The geometric
 // normal decides reflection or transmission (the shading-normal rules above: a direction
 // on wo's side is a reflection, on the other side a transmission, and the shading normal
 // must agree or the BSDF is 0); a sample whose side is not the event drawn is rejected, so
@@ -249,9 +254,25 @@ float ggx_lambda(float c, float a) {
     return 0.5 * (sqrt(1.0 + a * a * tan2) - 1.0);
 }
 
+// A half vector drawn from the GGX normals visible from `wo` (n.wo > 0), width `a`,
+// uniform `u`: density D_wo(h) = G1(wo) D(h) max(0, wo.h) / (n.wo) (the header). Dupuy &
+// Benyoub 2023: in the configuration stretched to a = 1 the visible normals are h = c +
+// wo', with c uniform on the spherical cap z >= -wo'.z of the unit sphere; unstretch.
+vec3 ggx_sample_h(vec3 n, vec3 wo, float a, vec2 u) {
+    vec3 t, b;
+    make_frame(n, t, b);
+    vec3 v = normalize(vec3(a * dot(wo, t), a * dot(wo, b), dot(wo, n)));
+    float phi = 2.0 * PI * u.x;
+    float z = (1.0 - u.y) * (1.0 + v.z) - v.z;
+    float r = sqrt(clamp(1.0 - z * z, 0.0, 1.0));
+    vec3 h = vec3(r * cos(phi), r * sin(phi), z) + v;
+    return normalize(a * h.x * t + a * h.y * b + max(h.z, 0.0) * n);
+}
+
 // A half vector drawn from D(h) cos(theta_h) about n for width `a` and uniform `u`:
 // tan^2(theta_h) = a^2 u.x / (1 - u.x), phi = 2 pi u.y (Walter et al. 2007, eq. 35-36).
-vec3 ggx_sample_h(vec3 n, float a, vec2 u) {
+// The rough dielectric's sampling (its pdfs in rough_dielectric_eval).
+vec3 ggx_sample_h_d(vec3 n, float a, vec2 u) {
     float t2 = a * a * u.x / max(1.0 - u.x, 1e-7);
     float ch = 1.0 / sqrt(1.0 + t2);
     float sh = sqrt(max(0.0, 1.0 - ch * ch));
@@ -259,9 +280,12 @@ vec3 ggx_sample_h(vec3 n, float a, vec2 u) {
     return to_world(vec3(sh * cos(phi), sh * sin(phi), ch), n);
 }
 
+// Smith's G1 = 1 / (1 + Lambda) for GGX at |cos(theta)| = `c` > 0.
+float ggx_g1(float c, float a) { return 1.0 / (1.0 + ggx_lambda(c, a)); }
+
 // The GGX lobe for unit wo, wi above the surface (cos_o, cos_i > 0): f, and the pdfs of
-// sampling wi given wo (fwd) and wo given wi (rev) by D(h) cos(theta_h), without the
-// component probability.
+// sampling wi given wo (fwd) and wo given wi (rev) by the visible normals (ggx_sample_h),
+// without the component probability.
 vec3 ggx_eval(vec3 n, vec3 wo, vec3 wi, float cos_o, float cos_i, vec3 f0, float a, out float pdf_fwd,
               out float pdf_rev) {
     pdf_fwd = 0.0;
@@ -277,8 +301,8 @@ vec3 ggx_eval(vec3 n, vec3 wo, vec3 wi, float cos_o, float cos_i, vec3 f0, float
     float d = ggx_d(ch, a);
     float g2 = 1.0 / (1.0 + ggx_lambda(cos_o, a) + ggx_lambda(cos_i, a));
     vec3 fr = schlick(f0, oh);
-    pdf_fwd = d * ch / (4.0 * oh);
-    pdf_rev = d * ch / (4.0 * ih);
+    pdf_fwd = ggx_g1(cos_o, a) * d / (4.0 * cos_o);
+    pdf_rev = ggx_g1(cos_i, a) * d / (4.0 * cos_i);
     return fr * (d * g2 / (4.0 * cos_o * cos_i));
 }
 
@@ -295,6 +319,21 @@ vec3 ggx_eval(vec3 n, vec3 wo, vec3 wi, float cos_o, float cos_i, vec3 f0, float
 float diffuse_fresnel_weight(float f0, float cos_o, float cos_i) {
     return (1.0 - schlick(f0, cos_o)) * (1.0 - schlick(f0, cos_i)) / (1.0 - (f0 + (1.0 - f0) / 21.0));
 }
+
+#if HAS_GGX
+// The selection weights of an opaque material's diffuse and GGX lobes when the fixed
+// direction has cos(theta) = `c` (> 0, shading normal): estimates of their directional
+// albedos, Schlick's F(c) for the GGX lobe (Fresnel at the half vector averages near it)
+// and (1 - F_d(c)) base for the diffuse lobe under the dielectric interface (exact:
+// diffuse_fresnel_weight's cosine-weighted integral over wi is 1 - F_d(c)), instead of
+// SmallVCM's luminance albedos, which pick the 4% coat as seldom at grazing angles as at
+// normal incidence, where it reflects most. A lobe that is absent stays at 0.
+void fresnel_lobe_weights(GpuMaterial m, vec3 tint, float c, inout float a_d, inout float a_g) {
+    if (a_g > 0.0) a_g = luminance(schlick(glossy_colour(m, tint), c));
+    float f0 = m.mirror.w;
+    if (f0 > 0.0) a_d *= 1.0 - schlick(f0, c);
+}
+#endif
 
 // `ng`: geometric normal (for a dielectric it must point outwards); `ns`: shading normal
 // on the same side as ng (== ng for flat shading); `tint`: the point's tint (Surface.tint).
@@ -342,6 +381,9 @@ Bsdf base_bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, T
     vec3 glossy = glossy_colour(m, tint.rgb);
     a_g = luminance(glossy);
     albedo += glossy;
+    // Opaque materials only: a dielectric's interface components also change with the
+    // direction, and lobes_eval's reverse probabilities assume only these two do.
+    if (ior < 0.0 && b.valid) fresnel_lobe_weights(m, tint.rgb, dot(b.n, wo), a_d, a_g);
 #endif
 #if HAS_PARTIAL_TRANSMISSION
     // Partial transmission (the header): the lobes so far carry 1 - the glass weight, the
@@ -433,9 +475,6 @@ Bsdf base_bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, T
 }
 
 #if HAS_ROUGH_DIELECTRIC
-// Smith's G1 = 1 / (1 + Lambda) for GGX at |cos(theta)| = `c` > 0.
-float ggx_g1(float c, float a) { return 1.0 / (1.0 + ggx_lambda(c, a)); }
-
 // The rough dielectric (the header): f(wo, wi) for wi on either side of the surface, with
 // the pdfs of sampling wi given wo (fwd) and wo given wi (rev).
 vec3 rough_dielectric_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
@@ -509,6 +548,30 @@ float lobe_side(Bsdf b) {
 #endif
 }
 
+#if HAS_GGX
+// An opaque material's diffuse and GGX selection probabilities with `c` the fixed
+// direction's cosine (fresnel_lobe_weights), for the reverse pdfs; the other components'
+// weights (Phong, mirror: luminance albedos) do not depend on it.
+void lobe_probs_at(Bsdf b, GpuMaterial m, float c, inout float p_d, inout float p_g) {
+    float a_d = 0.0, a_g = 0.0, rest = 0.0;
+#if HAS_DIFFUSE
+    a_d = luminance(diffuse_colour(m, b.tint.rgb));
+#endif
+    a_g = luminance(glossy_colour(m, b.tint.rgb));
+#if HAS_PHONG
+    rest += luminance(m.phong.rgb);
+#endif
+#if HAS_MIRROR
+    rest += luminance(mirror_colour(m, b.tint.rgb));
+#endif
+    fresnel_lobe_weights(m, b.tint.rgb, c, a_d, a_g);
+    float total = a_d + a_g + rest;
+    if (total < 1e-9) return;
+    p_d = a_d / total;
+    p_g = a_g / total;
+}
+#endif
+
 // The diffuse, Phong and GGX lobes: f(wo, wi) and the pdfs with their component
 // probabilities (bsdf_eval).
 vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
@@ -526,6 +589,12 @@ vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
 #endif
     GpuMaterial m = point_material(b.material, b.tint);
     vec3 f = vec3(0.0);
+    // The component probabilities of sampling wo from wi (the reverse pdf): bsdf_init's,
+    // but for the lobes whose selection weight depends on the fixed direction.
+    float rev_d = b.prob_diffuse, rev_g = b.prob_glossy;
+#if HAS_GGX
+    if (m.phong.w < 0.0) lobe_probs_at(b, m, cos_i, rev_d, rev_g);
+#endif
 #if HAS_DIFFUSE
     if (b.prob_diffuse > 0.0) {
         float f0 = m.mirror.w;
@@ -535,7 +604,7 @@ vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
             f += diffuse_colour(m, b.tint.rgb) * INV_PI;
         }
         pdf_fwd += b.prob_diffuse * cos_i * INV_PI;
-        pdf_rev += b.prob_diffuse * cos_o * INV_PI;
+        pdf_rev += rev_d * cos_o * INV_PI;
     }
 #endif
 #if HAS_PHONG
@@ -557,7 +626,7 @@ vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
         float pf, pr;
         f += ggx_eval(n, b.wo, wi, cos_o, cos_i, glossy_colour(m, b.tint.rgb), m.glossy.w, pf, pr);
         pdf_fwd += b.prob_glossy * pf;
-        pdf_rev += b.prob_glossy * pr;
+        pdf_rev += rev_g * pr;
     }
 #endif
 #if HAS_PARTIAL_TRANSMISSION
@@ -647,7 +716,7 @@ BsdfSample base_bsdf_sample(Bsdf b, vec3 u) {
         float x_rough = (x - p_nonspec) / b.prob_rough;
         GpuMaterial mr = material_at(b.material);
         float side = dot(b.ng, b.wo) >= 0.0 ? 1.0 : -1.0;
-        vec3 h = ggx_sample_h(side * b.n, mr.emission.w, u.xy);
+        vec3 h = ggx_sample_h_d(side * b.n, mr.emission.w, u.xy);
         float oh = dot(b.wo, h);
         if (oh < EPS_COSINE) return s;
         bool reflect_h = x_rough < fresnel_dielectric(side * oh, mr.phong.w);
@@ -683,8 +752,8 @@ BsdfSample base_bsdf_sample(Bsdf b, vec3 u) {
 #endif
 #if HAS_GGX
         if (x >= b.prob_diffuse + b.prob_phong) {
-            // GGX: half vector from D(h) cos(theta_h), then reflect wo about it.
-            vec3 h = ggx_sample_h(n, m.glossy.w, u.xy);
+            // GGX: half vector from the normals visible from wo, then reflect wo about it.
+            vec3 h = ggx_sample_h(n, b.wo, m.glossy.w, u.xy);
             float oh = dot(b.wo, h);
             if (oh <= 0.0) return s;
             s.wi = 2.0 * oh * h - b.wo;

@@ -220,14 +220,20 @@ fn absorbing_bulb_estimators_agree() {
 }
 
 /// A diffuse ball inside an absorbing rough glass sphere (IOR 1.5, roughness 1), lit from
-/// outside by a spot light: the ball is reached only through the medium. Next-event rays
-/// from the ball end on the glass (it blocks them), so pt lights it by next-event
-/// estimation at the glass's inner side, while bpt and vcm also connect the ball's
-/// vertices to light vertices on the glass, segments that lie inside the medium: their
-/// transmittance must be the traced segments'. Per pixel against pt (dropping that
-/// transmittance fails 24 pixels and raises bpt's mean by a quarter).
+/// outside by a spot light: the ball is reached only through the medium. bpt and vcm
+/// connect the ball's vertices to light vertices on the glass, segments that lie inside the
+/// medium: their transmittance must be the traced segments'. Per pixel against light
+/// tracing, whose only connections (to the camera, from the glass's outer side) are outside
+/// the medium (dropping that transmittance fails every seed pair tried, z -6.1 to -6.6, and
+/// raises bpt's mean by a quarter).
+///
+/// Not against pt: its red channel is heavy-tailed here (rare large samples from the rough
+/// glass itself), so a pixel whose pt samples missed them is low with a small variance, and
+/// the Šidák threshold fails about 6 seed pairs in 22 (z -5.0 to -6.8; the 22 pooled, no
+/// pixel beyond |z| 4.2). lt against bpt: 0 of 22 pairs fail (lt 41 + 2k, bpt 42 + 2k),
+/// worst |z| 4.3, with visible-normal GGX sampling as without.
 #[test]
-fn ball_in_an_absorbing_sphere_bpt_agrees_with_pt() {
+fn ball_in_an_absorbing_sphere_bpt_agrees_with_lt() {
     let size = (16u32, 16u32);
     let (mut scene, a) = floor_with_absorbing_glass(1.0, Vec3::new(1.0, 3.0, 6.0), Vec3::ONE);
     scene.materials.push(Material { name: "ball".into(), diffuse: Vec3::splat(0.8), ..Default::default() });
@@ -254,12 +260,12 @@ fn ball_in_an_absorbing_sphere_bpt_agrees_with_pt() {
     let glass = primary_hit_mask(&scene, size.0, size.1, |m| m.ior >= 0.0);
     assert!(glass.iter().filter(|&&g| g).count() > 100, "the sphere fills the view");
     with_gpu(|gpu| {
-        let pt = render_stats(&render(gpu, &scene, Algorithm::Pt, true, size, 4096, 41), Some(&glass));
+        let lt = render_stats(&render(gpu, &scene, Algorithm::Lt, true, size, 4096, 41), Some(&glass));
         // bpt only: vcm connects through the same code (glsl/camera_subpath.comp,
         // connect_vertices), and its merges at the glass's silhouette keep a bias at
         // 1024 iterations that a single pixel's z-test can see.
         let bpt = render_stats(&render(gpu, &scene, Algorithm::Bpt, true, size, 1024, 42), Some(&glass));
-        eprintln!("bpt: image mean PT {:.5}, BPT {:.5}", image_mean(&pt), image_mean(&bpt));
-        welch_test(&pt, &bpt, ALPHA).unwrap().assert_passed("ball_in_medium_pt_vs_bpt");
+        eprintln!("bpt: image mean LT {:.5}, BPT {:.5}", image_mean(&lt), image_mean(&bpt));
+        welch_test(&lt, &bpt, ALPHA).unwrap().assert_passed("ball_in_medium_lt_vs_bpt");
     });
 }

@@ -105,11 +105,14 @@ vec3 clearcoat_eval(Bsdf b, vec3 wi, vec3 f_base, inout float pdf_fwd, inout flo
     return f;
 }
 
-// Draws wi from the coat's GGX lobe (h from D(h) cos(theta_h) about the normal, wo
-// reflected about it), valued by the whole blend.
+// Draws wi from the coat's GGX lobe (h from the normals visible from wo, wo reflected
+// about it), valued by the whole blend.
 BsdfSample clearcoat_sample(Bsdf b, vec2 u) {
     BsdfSample s = no_sample();
-    vec3 h = ggx_sample_h(b.n, b.coat_alpha, u);
+    // Visible normals need wo above the coat (ggx_sample_h); clearcoat_eval gives the coat
+    // no pdf otherwise either.
+    if (dot(b.n, b.wo) < EPS_COSINE) return s;
+    vec3 h = ggx_sample_h(b.n, b.wo, b.coat_alpha, u);
     float oh = dot(b.wo, h);
     if (oh <= 0.0) return s;
     s.wi = 2.0 * oh * h - b.wo;
