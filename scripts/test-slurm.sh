@@ -60,22 +60,23 @@ doc_line() {
   printf '%s\n' "$line"
 }
 
-# The field $2 (JobState, ExitCode, Reason) of job $1 (a job id or ARRAYID_TASK).
+# The field $2 (JobState, ExitCode, Reason) of job $1 (a job id or ARRAYID_TASK); empty
+# when slurmctld does not answer in 5 s.
 job_field() {
-  scontrol -o show job "$1" | tr ' ' '\n' | sed -n "s/^$2=//p" | head -n1
+  timeout 5 scontrol -o show job "$1" | tr ' ' '\n' | sed -n "s/^$2=//p" | head -n1
 }
 
-# Waits up to $2 seconds for job $1 to end; fails unless it ended in state $3.
+# Waits up to $2 seconds of wall time for job $1 to end; fails unless it ended in state $3.
 wait_job() {
-  local id=$1 timeout=$2 want=$3 state
-  for _ in $(seq $((timeout * 10))); do
+  local id=$1 want=$3 state deadline=$(($(date +%s) + $2))
+  while [ "$(date +%s)" -lt "$deadline" ]; do
     state=$(job_field "$id" JobState)
     case "$state" in
       PENDING | RUNNING | CONFIGURING | COMPLETING | "") sleep 0.1 ;;
       *) break ;;
     esac
   done
-  [ "$state" = "$want" ] || fail "job $id: state $state after up to $timeout s, expected $want"
+  [ "$state" = "$want" ] || fail "job $id: state $state after up to $2 s, expected $want"
 }
 
 # The pid of array task $1's vkvcm once it is rendering: after its first progress line, which

@@ -30,7 +30,7 @@ stop_daemons() {
     [ -f "$f" ] || continue
     pid=$(cat "$f")
     rm -f "$f"
-    [ -n "$pid" ] && tr '\0' ' ' <"/proc/$pid/cmdline" 2>/dev/null | grep -qF "$dir/" || continue
+    [ -n "$pid" ] && { tr '\0' ' ' <"/proc/$pid/cmdline"; } 2>/dev/null | grep -qF "$dir/" || continue
     kill "$pid" 2>/dev/null && pids+=("$pid")
   done
   for pid in "${pids[@]}"; do
@@ -39,10 +39,15 @@ stop_daemons() {
   done
 }
 
-# Waits up to $1 seconds for the command after it to succeed.
+# Waits up to $1 seconds of wall time for the command after it to succeed. Each try is
+# cut at 5 s: with no slurmctld listening (e.g. its port taken by another cluster) a
+# client command such as sinfo retries for far longer than the whole wait.
 wait_for() {
-  local timeout=$1; shift
-  for _ in $(seq $((timeout * 10))); do "$@" >/dev/null 2>&1 && return 0; sleep 0.1; done
+  local deadline=$(($(date +%s) + $1)); shift
+  while [ "$(date +%s)" -lt "$deadline" ]; do
+    timeout 5 "$@" >/dev/null 2>&1 && return 0
+    sleep 0.1
+  done
   return 1
 }
 
@@ -122,7 +127,7 @@ stop() {
   # belong to slurmd's step daemons, which would otherwise outlive the cluster.
   if [ -f "$dir/slurmctld.pid" ]; then
     export SLURM_CONF=$dir/slurm.conf
-    scancel --quiet --user "$(id -un)" 2>/dev/null || true
+    timeout 10 scancel --quiet --user "$(id -un)" 2>/dev/null || true
     wait_for 10 bash -c '[ -z "$(squeue -h -o %i)" ]' || true
   fi
   stop_daemons "$dir/slurmd.pid" "$dir/slurmctld.pid" "$dir/munge/munged.pid"
