@@ -701,6 +701,17 @@ BsdfSample no_sample() {
     return s;
 }
 
+// Completes a sample whose non-specular direction s.wi a lobe drew: valued by the whole
+// BSDF with both pdfs (every lobe that could have drawn it); not ok where none could.
+BsdfSample valued_sample(Bsdf b, BsdfSample s) {
+    vec3 f = bsdf_eval(b, s.wi, s.pdf, s.pdf_rev);
+    if (s.pdf <= 0.0) return s;
+    s.cos_wi = bsdf_cos_geometric(b, s.wi);
+    s.weight = f * (bsdf_cos(b, s.wi) / s.pdf);
+    s.ok = true;
+    return s;
+}
+
 BsdfSample base_bsdf_sample(Bsdf b, vec3 u) {
     BsdfSample s = no_sample();
     if (!b.valid) return s;
@@ -731,12 +742,7 @@ BsdfSample base_bsdf_sample(Bsdf b, vec3 u) {
         }
         // bsdf_eval's event (the geometric side of wi) must be the one drawn.
         if ((side * dot(b.ng, s.wi) > 0.0) != reflect_h) return s;
-        vec3 f = bsdf_eval(b, s.wi, s.pdf, s.pdf_rev);
-        if (s.pdf <= 0.0) return s;
-        s.cos_wi = bsdf_cos_geometric(b, s.wi);
-        s.weight = f * (bsdf_cos(b, s.wi) / s.pdf);
-        s.ok = true;
-        return s;
+        return valued_sample(b, s);
     }
 #endif
     GpuMaterial m = point_material(b.material, b.tint);
@@ -771,12 +777,8 @@ BsdfSample base_bsdf_sample(Bsdf b, vec3 u) {
             return s;  // unreachable: x < p_nonspec selects a present component
 #endif
         }
-        vec3 f = bsdf_eval(b, s.wi, s.pdf, s.pdf_rev);
-        if (s.pdf <= 0.0 || dot(n, s.wi) < EPS_COSINE) return s;
-        s.cos_wi = bsdf_cos_geometric(b, s.wi);
-        s.weight = f * (bsdf_cos(b, s.wi) / s.pdf);
-        s.ok = true;
-        return s;
+        if (dot(n, s.wi) < EPS_COSINE) return s;
+        return valued_sample(b, s);
     }
 #endif
     s.specular = true;

@@ -117,12 +117,7 @@ BsdfSample clearcoat_sample(Bsdf b, vec2 u) {
     if (oh <= 0.0) return s;
     s.wi = 2.0 * oh * h - b.wo;
     if (dot(b.n, s.wi) < EPS_COSINE) return s;
-    vec3 f = bsdf_eval(b, s.wi, s.pdf, s.pdf_rev);
-    if (s.pdf <= 0.0) return s;
-    s.cos_wi = bsdf_cos_geometric(b, s.wi);
-    s.weight = f * (bsdf_cos(b, s.wi) / s.pdf);
-    s.ok = true;
-    return s;
+    return valued_sample(b, s);
 }
 
 // A specular sample of the base (mirror or refraction, drawn with probability 1 - p(wo)
