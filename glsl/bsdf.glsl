@@ -94,7 +94,7 @@
 // is a property of the point, so bsdf_init, bsdf_eval and bsdf_sample all see the same
 // lobes, and the component probabilities and pdfs stay exact.
 //
-// Layers over the whole material (the clear coat, glsl/lobes/clearcoat.glsl) wrap the
+// Layers over the whole material (the sheen and the clear coat, glsl/lobes/) wrap the
 // base at the end of this file: bsdf_init, bsdf_eval and bsdf_sample are the base's
 // (base_bsdf_*) with the layers applied.
 //
@@ -132,6 +132,12 @@ struct Bsdf {
     // The clear coat (glsl/lobes/clearcoat.glsl): its factor, GGX alpha, its sampling
     // probability at wo, and the base's albedo its sampling probabilities use.
     float coat_weight, coat_alpha, prob_coat, coat_base_albedo;
+#endif
+#if HAS_SHEEN
+    // The sheen (glsl/lobes/sheen.glsl): its colour, max(colour), roughness, its sampling
+    // probability at wo, and the base's albedo its sampling probabilities use.
+    vec3 sheen_colour;
+    float sheen_max, sheen_roughness, prob_sheen, sheen_base_albedo;
 #endif
 };
 
@@ -834,12 +840,33 @@ BsdfSample base_bsdf_sample(Bsdf b, vec3 u) {
     return s;
 }
 
+// For the layers of glsl/lobes/: whether wo is off the geometric surface and above the
+// shading one on that side (bsdf_init's validity; the base may be invalid for its zero
+// albedo alone), and a luminance albedo of the base that does not depend on directions
+// (their sampling probabilities): its lobes' colours, plus the glass weight of a
+// dielectric's interface (which reflects and transmits all it receives) or the mirror
+// colour of an opaque material.
+bool bsdf_wo_seen(Bsdf b) {
+    float c = dot(b.ng, b.wo);
+    return abs(c) >= EPS_COSINE && (c >= 0.0 ? dot(b.n, b.wo) : -dot(b.n, b.wo)) >= EPS_COSINE;
+}
+float base_albedo_luminance(GpuMaterial m, Tint tint) {
+    float lobes = luminance(diffuse_colour(m, tint.rgb) + m.phong.rgb + glossy_colour(m, tint.rgb));
+    if (m.phong.w >= 0.0) return lobes * (1.0 - m.transmission.w) + m.transmission.w;
+    return lobes + luminance(mirror_colour(m, tint.rgb));
+}
+
 // The material's BSDF: the base above (the lobes of this file) under the layers of
-// glsl/lobes/ that the material has. Without such layers, the base's, bit for bit.
+// glsl/lobes/ that the material has (glTF's order: the coat over the sheen over the
+// base). Without such layers, the base's, bit for bit.
+#include "lobes/sheen.glsl"
 #include "lobes/clearcoat.glsl"
 
 Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint tint) {
     Bsdf b = base_bsdf_init(material, ng, ns, wo, from_light, tint);
+#if HAS_SHEEN
+    sheen_init(b, point_material(material, tint));
+#endif
 #if HAS_CLEARCOAT
     clearcoat_init(b, point_material(material, tint));
 #endif
@@ -851,6 +878,9 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint t
 // roulette.
 vec3 bsdf_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
     vec3 f = base_bsdf_eval(b, wi, pdf_fwd, pdf_rev);
+#if HAS_SHEEN
+    if (b.sheen_max > 0.0) f = sheen_eval(b, wi, f, pdf_fwd, pdf_rev);
+#endif
 #if HAS_CLEARCOAT
     if (b.coat_weight > 0.0) f = clearcoat_eval(b, wi, f, pdf_fwd, pdf_rev);
 #endif
@@ -864,7 +894,16 @@ BsdfSample bsdf_sample(Bsdf b, vec3 u) {
         u.z = (u.z - b.prob_coat) / (1.0 - b.prob_coat);
     }
 #endif
+#if HAS_SHEEN
+    if (b.prob_sheen > 0.0) {
+        if (u.z < b.prob_sheen) return sheen_sample(b, u.xy);
+        u.z = (u.z - b.prob_sheen) / (1.0 - b.prob_sheen);
+    }
+#endif
     BsdfSample s = base_bsdf_sample(b, u);
+#if HAS_SHEEN
+    if (s.ok && s.specular && b.sheen_max > 0.0) sheen_specular(b, s);
+#endif
 #if HAS_CLEARCOAT
     if (s.ok && s.specular && b.coat_weight > 0.0) clearcoat_specular(b, s);
 #endif

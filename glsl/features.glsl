@@ -59,6 +59,18 @@
 #if HAS_CLEARCOAT_TEXTURES && !HAS_CLEARCOAT
 #error "HAS_CLEARCOAT_TEXTURES needs HAS_CLEARCOAT"
 #endif
+// A sheen over some material (KHR_materials_sheen; glsl/lobes/sheen.glsl).
+#ifndef HAS_SHEEN
+#define HAS_SHEEN 1
+#endif
+// Sheens whose colour or roughness a texture varies per point (glsl/textures.glsl
+// `surface_tint`; light vertices carry the point's values).
+#ifndef HAS_SHEEN_TEXTURES
+#define HAS_SHEEN_TEXTURES 1
+#endif
+#if HAS_SHEEN_TEXTURES && !HAS_SHEEN
+#error "HAS_SHEEN_TEXTURES needs HAS_SHEEN"
+#endif
 // Light kinds (glsl/lights.glsl).
 #ifndef HAS_AREA_LIGHTS
 #define HAS_AREA_LIGHTS 1

@@ -61,6 +61,7 @@ layout(std430) writeonly buffer light_vertex_chunk_counts { uint lv_chunk_count[
 //   with HAS_CLEARCOAT_TEXTURES:  b[Bi+LV_COAT] = (tint.coat, tint.coat_roughness, 0, 0)
 //   with HAS_TRANSMISSION_TEXTURES: b[Bi+LV_TRANSMISSION] = (tint.transmission, 0, 0, 0)
 //   with HAS_SPECULAR_TEXTURES:   b[Bi+LV_SPECULAR] = tint.specular
+//   with HAS_SHEEN_TEXTURES:      b[Bi+LV_SHEEN] = tint.sheen
 // B = 2 + the others (src/render/light_vertex_store.rs, LightVertexPlan, sizes the store
 // the same way; light_vertex_compact.comp copies B vec4 per vertex). The point's metallic
 // and roughness (a metallic-roughness texture's texel) fill the two vec4s' spare w, so a
@@ -70,7 +71,8 @@ layout(std430) writeonly buffer light_vertex_chunk_counts { uint lv_chunk_count[
 #define LV_COAT (LV_TINT + (HAS_VERTEX_ATTRIBUTES != 0 ? 1u : 0u))
 #define LV_TRANSMISSION (LV_COAT + (HAS_CLEARCOAT_TEXTURES != 0 ? 1u : 0u))
 #define LV_SPECULAR (LV_TRANSMISSION + (HAS_TRANSMISSION_TEXTURES != 0 ? 1u : 0u))
-#define LV_B_STRIDE (LV_SPECULAR + (HAS_SPECULAR_TEXTURES != 0 ? 1u : 0u))
+#define LV_SHEEN (LV_SPECULAR + (HAS_SPECULAR_TEXTURES != 0 ? 1u : 0u))
+#define LV_B_STRIDE (LV_SHEEN + (HAS_SHEEN_TEXTURES != 0 ? 1u : 0u))
 struct LightVertex {
     vec3 p;
     vec3 thr;
@@ -109,6 +111,9 @@ void lv_store(uint slot, LightVertex v) {
 #if HAS_SPECULAR_TEXTURES
     lv_scratch_b[LV_B_STRIDE * slot + LV_SPECULAR] = v.tint.specular;
 #endif
+#if HAS_SHEEN_TEXTURES
+    lv_scratch_b[LV_B_STRIDE * slot + LV_SHEEN] = v.tint.sheen;
+#endif
 }
 #endif
 
@@ -143,6 +148,9 @@ LightVertex lv_load(uint slot) {
 #endif
 #if HAS_SPECULAR_TEXTURES
     v.tint.specular = lv_b_at(LV_B_STRIDE * slot + LV_SPECULAR);
+#endif
+#if HAS_SHEEN_TEXTURES
+    v.tint.sheen = lv_b_at(LV_B_STRIDE * slot + LV_SHEEN);
 #endif
     uint info = floatBitsToUint(b1.w);
     v.material = info & 0xffffffu;

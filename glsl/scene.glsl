@@ -93,7 +93,7 @@ GpuSphere sphere_at(uint i) {
     return s;
 }
 // GpuMaterial's vec4s, in field order.
-#define MATERIAL_TEXELS 14u
+#define MATERIAL_TEXELS 16u
 GpuMaterial material_at(uint i) {
     GpuMaterial m;
     uint k = MATERIAL_TEXELS * i;
@@ -111,6 +111,8 @@ GpuMaterial material_at(uint i) {
     m.coat = texel_vec4(materials, k + 11u);
     m.layers = texel_vec4(materials, k + 12u);
     m.specular = texel_vec4(materials, k + 13u);
+    m.sheen = texel_vec4(materials, k + 14u);
+    m.sheen_maps = texel_vec4(materials, k + 15u);
     return m;
 }
 vec4 material_surface(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 5u); }
@@ -118,6 +120,7 @@ vec4 material_maps(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 
 vec4 material_medium(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 9u); }
 vec4 material_coat(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 11u); }
 vec4 material_layers(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 12u); }
+vec4 material_sheen_maps(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 15u); }
 GpuLight light_at(uint i) {
     GpuLight l;
     l.a = texel_vec4(lights, 5u * i);
@@ -144,6 +147,7 @@ vec4 material_maps(uint i) { return material_data[i].maps; }
 vec4 material_medium(uint i) { return material_data[i].medium; }
 vec4 material_coat(uint i) { return material_data[i].coat; }
 vec4 material_layers(uint i) { return material_data[i].layers; }
+vec4 material_sheen_maps(uint i) { return material_data[i].sheen_maps; }
 GpuLight light_at(uint i) { return light_data[i]; }
 #endif
 

@@ -156,9 +156,11 @@ struct Tint {
     float transmission;    // multiplies transmissionFactor (transmissionTexture's R)
     vec4 specular;         // rgb: multiplies specularColorFactor (specularColorTexture's RGB),
                            // a: specularFactor (specularTexture's A)
+    vec4 sheen;            // rgb: multiplies sheenColorFactor (sheenColorTexture's RGB),
+                           // a: sheenRoughnessFactor (sheenRoughnessTexture's A)
 };
 
-Tint no_tint() { return Tint(vec3(1.0), 1.0, 1.0, 1.0, 1.0, 1.0, vec4(1.0)); }
+Tint no_tint() { return Tint(vec3(1.0), 1.0, 1.0, 1.0, 1.0, 1.0, vec4(1.0), vec4(1.0)); }
 
 // The tint (rgb) and alpha (times the material's alpha factor) of triangle `tri` with
 // material `material` at barycentric weights (u, v): (1, 1, 1, factor) where it has no
@@ -217,6 +219,21 @@ Tint surface_tint(uint tri, uint material, float u, float v) {
         if (cref != NO_TEXTURE && texture_uv(cref, c0, c1, c2, 1.0 - u - v, u, v, cuv)) {
             t.coat_roughness = texture_sample(cref, cuv).g;
         }
+    }
+#endif
+#if HAS_SHEEN_TEXTURES
+    // KHR_materials_sheen: colour factor x sheenColorTexture's RGB (sRGB), roughness x
+    // sheenRoughnessTexture's A (linear).
+    vec4 sheen_maps = material_sheen_maps(material);
+    GpuVertexAttributes h0, h1, h2;
+    vec2 huv;
+    if (triangle_attributes(tri, h0, h1, h2)) {
+        uint href = floatBitsToUint(sheen_maps.x);
+        if (href != NO_TEXTURE && texture_uv(href, h0, h1, h2, 1.0 - u - v, u, v, huv)) {
+            t.sheen.rgb = texture_sample(href, huv).rgb;
+        }
+        href = floatBitsToUint(sheen_maps.y);
+        if (href != NO_TEXTURE && texture_uv(href, h0, h1, h2, 1.0 - u - v, u, v, huv)) t.sheen.a = texture_sample(href, huv).a;
     }
 #endif
 #if HAS_TRANSMISSION_TEXTURES || HAS_SPECULAR_TEXTURES

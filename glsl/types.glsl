@@ -16,6 +16,7 @@
 #define ALPHA_OPAQUE (-1.0)
 #define ALPHA_BLEND (-2.0)
 #define MIN_GGX_ALPHA 1e-3
+#define MIN_SHEEN_ROUGHNESS 0.07  // src/render/gpu_types.rs, tests/common/sheen.rs
 #define MATERIAL_ONE_SIDED 1u
 
 struct GpuMaterial {
@@ -40,6 +41,8 @@ struct GpuMaterial {
                          // z, w: its factor's and roughness's textures or NO_TEXTURE (bits)
     vec4 layers;         // transmission, specular and specular colour textures or NO_TEXTURE (bits), w reserved
     vec4 specular;       // rgb: F0 of the IOR x specularColorFactor, w: specularFactor (glsl/bsdf.glsl, point_material)
+    vec4 sheen;          // rgb: sheenColorFactor (0: none), w: sheenRoughnessFactor (glsl/lobes/sheen.glsl)
+    vec4 sheen_maps;     // x, y: sheen colour and roughness textures or NO_TEXTURE (bits), z, w reserved
 };
 
 struct GpuTextureRef {

@@ -85,7 +85,9 @@ fn rust_and_glsl_layouts_match() {
             transmission,
             coat,
             layers,
-            specular
+            specular,
+            sheen,
+            sheen_maps
         }),
         rust_layout!(GpuTextureRef { image, row0, row1 }),
         rust_layout!(GpuVertexAttributes { uv, color, tangent }),

@@ -2067,6 +2067,40 @@ fn clearcoat_factors_are_read() {
     assert!(e.contains("clearcoatTexture.index"), "{e}");
 }
 
+/// KHR_materials_sheen: its factors reach the material (clamped to [0, 1]; defaults
+/// black and 0) and so do its textures, without a warning.
+#[test]
+fn sheen_factors_are_read() {
+    let mut d = Doc::triangle();
+    d.json["extensionsUsed"] = json!(["KHR_materials_sheen"]);
+    d.json["materials"] = json!([
+        {"name": "a", "extensions": {"KHR_materials_sheen": {"sheenColorFactor": [0.5, 2.0, -1.0], "sheenRoughnessFactor": 0.3}}},
+        {"name": "b", "extensions": {"KHR_materials_sheen": {"sheenRoughnessFactor": 1.5}}},
+    ]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let s = d.load().unwrap();
+    assert_eq!((s.materials[0].sheen_color, s.materials[0].sheen_roughness), (Vec3::new(0.5, 1.0, 0.0), 0.3));
+    assert!(s.materials[0].has_sheen());
+    assert_eq!((s.materials[1].sheen_color, s.materials[1].sheen_roughness), (Vec3::ZERO, 1.0));
+    assert!(!s.materials[1].has_sheen());
+    let w = &s.report.warnings;
+    assert!(!w.iter().any(|x| x.contains("KHR_materials_sheen")), "{w:?}");
+    // A colour that is not three numbers is an error that names it.
+    d.json["materials"][1]["extensions"]["KHR_materials_sheen"]["sheenColorFactor"] = json!([1.0, 1.0]);
+    let e = format!("{:#}", d.load().unwrap_err());
+    assert!(e.contains("KHR_materials_sheen") && e.contains("sheenColorFactor"), "{e}");
+    // Its textures reach the material; one naming no texture is an error that names it.
+    let mut d = Doc::textured();
+    d.json["materials"][0]["extensions"] = json!({"KHR_materials_sheen": {"sheenColorFactor": [1.0, 1.0, 1.0],
+        "sheenColorTexture": {"index": 0}, "sheenRoughnessTexture": {"index": 0}}});
+    let s = d.load().unwrap();
+    assert!(s.materials[0].sheen_color_texture.is_some() && s.materials[0].sheen_roughness_texture.is_some());
+    assert!(!s.report.warnings.iter().any(|x| x.contains("sheen")), "{:?}", s.report.warnings);
+    d.json["materials"][0]["extensions"]["KHR_materials_sheen"]["sheenRoughnessTexture"] = json!({"index": 7});
+    let e = format!("{:#}", d.load().unwrap_err());
+    assert!(e.contains("sheenRoughnessTexture"), "{e}");
+}
+
 /// KHR_materials_transmission's transmissionTexture and KHR_materials_specular's
 /// specularTexture and specularColorTexture reach the material (`LayerTextures`) with the
 /// factors they multiply, without a texture warning; a transmissionTexture on a fully

@@ -14,13 +14,13 @@
 //
 // Sampling: the coat with probability p(d) = c(d) / (c(d) + (1 - c(d)) A), the base with
 // 1 - p(d), where d is the fixed direction and A a direction-free luminance albedo of the
-// base (`coat_base_albedo`); the base then picks among its own components as without a
+// base (`base_albedo_luminance`); the base then picks among its own components as without a
 // coat. p depends on d alone, so the reverse pdf (the density of drawing wo from wi) is
 // p(wi) pdf_coat(wo | wi) + (1 - p(wi)) pdf_base(wo | wi), exactly what a vertex with
 // fixed direction wi draws. A base of zero albedo leaves the coat alone (p = 1).
 //
-// Requires: glsl/bsdf.glsl up to its wrappers (Bsdf, point_material, the colour
-// functions, schlick, ggx_eval, ggx_sample_h, bsdf_cos, bsdf_cos_geometric, BsdfSample, no_sample,
+// Requires: glsl/bsdf.glsl up to its wrappers (Bsdf, point_material, bsdf_wo_seen,
+// base_albedo_luminance, schlick, ggx_eval, ggx_sample_h, bsdf_cos, bsdf_cos_geometric, BsdfSample, no_sample,
 // and bsdf_eval declared).
 #ifndef CLEARCOAT_GLSL
 #define CLEARCOAT_GLSL
@@ -45,15 +45,6 @@ float coat_prob(Bsdf b, vec3 d) {
     return den > 0.0 ? c / den : 0.0;
 }
 
-// A luminance albedo of the base that does not depend on directions (sampling only): its
-// lobes' colours, plus the glass weight of a dielectric's interface (which reflects and
-// transmits all it receives) or the mirror colour of an opaque material.
-float coat_base_albedo(GpuMaterial m, Tint tint) {
-    float lobes = luminance(diffuse_colour(m, tint.rgb) + m.phong.rgb + glossy_colour(m, tint.rgb));
-    if (m.phong.w >= 0.0) return lobes * (1.0 - m.transmission.w) + m.transmission.w;
-    return lobes + luminance(mirror_colour(m, tint.rgb));
-}
-
 // Adds the coat to the base's Bsdf `b` (bsdf_init): its weight, the coat's sampling
 // probability at wo, and the continuation probability and delta flag of the blend.
 void clearcoat_init(inout Bsdf b, GpuMaterial m) {
@@ -70,12 +61,8 @@ void clearcoat_init(inout Bsdf b, GpuMaterial m) {
     b.prob_coat = 0.0;
     b.coat_base_albedo = 0.0;
     if (b.coat_weight <= 0.0) return;
-    // bsdf_init's geometric validity (wo off the geometric surface and above the shading
-    // one on that side): the base may be invalid for its zero albedo alone.
-    float c = dot(b.ng, b.wo);
-    bool seen = abs(c) >= EPS_COSINE && (c >= 0.0 ? dot(b.n, b.wo) : -dot(b.n, b.wo)) >= EPS_COSINE;
-    if (!seen) return;
-    b.coat_base_albedo = b.valid ? coat_base_albedo(m, b.tint) : 0.0;
+    if (!bsdf_wo_seen(b)) return;
+    b.coat_base_albedo = b.valid ? base_albedo_luminance(m, b.tint) : 0.0;
     b.prob_coat = coat_prob(b, b.wo);
     if (b.prob_coat > 0.0) {
         b.valid = true;

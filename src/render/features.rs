@@ -47,6 +47,12 @@ pub struct FeatureSet {
     /// triangle texture coordinates: surfaces and light vertices carry the point's coat
     /// factor and roughness multipliers (glsl/textures.glsl, `surface_tint`).
     pub clearcoat_textures: bool,
+    /// Some material has a sheen (`Material::has_sheen`, glsl/lobes/sheen.glsl).
+    pub sheen: bool,
+    /// Some material with a sheen has a sheen-colour or sheen-roughness texture and some
+    /// triangle texture coordinates: surfaces and light vertices carry the point's sheen
+    /// colour and roughness multipliers (glsl/textures.glsl, `surface_tint`).
+    pub sheen_textures: bool,
     /// Light kinds.
     pub area_lights: bool,
     pub point_lights: bool,
@@ -125,6 +131,8 @@ impl FeatureSet {
             && any_mat(&|m| {
                 m.clearcoat > 0.0 && (m.clearcoat_texture.is_some() || m.clearcoat_roughness_texture.is_some())
             });
+        let sheen_textures = vertex_attributes
+            && any_mat(&|m| m.has_sheen() && (m.sheen_color_texture.is_some() || m.sheen_roughness_texture.is_some()));
         let transmission_textured = |m: &crate::scene::Material| {
             m.is_dielectric() && m.layer_textures.as_deref().is_some_and(|l| l.transmission.is_some())
         };
@@ -167,6 +175,8 @@ impl FeatureSet {
             volume: g || any_mat(&|m| nonzero(m.medium_attenuation())),
             clearcoat: g || any_mat(&|m| m.clearcoat > 0.0),
             clearcoat_textures: g || clearcoat_textures,
+            sheen: g || any_mat(&|m| m.has_sheen()),
+            sheen_textures: g || sheen_textures,
             area_lights: g || any_light(&|l| matches!(l, Light::Area { .. })),
             point_lights: g || any_light(&|l| matches!(l, Light::Point { .. })),
             spot_lights: g || any_light(&|l| matches!(l, Light::Spot { .. })),
@@ -184,6 +194,7 @@ impl FeatureSet {
                 || emissive_textures
                 || metallic_roughness_textures
                 || clearcoat_textures
+                || sheen_textures
                 || transmission_textures
                 || specular_textures,
             alpha_mask: g || any_mat(&|m| m.alpha_mode != crate::scene::AlphaMode::Opaque),
@@ -217,6 +228,8 @@ impl FeatureSet {
             ("HAS_VOLUME", self.volume),
             ("HAS_CLEARCOAT", self.clearcoat),
             ("HAS_CLEARCOAT_TEXTURES", self.clearcoat_textures),
+            ("HAS_SHEEN", self.sheen),
+            ("HAS_SHEEN_TEXTURES", self.sheen_textures),
             ("HAS_AREA_LIGHTS", self.area_lights),
             ("HAS_POINT_LIGHTS", self.point_lights),
             ("HAS_SPOT_LIGHTS", self.spot_lights),
@@ -272,6 +285,7 @@ impl fmt::Display for FeatureSet {
             ("rough dielectric", self.rough_dielectric),
             ("absorbing volume", self.volume),
             ("clear coat", self.clearcoat),
+            ("sheen", self.sheen),
         ];
         writeln!(f, "  materials: {}", list(&mats))?;
         let lights = [
@@ -303,6 +317,7 @@ impl fmt::Display for FeatureSet {
             ("emissive textures", self.emissive_textures),
             ("metallic-roughness textures", self.metallic_roughness_textures),
             ("clear-coat textures", self.clearcoat_textures),
+            ("sheen textures", self.sheen_textures),
             ("transmission textures", self.transmission_textures),
             ("specular textures", self.specular_textures),
         ];

@@ -84,6 +84,13 @@ pub struct GpuMaterial {
     /// With such textures (glsl/bsdf.glsl, `point_material`): rgb: the F0 of the IOR
     /// times specularColorFactor (not clamped); w: specularFactor. Zero without them.
     pub specular: [f32; 4],
+    /// The sheen (`Material::sheen_color`, glsl/lobes/sheen.glsl): rgb: sheenColorFactor
+    /// (0: none, also where the kernels lack HAS_SHEEN); w: sheenRoughnessFactor, at
+    /// least MIN_SHEEN_ROUGHNESS.
+    pub sheen: [f32; 4],
+    /// Indices in `texture_refs` (bits, or `NO_TEXTURE`) of x: its sheenColorTexture,
+    /// y: sheenRoughnessTexture; z, w: reserved.
+    pub sheen_maps: [f32; 4],
 }
 
 /// A texture as a material uses it (`scene::TextureRef`): where its image's texels are,
@@ -115,6 +122,11 @@ pub struct GpuVertexAttributes {
 /// Smallest GGX alpha the kernels see (a smaller one makes D(h) overflow-prone and the
 /// lobe a mirror in all but name); glsl/types.glsl has the same.
 pub const MIN_GGX_ALPHA: f32 = 1e-3;
+
+/// Smallest sheen roughness the kernels see (glsl/lobes/sheen.glsl: below it the Charlie
+/// lobe's exponent 1 / roughness^2 exceeds 200; its albedo table starts there);
+/// glsl/types.glsl has the same.
+pub const MIN_SHEEN_ROUGHNESS: f32 = 0.07;
 
 /// What shading needs of a triangle beyond its vertices, in original scene order (the
 /// vertices are read from the BVH's primitive of the hit, glsl/scene.glsl `surface_at`,

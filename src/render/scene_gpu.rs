@@ -68,6 +68,8 @@ impl ScenePlan {
                     + m.metallic_roughness_texture.is_some() as u64
                     + m.clearcoat_texture.is_some() as u64
                     + m.clearcoat_roughness_texture.is_some() as u64
+                    + m.sheen_color_texture.is_some() as u64
+                    + m.sheen_roughness_texture.is_some() as u64
                     + m.layer_textures.as_ref().map_or(0, |l| {
                         l.transmission.is_some() as u64
                             + l.specular.is_some() as u64
@@ -174,11 +176,12 @@ fn vertex_attributes(a: Option<&VertexAttributes>, k: usize) -> GpuVertexAttribu
 /// The scene's textures on the GPU: the texture references of the materials (each
 /// material's base-colour texture, normal map, emissive texture and metallic-roughness
 /// texture, clearcoat and clearcoat-roughness textures, transmission, specular and
-/// specular-colour textures, in material order), per material the indices of its nine
+/// specular-colour textures, sheen-colour and sheen-roughness textures, in material
+/// order), per material the indices of its eleven
 /// (or `NO_TEXTURE`),
 /// and the texels of the scene's images (RGBA8 packed little-endian, R lowest; four to a
 /// 16-byte element).
-type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 9]>, Vec<[u32; 4]>);
+type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 11]>, Vec<[u32; 4]>);
 
 fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     let mut first = Vec::with_capacity(scene.images.len());
@@ -200,7 +203,7 @@ fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     let mut refs = Vec::new();
     let mut indices = Vec::with_capacity(scene.materials.len());
     for (i, m) in scene.materials.iter().enumerate() {
-        let mut index = [NO_TEXTURE; 9];
+        let mut index = [NO_TEXTURE; 11];
         let layers = m.layer_textures.as_deref();
         // Normal maps and metallic-roughness textures hold linear values, not sRGB colours.
         let slots = [
@@ -214,6 +217,9 @@ fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
             (layers.and_then(|l| l.specular.as_ref()), true),
             // KHR_materials_specular: specularColorTexture is sRGB, specularTexture linear.
             (layers.and_then(|l| l.specular_color.as_ref()), false),
+            // KHR_materials_sheen: sheenColorTexture is sRGB, sheenRoughnessTexture linear.
+            (m.sheen_color_texture.as_ref(), false),
+            (m.sheen_roughness_texture.as_ref(), true),
         ];
         for (slot, (t, linear)) in slots.into_iter().enumerate() {
             let Some(t) = t else { continue };
@@ -377,12 +383,12 @@ fn gpu_triangles(scene: &Scene, features: &FeatureSet) -> GpuGeometry {
 
 /// The materials as the kernels read them, with the texture indices of each
 /// (`texture_indices`, [`gpu_textures`]) where `features` has the textures' kind.
-fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 9]]) -> Vec<GpuMaterial> {
+fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 11]]) -> Vec<GpuMaterial> {
     scene
         .materials
         .iter()
         .zip(texture_indices)
-        .map(|(m, &[texture, normal_map, emissive, metallic_roughness, coat, coat_roughness, t, s, sc])| {
+        .map(|(m, &[texture, normal_map, emissive, metallic_roughness, coat, coat_roughness, t, s, sc, sh, shr])| {
             let normal_map = if features.normal_maps { normal_map } else { NO_TEXTURE };
             let emissive = if features.emissive_textures { emissive } else { NO_TEXTURE };
             let (metallic_roughness, mut base_metallic, mut f0_roughness) =
@@ -426,6 +432,8 @@ fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 
                 coat: gpu_coat(m, features, [coat, coat_roughness]),
                 layers,
                 specular,
+                sheen: gpu_sheen(m, features),
+                sheen_maps: gpu_sheen_maps(m, features, [sh, shr]),
             }
         })
         .collect()
@@ -440,6 +448,21 @@ fn gpu_coat(m: &crate::scene::Material, features: &FeatureSet, textures: [u32; 2
     let t = |i: u32| bits(if features.clearcoat_textures { i } else { NO_TEXTURE });
     let r = m.clearcoat_roughness.clamp(0.0, 1.0);
     [m.clearcoat.min(1.0), (r * r).max(MIN_GGX_ALPHA), t(textures[0]), t(textures[1])]
+}
+
+/// GpuMaterial.sheen of `m` (glsl/types.glsl): zero where the kernels have no sheen.
+fn gpu_sheen(m: &crate::scene::Material, features: &FeatureSet) -> [f32; 4] {
+    if !features.sheen || !m.has_sheen() {
+        return [0.0; 4];
+    }
+    v4(m.sheen_color.clamp(Vec3::ZERO, Vec3::ONE), m.sheen_roughness.clamp(MIN_SHEEN_ROUGHNESS, 1.0))
+}
+
+/// GpuMaterial.sheen_maps of `m` with the indices of its two textures: none where the
+/// kernels have no sheen textures.
+fn gpu_sheen_maps(m: &crate::scene::Material, features: &FeatureSet, textures: [u32; 2]) -> [f32; 4] {
+    let t = |i: u32| bits(if features.sheen_textures && m.has_sheen() { i } else { NO_TEXTURE });
+    [t(textures[0]), t(textures[1]), 0.0, 0.0]
 }
 
 /// Uploads the [`CHUNKED`] arrays: whole, each one buffer added to `buffers`, or with
@@ -547,7 +570,7 @@ impl SceneGpu {
         let (texture_refs, texture_indices, texels) = if features.textures {
             gpu_textures(scene)?
         } else {
-            (Vec::new(), vec![[NO_TEXTURE; 9]; scene.materials.len()], Vec::new())
+            (Vec::new(), vec![[NO_TEXTURE; 11]; scene.materials.len()], Vec::new())
         };
         let materials = gpu_materials(scene, features, &texture_indices);
         let env = match environment_map(scene) {

@@ -246,6 +246,18 @@ pub struct Material {
     /// respectively (glsl/textures.glsl, `surface_tint`).
     pub clearcoat_texture: Option<TextureRef>,
     pub clearcoat_roughness_texture: Option<TextureRef>,
+    /// KHR_materials_sheen's sheenColorFactor (linear, each channel in [0, 1]; black: no
+    /// sheen): the colour of a Charlie sheen lobe over the rest of the material,
+    /// f = f_sheen + f_base (1 - max(sheenColor) E) (glsl/lobes/sheen.glsl).
+    pub sheen_color: Vec3,
+    /// sheenRoughnessFactor in [0, 1] (the kernels take at least
+    /// `MIN_SHEEN_ROUGHNESS`).
+    pub sheen_roughness: f32,
+    /// sheenColorTexture (sRGB) and sheenRoughnessTexture (linear): where a triangle has
+    /// their texture coordinates, the factors are multiplied by the texel's RGB and A
+    /// channel respectively (glsl/textures.glsl, `surface_tint`).
+    pub sheen_color_texture: Option<TextureRef>,
+    pub sheen_roughness_texture: Option<TextureRef>,
     /// KHR_materials_transmission's transmissionTexture and KHR_materials_specular's
     /// specularTexture and specularColorTexture, with the factors the kernels recompute the
     /// lobes from where a triangle has their texture coordinates ([`LayerTextures`]).
@@ -328,6 +340,10 @@ impl Default for Material {
             clearcoat_roughness: 0.0,
             clearcoat_texture: None,
             clearcoat_roughness_texture: None,
+            sheen_color: Vec3::ZERO,
+            sheen_roughness: 0.0,
+            sheen_color_texture: None,
+            sheen_roughness_texture: None,
             layer_textures: None,
         }
     }
@@ -377,6 +393,11 @@ impl Material {
 
     /// A dielectric whose glass weight is below 1: partial transmission, its other lobes
     /// weighted by 1 - the glass weight (HAS_PARTIAL_TRANSMISSION).
+    /// Whether the material has a sheen (a sheen colour above black).
+    pub fn has_sheen(&self) -> bool {
+        self.sheen_color.max_element() > 0.0
+    }
+
     pub fn has_partial_transmission(&self) -> bool {
         self.lobes_weight() > 0.0 && self.is_dielectric()
     }

@@ -5,6 +5,7 @@ pub mod corpus;
 pub mod ggx;
 pub mod instanced_gltf;
 pub mod scenes;
+pub mod sheen;
 
 use std::sync::Arc;
 

@@ -161,6 +161,8 @@ impl Importer<'_> {
                 "the transmission factor alone applies",
             ),
             ("specularTexture", layers.and_then(|l| l.specular.as_ref()), "the specular factor alone applies"),
+            ("sheenColorTexture", mat.sheen_color_texture.as_ref(), "the sheen colour factor alone applies"),
+            ("sheenRoughnessTexture", mat.sheen_roughness_texture.as_ref(), "the sheen roughness factor alone applies"),
             (
                 "specularColorTexture",
                 layers.and_then(|l| l.specular_color.as_ref()),

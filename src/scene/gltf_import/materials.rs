@@ -4,7 +4,9 @@
 //! `KHR_materials_emissive_strength`, `KHR_materials_volume` (absorption inside
 //! transmissive meshes), `KHR_materials_clearcoat`, and vkvcm's own `VKVCM_materials_phong`.
 
-use super::extensions::{ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG, KHR_MATERIALS_CLEARCOAT};
+use super::extensions::{
+    ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG, KHR_MATERIALS_CLEARCOAT, KHR_MATERIALS_SHEEN,
+};
 use super::Importer;
 use crate::scene::{AlphaMode, LayerTextures, Material, GLTF_DIELECTRIC_F0};
 use anyhow::{bail, Result};
@@ -119,6 +121,7 @@ impl Importer<'_> {
         self.set_emission(m, &mut out, &label)?;
         if phong_ext.is_none() {
             self.set_clearcoat(m, &mut out, &label)?;
+            self.set_sheen(m, &mut out, &label)?;
         }
         // glTF's doubleSided false (the default) is back-face culling: the camera does not
         // see the back side of such a surface (glsl/scene.glsl, trace_camera_segment and
@@ -273,6 +276,29 @@ impl Importer<'_> {
                 "textures are not supported (the coat shades with the base's normal)",
                 format!("{label} {KHR_MATERIALS_CLEARCOAT}.clearcoatNormalTexture"),
             );
+        }
+        Ok(())
+    }
+
+    /// Sets the sheen of `out` from `m`'s KHR_materials_sheen: sheenColorFactor (default
+    /// black: no sheen) and sheenRoughnessFactor (default 0), clamped to [0, 1] as glTF's
+    /// factors, and their textures.
+    fn set_sheen(&mut self, m: &gltf::Material, out: &mut Material, label: &str) -> Result<()> {
+        let Some(v) = m.extensions().and_then(|e| e.get(KHR_MATERIALS_SHEEN)) else {
+            return Ok(());
+        };
+        let ctx = format!("{label}: {KHR_MATERIALS_SHEEN}");
+        if !v.is_object() {
+            bail!("{ctx} must be an object");
+        }
+        out.sheen_color = ext_vec3(v, "sheenColorFactor", Vec3::ZERO, &ctx)?.clamp(Vec3::ZERO, Vec3::ONE);
+        out.sheen_roughness = ext_f32(v, "sheenRoughnessFactor", 0.0, &ctx)?.clamp(0.0, 1.0);
+        if let Some(info) = v.get("sheenColorTexture") {
+            out.sheen_color_texture = self.json_texture(info, label, "KHR_materials_sheen.sheenColorTexture")?;
+        }
+        if let Some(info) = v.get("sheenRoughnessTexture") {
+            out.sheen_roughness_texture =
+                self.json_texture(info, label, "KHR_materials_sheen.sheenRoughnessTexture")?;
         }
         Ok(())
     }
