@@ -8,8 +8,8 @@ use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use vkvcm::image::{read_exr, Image};
 use vkvcm_tools::stats::{
-    dump_on_failure, inverse_normal_cdf, normal_sf, one_sample_test, sidak, student_t_two_sided_p, welch_test, z_test,
-    z_test_analytic, PixelStats,
+    dump_on_failure, image_mean_test, inverse_normal_cdf, normal_sf, one_sample_test, sidak, student_t_two_sided_p,
+    welch_test, z_test, z_test_analytic, PixelStats,
 };
 
 fn rel_err(got: f64, want: f64) -> f64 {
@@ -471,4 +471,40 @@ fn calibration_false_failure_rates() {
         }
         eprintln!("one-sample K={k}: {failures} of {trials} failed ({:.2}%)", 100.0 * failures as f64 / trials as f64);
     }
+}
+
+/// The image-mean test (assert_matches_mitsuba's): 16 block means against a reference of
+/// 16 renders of 16x16 pixels. Without a bias it fails at most ~alpha of the time (2000
+/// trials at alpha 0.01: below 2%, a binomial tail of 3.2 standard deviations above 1%);
+/// a bias of 8 standard errors fails nearly always (t threshold 4.07 with 15 df at 1e-3:
+/// over 90% of trials).
+#[test]
+fn image_mean_test_false_failures_and_power() {
+    let truth_image = || truth(16, 16);
+    let mut rng = Normal::new(31);
+    let (truth, block_sd, pixel_sd, k) = (0.5f64, 0.02f64, 0.3f64, 16usize);
+    let n = 256.0;
+    let ref_se = pixel_sd / (n * k as f64).sqrt();
+    let se = (block_sd * block_sd / 16.0 + ref_se * ref_se).sqrt();
+    let mut trial = |bias: f64| {
+        let blocks: Vec<f64> = (0..16).map(|_| truth + bias * se + block_sd * rng.sample()).collect();
+        let ref_mean = truth + ref_se * rng.sample();
+        let reference = PixelStats {
+            width: 16,
+            height: 16,
+            count: k,
+            mean: vec![[ref_mean; 3]; 256],
+            variance: vec![[pixel_sd * pixel_sd; 3]; 256],
+        };
+        image_mean_test(&blocks, &reference).unwrap()
+    };
+    let false_failures = (0..2000).filter(|_| trial(0.0).p < 0.01).count();
+    assert!(false_failures < 40, "{false_failures} of 2000 unbiased trials failed at 0.01");
+    let detected = (0..200).filter(|_| trial(8.0).p < 1e-3).count();
+    assert!(detected > 180, "a bias of 8 standard errors failed only {detected} of 200 trials at 1e-3");
+    let one = trial(0.0);
+    assert_eq!(one.df, 15.0);
+    assert!((one.reference_std_error - ref_se).abs() < 1e-12, "{one}");
+    let reference = PixelStats::from_images(&[truth_image(), truth_image()]).unwrap();
+    assert!(image_mean_test(&[0.5], &reference).is_err(), "one block has no spread");
 }
