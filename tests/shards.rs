@@ -284,6 +284,12 @@ fn cli_reference_shards_merge_into_the_one_machine_reference() {
     let (code, _, err) = run_out(d, &[&conv[..], &["-r", "m2.exr", "--rows", "rows0.csv"]].concat());
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("no file holds estimator bpt"), "{err}");
+    // An incomplete reference set: converge names what is missing and `vkvcm merge
+    // --partial`, not an option of its own.
+    let (code, _, err) = run_out(d, &[&conv[..], &["-r", "r0of3.exr", "r2of3.exr"]].concat());
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("1/3") && err.contains("missing") && err.contains("`vkvcm merge --partial`"), "{err}");
+    assert!(!err.contains("use --partial"), "{err}");
 }
 
 fn attr_of<'a>(meta: &'a [(String, String)], key: &str) -> &'a str {

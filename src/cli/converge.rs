@@ -313,8 +313,8 @@ fn load_reference(paths: &[PathBuf]) -> Result<(Image, Vec<(String, String)>)> {
             return Ok((img, meta));
         }
     }
-    let m = super::shard::merge_files(paths, false)
-        .context("--reference (converge merges complete sets only: `vkvcm merge --partial` merges the others)")?;
+    let hint = "converge takes complete sets only: `vkvcm merge --partial` merges what there is";
+    let m = super::shard::merge_files(paths, false, hint).context("--reference")?;
     if m.half_b.is_some() {
         let (r, meta) = reference::from_merged(m)?;
         return Ok((r.image, meta));

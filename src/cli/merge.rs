@@ -40,7 +40,7 @@ pub fn merge_cmd(a: MergeArgs) -> Result<()> {
     if let Some(p) = &a.png {
         super::render::check_writable(p).context("--png")?;
     }
-    let m = super::shard::merge_files(&a.inputs, a.partial)?;
+    let m = super::shard::merge_files(&a.inputs, a.partial, "use --partial to merge what there is")?;
     if m.half_b.is_some() {
         return write_reference(&a, m);
     }

@@ -140,10 +140,12 @@ pub fn render_on_devices(
 /// The shards `paths` merged, read one at a time (the merge holds the running sums and
 /// one shard's). An unreadable, truncated or foreign file is a usage error naming it; a
 /// refusal exits 3 for another scene, 2 otherwise.
-pub(super) fn merge_files(paths: &[PathBuf], partial: bool) -> Result<merge::Merged> {
+/// `incomplete_hint` follows the refusal of an incomplete set (what the user may do).
+pub(super) fn merge_files(paths: &[PathBuf], partial: bool, incomplete_hint: &str) -> Result<merge::Merged> {
     let refused = |r: merge::Refusal| {
         let class = if r.scene { Class::Scene } else { Class::Usage };
-        anyhow::Error::new(super::exit::Classified(class, anyhow::anyhow!("{}", r.message)))
+        let message = if r.incomplete { format!("{} ({incomplete_hint})", r.message) } else { r.message };
+        anyhow::Error::new(super::exit::Classified(class, anyhow::anyhow!("{message}")))
     };
     let mut merger: Option<merge::Merger> = None;
     for p in paths {

@@ -30,11 +30,17 @@ const PER_FILE: [&str; 11] = [
 pub struct Refusal {
     /// True when the files are of different scenes (the rest are usage errors).
     pub scene: bool,
+    /// True when the files are a consistent but incomplete set (a partial merge takes them).
+    pub incomplete: bool,
     pub message: String,
 }
 
 fn refuse(message: String) -> Refusal {
-    Refusal { scene: false, message }
+    Refusal { scene: false, incomplete: false, message }
+}
+
+fn incomplete(message: String) -> Refusal {
+    Refusal { scene: false, incomplete: true, message }
 }
 
 /// The merged render.
@@ -166,8 +172,8 @@ impl Merger {
         *slot = Some(p.to_path_buf());
         let range = sh.shard.range(sh.total);
         if s.held != IterationSet::of(range.clone()) && !self.partial {
-            return Err(refuse(format!(
-                "{}: shard {} holds iterations {} of its {}-{}: unfinished (use --partial to merge it anyway)",
+            return Err(incomplete(format!(
+                "{}: shard {} holds iterations {} of its {}-{}: unfinished",
                 p.display(),
                 sh.shard,
                 s.held,
@@ -191,8 +197,8 @@ impl Merger {
         let missing: Vec<String> =
             self.seen.iter().enumerate().filter(|(_, p)| p.is_none()).map(|(k, _)| format!("{k}/{count}")).collect();
         if !missing.is_empty() && !self.partial {
-            return Err(refuse(format!(
-                "shard(s) {} of the render of {} are missing (use --partial to merge the others)",
+            return Err(incomplete(format!(
+                "shard(s) {} of the render of {} are missing",
                 missing.join(", "),
                 self.p0.display()
             )));
@@ -228,7 +234,7 @@ fn check_same(p0: &Path, first: &SavedRender, p: &Path, s: &SavedRender) -> std:
                 attribute(s, key).unwrap_or("(none)"),
                 attribute(first, key).unwrap_or("(none)")
             );
-            return Err(Refusal { scene: true, message });
+            return Err(Refusal { scene: true, incomplete: false, message });
         }
     }
     if (s.width, s.height) != (first.width, first.height) {
