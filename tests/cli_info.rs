@@ -1,5 +1,5 @@
-//! `vkvcm info` as a user runs it: `--json` on the reference scenes, an instanced scene
-//! and a malformed one; what it reports agrees with the loaded scene and the plan, and a
+//! `vkvcm info` as a user runs it: `--json` on the reference scenes (also with render's
+//! view options), an instanced scene and a malformed one; what it reports agrees with the loaded scene and the plan, and a
 //! frame too large for the device is said to be so (exit code 5).
 
 use std::path::Path;
@@ -65,6 +65,24 @@ fn reference_scenes() {
     assert_eq!(ext["KHR_materials_transmission"], 1, "{ext}");
     // pt has no hash grid: the plan follows the estimator.
     assert!(!v["plan"]["buffers"].as_array().unwrap().iter().any(|b| b["name"] == "grid_keys"));
+}
+
+/// `info` takes `render`'s scene and view options (one `SceneArgs`): without --width and
+/// --height the planned frame follows the camera's aspect ratio as a render's does
+/// (512 on the longer side), and --look-from with negative numbers and --fov are taken.
+#[test]
+fn view_options_are_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = common::wide_camera_box(dir.path());
+    let file = file.to_str().unwrap();
+    let (code, v, o) = info_json(dir.path(), file, &["-a", "pt", "--look-from", "-1,2.5,-4", "--fov", "30"]);
+    assert_eq!(code, Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let p = &v["plan"];
+    assert_eq!((p["width"].as_u64(), p["height"].as_u64()), (Some(512), Some(256)), "{p}");
+    assert!((v["scene"]["camera_used"]["yfov_degrees"].as_f64().unwrap() - 30.0).abs() < 1e-4, "{}", v["scene"]);
+    assert!((v["scene"]["camera_used"]["aspect"].as_f64().unwrap() - 2.0).abs() < 1e-9, "{}", v["scene"]);
+    let (code, _, o) = info_json(dir.path(), "gbs_s", &["--width", "0"]);
+    assert_eq!(code, Some(2), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
 #[test]

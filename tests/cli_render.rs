@@ -268,15 +268,7 @@ fn a_file_without_camera_or_lights_renders_with_the_defaults() {
 #[test]
 fn the_frame_follows_the_camera_and_negative_coordinates_parse() {
     let dir = tempfile::tempdir().unwrap();
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/khronos/Box.gltf");
-    let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(src).unwrap()).unwrap();
-    doc["cameras"] =
-        serde_json::json!([{"type": "perspective", "perspective": {"yfov": 0.7, "aspectRatio": 2.0, "znear": 0.1}}]);
-    doc["nodes"].as_array_mut().unwrap().push(serde_json::json!({"camera": 0, "translation": [0.0, 0.0, 4.0]}));
-    let n = doc["nodes"].as_array().unwrap().len() - 1;
-    doc["scenes"][0]["nodes"].as_array_mut().unwrap().push(serde_json::json!(n));
-    let file = dir.path().join("wide.gltf");
-    std::fs::write(&file, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let file = common::wide_camera_box(dir.path());
     let cases: [(&[&str], (u32, u32)); 4] = [
         (&[], (512, 256)),
         (&["--width", "64"], (64, 32)),

@@ -18,32 +18,17 @@ use vkvcm::scene::{self, Light, Material, Scene};
 
 #[derive(Args)]
 pub struct InfoArgs {
-    /// A glTF file (.gltf/.glb) or a built-in scene: gbs_s (default), glm_c, gbs_p, gbs_b.
-    pub scene: Option<String>,
+    #[command(flatten)]
+    pub scene: super::scene_args::SceneArgs,
     /// The estimator whose buffers are planned.
     #[arg(long, short = 'a', value_enum, default_value = "vcm")]
     pub algo: Algorithm,
-    #[arg(long, default_value_t = 512)]
-    pub width: u32,
-    #[arg(long, default_value_t = 512)]
-    pub height: u32,
     /// Light subpaths per iteration, N_L (as `render --light-paths`).
     #[arg(long, value_name = "N")]
     pub light_paths: Option<u32>,
-    /// Camera, by node or camera name (as `render --camera`).
-    #[arg(long)]
-    pub camera: Option<String>,
-    /// The glTF scene, by name or index (as `render --gltf-scene`).
-    #[arg(long, value_name = "NAME|INDEX")]
-    pub gltf_scene: Option<String>,
-    /// Plan every mesh as world-space triangles (as `render --flatten-instances`).
-    #[arg(long)]
-    pub flatten_instances: bool,
     /// The features and plan of `render --generic`.
     #[arg(long)]
     pub generic: bool,
-    #[command(flatten)]
-    pub env: super::EnvArgs,
     /// Print JSON (one object: scene, features, plan) instead of text.
     #[arg(long)]
     pub json: bool,
@@ -109,7 +94,7 @@ struct UsedCamera {
     /// `--camera`, else the file's first camera (or one framing the scene).
     selected: Option<String>,
     yfov_degrees: f32,
-    /// The image's aspect, --width / --height, which the render uses whatever the file's.
+    /// The image's aspect (--width / --height, else the camera's), which the render uses.
     aspect: f64,
 }
 
@@ -141,20 +126,16 @@ struct BufferInfo {
 
 /// Prints the report; `Some(Class::Memory)` when the frame does not fit the device.
 pub fn info_cmd(a: InfoArgs) -> Result<Option<Class>> {
-    a.env.check().class(Class::Usage)?;
-    let name = a.scene.clone().unwrap_or_else(|| "default".into());
-    let options = scene::LoadOptions {
-        scene: a.gltf_scene.clone(),
-        flatten_instances: a.flatten_instances,
-        ..a.env.load_options(a.camera.clone()).class(Class::Scene)?
-    };
-    let loaded = scene::load_named_with(&name, &options).class(Class::Scene)?;
+    a.scene.check().class(Class::Usage)?;
+    let name = a.scene.name();
+    let loaded = a.scene.load().class(Class::Scene)?;
+    let (width, height) = a.scene.frame_size(&loaded);
     let file = scene::builtin_path(&name).or_else(|| Some(PathBuf::from(&name)).filter(|p| p.is_file()));
     let document = match &file {
         Some(f) => document_json(f).class(Class::Scene)?,
         None => Value::Null,
     };
-    let mut settings = RenderSettings::new(a.algo, a.width, a.height, Budget::Iterations(1));
+    let mut settings = RenderSettings::new(a.algo, width, height, Budget::Iterations(1));
     settings.light_paths = a.light_paths;
     settings.generic = a.generic;
     let gpu = super::open_device(&a.gpu)?;
@@ -170,15 +151,15 @@ pub fn info_cmd(a: InfoArgs) -> Result<Option<Class>> {
             limit_bytes: limits.max_bytes(b),
         })
         .collect();
-    let what = format!("a {}x{} {} render", a.width, a.height, a.algo.name());
+    let what = format!("a {width}x{height} {} render", a.algo.name());
     let error = plan.check(&gpu, &what).err().map(|e| format!("{e:#}"));
     let info = Info {
-        scene: scene_info(&loaded, file, &document, a.camera.clone(), a.width, a.height),
+        scene: scene_info(&loaded, file, &document, a.scene.camera.clone(), width, height),
         features: FeatureSet::new(&loaded, a.generic),
         plan: PlanInfo {
             algorithm: a.algo.name().to_string(),
-            width: a.width,
-            height: a.height,
+            width,
+            height,
             device: gpu.info.name.clone(),
             total_bytes: buffers.iter().map(|b| b.bytes).sum(),
             buffers,

@@ -10,6 +10,7 @@ pub mod info;
 pub mod merge;
 pub mod progress;
 pub mod render;
+pub mod scene_args;
 pub mod shard;
 pub mod submission;
 pub mod trace;

@@ -17,8 +17,8 @@ use vkvcm::scene;
 
 #[derive(Args)]
 pub struct RenderArgs {
-    /// A glTF file (.gltf/.glb) or a built-in scene: gbs_s (default), glm_c, gbs_p, gbs_b.
-    pub scene: Option<String>,
+    #[command(flatten)]
+    pub scene: super::scene_args::SceneArgs,
     /// Estimator.
     #[arg(long, short = 'a', value_enum, default_value = "vcm")]
     pub algo: Algorithm,
@@ -30,15 +30,7 @@ pub struct RenderArgs {
     /// --resume: this many more seconds).
     #[arg(long, short = 't')]
     pub time: Option<f64>,
-    /// Image width (default: 512 pixels on the longer side, the other following the
-    /// camera's aspect ratio: a glTF camera's aspectRatio, else square; one of --width
-    /// and --height alone sets the other by that ratio).
-    #[arg(long = "width", value_name = "PIXELS")]
-    pub width_arg: Option<u32>,
-    /// Image height (default: see --width).
-    #[arg(long = "height", value_name = "PIXELS")]
-    pub height_arg: Option<u32>,
-    /// The frame's size, from --width/--height and the camera (`frame_size`).
+    /// The frame's size, from --width/--height and the camera (`SceneArgs::frame_size`).
     #[arg(skip)]
     pub width: u32,
     #[arg(skip)]
@@ -83,36 +75,6 @@ pub struct RenderArgs {
     /// With --connect cache: light vertices connected to per camera vertex.
     #[arg(long, default_value_t = vkvcm::render::DEFAULT_CACHE_CONNECTIONS)]
     pub cache_connections: u32,
-    /// Camera to use, by node or camera name, or `auto`: one that frames the scene
-    /// (default: the file's first camera, else auto).
-    #[arg(long)]
-    pub camera: Option<String>,
-    /// glTF files with several scenes: render the scene with this name, else with this
-    /// index (default: the file's default scene, else the first).
-    #[arg(long, value_name = "NAME|INDEX")]
-    pub gltf_scene: Option<String>,
-    /// Store every mesh as world-space triangles, also those that several nodes (or
-    /// EXT_mesh_gpu_instancing) place, which are otherwise stored once and instanced:
-    /// the same image, more memory (for A/B comparisons).
-    #[arg(long)]
-    pub flatten_instances: bool,
-    /// Put the camera at X,Y,Z (the file's world coordinates); it then looks at the
-    /// centre of the scene unless --look-at says otherwise, with world +Y up unless --up
-    /// says otherwise.
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
-    pub look_from: Option<glam::Vec3>,
-    /// Point the camera at X,Y,Z (the file's world coordinates).
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
-    pub look_at: Option<glam::Vec3>,
-    /// The direction that is up in the image (default with --look-from / --look-at:
-    /// world +Y; alone it turns the file's camera about its view).
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
-    pub up: Option<glam::Vec3>,
-    /// Vertical field of view in degrees.
-    #[arg(long, value_name = "DEGREES")]
-    pub fov: Option<f32>,
-    #[command(flatten)]
-    pub env: super::EnvArgs,
     /// Output EXR (linear float32, with the second moment and settings to resume it).
     /// Default: <scene>_<algo>.exr.
     #[arg(long, short = 'o')]
@@ -182,19 +144,6 @@ pub struct RenderArgs {
     pub shards: super::shard::ShardArgs,
     #[command(flatten)]
     pub submission: super::submission::SubmissionArgs,
-}
-
-/// `X,Y,Z` as a vector of three finite numbers.
-pub fn parse_vec3(s: &str) -> std::result::Result<glam::Vec3, String> {
-    let v: Vec<f32> = s
-        .split(',')
-        .map(|c| c.trim().parse::<f32>())
-        .collect::<std::result::Result<_, _>>()
-        .map_err(|e| format!("{s:?}: {e}"))?;
-    match v[..] {
-        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(glam::Vec3::new(x, y, z)),
-        _ => Err(format!("{s:?}: expected three finite numbers X,Y,Z")),
-    }
 }
 
 /// `--connect`.
@@ -285,12 +234,6 @@ fn kernel_cache_line(gpu: &Gpu) -> String {
 
 /// Checks the arguments that need no scene or device; errors name the option.
 fn check_args(a: &RenderArgs) -> Result<()> {
-    if a.width_arg == Some(0) {
-        bail!("--width 0: the image width must be at least 1 pixel");
-    }
-    if a.height_arg == Some(0) {
-        bail!("--height 0: the image height must be at least 1 pixel");
-    }
     if a.iterations == Some(0) {
         bail!("--iterations 0: at least one iteration is needed");
     }
@@ -313,7 +256,7 @@ fn check_args(a: &RenderArgs) -> Result<()> {
     if !(a.alpha > 0.0 && a.alpha <= 1.0) {
         bail!("--alpha {}: must be in (0, 1]", a.alpha);
     }
-    a.env.check()?;
+    a.scene.check()?;
     if !(a.exposure > 0.0 && a.exposure.is_finite()) {
         bail!("--exposure {}: must be a positive number", a.exposure);
     }
@@ -332,7 +275,7 @@ pub fn render_cmd(mut a: RenderArgs) -> Result<Option<Class>> {
         let _p = super::trace::phase("scene load");
         load_scene(&a).class(Class::Scene)?
     };
-    (a.width, a.height) = frame_size(a.width_arg, a.height_arg, scene.report.camera_aspect);
+    (a.width, a.height) = a.scene.frame_size(&scene);
     let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}_{}.exr", scene.name, a.algo.name())));
     check_writable(&output).context("--output")?;
     if let Some(p) = &a.png {
@@ -344,7 +287,7 @@ pub fn render_cmd(mut a: RenderArgs) -> Result<Option<Class>> {
     if let Some(p) = &a.profile_json {
         check_writable(p).context("--profile-json")?;
     }
-    let camera = a.camera.clone().unwrap_or_else(|| "default".into());
+    let camera = a.scene.camera.clone().unwrap_or_else(|| "default".into());
     let mut provenance = saved::Provenance { shard, ..saved::Provenance::new(&scene, &camera, "") };
     let saved = read_resumed(&a, &output, &settings, &provenance).class(Class::Usage)?;
     if let (Some(s), Budget::Iterations(n)) = (&saved, settings.budget) {
@@ -436,16 +379,7 @@ fn say(a: &RenderArgs, line: &str) {
 
 /// The scene with the view and environment options applied; prints the loader's warnings.
 fn load_scene(a: &RenderArgs) -> Result<scene::Scene> {
-    let scene_name = a.scene.clone().unwrap_or_else(|| "default".into());
-    let options = vkvcm::scene::LoadOptions {
-        scene: a.gltf_scene.clone(),
-        flatten_instances: a.flatten_instances,
-        ..a.env.load_options(a.camera.clone())?
-    };
-    let mut scene = scene::load_named_with(&scene_name, &options)?;
-    scene
-        .set_view(a.look_from, a.look_at, a.up, a.fov.map(f32::to_radians))
-        .context("--look-from / --look-at / --up / --fov")?;
+    let scene = a.scene.load()?;
     for w in &scene.report.warnings {
         eprintln!("warning: {w}");
     }
@@ -456,22 +390,6 @@ fn load_scene(a: &RenderArgs) -> Result<scene::Scene> {
         eprintln!("warning: skipped {} degenerate triangle(s)", scene.report.degenerate_triangles);
     }
     Ok(scene)
-}
-
-/// The frame's size: --width and --height, else 512 pixels on the longer side with the
-/// camera's `aspect` (width / height; square without one), one given side setting the
-/// other by it, as a glTF viewer shows a camera of that aspect ratio.
-pub fn frame_size(width: Option<u32>, height: Option<u32>, aspect: Option<f32>) -> (u32, u32) {
-    const LONG_SIDE: u32 = 512;
-    let aspect = aspect.filter(|a| *a > 0.0 && a.is_finite()).unwrap_or(1.0) as f64;
-    let side = |x: f64| (x.round() as u32).max(1);
-    match (width, height) {
-        (Some(w), Some(h)) => (w, h),
-        (Some(w), None) => (w, side(w as f64 / aspect)),
-        (None, Some(h)) => (side(h as f64 * aspect), h),
-        (None, None) if aspect >= 1.0 => (LONG_SIDE, side(LONG_SIDE as f64 / aspect)),
-        (None, None) => (side(LONG_SIDE as f64 * aspect), LONG_SIDE),
-    }
 }
 
 /// The render settings the arguments ask for.

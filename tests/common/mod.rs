@@ -272,3 +272,18 @@ pub fn render_checked(
     assert_eq!(out.overflow_splats, 0, "{} {:?}: overflowing splats", scene.name, s.algorithm);
     out
 }
+
+/// tests/khronos/Box.gltf with a camera of aspectRatio 2 (yfov 0.7) at (0, 0, 4), written
+/// to `dir`/wide.gltf: a frame whose default size follows the camera (512 x 256).
+pub fn wide_camera_box(dir: &std::path::Path) -> std::path::PathBuf {
+    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/khronos/Box.gltf");
+    let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(src).unwrap()).unwrap();
+    doc["cameras"] =
+        serde_json::json!([{"type": "perspective", "perspective": {"yfov": 0.7, "aspectRatio": 2.0, "znear": 0.1}}]);
+    doc["nodes"].as_array_mut().unwrap().push(serde_json::json!({"camera": 0, "translation": [0.0, 0.0, 4.0]}));
+    let n = doc["nodes"].as_array().unwrap().len() - 1;
+    doc["scenes"][0]["nodes"].as_array_mut().unwrap().push(serde_json::json!(n));
+    let file = dir.join("wide.gltf");
+    std::fs::write(&file, serde_json::to_vec(&doc).unwrap()).unwrap();
+    file
+}
