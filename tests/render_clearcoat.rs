@@ -17,36 +17,17 @@
 
 mod common;
 
-use std::sync::Arc;
-
 use common::ggx::ggx_albedo;
 use common::scenes::*;
-use common::{image_mean, render_checked, render_stats, with_gpu};
+use common::{image_mean, with_gpu, TestRender};
 use glam::Vec3;
-use vkvcm::gpu::Gpu;
-use vkvcm::render::{Algorithm, Budget, RenderSettings};
+use vkvcm::render::Algorithm;
 use vkvcm::scene::{Light, Material, Scene, Sphere};
-use vkvcm_tools::stats::{one_sample_test, welch_test, PixelStats};
+use vkvcm_tools::stats::{one_sample_test, welch_test};
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 20;
 const H: u32 = 20;
-
-fn stats(
-    gpu: &Arc<Gpu>,
-    scene: &Scene,
-    algo: Algorithm,
-    nee: bool,
-    iterations: u64,
-    seed: u32,
-    len: u32,
-) -> PixelStats {
-    let mut s = RenderSettings::new(algo, W, H, Budget::Iterations(iterations));
-    s.frame.seed = seed;
-    s.frame.max_path_length = len;
-    s.nee = nee;
-    render_stats(&render_checked(gpu, scene, &s), None)
-}
 
 fn coated(name: &str, base: Material, clearcoat: f32, roughness: f32) -> Material {
     Material { name: name.into(), clearcoat, clearcoat_roughness: roughness, ..base }
@@ -120,7 +101,7 @@ fn coat_alone_matches_quadrature() {
             for (e, v) in expected.data.iter_mut().zip(&values) {
                 *e = [v.unwrap_or(0.0); 3];
             }
-            let st = stats(gpu, &sc, Algorithm::Pt, true, 1024, 51, 2);
+            let st = TestRender::new(Algorithm::Pt, W, H, 1024).seed(51).max_path_length(2).stats(gpu, &sc);
             let masked = {
                 let mut m = st.clone();
                 for (i, _) in mask.iter().enumerate().filter(|(_, keep)| !**keep) {
@@ -152,7 +133,7 @@ fn clearcoat_furnace() {
             ("white mirror", Material::metallic_roughness(Vec3::ONE, 1.0, 0.0), 0.2, 0.97),
         ] {
             let sc = sphere_scene(coated(label, base, 1.0, coat_roughness));
-            let st = stats(gpu, &sc, Algorithm::Pt, true, 512, 61, 2);
+            let st = TestRender::new(Algorithm::Pt, W, H, 512).seed(61).max_path_length(2).stats(gpu, &sc);
             let z = vkvcm_tools::stats::inverse_normal_cdf(1.0 - vkvcm_tools::stats::sidak(ALPHA, 3 * st.mean.len()));
             let mut worst = 0.0f64;
             for (m, v) in st.mean.iter().zip(&st.variance) {
@@ -181,12 +162,15 @@ fn clearcoat_estimators_agree() {
     let right = coated("coated_gold", Material::metallic_roughness(Vec3::new(0.9, 0.7, 0.3), 1.0, 0.5), 0.5, 0.3);
     let sc = glossy_floor_scene(left, right);
     with_gpu(|gpu| {
-        let pt = stats(gpu, &sc, Algorithm::Pt, true, 2048, 71, 4);
+        let pt = TestRender::new(Algorithm::Pt, W, H, 2048).seed(71).max_path_length(4).stats(gpu, &sc);
         assert!(image_mean(&pt) > 0.02, "the scene rendered (almost) black");
         for (what, other) in [
-            ("PT without NEE", stats(gpu, &sc, Algorithm::Pt, false, 2048, 72, 4)),
-            ("BPT", stats(gpu, &sc, Algorithm::Bpt, true, 1024, 73, 4)),
-            ("LT", stats(gpu, &sc, Algorithm::Lt, true, 2048, 74, 4)),
+            (
+                "PT without NEE",
+                TestRender::new(Algorithm::Pt, W, H, 2048).seed(72).max_path_length(4).nee(false).stats(gpu, &sc),
+            ),
+            ("BPT", TestRender::new(Algorithm::Bpt, W, H, 1024).seed(73).max_path_length(4).stats(gpu, &sc)),
+            ("LT", TestRender::new(Algorithm::Lt, W, H, 2048).seed(74).max_path_length(4).stats(gpu, &sc)),
         ] {
             eprintln!("image mean PT {:.5}, {what} {:.5}", image_mean(&pt), image_mean(&other));
             let t = welch_test(&pt, &other, ALPHA).unwrap();
@@ -240,9 +224,9 @@ fn clearcoat_textures_scale_the_factors() {
     let (f, r) = (64.0 / 255.0, 0.5 * 204.0 / 255.0);
     let plain = textured_floor_scene(coated("red", base(red, 0.0), f, r), coated("gold", base(gold, 1.0), f, r));
     with_gpu(|gpu| {
-        let pt_tex = stats(gpu, &tex, Algorithm::Pt, true, 1024, 81, 4);
-        let pt_plain = stats(gpu, &plain, Algorithm::Pt, true, 1024, 82, 4);
-        let bpt_tex = stats(gpu, &tex, Algorithm::Bpt, true, 1024, 83, 4);
+        let pt_tex = TestRender::new(Algorithm::Pt, W, H, 1024).seed(81).max_path_length(4).stats(gpu, &tex);
+        let pt_plain = TestRender::new(Algorithm::Pt, W, H, 1024).seed(82).max_path_length(4).stats(gpu, &plain);
+        let bpt_tex = TestRender::new(Algorithm::Bpt, W, H, 1024).seed(83).max_path_length(4).stats(gpu, &tex);
         eprintln!(
             "image mean PT textured {:.5}, PT factors {:.5}, BPT textured {:.5}",
             image_mean(&pt_tex),

@@ -10,27 +10,21 @@
 
 mod common;
 
-use std::sync::Arc;
-
 use common::ggx::ggx_albedo;
 use common::scenes::*;
-use common::{image_mean, render_checked, render_stats, with_gpu};
+use common::{image_mean, render_checked, render_stats, with_gpu, TestRender};
 use glam::Vec3;
-use vkvcm::gpu::Gpu;
 use vkvcm::render::{Algorithm, Budget, RenderSettings};
 use vkvcm::scene::{Light, Material, Scene, Sphere};
-use vkvcm_tools::stats::{welch_test, PixelStats};
+use vkvcm_tools::stats::welch_test;
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 24;
 const H: u32 = 24;
 
-fn stats(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, nee: bool, iterations: u64, seed: u32) -> PixelStats {
-    let mut s = RenderSettings::new(algo, W, H, Budget::Iterations(iterations));
-    s.frame.seed = seed;
-    s.frame.max_path_length = 4;
-    s.nee = nee;
-    render_stats(&render_checked(gpu, scene, &s), None)
+/// `algo` for `iterations` at W x H, paths of at most 4 segments.
+fn run(algo: Algorithm, iterations: u64) -> TestRender {
+    TestRender::new(algo, W, H, iterations).max_path_length(4)
 }
 
 /// Left half: pure GGX metal, roughness 0.3 (alpha 0.09), coloured F0. Right half:
@@ -58,8 +52,8 @@ fn ggx_floor() -> Scene {
 fn ggx_nee_and_bsdf_sampling_agree() {
     let scene = ggx_floor();
     with_gpu(|gpu| {
-        let a = stats(gpu, &scene, Algorithm::Pt, true, 1024, 11);
-        let b = stats(gpu, &scene, Algorithm::Pt, false, 4096, 12);
+        let a = run(Algorithm::Pt, 1024).seed(11).stats(gpu, &scene);
+        let b = run(Algorithm::Pt, 4096).seed(12).nee(false).stats(gpu, &scene);
         assert!(image_mean(&a) > 0.05, "the scene rendered (almost) black");
         let t = welch_test(&a, &b, ALPHA).unwrap();
         assert!(t.passed(), "GGX floor: PT NEE vs PT BSDF sampling only: {t}");
@@ -73,8 +67,8 @@ fn ggx_nee_and_bsdf_sampling_agree() {
 fn ggx_bpt_matches_pt() {
     let scene = ggx_floor();
     with_gpu(|gpu| {
-        let pt = stats(gpu, &scene, Algorithm::Pt, true, 16384, 21);
-        let bpt = stats(gpu, &scene, Algorithm::Bpt, true, 8192, 22);
+        let pt = run(Algorithm::Pt, 16384).seed(21).stats(gpu, &scene);
+        let bpt = run(Algorithm::Bpt, 8192).seed(22).stats(gpu, &scene);
         let t = welch_test(&pt, &bpt, ALPHA).unwrap();
         assert!(t.passed(), "GGX floor: PT vs BPT: {t}");
     });

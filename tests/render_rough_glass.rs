@@ -14,10 +14,10 @@ mod common;
 use std::sync::Arc;
 
 use common::scenes::*;
-use common::{image_mean, render_checked, render_stats, with_gpu};
+use common::{image_mean, render_checked, render_stats, with_gpu, TestRender};
 use glam::Vec3;
 use vkvcm::gpu::Gpu;
-use vkvcm::render::{self, Algorithm, Budget, RenderSettings};
+use vkvcm::render::{Algorithm, Budget, RenderSettings};
 use vkvcm::scene::{Light, Material, Scene, Sphere};
 use vkvcm_tools::stats::{welch_test, PixelStats};
 
@@ -25,23 +25,9 @@ const ALPHA: f64 = 1e-3;
 const W: u32 = 24;
 const H: u32 = 24;
 
-fn render(
-    gpu: &Arc<Gpu>,
-    scene: &Scene,
-    algo: Algorithm,
-    nee: bool,
-    iterations: u64,
-    seed: u32,
-) -> render::RenderOutput {
-    let mut s = RenderSettings::new(algo, W, H, Budget::Iterations(iterations));
-    s.frame.seed = seed;
-    s.frame.max_path_length = 6;
-    s.nee = nee;
-    render_checked(gpu, scene, &s)
-}
-
-fn stats(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, nee: bool, iterations: u64, seed: u32) -> PixelStats {
-    render_stats(&render(gpu, scene, algo, nee, iterations, seed), None)
+/// `algo` for `iterations` at W x H, paths of at most 6 segments.
+fn run(algo: Algorithm, iterations: u64) -> TestRender {
+    TestRender::new(algo, W, H, iterations).max_path_length(6)
 }
 
 /// A rough dielectric of IOR `ior` and glTF roughness `roughness` (GGX alpha
@@ -93,8 +79,8 @@ fn rough_glass_nee_and_bsdf_sampling_agree() {
     with_gpu(|gpu| {
         for shading_normals in [false, true] {
             let scene = rough_glass_scene(shading_normals);
-            let a = stats(gpu, &scene, Algorithm::Pt, true, 1024, 11);
-            let b = stats(gpu, &scene, Algorithm::Pt, false, 4096, 12);
+            let a = run(Algorithm::Pt, 1024).seed(11).stats(gpu, &scene);
+            let b = run(Algorithm::Pt, 4096).seed(12).nee(false).stats(gpu, &scene);
             assert!(image_mean(&a) > 0.05, "{}: the scene rendered (almost) black", scene.name);
             eprintln!("{}: image mean NEE {:.5}, BSDF only {:.5}", scene.name, image_mean(&a), image_mean(&b));
             let t = welch_test(&a, &b, ALPHA).unwrap();
@@ -121,11 +107,11 @@ fn rough_glass_bpt_and_lt_match_pt() {
             let no_glass = common::primary_hit_mask(&scene, W, H, |m| !m.is_rough_dielectric());
             let kept = no_glass.iter().filter(|&&k| k).count();
             assert!(kept > (W * H / 2) as usize && kept < (W * H) as usize, "the mask keeps {kept} pixels");
-            let pt_out = render(gpu, &scene, Algorithm::Pt, true, 8192, 21);
+            let pt_out = run(Algorithm::Pt, 8192).seed(21).output(gpu, &scene);
             for (algo, iterations) in [(Algorithm::Bpt, 4096), (Algorithm::Lt, 8192)] {
                 let mask = (algo == Algorithm::Lt).then_some(no_glass.as_slice());
                 let pt = &render_stats(&pt_out, mask);
-                let other = render_stats(&render(gpu, &scene, algo, true, iterations, 22), mask);
+                let other = render_stats(&run(algo, iterations).seed(22).output(gpu, &scene), mask);
                 eprintln!(
                     "{}: image mean PT {:.5}, {} {:.5}",
                     scene.name,

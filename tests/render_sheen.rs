@@ -16,36 +16,17 @@
 
 mod common;
 
-use std::sync::Arc;
-
 use common::scenes::*;
 use common::sheen::*;
-use common::{image_mean, render_checked, render_stats, with_gpu};
+use common::{image_mean, with_gpu, TestRender};
 use glam::Vec3;
-use vkvcm::gpu::Gpu;
-use vkvcm::render::{Algorithm, Budget, RenderSettings};
+use vkvcm::render::Algorithm;
 use vkvcm::scene::{Light, Material, Scene, Sphere};
 use vkvcm_tools::stats::{one_sample_test, welch_test, PixelStats};
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 20;
 const H: u32 = 20;
-
-fn stats(
-    gpu: &Arc<Gpu>,
-    scene: &Scene,
-    algo: Algorithm,
-    nee: bool,
-    iterations: u64,
-    seed: u32,
-    len: u32,
-) -> PixelStats {
-    let mut s = RenderSettings::new(algo, W, H, Budget::Iterations(iterations));
-    s.frame.seed = seed;
-    s.frame.max_path_length = len;
-    s.nee = nee;
-    render_stats(&render_checked(gpu, scene, &s), None)
-}
 
 fn sheened(name: &str, base: Material, color: Vec3, roughness: f32) -> Material {
     Material { name: name.into(), sheen_color: color, sheen_roughness: roughness, ..base }
@@ -177,7 +158,7 @@ fn sheen_matches_quadrature_and_furnace() {
             let colour = Vec3::new(1.0, 0.5, 0.25);
             let sc = sphere_scene(sheened("black sheen", Material::default(), colour, roughness));
             let e = tabulated(&|mu| sheen_albedo_capped(&table, mu, r, 128));
-            let st = stats(gpu, &sc, Algorithm::Pt, true, 1024, seed, 2);
+            let st = TestRender::new(Algorithm::Pt, W, H, 1024).seed(seed).max_path_length(2).stats(gpu, &sc);
             eprintln!("sheen alone, roughness {roughness}: image mean {:.5}", image_mean(&st));
             test_against(&st, &expected_image(&sc, colour, &e), &format!("sheen alone r {roughness} vs quadrature"));
 
@@ -197,7 +178,7 @@ fn sheen_matches_quadrature_and_furnace() {
                 sheen_albedo_capped(&table, mu, r, 128) + base
             };
             let furnace = tabulated(&scaled);
-            let st = stats(gpu, &sc, Algorithm::Pt, true, 1024, seed + 10, 2);
+            let st = TestRender::new(Algorithm::Pt, W, H, 1024).seed(seed + 10).max_path_length(2).stats(gpu, &sc);
             test_against(&st, &expected_image(&sc, Vec3::ONE, &furnace), &format!("sheen furnace r {roughness}"));
             let z = vkvcm_tools::stats::inverse_normal_cdf(1.0 - vkvcm_tools::stats::sidak(ALPHA, 3 * st.mean.len()));
             let mut worst = 0.0f64;
@@ -234,12 +215,15 @@ fn sheen_estimators_agree() {
     );
     let sc = glossy_floor_scene(left, right);
     with_gpu(|gpu| {
-        let pt = stats(gpu, &sc, Algorithm::Pt, true, 2048, 71, 4);
+        let pt = TestRender::new(Algorithm::Pt, W, H, 2048).seed(71).max_path_length(4).stats(gpu, &sc);
         assert!(image_mean(&pt) > 0.02, "the scene rendered (almost) black");
         for (what, other) in [
-            ("PT without NEE", stats(gpu, &sc, Algorithm::Pt, false, 2048, 72, 4)),
-            ("BPT", stats(gpu, &sc, Algorithm::Bpt, true, 1024, 73, 4)),
-            ("LT", stats(gpu, &sc, Algorithm::Lt, true, 2048, 74, 4)),
+            (
+                "PT without NEE",
+                TestRender::new(Algorithm::Pt, W, H, 2048).seed(72).max_path_length(4).nee(false).stats(gpu, &sc),
+            ),
+            ("BPT", TestRender::new(Algorithm::Bpt, W, H, 1024).seed(73).max_path_length(4).stats(gpu, &sc)),
+            ("LT", TestRender::new(Algorithm::Lt, W, H, 2048).seed(74).max_path_length(4).stats(gpu, &sc)),
         ] {
             eprintln!("image mean PT {:.5}, {what} {:.5}", image_mean(&pt), image_mean(&other));
             let t = welch_test(&pt, &other, ALPHA).unwrap();
@@ -331,9 +315,9 @@ fn sheen_textures_scale_the_factors() {
         texel,
     );
     with_gpu(|gpu| {
-        let pt_tex = stats(gpu, &tex, Algorithm::Pt, true, 1024, 81, 4);
-        let pt_plain = stats(gpu, &plain, Algorithm::Pt, true, 1024, 82, 4);
-        let bpt_tex = stats(gpu, &tex, Algorithm::Bpt, true, 1024, 83, 4);
+        let pt_tex = TestRender::new(Algorithm::Pt, W, H, 1024).seed(81).max_path_length(4).stats(gpu, &tex);
+        let pt_plain = TestRender::new(Algorithm::Pt, W, H, 1024).seed(82).max_path_length(4).stats(gpu, &plain);
+        let bpt_tex = TestRender::new(Algorithm::Bpt, W, H, 1024).seed(83).max_path_length(4).stats(gpu, &tex);
         eprintln!(
             "sheen colour {colour}, roughness {r}: image mean PT textured {:.5}, PT factors {:.5}, BPT textured {:.5}",
             image_mean(&pt_tex),

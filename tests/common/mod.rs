@@ -261,6 +261,39 @@ pub fn assert_matches_mitsuba(
 /// Blocks of iterations whose image means [`assert_matches_mitsuba`] compares.
 pub const IMAGE_MEAN_BLOCKS: u64 = 16;
 
+/// A small render test's settings, built up by name where a test would otherwise pass
+/// a row of positional numbers: `TestRender::new(Algorithm::Pt, 20, 20, 1024).seed(51)
+/// .max_path_length(2).nee(false).stats(gpu, &scene)`; what is not set is
+/// `RenderSettings::new`'s.
+pub struct TestRender(pub vkvcm::render::RenderSettings);
+
+impl TestRender {
+    pub fn new(algo: vkvcm::render::Algorithm, width: u32, height: u32, iterations: u64) -> Self {
+        let budget = vkvcm::render::Budget::Iterations(iterations);
+        TestRender(vkvcm::render::RenderSettings::new(algo, width, height, budget))
+    }
+    pub fn seed(mut self, seed: u32) -> Self {
+        self.0.frame.seed = seed;
+        self
+    }
+    pub fn max_path_length(mut self, segments: u32) -> Self {
+        self.0.frame.max_path_length = segments;
+        self
+    }
+    pub fn nee(mut self, on: bool) -> Self {
+        self.0.nee = on;
+        self
+    }
+    /// [`render_checked`] with these settings.
+    pub fn output(&self, gpu: &Arc<Gpu>, scene: &vkvcm::scene::Scene) -> vkvcm::render::RenderOutput {
+        render_checked(gpu, scene, &self.0)
+    }
+    /// Per-pixel statistics of [`TestRender::output`] ([`render_stats`]).
+    pub fn stats(&self, gpu: &Arc<Gpu>, scene: &vkvcm::scene::Scene) -> vkvcm_tools::stats::PixelStats {
+        render_stats(&self.output(gpu, scene), None)
+    }
+}
+
 /// `render::render` of `scene` with `s`, failing on rejected samples or overflowing splats.
 pub fn render_checked(
     gpu: &Arc<Gpu>,
