@@ -9,9 +9,13 @@ import base64
 import json
 import math
 import struct
+import sys
 import urllib.request
 import zlib
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from env_reference import look_at_quaternion  # noqa: E402
 
 KHRONOS = "https://raw.githubusercontent.com/KhronosGroup/glTF-Sample-Assets/main/Models"
 
@@ -155,31 +159,6 @@ def frame_camera(doc, yfov=40.0):
     return eye, centre, yfov
 
 
-def look_at_quaternion(eye, target):
-    """Rotation of a glTF camera (looking down -Z, +Y up) at eye towards target, world +Y up."""
-    f = [t - e for t, e in zip(target, eye)]
-    fl = math.sqrt(sum(x * x for x in f))
-    z = [-x / fl for x in f]  # camera +Z points away from the view
-    up = [0.0, 1.0, 0.0]
-    x = [up[1] * z[2] - up[2] * z[1], up[2] * z[0] - up[0] * z[2], up[0] * z[1] - up[1] * z[0]]
-    xl = math.sqrt(sum(v * v for v in x))
-    x = [v / xl for v in x]
-    y = [z[1] * x[2] - z[2] * x[1], z[2] * x[0] - z[0] * x[2], z[0] * x[1] - z[1] * x[0]]
-    m = [[x[0], y[0], z[0]], [x[1], y[1], z[1]], [x[2], y[2], z[2]]]
-    tr = m[0][0] + m[1][1] + m[2][2]
-    if tr > 0:
-        s = math.sqrt(tr + 1.0) * 2
-        return [(m[2][1] - m[1][2]) / s, (m[0][2] - m[2][0]) / s, (m[1][0] - m[0][1]) / s, 0.25 * s]
-    if m[0][0] > m[1][1] and m[0][0] > m[2][2]:
-        s = math.sqrt(1.0 + m[0][0] - m[1][1] - m[2][2]) * 2
-        return [0.25 * s, (m[0][1] + m[1][0]) / s, (m[0][2] + m[2][0]) / s, (m[2][1] - m[1][2]) / s]
-    if m[1][1] > m[2][2]:
-        s = math.sqrt(1.0 + m[1][1] - m[0][0] - m[2][2]) * 2
-        return [(m[0][1] + m[1][0]) / s, 0.25 * s, (m[1][2] + m[2][1]) / s, (m[0][2] - m[2][0]) / s]
-    s = math.sqrt(1.0 + m[2][2] - m[0][0] - m[1][1]) * 2
-    return [(m[0][2] + m[2][0]) / s, (m[1][2] + m[2][1]) / s, 0.25 * s, (m[1][0] - m[0][1]) / s]
-
-
 CAMERA = "vkvcm_cycles_cam"
 
 
@@ -191,7 +170,7 @@ def with_camera(src, dst, override=None):
     doc.setdefault("cameras", []).append({"type": "perspective", "name": CAMERA, "perspective": {
         "yfov": math.radians(yfov), "aspectRatio": 1.0, "znear": 0.01}})
     doc.setdefault("nodes", []).append({"name": CAMERA, "camera": len(doc["cameras"]) - 1,
-                                        "translation": list(eye), "rotation": look_at_quaternion(eye, target)})
+                                        "translation": list(eye), "rotation": look_at_quaternion(eye, target, [0.0, 1.0, 0.0])})
     si = doc.get("scene", 0)
     doc["scenes"][si].setdefault("nodes", []).append(len(doc["nodes"]) - 1)
     if Path(src).suffix == ".glb":
