@@ -23,11 +23,13 @@ use common::{image_mean, with_gpu, TestRender};
 use glam::Vec3;
 use vkvcm::render::Algorithm;
 use vkvcm::scene::{Light, Material, Scene, Sphere};
-use vkvcm_tools::stats::{one_sample_test, welch_test};
+use vkvcm_tools::stats::one_sample_test;
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 20;
 const H: u32 = 20;
+/// The texel of the texture tests: R 64 (coat factor), G 204 (coat roughness).
+const TEXEL: [u8; 4] = [64, 204, 0, 255];
 
 fn coated(name: &str, base: Material, clearcoat: f32, roughness: f32) -> Material {
     Material { name: name.into(), clearcoat, clearcoat_roughness: roughness, ..base }
@@ -161,38 +163,7 @@ fn clearcoat_estimators_agree() {
     let left = coated("coated_red", Material::metallic_roughness(Vec3::new(0.8, 0.2, 0.1), 0.0, 0.6), 1.0, 0.4);
     let right = coated("coated_gold", Material::metallic_roughness(Vec3::new(0.9, 0.7, 0.3), 1.0, 0.5), 0.5, 0.3);
     let sc = glossy_floor_scene(left, right);
-    with_gpu(|gpu| {
-        let pt = TestRender::new(Algorithm::Pt, W, H, 2048).seed(71).max_path_length(4).stats(gpu, &sc);
-        assert!(image_mean(&pt) > 0.02, "the scene rendered (almost) black");
-        for (what, other) in [
-            (
-                "PT without NEE",
-                TestRender::new(Algorithm::Pt, W, H, 2048).seed(72).max_path_length(4).nee(false).stats(gpu, &sc),
-            ),
-            ("BPT", TestRender::new(Algorithm::Bpt, W, H, 1024).seed(73).max_path_length(4).stats(gpu, &sc)),
-            ("LT", TestRender::new(Algorithm::Lt, W, H, 2048).seed(74).max_path_length(4).stats(gpu, &sc)),
-        ] {
-            eprintln!("image mean PT {:.5}, {what} {:.5}", image_mean(&pt), image_mean(&other));
-            let t = welch_test(&pt, &other, ALPHA).unwrap();
-            assert!(t.passed(), "PT vs {what}: {t}");
-        }
-    });
-}
-
-/// glossy_floor_scene with `left` and `right` on floors whose triangles carry texture
-/// coordinates (the texel is the same everywhere: a 1 x 1 image).
-fn textured_floor_scene(left: Material, right: Material) -> Scene {
-    let mut sc = glossy_floor_scene(left, right);
-    for t in sc.triangles.iter_mut().filter(|t| t.material < 2) {
-        t.attributes = Some(Box::new(vkvcm::scene::VertexAttributes {
-            uv: [Some([glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y]), None],
-            color: None,
-            tangent: None,
-        }));
-    }
-    sc.images =
-        vec![vkvcm::scene::TextureImage { name: "coat".into(), width: 1, height: 1, texels: vec![[64, 204, 0, 255]] }];
-    sc
+    with_gpu(|gpu| common::assert_estimators_agree(gpu, &sc, W, H, 4));
 }
 
 /// clearcoatTexture (R) and clearcoatRoughnessTexture (G) multiply the factors per point:
@@ -205,14 +176,7 @@ fn textured_floor_scene(left: Material, right: Material) -> Scene {
 #[test]
 fn clearcoat_textures_scale_the_factors() {
     let base = |c: Vec3, m: f32| Material::metallic_roughness(c, m, 0.6);
-    let t = vkvcm::scene::TextureRef {
-        image: 0,
-        wrap_s: vkvcm::scene::Wrap::Repeat,
-        wrap_t: vkvcm::scene::Wrap::Repeat,
-        filter: vkvcm::scene::Filter::Nearest,
-        tex_coord: 0,
-        transform: vkvcm::scene::TextureRef::IDENTITY,
-    };
+    let t = nearest_texture(0);
     let textured = |name: &str, b: Material| Material {
         clearcoat_texture: Some(t.clone()),
         clearcoat_roughness_texture: Some(t.clone()),
@@ -220,24 +184,10 @@ fn clearcoat_textures_scale_the_factors() {
     };
     let red = Vec3::new(0.8, 0.2, 0.1);
     let gold = Vec3::new(0.9, 0.7, 0.3);
-    let tex = textured_floor_scene(textured("red", base(red, 0.0)), textured("gold", base(gold, 1.0)));
+    let tex = textured_floor_scene(textured("red", base(red, 0.0)), textured("gold", base(gold, 1.0)), TEXEL);
     let (f, r) = (64.0 / 255.0, 0.5 * 204.0 / 255.0);
-    let plain = textured_floor_scene(coated("red", base(red, 0.0), f, r), coated("gold", base(gold, 1.0), f, r));
-    with_gpu(|gpu| {
-        let pt_tex = TestRender::new(Algorithm::Pt, W, H, 1024).seed(81).max_path_length(4).stats(gpu, &tex);
-        let pt_plain = TestRender::new(Algorithm::Pt, W, H, 1024).seed(82).max_path_length(4).stats(gpu, &plain);
-        let bpt_tex = TestRender::new(Algorithm::Bpt, W, H, 1024).seed(83).max_path_length(4).stats(gpu, &tex);
-        eprintln!(
-            "image mean PT textured {:.5}, PT factors {:.5}, BPT textured {:.5}",
-            image_mean(&pt_tex),
-            image_mean(&pt_plain),
-            image_mean(&bpt_tex)
-        );
-        let t = welch_test(&pt_tex, &pt_plain, ALPHA).unwrap();
-        assert!(t.passed(), "textured coat vs its factors: {t}");
-        let t = welch_test(&pt_plain, &bpt_tex, ALPHA).unwrap();
-        assert!(t.passed(), "PT vs BPT on the textured coat: {t}");
-    });
+    let plain = textured_floor_scene(coated("red", base(red, 0.0), f, r), coated("gold", base(gold, 1.0), f, r), TEXEL);
+    with_gpu(|gpu| common::assert_textures_match_factors(gpu, &tex, &plain, W, H));
 }
 
 /// The feature set compiles the coat in only where a primitive's material has one, and its
@@ -253,15 +203,8 @@ fn coat_features() {
     let coat = |name: &str| coated(name, Material::metallic_roughness(Vec3::new(0.8, 0.2, 0.1), 0.0, 0.6), 0.9, 0.3);
     let f = FeatureSet::new(&glossy_floor_scene(coat("a"), coat("b")), false);
     assert!(f.clearcoat && !f.clearcoat_textures && f.to_string().contains("clear coat"), "{f}");
-    let t = vkvcm::scene::TextureRef {
-        image: 0,
-        wrap_s: vkvcm::scene::Wrap::Repeat,
-        wrap_t: vkvcm::scene::Wrap::Repeat,
-        filter: vkvcm::scene::Filter::Nearest,
-        tex_coord: 0,
-        transform: vkvcm::scene::TextureRef::IDENTITY,
-    };
-    let sc = textured_floor_scene(Material { clearcoat_texture: Some(t), ..coat("textured") }, coat("b"));
+    let t = nearest_texture(0);
+    let sc = textured_floor_scene(Material { clearcoat_texture: Some(t), ..coat("textured") }, coat("b"), TEXEL);
     let f = FeatureSet::new(&sc, false);
     assert!(f.clearcoat && f.clearcoat_textures, "{f}");
 }

@@ -9,32 +9,19 @@
 //! textured floor must agree with PT on the constant one (light vertices carry the point's
 //! multipliers; the pdfs of the varied lobes). Statistics as in tests/render_clearcoat.rs:
 //! K = iterations independent samples per pixel, the per-pixel tests Šidák-corrected so
-//! that each comparison has false-failure probability ALPHA. Lavapipe, validation on.
+//! that each comparison has false-failure probability 1e-3 (tests/common
+//! `assert_textures_match_factors`). Lavapipe, validation on.
 
 mod common;
 
-use std::sync::Arc;
-
 use common::scenes::glossy_floor_scene;
-use common::{image_mean, render_checked, render_stats, with_gpu};
+use common::with_gpu;
 use glam::{Vec2, Vec3};
-use vkvcm::gpu::Gpu;
 use vkvcm::render::features::FeatureSet;
-use vkvcm::render::{Algorithm, Budget, RenderSettings};
 use vkvcm::scene::{Filter, LayerTextures, Material, Scene, TextureImage, TextureRef, VertexAttributes, Wrap};
-use vkvcm_tools::stats::{welch_test, PixelStats};
 
-const ALPHA: f64 = 1e-3;
 const W: u32 = 20;
 const H: u32 = 20;
-const ITERATIONS: u64 = 1024;
-
-fn stats(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, seed: u32) -> PixelStats {
-    let mut s = RenderSettings::new(algo, W, H, Budget::Iterations(ITERATIONS));
-    s.frame.seed = seed;
-    s.frame.max_path_length = 4;
-    render_stats(&render_checked(gpu, scene, &s), None)
-}
 
 /// Texel (0, 0) or (1, 0) of the 2 x 1 test image, nearest.
 fn texture() -> TextureRef {
@@ -63,6 +50,7 @@ fn textured_floor(textured: Material, texels: [[u8; 4]; 2]) -> Scene {
         }));
     }
     sc.images = vec![TextureImage { name: "layers".into(), width: 2, height: 1, texels: texels.to_vec() }];
+    sc.name = "two-texel floor".into();
     sc
 }
 
@@ -79,24 +67,6 @@ fn constant_floor(left: Material, right: Material, texels: [[u8; 4]; 2]) -> Scen
         }
     }
     sc
-}
-
-/// PT on the textured floor against PT on the constant one, and BPT on the textured floor
-/// against PT on the constant one.
-fn assert_agree(gpu: &Arc<Gpu>, textured: &Scene, constant: &Scene, what: &str) {
-    let pt_tex = stats(gpu, textured, Algorithm::Pt, 91);
-    let pt_const = stats(gpu, constant, Algorithm::Pt, 92);
-    let bpt_tex = stats(gpu, textured, Algorithm::Bpt, 93);
-    eprintln!(
-        "{what}: image mean PT textured {:.5}, PT factors {:.5}, BPT textured {:.5}",
-        image_mean(&pt_tex),
-        image_mean(&pt_const),
-        image_mean(&bpt_tex)
-    );
-    let t = welch_test(&pt_tex, &pt_const, ALPHA).unwrap();
-    assert!(t.passed(), "{what}: textured vs its factors: {t}");
-    let t = welch_test(&pt_const, &bpt_tex, ALPHA).unwrap();
-    assert!(t.passed(), "{what}: PT vs BPT on the textured floor: {t}");
 }
 
 /// transmissionTexture's R multiplies transmissionFactor: rough glass (roughness 0.4, not
@@ -124,7 +94,7 @@ fn transmission_texture_scales_the_factor() {
     let f = FeatureSet::new(&tex, false);
     assert!(f.transmission_textures && f.partial_transmission && f.diffuse && f.ggx && !f.specular_textures, "{f}");
     let constant = constant_floor(glass(64.0 / 255.0), glass(204.0 / 255.0), texels);
-    with_gpu(|gpu| assert_agree(gpu, &tex, &constant, "transmission texture"));
+    with_gpu(|gpu| common::assert_textures_match_factors(gpu, &tex, &constant, W, H));
 }
 
 /// The sRGB transfer function's inverse (IEC 61966-2-1), as the kernels decode texels.
@@ -169,5 +139,5 @@ fn specular_textures_scale_the_factors() {
     assert!(f.specular_textures && !f.transmission_textures && !f.partial_transmission, "{f}");
     let constant_of = |t| Material::metallic_roughness_with_f0(base, 0.0, 0.3, f0(t));
     let constant = constant_floor(constant_of(texels[0]), constant_of(texels[1]), texels);
-    with_gpu(|gpu| assert_agree(gpu, &tex, &constant, "specular textures"));
+    with_gpu(|gpu| common::assert_textures_match_factors(gpu, &tex, &constant, W, H));
 }

@@ -22,7 +22,7 @@ use common::{image_mean, with_gpu, TestRender};
 use glam::Vec3;
 use vkvcm::render::Algorithm;
 use vkvcm::scene::{Light, Material, Scene, Sphere};
-use vkvcm_tools::stats::{one_sample_test, welch_test, PixelStats};
+use vkvcm_tools::stats::{one_sample_test, PixelStats};
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 20;
@@ -214,22 +214,7 @@ fn sheen_estimators_agree() {
         0.25,
     );
     let sc = glossy_floor_scene(left, right);
-    with_gpu(|gpu| {
-        let pt = TestRender::new(Algorithm::Pt, W, H, 2048).seed(71).max_path_length(4).stats(gpu, &sc);
-        assert!(image_mean(&pt) > 0.02, "the scene rendered (almost) black");
-        for (what, other) in [
-            (
-                "PT without NEE",
-                TestRender::new(Algorithm::Pt, W, H, 2048).seed(72).max_path_length(4).nee(false).stats(gpu, &sc),
-            ),
-            ("BPT", TestRender::new(Algorithm::Bpt, W, H, 1024).seed(73).max_path_length(4).stats(gpu, &sc)),
-            ("LT", TestRender::new(Algorithm::Lt, W, H, 2048).seed(74).max_path_length(4).stats(gpu, &sc)),
-        ] {
-            eprintln!("image mean PT {:.5}, {what} {:.5}", image_mean(&pt), image_mean(&other));
-            let t = welch_test(&pt, &other, ALPHA).unwrap();
-            assert!(t.passed(), "PT vs {what}: {t}");
-        }
-    });
+    with_gpu(|gpu| common::assert_estimators_agree(gpu, &sc, W, H, 4));
 }
 
 /// The feature set compiles the sheen in only where a used material has one.
@@ -242,35 +227,13 @@ fn sheen_features() {
     let s = sheened("s", Material::default(), Vec3::new(0.0, 0.1, 0.0), 0.5);
     let f = FeatureSet::new(&glossy_floor_scene(s.clone(), Material::default()), false);
     assert!(f.sheen && !f.sheen_textures && f.to_string().contains("sheen"), "{f}");
-    let t = vkvcm::scene::TextureRef {
-        image: 0,
-        wrap_s: vkvcm::scene::Wrap::Repeat,
-        wrap_t: vkvcm::scene::Wrap::Repeat,
-        filter: vkvcm::scene::Filter::Nearest,
-        tex_coord: 0,
-        transform: vkvcm::scene::TextureRef::IDENTITY,
-    };
+    let t = nearest_texture(0);
     let textured = Material { sheen_roughness_texture: Some(t), ..s };
     let f = FeatureSet::new(&textured_floor_scene(textured.clone(), Material::default(), [0; 4]), false);
     assert!(f.sheen && f.sheen_textures, "{f}");
     // Without texture coordinates, no sheen textures.
     let f = FeatureSet::new(&glossy_floor_scene(textured, Material::default()), false);
     assert!(f.sheen && !f.sheen_textures, "{f}");
-}
-
-/// glossy_floor_scene with `left` and `right` on floors whose triangles carry texture
-/// coordinates, under one texel everywhere (a 1 x 1 image, RGBA `texel`).
-fn textured_floor_scene(left: Material, right: Material, texel: [u8; 4]) -> Scene {
-    let mut sc = glossy_floor_scene(left, right);
-    for t in sc.triangles.iter_mut().filter(|t| t.material < 2) {
-        t.attributes = Some(Box::new(vkvcm::scene::VertexAttributes {
-            uv: [Some([glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y]), None],
-            color: None,
-            tangent: None,
-        }));
-    }
-    sc.images = vec![vkvcm::scene::TextureImage { name: "sheen".into(), width: 1, height: 1, texels: vec![texel] }];
-    sc
 }
 
 /// sheenColorTexture (RGB, sRGB) and sheenRoughnessTexture (A, linear) multiply the
@@ -281,14 +244,7 @@ fn textured_floor_scene(left: Material, right: Material, texel: [u8; 4]) -> Scen
 /// sheen). Sabotages: see the commit message.
 #[test]
 fn sheen_textures_scale_the_factors() {
-    let t = vkvcm::scene::TextureRef {
-        image: 0,
-        wrap_s: vkvcm::scene::Wrap::Repeat,
-        wrap_t: vkvcm::scene::Wrap::Repeat,
-        filter: vkvcm::scene::Filter::Nearest,
-        tex_coord: 0,
-        transform: vkvcm::scene::TextureRef::IDENTITY,
-    };
+    let t = nearest_texture(0);
     let base = |c: Vec3, m: f32| Material::metallic_roughness(c, m, 0.6);
     let textured = |name: &str, b: Material| Material {
         sheen_color_texture: Some(t.clone()),
@@ -314,19 +270,5 @@ fn sheen_textures_scale_the_factors() {
         sheened("gold", base(gold, 1.0), colour, r),
         texel,
     );
-    with_gpu(|gpu| {
-        let pt_tex = TestRender::new(Algorithm::Pt, W, H, 1024).seed(81).max_path_length(4).stats(gpu, &tex);
-        let pt_plain = TestRender::new(Algorithm::Pt, W, H, 1024).seed(82).max_path_length(4).stats(gpu, &plain);
-        let bpt_tex = TestRender::new(Algorithm::Bpt, W, H, 1024).seed(83).max_path_length(4).stats(gpu, &tex);
-        eprintln!(
-            "sheen colour {colour}, roughness {r}: image mean PT textured {:.5}, PT factors {:.5}, BPT textured {:.5}",
-            image_mean(&pt_tex),
-            image_mean(&pt_plain),
-            image_mean(&bpt_tex)
-        );
-        let t = welch_test(&pt_tex, &pt_plain, ALPHA).unwrap();
-        assert!(t.passed(), "textured sheen vs its factors: {t}");
-        let t = welch_test(&pt_plain, &bpt_tex, ALPHA).unwrap();
-        assert!(t.passed(), "PT vs BPT on the textured sheen: {t}");
-    });
+    with_gpu(|gpu| common::assert_textures_match_factors(gpu, &tex, &plain, W, H));
 }

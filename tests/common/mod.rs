@@ -294,6 +294,64 @@ impl TestRender {
     }
 }
 
+/// A material lobe's estimators agree on a closed scene, per pixel (Welch test at
+/// 1e-3), paths of at most `max_path_length` segments at `width` x `height`: pt with NEE
+/// (2048 iterations) against pt without it (2048: bsdf_eval's pdf is the density
+/// bsdf_sample draws), bpt (1024: the reverse pdfs of its MIS) and light tracing (2048:
+/// the adjoint BSDF on light subpaths).
+pub fn assert_estimators_agree(
+    gpu: &Arc<Gpu>,
+    scene: &vkvcm::scene::Scene,
+    width: u32,
+    height: u32,
+    max_path_length: u32,
+) {
+    use vkvcm::render::Algorithm::{Bpt, Lt, Pt};
+    let run = |algo, iterations, seed| {
+        TestRender::new(algo, width, height, iterations).seed(seed).max_path_length(max_path_length)
+    };
+    let pt = run(Pt, 2048, 71).stats(gpu, scene);
+    assert!(image_mean(&pt) > 0.02, "{}: the scene rendered (almost) black", scene.name);
+    for (what, other) in [
+        ("PT without NEE", run(Pt, 2048, 72).nee(false).stats(gpu, scene)),
+        ("BPT", run(Bpt, 1024, 73).stats(gpu, scene)),
+        ("LT", run(Lt, 2048, 74).stats(gpu, scene)),
+    ] {
+        eprintln!("{}: image mean PT {:.5}, {what} {:.5}", scene.name, image_mean(&pt), image_mean(&other));
+        let t = vkvcm_tools::stats::welch_test(&pt, &other, 1e-3).unwrap();
+        assert!(t.passed(), "{}: PT vs {what}: {t}", scene.name);
+    }
+}
+
+/// A material's textures scale its factors per point: PT on `textured` against PT on
+/// `factors` (the same scene with the textured products as constant factors), and BPT on
+/// `textured` against PT on `factors` (light vertices carry the point's values), per pixel
+/// (Welch test at 1e-3), 1024 iterations each, paths of at most 4 segments.
+pub fn assert_textures_match_factors(
+    gpu: &Arc<Gpu>,
+    textured: &vkvcm::scene::Scene,
+    factors: &vkvcm::scene::Scene,
+    width: u32,
+    height: u32,
+) {
+    use vkvcm::render::Algorithm::{Bpt, Pt};
+    let run = |algo, seed| TestRender::new(algo, width, height, 1024).seed(seed).max_path_length(4);
+    let pt_tex = run(Pt, 81).stats(gpu, textured);
+    let pt_factors = run(Pt, 82).stats(gpu, factors);
+    let bpt_tex = run(Bpt, 83).stats(gpu, textured);
+    eprintln!(
+        "{}: image mean PT textured {:.5}, PT factors {:.5}, BPT textured {:.5}",
+        textured.name,
+        image_mean(&pt_tex),
+        image_mean(&pt_factors),
+        image_mean(&bpt_tex)
+    );
+    let t = vkvcm_tools::stats::welch_test(&pt_tex, &pt_factors, 1e-3).unwrap();
+    assert!(t.passed(), "{}: textured vs its factors: {t}", textured.name);
+    let t = vkvcm_tools::stats::welch_test(&pt_factors, &bpt_tex, 1e-3).unwrap();
+    assert!(t.passed(), "{}: PT vs BPT on the textured material: {t}", textured.name);
+}
+
 /// `render::render` of `scene` with `s`, failing on rejected samples or overflowing splats.
 pub fn render_checked(
     gpu: &Arc<Gpu>,

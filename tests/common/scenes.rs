@@ -212,3 +212,31 @@ pub fn add_filament(s: &mut Scene, centre: Vec3, radiance: f32) {
     }
     s.lights = area_lights(&s.triangles, &s.materials);
 }
+
+/// glossy_floor_scene with `left` and `right` on floors whose triangles carry texture
+/// coordinates, under one texel everywhere (a 1 x 1 image, RGBA `texel`): a textured
+/// material there must render as its factors times the texel.
+pub fn textured_floor_scene(left: Material, right: Material, texel: [u8; 4]) -> Scene {
+    let mut sc = glossy_floor_scene(left, right);
+    for t in sc.triangles.iter_mut().filter(|t| t.material < 2) {
+        t.attributes = Some(Box::new(vkvcm::scene::VertexAttributes {
+            uv: [Some([glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y]), None],
+            color: None,
+            tangent: None,
+        }));
+    }
+    sc.images = vec![vkvcm::scene::TextureImage { name: "texel".into(), width: 1, height: 1, texels: vec![texel] }];
+    sc
+}
+
+/// A reference to image `image`, texture coordinates 0, nearest filtering, repeating.
+pub fn nearest_texture(image: u32) -> vkvcm::scene::TextureRef {
+    vkvcm::scene::TextureRef {
+        image,
+        wrap_s: vkvcm::scene::Wrap::Repeat,
+        wrap_t: vkvcm::scene::Wrap::Repeat,
+        filter: vkvcm::scene::Filter::Nearest,
+        tex_coord: 0,
+        transform: vkvcm::scene::TextureRef::IDENTITY,
+    }
+}
