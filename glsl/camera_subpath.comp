@@ -168,6 +168,8 @@ void start_path(uint pixel, out SubpathState st, out PathSampler ps) {
     st.finite_light = true;
     st.from_material = NO_MATERIAL;
     st.from_ng = vec3(0.0);
+    st.from_p = params.cam_pos.xyz;
+    st.light = NO_LIGHT;
     mis_camera_start(st, st.d);
 }
 
@@ -197,7 +199,7 @@ void reach_surface(inout SubpathState st, Hit h, Surface s) {
 void add_emission(SubpathState st, Hit h, Surface s, inout vec3 L) {
     if (s.light != NO_LIGHT && st.len >= min_path_length()) {
         float dpdf_a, epdf;
-        vec3 le = area_light_radiance(s.light, h.u, h.v, st.d, dpdf_a, epdf);
+        vec3 le = area_light_radiance(s.light, h.u, h.v, st.d, st.from_p, s.p, dpdf_a, epdf);
         if (max3(le) > 0.0) {
             L += st.thr * le * mis_weight_hit(st, dpdf_a, epdf, light_pick_prob(s.light), VERTEX_CONNECTION != 0);
         }

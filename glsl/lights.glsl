@@ -26,6 +26,96 @@ bool light_is_infinite(uint kind) { return kind == LIGHT_DIRECTIONAL || kind == 
 // The emitting side of an area light: its triangle's geometric normal (p1-p0)x(p2-p0).
 vec3 area_light_normal(GpuLight l) { return normalize(cross(l.b.xyz, l.c.xyz)); }
 
+// ---- Solid-angle sampling of triangle lights (Arvo 1995, "Stratified sampling of
+// spherical triangles", in the form of pbrt-v4's SampleSphericalTriangle): next-event
+// estimation draws the direction uniformly in the solid angle the triangle subtends at the
+// shading point, which removes the 1/d^2 and the light's cosine from the estimate (large
+// or near lights). Below a solid angle of SPHERICAL_MIN_SR float32 loses the angles, and
+// near a hemisphere the arc construction degenerates: there the point is drawn by area, as
+// pbrt-v4 does (its MinSphericalSampleArea and MaxSphericalSampleArea). The choice depends
+// on the shading point, so the direct pdf of a light point does too (area_light_direct_pdf_a).
+#define SPHERICAL_MIN_SR 3e-4
+#define SPHERICAL_MAX_SR 6.22
+
+// The solid angle of area light l's triangle seen from x (Van Oosterom & Strackee 1983,
+// tan(omega / 2) = |a.(b x c)| / (1 + a.b + b.c + c.a) for the unit vectors a, b, c).
+float triangle_solid_angle(GpuLight l, vec3 x) {
+    vec3 a = normalize(l.a.xyz - x);
+    vec3 b = normalize(l.a.xyz + l.b.xyz - x);
+    vec3 c = normalize(l.a.xyz + l.c.xyz - x);
+    return abs(2.0 * atan(dot(a, cross(b, c)), 1.0 + dot(a, b) + dot(a, c) + dot(b, c)));
+}
+
+bool area_light_by_solid_angle(float omega) { return omega > SPHERICAL_MIN_SR && omega < SPHERICAL_MAX_SR; }
+
+// The angle between unit vectors, accurate for small angles (pbrt-v4's AngleBetween).
+float angle_between(vec3 v1, vec3 v2) {
+    if (dot(v1, v2) < 0.0) return PI - 2.0 * asin(min(1.0, length(v1 + v2) * 0.5));
+    return 2.0 * asin(min(1.0, length(v2 - v1) * 0.5));
+}
+
+// v made orthogonal to the unit vector w, normalized.
+vec3 orthogonal_to(vec3 v, vec3 w) { return normalize(v - dot(v, w) * w); }
+
+// A direction drawn uniformly in the solid angle of triangle l seen from x (Arvo 1995:
+// u.x picks the sub-triangle's area, u.y the point along its arc), returned as the
+// barycentrics (b1, b2) of the point it meets, as sample_triangle's.
+vec2 sample_spherical_triangle(GpuLight l, vec3 x, vec2 u) {
+    vec3 p0 = l.a.xyz, p1 = l.a.xyz + l.b.xyz, p2 = l.a.xyz + l.c.xyz;
+    vec3 a = normalize(p0 - x), b = normalize(p1 - x), c = normalize(p2 - x);
+    vec3 n_ab = normalize(cross(a, b)), n_bc = normalize(cross(b, c)), n_ca = normalize(cross(c, a));
+    // The spherical triangle's angles at a, b, c.
+    float alpha = angle_between(n_ab, -n_ca);
+    float beta = angle_between(n_bc, -n_ab);
+    float gamma = angle_between(n_ca, -n_bc);
+    // The sub-triangle of area A' = u.x A: the point c' on arc a-c that bounds it.
+    float ap_pi = mix(PI, alpha + beta + gamma, u.x);
+    float cos_alpha = cos(alpha), sin_alpha = sin(alpha);
+    float sin_phi = sin(ap_pi) * cos_alpha - cos(ap_pi) * sin_alpha;
+    float cos_phi = cos(ap_pi) * cos_alpha + sin(ap_pi) * sin_alpha;
+    float k1 = cos_phi + cos_alpha;
+    float k2 = sin_phi - sin_alpha * dot(a, b);
+    float cos_bp = (k2 + (k2 * cos_phi - k1 * sin_phi) * cos_alpha) / ((k2 * sin_phi + k1 * cos_phi) * sin_alpha);
+    cos_bp = clamp(cos_bp, -1.0, 1.0);
+    float sin_bp = sqrt(max(0.0, 1.0 - cos_bp * cos_bp));
+    vec3 cp = cos_bp * a + sin_bp * orthogonal_to(c, a);
+    // The direction along the arc from b to c', uniform in the sub-triangle's area.
+    float cos_t = 1.0 - u.y * (1.0 - dot(cp, b));
+    float sin_t = sqrt(max(0.0, 1.0 - cos_t * cos_t));
+    vec3 w = cos_t * b + sin_t * orthogonal_to(cp, b);
+    // The barycentrics of the point it meets (Moller & Trumbore), clamped into the triangle.
+    vec3 e1 = l.b.xyz, e2 = l.c.xyz;
+    vec3 s1 = cross(w, e2);
+    float divisor = dot(s1, e1);
+    if (divisor == 0.0) return vec2(1.0 / 3.0);
+    vec3 s = x - p0;
+    float b1 = clamp(dot(s, s1) / divisor, 0.0, 1.0);
+    float b2 = clamp(dot(w, cross(s, e1)) / divisor, 0.0, 1.0);
+    float sum = b1 + b2;
+    if (sum > 1.0) { b1 /= sum; b2 /= sum; }
+    return vec2(b1, b2);
+}
+
+// The solid-angle pdf of light_illuminate's direction towards a point of area light l at
+// squared distance d2 and light cosine cos_l, given the triangle's solid angle omega at
+// the shading point (no pick probability).
+float area_light_pdf_w(GpuLight l, float omega, float d2, float cos_l) {
+    return area_light_by_solid_angle(omega) ? 1.0 / omega : d2 / (cos_l * l.d.w);
+}
+
+// The pdf, per unit area at the light, with which light_illuminate at x samples point y
+// of area light `index` (no pick probability; 0 behind the light): what the MIS weights
+// of an emitter hit and of a light subpath's start need (glsl/mis_weights.glsl,
+// glsl/subpath.glsl).
+float area_light_direct_pdf_a(uint index, vec3 x, vec3 y) {
+    GpuLight l = light_at(index);
+    vec3 d = y - x;
+    float d2 = dot(d, d);
+    float cos_l = dot(area_light_normal(l), -d) * inversesqrt(d2);
+    if (cos_l <= EPS_COSINE_LIGHT) return 0.0;
+    return area_light_pdf_w(l, triangle_solid_angle(l, x), d2, cos_l) * cos_l / d2;
+}
+
 // Picks a light with probability light_pick_prob (Walker's alias method, one random
 // number: slot i = floor(u n); the fraction u n - i below the slot's threshold (d.y)
 // keeps light i, else its alias (d.z) is taken). Uniform selection's table keeps every
@@ -79,18 +169,21 @@ LightSample light_illuminate(uint index, vec3 x, vec2 u) {
     float r_scene = params.scene_sphere.w;
 #if HAS_AREA_LIGHTS
     if (kind == LIGHT_AREA) {
-        vec2 bc = sample_triangle(u);
-        vec3 p = l.a.xyz + bc.x * l.b.xyz + bc.y * l.c.xyz;
         vec3 nl = area_light_normal(l);
+        // One-sided: from behind, the whole triangle emits away.
+        if (dot(nl, x - l.a.xyz) <= 0.0) return s;
+        float omega = triangle_solid_angle(l, x);
+        vec2 bc = area_light_by_solid_angle(omega) ? sample_spherical_triangle(l, x, u) : sample_triangle(u);
+        vec3 p = l.a.xyz + bc.x * l.b.xyz + bc.y * l.c.xyz;
         vec3 d = p - x;
         float d2 = dot(d, d);
         s.dist = sqrt(d2);
         s.wi = d / s.dist;
         s.cos_light = dot(nl, -s.wi);
-        if (s.cos_light <= EPS_COSINE_LIGHT) return s;
-        float area = l.d.w;
-        s.pdf_w = d2 / (s.cos_light * area);
-        s.emission_pdf_w = s.cos_light * INV_PI / area;
+        // (Written so that a NaN from a degenerate spherical triangle also rejects.)
+        if (!(s.cos_light > EPS_COSINE_LIGHT)) return s;
+        s.pdf_w = area_light_pdf_w(l, omega, d2, s.cos_light);
+        s.emission_pdf_w = s.cos_light * INV_PI / l.d.w;
         s.light_point = p;
         s.light_normal = nl;
 #if HAS_EMISSIVE_TEXTURES
@@ -149,18 +242,19 @@ LightSample light_illuminate(uint index, vec3 x, vec2 u) {
     return s;
 }
 
-// Radiance leaving an area light at the point of barycentric weights (u, v) of its
-// triangle (a hit's) towards `-dir` (the ray direction that hit it), with the pdfs of
-// producing that point by direct sampling (area measure, no pick probability) and by
-// emission sampling (solid angle).
-vec3 area_light_radiance(uint index, float u, float v, vec3 dir, out float direct_pdf_a, out float emission_pdf_w) {
+// Radiance leaving an area light at the point y of barycentric weights (u, v) of its
+// triangle (a hit's) towards `-dir` (the ray direction that hit it, from the vertex x),
+// with the pdfs of producing that point by direct sampling from x (area measure, no pick
+// probability: area_light_direct_pdf_a) and by emission sampling (solid angle).
+vec3 area_light_radiance(uint index, float u, float v, vec3 dir, vec3 x, vec3 y, out float direct_pdf_a,
+                         out float emission_pdf_w) {
     GpuLight l = light_at(index);
     vec3 nl = area_light_normal(l);
     float c = dot(nl, -dir);
     direct_pdf_a = 0.0;
     emission_pdf_w = 0.0;
     if (c <= EPS_COSINE_LIGHT) return vec3(0.0);
-    direct_pdf_a = 1.0 / l.d.w;
+    direct_pdf_a = area_light_direct_pdf_a(index, x, y);
     emission_pdf_w = c * INV_PI / l.d.w;
 #if HAS_EMISSIVE_TEXTURES
     return l.radiance.rgb * emission_tint(floatBitsToUint(l.a.w), u, v);
@@ -189,7 +283,9 @@ vec3 background_radiance(uint index, vec3 dir, out float direct_pdf_w, out float
 // ---- Emission: a ray leaving a light (light subpaths). Pdfs exclude the pick
 // probability. `direct_pdf` is the pdf of choosing the start point by direct sampling
 // (area measure for area lights, 1 for delta lights, solid angle for the background),
-// as SmallVCM's directPdfA.
+// as SmallVCM's directPdfA; for area lights it is the area sampler's 1 / area, which a
+// light subpath's first hit replaces by the pdf from that point (mis_light_first_hit,
+// glsl/subpath.glsl).
 struct LightEmission {
     vec3 pos;
     vec3 dir;

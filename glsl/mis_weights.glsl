@@ -11,7 +11,9 @@
 #define MIS_WEIGHTS_GLSL
 
 // Camera subpath hits an emitter (area light or background; eq. 42-43, docs/smallvcm.md
-// 4.4.8), pdfs without the pick probability: weight 1 / (1 + w_camera), 1 for the primary ray. Without connections
+// 4.4.8), pdfs without the pick probability (`direct_pdf`: next-event estimation's from the
+// previous vertex, st.from_p, which for area lights depends on it: lights.glsl
+// area_light_direct_pdf_a): weight 1 / (1 + w_camera), 1 for the primary ray. Without connections
 // (ppm, bpm) only purely specular camera paths may see emitters, with weight 1.
 float mis_weight_hit(SubpathState st, float direct_pdf, float emission_pdf, float pick, bool use_vc) {
     if (st.len == 1u) return 1.0;

@@ -42,6 +42,7 @@ struct PtPath {
     // camera: NO_MATERIAL), for the segment's transmittance (glsl/medium.glsl).
     uint from_material;
     vec3 from_ng;
+    vec3 from_p;        // the vertex it leaves: an emitter hit's NEE pdf depends on it
     float last_pdf;     // solid-angle pdf of the last BSDF sample, for MIS at emitters
     bool last_specular;
     float eta_scale;    // refraction's radiance scaling, undone for the roulette
@@ -59,6 +60,7 @@ void start_path(uint pixel, out PtPath path, out PathSampler ps) {
     path.len = 1u;
     path.from_material = NO_MATERIAL;
     path.from_ng = vec3(0.0);
+    path.from_p = params.cam_pos.xyz;
 }
 
 // ---- The stages of a vertex, in the order main() runs them.
@@ -81,7 +83,7 @@ void add_background(inout PtPath path, inout vec3 L) {
 void add_emission(PtPath path, Hit h, Surface s, inout vec3 L) {
     if (s.light != NO_LIGHT && path.len >= min_path_length()) {
         float dpdf_a, epdf;
-        vec3 Le = area_light_radiance(s.light, h.u, h.v, path.d, dpdf_a, epdf);
+        vec3 Le = area_light_radiance(s.light, h.u, h.v, path.d, path.from_p, s.p, dpdf_a, epdf);
         if (max3(Le) > 0.0) {
             float cos_l = abs(dot(s.ng, path.d));
             float dpdf_w = dpdf_a * h.t * h.t / cos_l;
@@ -135,6 +137,7 @@ bool continue_path(inout PtPath path, Surface s, Bsdf b, inout PathSampler ps) {
     path.d = bs.wi;
     path.from_material = s.material;
     path.from_ng = s.ng;
+    path.from_p = s.p;
     path.len++;
     return true;
 }

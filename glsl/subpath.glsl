@@ -27,6 +27,10 @@ struct SubpathState {
     // the camera and at a light), for the segment's transmittance (glsl/medium.glsl).
     uint from_material;
     vec3 from_ng;
+    // The vertex the current segment leaves (the camera, the light point, a surface point):
+    // the direct pdf of an emitter hit depends on it (lights.glsl area_light_direct_pdf_a).
+    vec3 from_p;
+    uint light;        // light subpaths: the light they start on
 };
 
 // Light subpath start (eq. 31-33; delta lights eq. 48-50; docs/smallvcm.md 4.4.2).
@@ -36,6 +40,17 @@ void mis_light_start(inout SubpathState st, float emission_pdf, float direct_pdf
     st.dvcm = direct_pdf / emission_pdf;
     st.dvc = delta ? 0.0 : (finite ? cos_light : 1.0) / emission_pdf;
     st.dvm = st.dvc * push.mis_vc;
+}
+
+// Light subpaths from an area light: next-event estimation samples the start point y0 with
+// a pdf that depends on the receiving point (solid-angle sampling, lights.glsl), so the
+// direct pdf that mis_light_start took (the area sampler's 1 / area, light_emit) is
+// replaced at the first hit y1, once it is known (with mis_on_hit, before anything uses
+// dvcm). Other lights: nothing to do.
+void mis_light_first_hit(inout SubpathState st, vec3 y1) {
+    GpuLight l = light_at(st.light);
+    if (light_kind(l) != LIGHT_AREA) return;
+    st.dvcm *= area_light_direct_pdf_a(st.light, y1, st.from_p) * l.d.w;
 }
 
 // Camera subpath start along the primary direction `d` (eq. 31-33; docs/smallvcm.md 4.4.3).
@@ -101,6 +116,7 @@ bool scatter(inout SubpathState st, Bsdf b, vec3 p, vec3 ng, vec3 u_bsdf, float 
     st.d = bs.wi;
     st.from_material = b.material;
     st.from_ng = ng;
+    st.from_p = p;
     return max3(st.thr) > 0.0;
 }
 

@@ -5,7 +5,8 @@
 //! triangle and a smooth-shaded sphere mesh (the MIS quantities use geometric cosines,
 //! glsl/bsdf.glsl), the GGX scene with rough glass spheres, and an environment map, in bpt, bpm and vcm modes. The kernel evaluates every
 //! weight with the production functions of glsl/subpath.glsl and glsl/mis_weights.glsl (docs/estimators.md, "MIS
-//! weights sum to one: the debug kernel"). Lavapipe, validation on.
+//! weights sum to one: the debug kernel"), with the direct pdfs of triangle lights sampled by
+//! solid angle from the receiving point (glsl/lights.glsl). Lavapipe, validation on.
 
 mod common;
 
@@ -87,6 +88,8 @@ struct Summary {
     class_weight: [f64; 5],
     class_count: [usize; 5],
     by_length: [usize; 12],
+    /// Paths whose y_0 next-event estimation at y_1 samples by solid angle.
+    solid_angle: usize,
 }
 
 fn check_paths(label: &str, mode: Mode, out: &[PathOut], s: &mut Summary) {
@@ -100,6 +103,7 @@ fn check_paths(label: &str, mode: Mode, out: &[PathOut], s: &mut Summary) {
         s.paths += 1;
         s.by_length[k] += 1;
         s.through_specular += (p[6] > 0.0) as usize;
+        s.solid_angle += (p[STRIDE - 1] == 1.0) as usize;
         let id = format!("{label} {} path {i} (k {k}, generated with s = {})", mode.name, p[2]);
         if p[5] != 0.0 {
             s.errors.push(format!("{id}: {} weights negative or not finite: {:?}", p[5], &p[8..]));
@@ -275,11 +279,12 @@ fn print_summary(mode: Mode, s: &Summary) {
         .map(|(c, name)| format!("{name} {:.3} (n {})", s.class_weight[c] / s.paths.max(1) as f64, s.class_count[c]))
         .collect();
     println!(
-        "{}: {} paths (by length {:?}), {} through specular vertices, {} unsampled, {} with max weight < 0.9; max |sum-1| = {:.3e}; mean weight per path: {}",
+        "{}: {} paths (by length {:?}), {} through specular vertices, {} from area lights sampled by solid angle, {} unsampled, {} with max weight < 0.9; max |sum-1| = {:.3e}; mean weight per path: {}",
         mode.name,
         s.paths,
         &s.by_length[1..=MAX_PATH_LENGTH as usize],
         s.through_specular,
+        s.solid_angle,
         s.unsampled,
         s.shared,
         s.max_err,
@@ -311,6 +316,15 @@ fn check_mode(mode: Mode, s: &Summary) {
         "{}: only {} paths through specular vertices",
         mode.name,
         s.through_specular
+    );
+    // Triangle lights' solid-angle pdfs (lights.glsl) enter the emitter-hit, next-event and
+    // light-start weights of a good share of the paths.
+    assert!(
+        s.solid_angle * 5 >= s.paths,
+        "{}: only {} of {} paths start on an area light sampled by solid angle",
+        mode.name,
+        s.solid_angle,
+        s.paths
     );
     assert!(s.shared * 4 >= s.paths, "{}: only {} of {} paths share their weight", mode.name, s.shared, s.paths);
     for (c, name) in CLASSES.iter().enumerate().skip(1) {

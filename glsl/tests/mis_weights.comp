@@ -35,7 +35,9 @@ layout(local_size_x = 64) in;
 // [3] number of techniques that can sample the path; [4] sum of their weights;
 // [5] number of weights that are negative or not finite; [6] specular inner vertices;
 // [7] light kind of y_0; [8 + s] weight of connection technique s (s = 0..k; -1 if it
-// does not apply); [8 + MAXV + i] weight of merging at y_i (i = 1..k-1; -1 if none).
+// does not apply); [8 + MAXV + i] weight of merging at y_i (i = 1..k-1; -1 if none);
+// [31] 1 if y_0 lies on an area light that next-event estimation at y_1 samples by solid
+// angle (lights.glsl area_light_by_solid_angle), else 0.
 layout(std430) buffer mis_results { float result[]; };
 
 #define MAXV 12u  // vertices y_0..y_k, k <= 11
@@ -59,7 +61,8 @@ vec3 dir_to(uint i, uint j) {
 
 // Next-event estimation's light sample for the fixed y_0 as seen from x = y_1: the
 // production light_illuminate, with its area branch repeated for a given point instead of
-// a sampled one and the background's pdfs taken along the fixed direction (the pdfs of
+// a sampled one (the pdf of the point by solid angle or by area, as light_illuminate
+// chooses at x) and the background's pdfs taken along the fixed direction (the pdfs of
 // the other lights do not depend on the sample).
 LightSample light_sample_fixed(uint li, vec3 x) {
     LightSample s = light_illuminate(li, x, vec2(0.5));
@@ -71,7 +74,7 @@ LightSample light_sample_fixed(uint li, vec3 x) {
         s.dist = sqrt(d2);
         s.wi = d / s.dist;
         s.cos_light = dot(area_light_normal(l), -s.wi);
-        s.pdf_w = d2 / (s.cos_light * l.d.w);
+        s.pdf_w = area_light_pdf_w(l, triangle_solid_angle(l, x), d2, s.cos_light);
         s.emission_pdf_w = s.cos_light * INV_PI / l.d.w;
         s.light_point = vp[0];
         s.ok = s.cos_light > EPS_COSINE_LIGHT && max3(s.radiance) > 0.0;
@@ -139,6 +142,7 @@ void main() {
         uint pixel = min(uint(rnd(rng) * float(pixels)), pixels - 1u);
         SubpathState st;
         st.o = params.cam_pos.xyz;
+        st.from_p = params.cam_pos.xyz;
         st.d = camera_sample(pixel, rng);
         st.thr = vec3(1.0);
         st.len = 1u;
@@ -156,7 +160,7 @@ void main() {
                     Surface s = surface_at(h, st.o, st.d);
                     if (s.light == NO_LIGHT) return;
                     float dp, ep;
-                    if (max3(area_light_radiance(s.light, h.u, h.v, st.d, dp, ep)) <= 0.0) return;
+                    if (max3(area_light_radiance(s.light, h.u, h.v, st.d, st.from_p, s.p, dp, ep)) <= 0.0) return;
                     li = s.light;
                     vp[0] = s.p;
                     vn[0] = s.ng;
@@ -232,9 +236,12 @@ void main() {
     st.specular = true;
     st.finite_light = !infinite0;
     mis_light_start(st, e.emission_pdf_w * pick, e.direct_pdf * pick, e.cos_light, e.delta, e.finite);
+    st.from_p = vp[0];
+    st.light = li;
     for (uint i = 1u; i < k; ++i) {
         vec3 d = dir_to(i - 1u, i);
         st.len = i;
+        if (i == 1u) mis_light_first_hit(st, vp[1]);
         mis_on_hit(st, i == 1u && infinite0 ? 0.0 : distance(vp[i - 1u], vp[i]), abs(dot(vn[i], d)),
                    i == 1u && infinite0);
         L[i] = st;
@@ -262,7 +269,7 @@ void main() {
     if (kind == LIGHT_AREA || kind == LIGHT_BACKGROUND) {
         float dp, ep;
         // (Any point of the light: these scenes' lights are untextured, only the side matters.)
-        vec3 le = kind == LIGHT_AREA ? area_light_radiance(li, 0.0, 0.0, dir_to(1u, 0u), dp, ep) : background_radiance(li, dir_to(1u, 0u), dp, ep);
+        vec3 le = kind == LIGHT_AREA ? area_light_radiance(li, 0.0, 0.0, dir_to(1u, 0u), vp[1], vp[0], dp, ep) : background_radiance(li, dir_to(1u, 0u), dp, ep);
         // Without connections only purely specular camera paths count an emitter hit.
         if (max3(le) > 0.0 && (use_vc || C[0].specular || k == 1u)) {
             w = mis_weight_hit(C[0], dp, ep, pick, use_vc);
@@ -325,4 +332,5 @@ void main() {
     write_out(base, 5u, float(bad));
     write_out(base, 6u, float(n_delta));
     write_out(base, 7u, float(kind));
+    write_out(base, 31u, kind == LIGHT_AREA && area_light_by_solid_angle(triangle_solid_angle(light_at(li), vp[1])) ? 1.0 : 0.0);
 }

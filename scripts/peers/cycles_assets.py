@@ -434,7 +434,32 @@ def gen_spheres(path):
     return ((0.0, 2.7, 7.5), (0.0, 2.5, 0.0), 45.0)
 
 
-GENERATED = {"glass": gen_glass, "emitters": gen_emitters, "interior": gen_interior, "spheres": gen_spheres}
+def gen_panel(path):
+    """A closed white room lit only by one large emissive panel (two triangles, 2.4 x 2.4)
+    just below its 2.5-high ceiling, over a metal sphere and a box whose top is 0.9 below
+    the panel: a large nearby area light, solid-angle sampling's case."""
+    b = Builder()
+    white = b.material(pbrMetallicRoughness={"baseColorFactor": [0.7, 0.7, 0.7, 1], "metallicFactor": 0,
+                                             "roughnessFactor": 0.8}, doubleSided=True)
+    metal = b.material(pbrMetallicRoughness={"baseColorFactor": [0.9, 0.8, 0.6, 1], "metallicFactor": 1,
+                                             "roughnessFactor": 0.25}, doubleSided=True)
+    pos, nrm, uv, idx = box((-2, 0, -2), (2, 2.5, 2), inward=True)
+    b.mesh(pos, nrm, idx, white)
+    spos, snrm, sidx = sphere(0.45)
+    b.mesh(spos, snrm, sidx, metal, translation=(0.6, 0.45, -0.3))
+    bpos, bnrm, _, bidx = box((-1.2, 0, -0.8), (-0.4, 1.6, 0.0))
+    b.mesh(bpos, bnrm, bidx, white)
+    glow = b.material(emissiveFactor=[1.0, 0.9, 0.8], pbrMetallicRoughness={"baseColorFactor": [0, 0, 0, 1],
+                                                                          "metallicFactor": 0})
+    y = 2.499
+    epos = [(-1.2, y, -1.2), (1.2, y, -1.2), (1.2, y, 1.2), (-1.2, y, 1.2)]
+    b.mesh(epos, [(0, -1, 0)] * 4, [0, 1, 2, 0, 2, 3], glow)  # counter-clockwise seen from below
+    b.write(path)
+    return ((1.6, 1.4, 1.9), (-0.3, 1.0, -0.8), 60.0)
+
+
+GENERATED = {"glass": gen_glass, "emitters": gen_emitters, "interior": gen_interior, "spheres": gen_spheres,
+             "panel": gen_panel}
 ALL = list(DOWNLOADED) + list(GENERATED)
 
 
