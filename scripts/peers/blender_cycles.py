@@ -117,15 +117,23 @@ class Cycles:
 
 
 def cycles_child(scene, seed, spp, out, size, threads):
-    """Runs inside the venv: imports the glTF and renders it with Cycles to a float EXR."""
+    """Runs inside the venv: the harness's Cycles render of an asset (its added camera,
+    the white sky, size x size)."""
+    render_cycles(scene, cycles_assets.CAMERA, seed, spp, out, size, size, threads, (1.0, 1.0, 1.0))
+
+
+def render_cycles(scene, camera, seed, spp, out, width, height, threads, world_rgb):
+    """Runs inside the venv: imports the glTF with Blender's importer and renders it with
+    Cycles through the camera whose name starts with `camera` (None: the file's first) to a
+    float EXR, settings matched to vkvcm's (below), a uniform world of colour world_rgb."""
     import bpy
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.ops.preferences.addon_enable(module="cycles")  # the empty factory settings leave it off
-    bpy.ops.import_scene.gltf(filepath=scene)
+    bpy.ops.import_scene.gltf(filepath=str(scene))
     sc = bpy.context.scene
-    cams = [o for o in sc.objects if o.type == "CAMERA" and o.name.startswith(cycles_assets.CAMERA)]
+    cams = [o for o in sc.objects if o.type == "CAMERA" and (camera is None or o.name.startswith(camera))]
     if not cams:
-        raise SystemExit(f"no camera {cycles_assets.CAMERA} after import")
+        raise SystemExit(f"no camera {camera or ''} after import")
     sc.camera = cams[0]
     sc.render.engine = "CYCLES"
     c = sc.cycles
@@ -148,15 +156,15 @@ def cycles_child(scene, seed, spp, out, size, threads):
     c.filter_width = 1.0
     sc.render.threads_mode = "FIXED"
     sc.render.threads = int(threads)
-    sc.render.resolution_x = sc.render.resolution_y = int(size)
+    sc.render.resolution_x, sc.render.resolution_y = int(width), int(height)
     sc.render.resolution_percentage = 100
     sc.render.film_transparent = False
     sc.view_settings.view_transform = "Standard"
     sc.view_settings.look = "None"
-    world = bpy.data.worlds.new("white")
+    world = bpy.data.worlds.new("uniform")
     world.use_nodes = True
     bg = world.node_tree.nodes["Background"]
-    bg.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    bg.inputs["Color"].default_value = (*world_rgb, 1.0)
     bg.inputs["Strength"].default_value = 1.0
     sc.world = world
     s = sc.render.image_settings
