@@ -139,6 +139,11 @@ struct Bsdf {
     vec3 sheen_colour;
     float sheen_max, sheen_roughness, prob_sheen, sheen_base_albedo;
 #endif
+#if HAS_IRIDESCENCE
+    // E_avg of the iridescent Fresnel term of the diffuse lobe's interface (0 where the
+    // material has no iridescence or no such interface; glsl/lobes/iridescence.glsl).
+    vec3 interface_e_avg;
+#endif
 };
 
 // The material's colours at a point with tint `tint` (the header of glsl/textures.glsl):
@@ -245,6 +250,9 @@ vec3 schlick(vec3 f0, float c) {
 }
 float schlick(float f0, float c) { return schlick(vec3(f0), c).x; }
 
+// specular_fresnel: Schlick's, or the thin film's where the material is iridescent.
+#include "lobes/iridescence.glsl"
+
 // GGX (Trowbridge-Reitz) normal distribution D(h) for cos(theta_h) = `ch` > 0, width
 // `a` (Walter et al. 2007, eq. 33, written with cos only).
 float ggx_d(float ch, float a) {
@@ -334,8 +342,16 @@ float diffuse_fresnel_weight(float f0, float cos_o, float cos_i) {
 // diffuse_fresnel_weight's cosine-weighted integral over wi is 1 - F_d(c)), instead of
 // SmallVCM's luminance albedos, which pick the 4% coat as seldom at grazing angles as at
 // normal incidence, where it reflects most. A lobe that is absent stays at 0.
-void fresnel_lobe_weights(GpuMaterial m, vec3 tint, float c, inout float a_d, inout float a_g) {
-    if (a_g > 0.0) a_g = luminance(schlick(glossy_colour(m, tint), c));
+void fresnel_lobe_weights(GpuMaterial m, Tint tint, float c, inout float a_d, inout float a_g) {
+#if HAS_IRIDESCENCE
+    // The same estimates with the film's Fresnel term (glsl/lobes/iridescence.glsl).
+    if (iridescence_at(m, tint).x > 0.0) {
+        if (a_g > 0.0) a_g = luminance(specular_fresnel(m, tint, glossy_colour(m, tint.rgb), c));
+        if (m.mirror.w > 0.0) a_d *= 1.0 - luminance(specular_fresnel(m, tint, vec3(m.mirror.w), c));
+        return;
+    }
+#endif
+    if (a_g > 0.0) a_g = luminance(schlick(glossy_colour(m, tint.rgb), c));
     float f0 = m.mirror.w;
     if (f0 > 0.0) a_d *= 1.0 - schlick(f0, c);
 }
@@ -351,6 +367,10 @@ Bsdf base_bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, T
     b.wo = wo;
     b.from_light = from_light;
     b.tint = tint;
+#if HAS_IRIDESCENCE
+    b.interface_e_avg = vec3(0.0);
+    if (m.mirror.w > 0.0 && iridescence_at(m, tint).x > 0.0) b.interface_e_avg = iridescence_average(m, tint, m.mirror.w);
+#endif
     float c = dot(ng, wo);
     // wo must lie off the geometric surface and, on the same side, above the shading one.
     b.valid = abs(c) >= EPS_COSINE && (c >= 0.0 ? dot(ns, wo) : -dot(ns, wo)) >= EPS_COSINE;
@@ -389,7 +409,7 @@ Bsdf base_bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, T
     albedo += glossy;
     // Opaque materials only: a dielectric's interface components also change with the
     // direction, and lobes_eval's reverse probabilities assume only these two do.
-    if (ior < 0.0 && b.valid) fresnel_lobe_weights(m, tint.rgb, dot(b.n, wo), a_d, a_g);
+    if (ior < 0.0 && b.valid) fresnel_lobe_weights(m, tint, dot(b.n, wo), a_d, a_g);
 #endif
 #if HAS_PARTIAL_TRANSMISSION
     // Partial transmission (the header): the lobes so far carry 1 - the glass weight, the
@@ -570,7 +590,7 @@ void lobe_probs_at(Bsdf b, GpuMaterial m, float c, inout float p_d, inout float 
 #if HAS_MIRROR
     rest += luminance(mirror_colour(m, b.tint.rgb));
 #endif
-    fresnel_lobe_weights(m, b.tint.rgb, c, a_d, a_g);
+    fresnel_lobe_weights(m, b.tint, c, a_d, a_g);
     float total = a_d + a_g + rest;
     if (total < 1e-9) return;
     p_d = a_d / total;
@@ -605,6 +625,15 @@ vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
     if (b.prob_diffuse > 0.0) {
         float f0 = m.mirror.w;
         if (f0 > 0.0) {
+#if HAS_IRIDESCENCE
+            // The iridescent interface: diffuse_fresnel_weight per channel with the film's
+            // F and its E_avg (glsl/lobes/iridescence.glsl).
+            if (b.interface_e_avg != vec3(0.0)) {
+                vec3 w = (1.0 - specular_fresnel(m, b.tint, vec3(f0), cos_o)) *
+                         (1.0 - specular_fresnel(m, b.tint, vec3(f0), cos_i)) / (1.0 - b.interface_e_avg);
+                f += diffuse_colour(m, b.tint.rgb) * w * INV_PI;
+            } else
+#endif
             f += diffuse_colour(m, b.tint.rgb) * (INV_PI * diffuse_fresnel_weight(f0, cos_o, cos_i));
         } else {
             f += diffuse_colour(m, b.tint.rgb) * INV_PI;
@@ -630,6 +659,13 @@ vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
 #if HAS_GGX
     if (b.prob_glossy > 0.0) {
         float pf, pr;
+#if HAS_IRIDESCENCE
+        // The film's Fresnel term at the half vector (glsl/lobes/iridescence.glsl).
+        if (iridescence_at(m, b.tint).x > 0.0) {
+            vec3 fr = specular_fresnel(m, b.tint, glossy_colour(m, b.tint.rgb), max(dot(b.wo, normalize(b.wo + wi)), 0.0));
+            f += fr * ggx_eval(n, b.wo, wi, cos_o, cos_i, vec3(1.0), m.glossy.w, pf, pr);
+        } else
+#endif
         f += ggx_eval(n, b.wo, wi, cos_o, cos_i, glossy_colour(m, b.tint.rgb), m.glossy.w, pf, pr);
         pdf_fwd += b.prob_glossy * pf;
         pdf_rev += rev_g * pr;

@@ -71,6 +71,19 @@
 #if HAS_SHEEN_TEXTURES && !HAS_SHEEN
 #error "HAS_SHEEN_TEXTURES needs HAS_SHEEN"
 #endif
+// A thin-film iridescence over some material (KHR_materials_iridescence;
+// glsl/lobes/iridescence.glsl).
+#ifndef HAS_IRIDESCENCE
+#define HAS_IRIDESCENCE 1
+#endif
+// Iridescent materials whose factor or film thickness a texture varies per point
+// (glsl/textures.glsl `surface_tint`; light vertices carry the point's values).
+#ifndef HAS_IRIDESCENCE_TEXTURES
+#define HAS_IRIDESCENCE_TEXTURES 1
+#endif
+#if HAS_IRIDESCENCE_TEXTURES && !HAS_IRIDESCENCE
+#error "HAS_IRIDESCENCE_TEXTURES needs HAS_IRIDESCENCE"
+#endif
 // Light kinds (glsl/lights.glsl).
 #ifndef HAS_AREA_LIGHTS
 #define HAS_AREA_LIGHTS 1

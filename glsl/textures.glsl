@@ -158,9 +158,11 @@ struct Tint {
                            // a: specularFactor (specularTexture's A)
     vec4 sheen;            // rgb: multiplies sheenColorFactor (sheenColorTexture's RGB),
                            // a: sheenRoughnessFactor (sheenRoughnessTexture's A)
+    vec2 iridescence;      // x: multiplies iridescenceFactor (iridescenceTexture's R),
+                           // y: the film thickness between minimum and maximum (its thickness texture's G)
 };
 
-Tint no_tint() { return Tint(vec3(1.0), 1.0, 1.0, 1.0, 1.0, 1.0, vec4(1.0), vec4(1.0)); }
+Tint no_tint() { return Tint(vec3(1.0), 1.0, 1.0, 1.0, 1.0, 1.0, vec4(1.0), vec4(1.0), vec2(1.0)); }
 
 // The tint (rgb) and alpha (times the material's alpha factor) of triangle `tri` with
 // material `material` at barycentric weights (u, v): (1, 1, 1, factor) where it has no
@@ -234,6 +236,23 @@ Tint surface_tint(uint tri, uint material, float u, float v) {
         }
         href = floatBitsToUint(sheen_maps.y);
         if (href != NO_TEXTURE && texture_uv(href, h0, h1, h2, 1.0 - u - v, u, v, huv)) t.sheen.a = texture_sample(href, huv).a;
+    }
+#endif
+#if HAS_IRIDESCENCE_TEXTURES
+    // KHR_materials_iridescence: factor x iridescenceTexture's R, thickness
+    // mix(minimum, maximum, iridescenceThicknessTexture's G) (linear texels).
+    vec4 iridescence_maps = material_iridescence_maps(material);
+    GpuVertexAttributes i0, i1, i2;
+    vec2 iuv;
+    if (triangle_attributes(tri, i0, i1, i2)) {
+        uint iref = floatBitsToUint(iridescence_maps.x);
+        if (iref != NO_TEXTURE && texture_uv(iref, i0, i1, i2, 1.0 - u - v, u, v, iuv)) {
+            t.iridescence.x = texture_sample(iref, iuv).r;
+        }
+        iref = floatBitsToUint(iridescence_maps.y);
+        if (iref != NO_TEXTURE && texture_uv(iref, i0, i1, i2, 1.0 - u - v, u, v, iuv)) {
+            t.iridescence.y = texture_sample(iref, iuv).g;
+        }
     }
 #endif
 #if HAS_TRANSMISSION_TEXTURES || HAS_SPECULAR_TEXTURES

@@ -43,6 +43,9 @@ struct GpuMaterial {
     vec4 specular;       // rgb: F0 of the IOR x specularColorFactor, w: specularFactor (glsl/bsdf.glsl, point_material)
     vec4 sheen;          // rgb: sheenColorFactor (0: none), w: sheenRoughnessFactor (glsl/lobes/sheen.glsl)
     vec4 sheen_maps;     // x, y: sheen colour and roughness textures or NO_TEXTURE (bits), z, w reserved
+    vec4 iridescence;    // x: iridescenceFactor (0: none), y: the film's IOR, z, w: its thickness
+                         // minimum and maximum in nm (glsl/lobes/iridescence.glsl)
+    vec4 iridescence_maps;  // x, y: iridescence and thickness textures or NO_TEXTURE (bits), z, w reserved
 };
 
 struct GpuTextureRef {

@@ -2101,6 +2101,53 @@ fn sheen_factors_are_read() {
     assert!(e.contains("sheenRoughnessTexture"), "{e}");
 }
 
+/// KHR_materials_iridescence: its factors reach the material (the factor clamped to [0, 1];
+/// defaults 0, IOR 1.3, 100 and 400 nm) and so do its textures, without a warning; a smooth
+/// metal (a mirror otherwise) becomes the GGX lobe whose Fresnel term the film replaces; an
+/// IOR below 1 or a negative thickness is an error that names it.
+#[test]
+fn iridescence_factors_are_read() {
+    let mut d = Doc::triangle();
+    d.json["extensionsUsed"] = json!(["KHR_materials_iridescence"]);
+    d.json["materials"] = json!([
+        {"name": "a", "extensions": {"KHR_materials_iridescence": {"iridescenceFactor": 1.5, "iridescenceIor": 1.8,
+            "iridescenceThicknessMinimum": 200.0, "iridescenceThicknessMaximum": 800.0}}},
+        {"name": "b", "extensions": {"KHR_materials_iridescence": {}}},
+        {"name": "c", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.6, 0.3, 1.0], "metallicFactor": 1.0,
+            "roughnessFactor": 0.0}, "extensions": {"KHR_materials_iridescence": {"iridescenceFactor": 0.5}}},
+    ]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let s = d.load().unwrap();
+    let film = |m: &vkvcm::scene::Material| {
+        (m.iridescence, m.iridescence_ior, m.iridescence_thickness_min, m.iridescence_thickness_max)
+    };
+    assert_eq!(film(&s.materials[0]), (1.0, 1.8, 200.0, 800.0));
+    assert!(s.materials[0].has_iridescence());
+    assert_eq!(film(&s.materials[1]), (0.0, 1.3, 100.0, 400.0));
+    assert!(!s.materials[1].has_iridescence());
+    let c = &s.materials[2];
+    assert_eq!((c.glossy, c.mirror, c.roughness), (Vec3::new(0.9, 0.6, 0.3), Vec3::ZERO, 0.0));
+    let w = &s.report.warnings;
+    assert!(!w.iter().any(|x| x.contains("KHR_materials_iridescence")), "{w:?}");
+    d.json["materials"][1]["extensions"]["KHR_materials_iridescence"]["iridescenceIor"] = json!(0.5);
+    let e = format!("{:#}", d.load().unwrap_err());
+    assert!(e.contains("KHR_materials_iridescence") && e.contains("iridescenceIor"), "{e}");
+    d.json["materials"][1]["extensions"]["KHR_materials_iridescence"] = json!({"iridescenceThicknessMinimum": -1.0});
+    let e = format!("{:#}", d.load().unwrap_err());
+    assert!(e.contains("KHR_materials_iridescence") && e.contains("thickness"), "{e}");
+    // Its textures reach the material; one naming no texture is an error that names it.
+    let mut d = Doc::textured();
+    d.json["materials"][0]["extensions"] = json!({"KHR_materials_iridescence": {"iridescenceFactor": 1.0,
+        "iridescenceTexture": {"index": 0}, "iridescenceThicknessTexture": {"index": 0}}});
+    let s = d.load().unwrap();
+    assert!(s.materials[0].iridescence_texture.is_some() && s.materials[0].iridescence_thickness_texture.is_some());
+    assert!(!s.report.warnings.iter().any(|x| x.contains("iridescence")), "{:?}", s.report.warnings);
+    d.json["materials"][0]["extensions"]["KHR_materials_iridescence"]["iridescenceThicknessTexture"] =
+        json!({"index": 7});
+    let e = format!("{:#}", d.load().unwrap_err());
+    assert!(e.contains("iridescenceThicknessTexture"), "{e}");
+}
+
 /// KHR_materials_transmission's transmissionTexture and KHR_materials_specular's
 /// specularTexture and specularColorTexture reach the material (`LayerTextures`) with the
 /// factors they multiply, without a texture warning; a transmissionTexture on a fully

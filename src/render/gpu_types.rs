@@ -91,6 +91,13 @@ pub struct GpuMaterial {
     /// Indices in `texture_refs` (bits, or `NO_TEXTURE`) of x: its sheenColorTexture,
     /// y: sheenRoughnessTexture; z, w: reserved.
     pub sheen_maps: [f32; 4],
+    /// The thin film (`Material::iridescence`, glsl/lobes/iridescence.glsl): x:
+    /// iridescenceFactor (0: none, also where the kernels lack HAS_IRIDESCENCE); y: the
+    /// film's IOR; z, w: its thickness minimum and maximum in nm.
+    pub iridescence: [f32; 4],
+    /// Indices in `texture_refs` (bits, or `NO_TEXTURE`) of x: its iridescenceTexture,
+    /// y: iridescenceThicknessTexture; z, w: reserved.
+    pub iridescence_maps: [f32; 4],
 }
 
 /// A texture as a material uses it (`scene::TextureRef`): where its image's texels are,

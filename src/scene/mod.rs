@@ -258,6 +258,22 @@ pub struct Material {
     /// channel respectively (glsl/textures.glsl, `surface_tint`).
     pub sheen_color_texture: Option<TextureRef>,
     pub sheen_roughness_texture: Option<TextureRef>,
+    /// KHR_materials_iridescence's iridescenceFactor in [0, 1] (0: none): a thin film whose
+    /// interference replaces the Fresnel term of the GGX lobe and of the diffuse lobe's
+    /// interface, F = mix(F_schlick, F_iridescence, factor) (glsl/lobes/iridescence.glsl).
+    pub iridescence: f32,
+    /// iridescenceIor: the film's index of refraction (default 1.3).
+    pub iridescence_ior: f32,
+    /// iridescenceThicknessMinimum and Maximum in nm (default 100 and 400): the film is
+    /// the maximum thick, or where a triangle has the thickness texture's coordinates
+    /// mix(minimum, maximum, texel G).
+    pub iridescence_thickness_min: f32,
+    pub iridescence_thickness_max: f32,
+    /// iridescenceTexture and iridescenceThicknessTexture (linear): the factor is
+    /// multiplied by the texel's R, the thickness interpolated by its G
+    /// (glsl/textures.glsl, `surface_tint`).
+    pub iridescence_texture: Option<TextureRef>,
+    pub iridescence_thickness_texture: Option<TextureRef>,
     /// KHR_materials_transmission's transmissionTexture and KHR_materials_specular's
     /// specularTexture and specularColorTexture, with the factors the kernels recompute the
     /// lobes from where a triangle has their texture coordinates ([`LayerTextures`]).
@@ -344,6 +360,12 @@ impl Default for Material {
             sheen_roughness: 0.0,
             sheen_color_texture: None,
             sheen_roughness_texture: None,
+            iridescence: 0.0,
+            iridescence_ior: 1.3,
+            iridescence_thickness_min: 100.0,
+            iridescence_thickness_max: 400.0,
+            iridescence_texture: None,
+            iridescence_thickness_texture: None,
             layer_textures: None,
         }
     }
@@ -396,6 +418,11 @@ impl Material {
     /// Whether the material has a sheen (a sheen colour above black).
     pub fn has_sheen(&self) -> bool {
         self.sheen_color.max_element() > 0.0
+    }
+
+    /// Whether the material has a thin-film iridescence (a factor above 0).
+    pub fn has_iridescence(&self) -> bool {
+        self.iridescence > 0.0
     }
 
     pub fn has_partial_transmission(&self) -> bool {

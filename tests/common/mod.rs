@@ -4,6 +4,7 @@
 pub mod corpus;
 pub mod ggx;
 pub mod instanced_gltf;
+pub mod iridescence;
 pub mod scenes;
 pub mod sheen;
 

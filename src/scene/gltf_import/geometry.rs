@@ -163,6 +163,12 @@ impl Importer<'_> {
             ("specularTexture", layers.and_then(|l| l.specular.as_ref()), "the specular factor alone applies"),
             ("sheenColorTexture", mat.sheen_color_texture.as_ref(), "the sheen colour factor alone applies"),
             ("sheenRoughnessTexture", mat.sheen_roughness_texture.as_ref(), "the sheen roughness factor alone applies"),
+            ("iridescenceTexture", mat.iridescence_texture.as_ref(), "the iridescence factor alone applies"),
+            (
+                "iridescenceThicknessTexture",
+                mat.iridescence_thickness_texture.as_ref(),
+                "the film is the thickness maximum thick",
+            ),
             (
                 "specularColorTexture",
                 layers.and_then(|l| l.specular_color.as_ref()),

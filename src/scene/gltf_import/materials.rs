@@ -5,7 +5,8 @@
 //! transmissive meshes), `KHR_materials_clearcoat`, and vkvcm's own `VKVCM_materials_phong`.
 
 use super::extensions::{
-    ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG, KHR_MATERIALS_CLEARCOAT, KHR_MATERIALS_SHEEN,
+    ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG, KHR_MATERIALS_CLEARCOAT, KHR_MATERIALS_IRIDESCENCE,
+    KHR_MATERIALS_SHEEN,
 };
 use super::Importer;
 use crate::scene::{AlphaMode, LayerTextures, Material, GLTF_DIELECTRIC_F0};
@@ -122,6 +123,7 @@ impl Importer<'_> {
         if phong_ext.is_none() {
             self.set_clearcoat(m, &mut out, &label)?;
             self.set_sheen(m, &mut out, &label)?;
+            self.set_iridescence(m, &mut out, &label)?;
         }
         // glTF's doubleSided false (the default) is back-face culling: the camera does not
         // see the back side of such a surface (glsl/scene.glsl, trace_camera_segment and
@@ -299,6 +301,41 @@ impl Importer<'_> {
         if let Some(info) = v.get("sheenRoughnessTexture") {
             out.sheen_roughness_texture =
                 self.json_texture(info, label, "KHR_materials_sheen.sheenRoughnessTexture")?;
+        }
+        Ok(())
+    }
+
+    /// Sets the thin film of `out` from `m`'s KHR_materials_iridescence: iridescenceFactor
+    /// (default 0: none, clamped to [0, 1]), iridescenceIor (default 1.3, at least 1),
+    /// iridescenceThicknessMinimum and Maximum (nm, default 100 and 400, not negative),
+    /// and their textures. A smooth metal, a mirror in vkvcm's model (no Fresnel term to
+    /// replace), becomes the GGX lobe of the smallest width with the mirror's colour as F0.
+    fn set_iridescence(&mut self, m: &gltf::Material, out: &mut Material, label: &str) -> Result<()> {
+        let Some(v) = m.extensions().and_then(|e| e.get(KHR_MATERIALS_IRIDESCENCE)) else {
+            return Ok(());
+        };
+        let ctx = format!("{label}: {KHR_MATERIALS_IRIDESCENCE}");
+        if !v.is_object() {
+            bail!("{ctx} must be an object");
+        }
+        out.iridescence = ext_f32(v, "iridescenceFactor", 0.0, &ctx)?.clamp(0.0, 1.0);
+        out.iridescence_ior = ext_f32(v, "iridescenceIor", 1.3, &ctx)?;
+        if out.iridescence_ior < 1.0 {
+            bail!("{ctx}.iridescenceIor must be at least 1, is {}", out.iridescence_ior);
+        }
+        let min = ext_f32(v, "iridescenceThicknessMinimum", 100.0, &ctx)?;
+        let max = ext_f32(v, "iridescenceThicknessMaximum", 400.0, &ctx)?;
+        non_negative(Vec3::new(min, max, 0.0), &format!("{ctx}'s thickness minimum and maximum"))?;
+        (out.iridescence_thickness_min, out.iridescence_thickness_max) = (min, max);
+        if let Some(info) = v.get("iridescenceTexture") {
+            out.iridescence_texture = self.json_texture(info, label, "KHR_materials_iridescence.iridescenceTexture")?;
+        }
+        if let Some(info) = v.get("iridescenceThicknessTexture") {
+            out.iridescence_thickness_texture =
+                self.json_texture(info, label, "KHR_materials_iridescence.iridescenceThicknessTexture")?;
+        }
+        if out.has_iridescence() && out.ior < 0.0 && out.glossy == Vec3::ZERO && out.mirror != Vec3::ZERO {
+            (out.glossy, out.roughness, out.mirror) = (out.mirror, 0.0, Vec3::ZERO);
         }
         Ok(())
     }
