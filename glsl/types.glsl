@@ -43,6 +43,7 @@ struct GpuMaterial {
     vec4 specular;       // rgb: F0 of the IOR x specularColorFactor, w: specularFactor (glsl/bsdf.glsl, point_material)
     vec4 sheen;          // rgb: sheenColorFactor (0: none), w: sheenRoughnessFactor (glsl/lobes/sheen.glsl)
     vec4 sheen_maps;     // x, y: sheen colour and roughness textures or NO_TEXTURE (bits), z, w reserved
+    vec4 anisotropy;     // x, y: cos, sin of the rotation, z: strength (0: none), w: texture or NO_TEXTURE (bits)
 };
 
 struct GpuTextureRef {

@@ -53,6 +53,10 @@ pub struct FeatureSet {
     /// triangle texture coordinates: surfaces and light vertices carry the point's sheen
     /// colour and roughness multipliers (glsl/textures.glsl, `surface_tint`).
     pub sheen_textures: bool,
+    /// Some material with a GGX lobe is anisotropic (`Material::has_anisotropy`) and some
+    /// triangle has tangents: surfaces and light vertices carry the point's anisotropy
+    /// direction and strength (glsl/lobes/anisotropy.glsl).
+    pub anisotropy: bool,
     /// Light kinds.
     pub area_lights: bool,
     pub point_lights: bool,
@@ -133,6 +137,7 @@ impl FeatureSet {
             });
         let sheen_textures = vertex_attributes
             && any_mat(&|m| m.has_sheen() && (m.sheen_color_texture.is_some() || m.sheen_roughness_texture.is_some()));
+        let anisotropy = tangents && any_mat(&|m| m.has_anisotropy());
         let transmission_textured = |m: &crate::scene::Material| {
             m.is_dielectric() && m.layer_textures.as_deref().is_some_and(|l| l.transmission.is_some())
         };
@@ -177,6 +182,7 @@ impl FeatureSet {
             clearcoat_textures: g || clearcoat_textures,
             sheen: g || any_mat(&|m| m.has_sheen()),
             sheen_textures: g || sheen_textures,
+            anisotropy: g || anisotropy,
             area_lights: g || any_light(&|l| matches!(l, Light::Area { .. })),
             point_lights: g || any_light(&|l| matches!(l, Light::Point { .. })),
             spot_lights: g || any_light(&|l| matches!(l, Light::Spot { .. })),
@@ -195,6 +201,7 @@ impl FeatureSet {
                 || metallic_roughness_textures
                 || clearcoat_textures
                 || sheen_textures
+                || (anisotropy && any_mat(&|m| m.has_anisotropy() && m.anisotropy_texture.is_some()))
                 || transmission_textures
                 || specular_textures,
             alpha_mask: g || any_mat(&|m| m.alpha_mode != crate::scene::AlphaMode::Opaque),
@@ -230,6 +237,7 @@ impl FeatureSet {
             ("HAS_CLEARCOAT_TEXTURES", self.clearcoat_textures),
             ("HAS_SHEEN", self.sheen),
             ("HAS_SHEEN_TEXTURES", self.sheen_textures),
+            ("HAS_ANISOTROPY", self.anisotropy),
             ("HAS_AREA_LIGHTS", self.area_lights),
             ("HAS_POINT_LIGHTS", self.point_lights),
             ("HAS_SPOT_LIGHTS", self.spot_lights),
@@ -286,6 +294,7 @@ impl fmt::Display for FeatureSet {
             ("absorbing volume", self.volume),
             ("clear coat", self.clearcoat),
             ("sheen", self.sheen),
+            ("anisotropic GGX", self.anisotropy),
         ];
         writeln!(f, "  materials: {}", list(&mats))?;
         let lights = [

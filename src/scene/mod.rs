@@ -258,6 +258,15 @@ pub struct Material {
     /// channel respectively (glsl/textures.glsl, `surface_tint`).
     pub sheen_color_texture: Option<TextureRef>,
     pub sheen_roughness_texture: Option<TextureRef>,
+    /// KHR_materials_anisotropy's anisotropyStrength in [0, 1] (0: isotropic): the GGX
+    /// lobe's alpha along the anisotropy direction is mix(alpha, 1, strength^2), across it
+    /// alpha (glsl/lobes/anisotropy.glsl). Needs the triangle's tangents.
+    pub anisotropy_strength: f32,
+    /// anisotropyRotation: radians from the tangent towards the bitangent.
+    pub anisotropy_rotation: f32,
+    /// anisotropyTexture (linear): RG the direction in tangent space ([0, 1] to [-1, 1]),
+    /// rotated by the rotation; B multiplies the strength (glsl/textures.glsl).
+    pub anisotropy_texture: Option<TextureRef>,
     /// KHR_materials_transmission's transmissionTexture and KHR_materials_specular's
     /// specularTexture and specularColorTexture, with the factors the kernels recompute the
     /// lobes from where a triangle has their texture coordinates ([`LayerTextures`]).
@@ -344,6 +353,9 @@ impl Default for Material {
             sheen_roughness: 0.0,
             sheen_color_texture: None,
             sheen_roughness_texture: None,
+            anisotropy_strength: 0.0,
+            anisotropy_rotation: 0.0,
+            anisotropy_texture: None,
             layer_textures: None,
         }
     }
@@ -393,6 +405,11 @@ impl Material {
 
     /// A dielectric whose glass weight is below 1: partial transmission, its other lobes
     /// weighted by 1 - the glass weight (HAS_PARTIAL_TRANSMISSION).
+    /// Whether the material's GGX lobe is anisotropic (KHR_materials_anisotropy).
+    pub fn has_anisotropy(&self) -> bool {
+        self.anisotropy_strength > 0.0
+    }
+
     /// Whether the material has a sheen (a sheen colour above black).
     pub fn has_sheen(&self) -> bool {
         self.sheen_color.max_element() > 0.0
