@@ -19,7 +19,8 @@
 // Dupuy & Benyoub's spherical caps ("Sampling Visible GGX Normals with Spherical Caps",
 // HPG 2023): pdf(wi | wo) = D_wo(h) / (4 wo.h) = G1(wo) D(h) / (4 n.wo), and the reverse
 // pdf, sampling wo from wi, G1(wi) D(h) / (4 n.wi). f, being reciprocal, needs no
-// adjoint correction.
+// adjoint correction. KHR_materials_anisotropy makes it anisotropic where the point's
+// tint has a strength (glsl/lobes/anisotropy.glsl; HAS_ANISOTROPY).
 //
 // Shading normals (interpolated vertex normals) follow Veach's thesis (1997), ch. 5.3:
 // every lobe is evaluated and sampled about the shading normal n, while the geometric
@@ -319,6 +320,9 @@ vec3 ggx_eval(vec3 n, vec3 wo, vec3 wi, float cos_o, float cos_i, vec3 f0, float
     pdf_rev = ggx_g1(cos_i, a) * d / (4.0 * cos_i);
     return fr * (d * g2 / (4.0 * cos_o * cos_i));
 }
+
+// The GGX lobe made anisotropic by KHR_materials_anisotropy (Tint.anisotropy).
+#include "lobes/anisotropy.glsl"
 
 // The weight of a diffuse lobe under a dielectric interface of Schlick F0 `f0` (glTF's
 // metallic/roughness dielectric): (1 - F(cos_o)) (1 - F(cos_i)) / (1 - E_avg), with
@@ -659,14 +663,22 @@ vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
 #if HAS_GGX
     if (b.prob_glossy > 0.0) {
         float pf, pr;
+        vec3 f0 = glossy_colour(m, b.tint.rgb);
+        vec3 film = vec3(1.0);
 #if HAS_IRIDESCENCE
-        // The film's Fresnel term at the half vector (glsl/lobes/iridescence.glsl).
+        // The film's Fresnel term at the half vector (glsl/lobes/iridescence.glsl) times the
+        // microfacet term taken with F = 1 (Schlick's with F0 = 1).
         if (iridescence_at(m, b.tint).x > 0.0) {
-            vec3 fr = specular_fresnel(m, b.tint, glossy_colour(m, b.tint.rgb), max(dot(b.wo, normalize(b.wo + wi)), 0.0));
-            f += fr * ggx_eval(n, b.wo, wi, cos_o, cos_i, vec3(1.0), m.glossy.w, pf, pr);
+            film = specular_fresnel(m, b.tint, f0, max(dot(b.wo, normalize(b.wo + wi)), 0.0));
+            f0 = vec3(1.0);
+        }
+#endif
+#if HAS_ANISOTROPY
+        if (b.tint.anisotropy.w > 0.0) {
+            f += film * ggx_anisotropic_eval(n, b.tint.anisotropy, b.wo, wi, cos_o, cos_i, f0, m.glossy.w, pf, pr);
         } else
 #endif
-        f += ggx_eval(n, b.wo, wi, cos_o, cos_i, glossy_colour(m, b.tint.rgb), m.glossy.w, pf, pr);
+        f += film * ggx_eval(n, b.wo, wi, cos_o, cos_i, f0, m.glossy.w, pf, pr);
         pdf_fwd += b.prob_glossy * pf;
         pdf_rev += rev_g * pr;
     }
@@ -801,7 +813,11 @@ BsdfSample base_bsdf_sample(Bsdf b, vec3 u) {
 #if HAS_GGX
         if (x >= b.prob_diffuse + b.prob_phong) {
             // GGX: half vector from the normals visible from wo, then reflect wo about it.
+#if HAS_ANISOTROPY
+            vec3 h = ggx_anisotropic_sample_h(n, b.tint.anisotropy, b.wo, m.glossy.w, u.xy);
+#else
             vec3 h = ggx_sample_h(n, b.wo, m.glossy.w, u.xy);
+#endif
             float oh = dot(b.wo, h);
             if (oh <= 0.0) return s;
             s.wi = 2.0 * oh * h - b.wo;

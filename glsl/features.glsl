@@ -83,6 +83,10 @@
 #endif
 #if HAS_IRIDESCENCE_TEXTURES && !HAS_IRIDESCENCE
 #error "HAS_IRIDESCENCE_TEXTURES needs HAS_IRIDESCENCE"
+// Anisotropic GGX lobes (KHR_materials_anisotropy; glsl/lobes/anisotropy.glsl): surfaces
+// and light vertices carry the point's anisotropy direction and strength (Tint.anisotropy).
+#ifndef HAS_ANISOTROPY
+#define HAS_ANISOTROPY 1
 #endif
 // Light kinds (glsl/lights.glsl).
 #ifndef HAS_AREA_LIGHTS
@@ -115,6 +119,9 @@
 // tint), textures, alpha cut-outs.
 #ifndef HAS_VERTEX_ATTRIBUTES
 #define HAS_VERTEX_ATTRIBUTES 1
+#endif
+#if HAS_ANISOTROPY && !HAS_VERTEX_ATTRIBUTES
+#error "HAS_ANISOTROPY needs HAS_VERTEX_ATTRIBUTES"
 #endif
 #ifndef HAS_TEXTURES
 #define HAS_TEXTURES 1

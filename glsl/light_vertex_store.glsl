@@ -63,6 +63,7 @@ layout(std430) writeonly buffer light_vertex_chunk_counts { uint lv_chunk_count[
 //   with HAS_SPECULAR_TEXTURES:   b[Bi+LV_SPECULAR] = tint.specular
 //   with HAS_SHEEN_TEXTURES:      b[Bi+LV_SHEEN] = tint.sheen
 //   with HAS_IRIDESCENCE_TEXTURES: b[Bi+LV_IRIDESCENCE] = (tint.iridescence, 0, 0)
+//   with HAS_ANISOTROPY:          b[Bi+LV_ANISOTROPY] = tint.anisotropy
 // B = 2 + the others (src/render/light_vertex_store.rs, LightVertexPlan, sizes the store
 // the same way; light_vertex_compact.comp copies B vec4 per vertex). The point's metallic
 // and roughness (a metallic-roughness texture's texel) fill the two vec4s' spare w, so a
@@ -74,7 +75,8 @@ layout(std430) writeonly buffer light_vertex_chunk_counts { uint lv_chunk_count[
 #define LV_SPECULAR (LV_TRANSMISSION + (HAS_TRANSMISSION_TEXTURES != 0 ? 1u : 0u))
 #define LV_SHEEN (LV_SPECULAR + (HAS_SPECULAR_TEXTURES != 0 ? 1u : 0u))
 #define LV_IRIDESCENCE (LV_SHEEN + (HAS_SHEEN_TEXTURES != 0 ? 1u : 0u))
-#define LV_B_STRIDE (LV_IRIDESCENCE + (HAS_IRIDESCENCE_TEXTURES != 0 ? 1u : 0u))
+#define LV_ANISOTROPY (LV_IRIDESCENCE + (HAS_IRIDESCENCE_TEXTURES != 0 ? 1u : 0u))
+#define LV_B_STRIDE (LV_ANISOTROPY + (HAS_ANISOTROPY != 0 ? 1u : 0u))
 struct LightVertex {
     vec3 p;
     vec3 thr;
@@ -118,6 +120,8 @@ void lv_store(uint slot, LightVertex v) {
 #endif
 #if HAS_IRIDESCENCE_TEXTURES
     lv_scratch_b[LV_B_STRIDE * slot + LV_IRIDESCENCE] = vec4(v.tint.iridescence, 0.0, 0.0);
+#if HAS_ANISOTROPY
+    lv_scratch_b[LV_B_STRIDE * slot + LV_ANISOTROPY] = v.tint.anisotropy;
 #endif
 }
 #endif
@@ -159,6 +163,8 @@ LightVertex lv_load(uint slot) {
 #endif
 #if HAS_IRIDESCENCE_TEXTURES
     v.tint.iridescence = lv_b_at(LV_B_STRIDE * slot + LV_IRIDESCENCE).xy;
+#if HAS_ANISOTROPY
+    v.tint.anisotropy = lv_b_at(LV_B_STRIDE * slot + LV_ANISOTROPY);
 #endif
     uint info = floatBitsToUint(b1.w);
     v.material = info & 0xffffffu;

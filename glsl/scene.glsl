@@ -93,7 +93,7 @@ GpuSphere sphere_at(uint i) {
     return s;
 }
 // GpuMaterial's vec4s, in field order.
-#define MATERIAL_TEXELS 18u
+#define MATERIAL_TEXELS 19u
 GpuMaterial material_at(uint i) {
     GpuMaterial m;
     uint k = MATERIAL_TEXELS * i;
@@ -115,6 +115,7 @@ GpuMaterial material_at(uint i) {
     m.sheen_maps = texel_vec4(materials, k + 15u);
     m.iridescence = texel_vec4(materials, k + 16u);
     m.iridescence_maps = texel_vec4(materials, k + 17u);
+    m.anisotropy = texel_vec4(materials, k + 18u);
     return m;
 }
 vec4 material_surface(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 5u); }
@@ -124,6 +125,7 @@ vec4 material_coat(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 
 vec4 material_layers(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 12u); }
 vec4 material_sheen_maps(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 15u); }
 vec4 material_iridescence_maps(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 17u); }
+vec4 material_anisotropy(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 18u); }
 GpuLight light_at(uint i) {
     GpuLight l;
     l.a = texel_vec4(lights, 5u * i);
@@ -152,6 +154,7 @@ vec4 material_coat(uint i) { return material_data[i].coat; }
 vec4 material_layers(uint i) { return material_data[i].layers; }
 vec4 material_sheen_maps(uint i) { return material_data[i].sheen_maps; }
 vec4 material_iridescence_maps(uint i) { return material_data[i].iridescence_maps; }
+vec4 material_anisotropy(uint i) { return material_data[i].anisotropy; }
 GpuLight light_at(uint i) { return light_data[i]; }
 #endif
 
@@ -352,6 +355,9 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
         }
 #endif
         s.tint = surface_tint(h.prim, s.material, h.u, h.v);
+#if HAS_ANISOTROPY
+        s.tint.anisotropy = anisotropy_at(h.prim, record, s.material, h.u, h.v, s.ns);
+#endif
 #if HAS_AREA_LIGHTS
         s.light = tri.light;
 #else

@@ -160,9 +160,11 @@ struct Tint {
                            // a: sheenRoughnessFactor (sheenRoughnessTexture's A)
     vec2 iridescence;      // x: multiplies iridescenceFactor (iridescenceTexture's R),
                            // y: the film thickness between minimum and maximum (its thickness texture's G)
+    vec4 anisotropy;       // xyz: the GGX lobe's anisotropy direction (world, unit), w: its
+                           // strength, 0: isotropic (anisotropy_at)
 };
 
-Tint no_tint() { return Tint(vec3(1.0), 1.0, 1.0, 1.0, 1.0, 1.0, vec4(1.0), vec4(1.0), vec2(1.0)); }
+Tint no_tint() { return Tint(vec3(1.0), 1.0, 1.0, 1.0, 1.0, 1.0, vec4(1.0), vec4(1.0), vec2(1.0), vec4(0.0)); }
 
 // The tint (rgb) and alpha (times the material's alpha factor) of triangle `tri` with
 // material `material` at barycentric weights (u, v): (1, 1, 1, factor) where it has no
@@ -301,22 +303,19 @@ vec3 emission_tint(uint tri, float u, float v) {
 }
 #endif
 
-#if HAS_NORMAL_MAPS
-// The unit shading normal `n` of triangle `tri` (with per-vertex attributes) at (u, v),
-// bent by its material's normal map (glTF 2.0 section 3.9.3, normalTexture): the
-// texel's RGB as (x, y, z) * 2 - 1, x and y times the map's scale, in the frame of the
-// interpolated tangent T (made orthogonal to n), B = w cross(n, T) (w: the tangent's
-// bitangent sign) and n. Unchanged where the material has no normal map or the triangle
-// no texture coordinates for it or no tangent. `record`: the instance record of a shared
-// mesh's triangle (glsl/bvh.glsl), whose object-to-world rows map each vertex's tangent
-// to world space as the importer does for flattened meshes (direction normalised, the
-// bitangent sign flipped by a mirroring transform); BVH_NO_INSTANCE for world space.
-vec3 normal_mapped(uint tri, uint record, uint material, float u, float v, vec3 n) {
-    vec4 maps = material_maps(material);
-    uint ref = floatBitsToUint(maps.x);
-    if (ref == NO_TEXTURE) return n;
-    GpuVertexAttributes a0, a1, a2;
-    if (!triangle_attributes(tri, a0, a1, a2)) return n;
+#if HAS_NORMAL_MAPS || HAS_ANISOTROPY
+// The tangent frame of triangle `tri` (with per-vertex attributes a0, a1, a2, read here)
+// at (u, v) about the unit normal `n`: the interpolated tangent T made orthogonal to n and
+// B = w cross(n, T) (w: the tangent's bitangent sign); false where the triangle has no
+// attributes or no tangent. `record`: the instance record of a shared mesh's triangle
+// (glsl/bvh.glsl), whose object-to-world rows map each vertex's tangent to world space as
+// the importer does for flattened meshes (direction normalised, the bitangent sign
+// flipped by a mirroring transform); BVH_NO_INSTANCE for world space.
+bool tangent_frame(uint tri, uint record, float u, float v, vec3 n, out GpuVertexAttributes a0,
+                   out GpuVertexAttributes a1, out GpuVertexAttributes a2, out vec3 tg, out vec3 b) {
+    tg = vec3(0.0);
+    b = vec3(0.0);
+    if (!triangle_attributes(tri, a0, a1, a2)) return false;
 #ifdef BVH_INSTANCES
     if (record != BVH_NO_INSTANCE) {
         vec3 r0 = uintBitsToFloat(bvh_prim_elem(3u * record + 3u).xyz);
@@ -333,15 +332,69 @@ vec3 normal_mapped(uint tri, uint record, uint material, float u, float v, vec3 
         a2.tangent = ts[2];
     }
 #endif
-    float w0 = 1.0 - u - v;
-    vec4 t = w0 * a0.tangent + u * a1.tangent + v * a2.tangent;
-    vec2 uv;
-    if (any(isnan(t)) || !texture_uv(ref, a0, a1, a2, w0, u, v, uv)) return n;
-    vec3 tg = t.xyz - n * dot(n, t.xyz);
+    vec4 t = (1.0 - u - v) * a0.tangent + u * a1.tangent + v * a2.tangent;
+    if (any(isnan(t))) return false;
+    tg = t.xyz - n * dot(n, t.xyz);
     float tl = length(tg);
-    if (!(tl > 1e-8)) return n;
+    if (!(tl > 1e-8)) return false;
     tg /= tl;
-    vec3 b = cross(n, tg) * (t.w < 0.0 ? -1.0 : 1.0);
+    b = cross(n, tg) * (t.w < 0.0 ? -1.0 : 1.0);
+    return true;
+}
+#endif
+
+#if HAS_ANISOTROPY
+// The anisotropy of material `material` at (u, v) of triangle `tri` (Tint.anisotropy),
+// about the unit shading normal `n` (KHR_materials_anisotropy): the direction
+// (cos r, sin r) rotated by anisotropyRotation r, with an anisotropyTexture its texel's
+// RG mapped to [-1, 1] and normalised, rotated by r, in the tangent frame (tangent_frame),
+// and the strength anisotropyStrength (times the texel's B). Isotropic (strength 0)
+// where the triangle has no tangent: the importer warns of primitives without TANGENT
+// or texture coordinates to generate tangents from.
+vec4 anisotropy_at(uint tri, uint record, uint material, float u, float v, vec3 n) {
+    vec4 an = material_anisotropy(material);
+    if (an.z <= 0.0) return vec4(0.0);
+    GpuVertexAttributes a0, a1, a2;
+    vec3 tg, b;
+    if (!tangent_frame(tri, record, u, v, n, a0, a1, a2, tg, b)) return vec4(0.0);
+    vec2 dir = vec2(1.0, 0.0);
+    float strength = an.z;
+#if HAS_TEXTURES
+    uint ref = floatBitsToUint(an.w);
+    vec2 uv;
+    if (ref != NO_TEXTURE && texture_uv(ref, a0, a1, a2, 1.0 - u - v, u, v, uv)) {
+        vec3 texel = texture_sample(ref, uv).rgb;
+        vec2 d = texel.rg * 2.0 - 1.0;
+        float dl = length(d);
+        dir = dl > 0.0 ? d / dl : dir;
+        strength *= texel.b;
+    }
+#endif
+    // The rotation matrix [cos -sin; sin cos] applied to dir.
+    vec2 r = vec2(an.x * dir.x - an.y * dir.y, an.y * dir.x + an.x * dir.y);
+    return vec4(normalize(r.x * tg + r.y * b), strength);
+}
+#endif
+
+#if HAS_NORMAL_MAPS
+// The unit shading normal `n` of triangle `tri` (with per-vertex attributes) at (u, v),
+// bent by its material's normal map (glTF 2.0 section 3.9.3, normalTexture): the
+// texel's RGB as (x, y, z) * 2 - 1, x and y times the map's scale, in the frame of the
+// interpolated tangent T (made orthogonal to n), B = w cross(n, T) (w: the tangent's
+// bitangent sign) and n. Unchanged where the material has no normal map or the triangle
+// no texture coordinates for it or no tangent. `record`: the instance record of a shared
+// mesh's triangle (glsl/bvh.glsl), whose object-to-world rows map each vertex's tangent
+// to world space as the importer does for flattened meshes (direction normalised, the
+// bitangent sign flipped by a mirroring transform); BVH_NO_INSTANCE for world space.
+vec3 normal_mapped(uint tri, uint record, uint material, float u, float v, vec3 n) {
+    vec4 maps = material_maps(material);
+    uint ref = floatBitsToUint(maps.x);
+    if (ref == NO_TEXTURE) return n;
+    GpuVertexAttributes a0, a1, a2;
+    vec3 tg, b;
+    vec2 uv;
+    if (!tangent_frame(tri, record, u, v, n, a0, a1, a2, tg, b) || !texture_uv(ref, a0, a1, a2, 1.0 - u - v, u, v, uv))
+        return n;
     vec3 m = texture_sample(ref, uv).xyz * 2.0 - 1.0;
     m.xy *= maps.y;
     vec3 bent = m.x * tg + m.y * b + m.z * n;

@@ -46,6 +46,7 @@ struct GpuMaterial {
     vec4 iridescence;    // x: iridescenceFactor (0: none), y: the film's IOR, z, w: its thickness
                          // minimum and maximum in nm (glsl/lobes/iridescence.glsl)
     vec4 iridescence_maps;  // x, y: iridescence and thickness textures or NO_TEXTURE (bits), z, w reserved
+    vec4 anisotropy;     // x, y: cos, sin of the rotation, z: strength (0: none), w: texture or NO_TEXTURE (bits)
 };
 
 struct GpuTextureRef {

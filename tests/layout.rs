@@ -89,7 +89,8 @@ fn rust_and_glsl_layouts_match() {
             sheen,
             sheen_maps,
             iridescence,
-            iridescence_maps
+            iridescence_maps,
+            anisotropy
         }),
         rust_layout!(GpuTextureRef { image, row0, row1 }),
         rust_layout!(GpuVertexAttributes { uv, color, tangent }),

@@ -2146,6 +2146,48 @@ fn iridescence_factors_are_read() {
         json!({"index": 7});
     let e = format!("{:#}", d.load().unwrap_err());
     assert!(e.contains("iridescenceThicknessTexture"), "{e}");
+/// KHR_materials_anisotropy: strength (clamped to [0, 1], default 0), rotation and texture
+/// reach the material without a warning; a smooth metal becomes a GGX lobe (a mirror
+/// cannot be anisotropic); the triangles get tangents generated from their texture
+/// coordinates (none in the file), and a primitive with neither TANGENT nor texture
+/// coordinates is warned of (its lobe stays isotropic).
+#[test]
+fn anisotropy_is_read() {
+    let mut d = Doc::textured();
+    d.json["extensionsUsed"] = json!(["KHR_materials_anisotropy"]);
+    d.json["materials"] = json!([{"name": "m",
+        "pbrMetallicRoughness": {"metallicFactor": 1.0, "roughnessFactor": 0.0, "baseColorFactor": [0.9, 0.8, 0.7, 1.0]},
+        "extensions": {"KHR_materials_anisotropy": {"anisotropyStrength": 1.5, "anisotropyRotation": 0.5,
+            "anisotropyTexture": {"index": 0}}}}]);
+    let s = d.load().unwrap();
+    let m = &s.materials[0];
+    assert_eq!((m.anisotropy_strength, m.anisotropy_rotation), (1.0, 0.5));
+    assert!(m.has_anisotropy() && m.anisotropy_texture.is_some());
+    assert_eq!((m.mirror, m.glossy), (Vec3::ZERO, Vec3::new(0.9, 0.8, 0.7)), "a smooth metal is a GGX lobe");
+    let a = s.triangles[0].attributes.as_ref().unwrap();
+    let t = a.tangent.expect("tangents generated for the anisotropy");
+    assert!(t.iter().all(|t| (t.truncate().length() - 1.0).abs() < 1e-5), "{t:?}");
+    let w = &s.report.warnings;
+    assert!(!w.iter().any(|x| x.contains("anisotropy")), "{w:?}");
+    // Defaults: strength 0 (isotropic), and a plain material stays as it was.
+    d.json["materials"][0]["extensions"]["KHR_materials_anisotropy"] = json!({});
+    let s = d.load().unwrap();
+    assert!(!s.materials[0].has_anisotropy());
+    assert_eq!(s.materials[0].mirror, Vec3::new(0.9, 0.8, 0.7));
+    // A texture naming no texture is an error that names it.
+    d.json["materials"][0]["extensions"]["KHR_materials_anisotropy"] = json!({"anisotropyTexture": {"index": 7}});
+    let e = format!("{:#}", d.load().unwrap_err());
+    assert!(e.contains("anisotropyTexture"), "{e}");
+    // No texture coordinates and no TANGENT: warned of, no tangents.
+    let mut d = Doc::triangle();
+    d.json["materials"] =
+        json!([{"name": "m", "extensions": {"KHR_materials_anisotropy": {"anisotropyStrength": 0.5}}}]);
+    d.prim()["material"] = json!(0);
+    let s = d.load().unwrap();
+    assert!(s.materials[0].has_anisotropy());
+    assert!(s.triangles[0].attributes.as_ref().is_none_or(|a| a.tangent.is_none()));
+    let w = &s.report.warnings;
+    assert!(w.iter().any(|x| x.contains("KHR_materials_anisotropy without TANGENT")), "{w:?}");
 }
 
 /// KHR_materials_transmission's transmissionTexture and KHR_materials_specular's

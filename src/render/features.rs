@@ -60,6 +60,10 @@ pub struct FeatureSet {
     /// texture coordinates: surfaces and light vertices carry the point's iridescence
     /// factor and thickness (glsl/textures.glsl, `surface_tint`).
     pub iridescence_textures: bool,
+    /// Some material with a GGX lobe is anisotropic (`Material::has_anisotropy`) and some
+    /// triangle has tangents: surfaces and light vertices carry the point's anisotropy
+    /// direction and strength (glsl/lobes/anisotropy.glsl).
+    pub anisotropy: bool,
     /// Light kinds.
     pub area_lights: bool,
     pub point_lights: bool,
@@ -144,6 +148,7 @@ impl FeatureSet {
             && any_mat(&|m| {
                 m.has_iridescence() && (m.iridescence_texture.is_some() || m.iridescence_thickness_texture.is_some())
             });
+        let anisotropy = tangents && any_mat(&|m| m.has_anisotropy());
         let transmission_textured = |m: &crate::scene::Material| {
             m.is_dielectric() && m.layer_textures.as_deref().is_some_and(|l| l.transmission.is_some())
         };
@@ -190,6 +195,7 @@ impl FeatureSet {
             sheen_textures: g || sheen_textures,
             iridescence: g || any_mat(&|m| m.has_iridescence()),
             iridescence_textures: g || iridescence_textures,
+            anisotropy: g || anisotropy,
             area_lights: g || any_light(&|l| matches!(l, Light::Area { .. })),
             point_lights: g || any_light(&|l| matches!(l, Light::Point { .. })),
             spot_lights: g || any_light(&|l| matches!(l, Light::Spot { .. })),
@@ -209,6 +215,7 @@ impl FeatureSet {
                 || clearcoat_textures
                 || sheen_textures
                 || iridescence_textures
+                || (anisotropy && any_mat(&|m| m.has_anisotropy() && m.anisotropy_texture.is_some()))
                 || transmission_textures
                 || specular_textures,
             alpha_mask: g || any_mat(&|m| m.alpha_mode != crate::scene::AlphaMode::Opaque),
@@ -246,6 +253,7 @@ impl FeatureSet {
             ("HAS_SHEEN_TEXTURES", self.sheen_textures),
             ("HAS_IRIDESCENCE", self.iridescence),
             ("HAS_IRIDESCENCE_TEXTURES", self.iridescence_textures),
+            ("HAS_ANISOTROPY", self.anisotropy),
             ("HAS_AREA_LIGHTS", self.area_lights),
             ("HAS_POINT_LIGHTS", self.point_lights),
             ("HAS_SPOT_LIGHTS", self.spot_lights),
@@ -303,6 +311,7 @@ impl fmt::Display for FeatureSet {
             ("clear coat", self.clearcoat),
             ("sheen", self.sheen),
             ("iridescence", self.iridescence),
+            ("anisotropic GGX", self.anisotropy),
         ];
         writeln!(f, "  materials: {}", list(&mats))?;
         let lights = [

@@ -98,6 +98,10 @@ pub struct GpuMaterial {
     /// Indices in `texture_refs` (bits, or `NO_TEXTURE`) of x: its iridescenceTexture,
     /// y: iridescenceThicknessTexture; z, w: reserved.
     pub iridescence_maps: [f32; 4],
+    /// The GGX lobe's anisotropy (KHR_materials_anisotropy, glsl/lobes/anisotropy.glsl):
+    /// x, y: cos and sin of anisotropyRotation; z: anisotropyStrength (0: isotropic, also
+    /// where the kernels lack HAS_ANISOTROPY); w: anisotropyTexture or NO_TEXTURE (bits).
+    pub anisotropy: [f32; 4],
 }
 
 /// A texture as a material uses it (`scene::TextureRef`): where its image's texels are,

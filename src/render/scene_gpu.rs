@@ -72,6 +72,7 @@ impl ScenePlan {
                     + m.sheen_roughness_texture.is_some() as u64
                     + m.iridescence_texture.is_some() as u64
                     + m.iridescence_thickness_texture.is_some() as u64
+                    + m.anisotropy_texture.is_some() as u64
                     + m.layer_textures.as_ref().map_or(0, |l| {
                         l.transmission.is_some() as u64
                             + l.specular.is_some() as u64
@@ -179,11 +180,11 @@ fn vertex_attributes(a: Option<&VertexAttributes>, k: usize) -> GpuVertexAttribu
 /// material's base-colour texture, normal map, emissive texture and metallic-roughness
 /// texture, clearcoat and clearcoat-roughness textures, transmission, specular and
 /// specular-colour textures, sheen-colour and sheen-roughness textures, iridescence and
-/// iridescence-thickness textures, in material order), per material the indices of its
-/// thirteen (or `NO_TEXTURE`),
+/// iridescence-thickness textures, the anisotropy texture, in material order), per
+/// material the indices of its fourteen (or `NO_TEXTURE`),
 /// and the texels of the scene's images (RGBA8 packed little-endian, R lowest; four to a
 /// 16-byte element).
-type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 13]>, Vec<[u32; 4]>);
+type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 14]>, Vec<[u32; 4]>);
 
 fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     let mut first = Vec::with_capacity(scene.images.len());
@@ -205,7 +206,7 @@ fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     let mut refs = Vec::new();
     let mut indices = Vec::with_capacity(scene.materials.len());
     for (i, m) in scene.materials.iter().enumerate() {
-        let mut index = [NO_TEXTURE; 13];
+        let mut index = [NO_TEXTURE; 14];
         let layers = m.layer_textures.as_deref();
         // Normal maps and metallic-roughness textures hold linear values, not sRGB colours.
         let slots = [
@@ -225,6 +226,8 @@ fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
             // KHR_materials_iridescence: both linear.
             (m.iridescence_texture.as_ref(), true),
             (m.iridescence_thickness_texture.as_ref(), true),
+            // KHR_materials_anisotropy: a direction and a strength, linear.
+            (m.anisotropy_texture.as_ref(), true),
         ];
         for (slot, (t, linear)) in slots.into_iter().enumerate() {
             let Some(t) = t else { continue };
@@ -388,7 +391,7 @@ fn gpu_triangles(scene: &Scene, features: &FeatureSet) -> GpuGeometry {
 
 /// The materials as the kernels read them, with the texture indices of each
 /// (`texture_indices`, [`gpu_textures`]) where `features` has the textures' kind.
-fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 13]]) -> Vec<GpuMaterial> {
+fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 14]]) -> Vec<GpuMaterial> {
     scene
         .materials
         .iter()
@@ -396,7 +399,7 @@ fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 
         .map(
             |(
                 m,
-                &[texture, normal_map, emissive, metallic_roughness, coat, coat_roughness, t, s, sc, sh, shr, ir, irt],
+                &[texture, normal_map, emissive, metallic_roughness, coat, coat_roughness, t, s, sc, sh, shr, ir, irt, an],
             )| {
                 let normal_map = if features.normal_maps { normal_map } else { NO_TEXTURE };
                 let emissive = if features.emissive_textures { emissive } else { NO_TEXTURE };
@@ -450,6 +453,7 @@ fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 
                     sheen_maps: gpu_sheen_maps(m, features, [sh, shr]),
                     iridescence: gpu_iridescence(m, features),
                     iridescence_maps: gpu_iridescence_maps(m, features, [ir, irt]),
+                    anisotropy: gpu_anisotropy(m, features, an),
                 }
             },
         )
@@ -495,6 +499,15 @@ fn gpu_iridescence(m: &crate::scene::Material, features: &FeatureSet) -> [f32; 4
 fn gpu_iridescence_maps(m: &crate::scene::Material, features: &FeatureSet, textures: [u32; 2]) -> [f32; 4] {
     let t = |i: u32| bits(if features.iridescence_textures && m.has_iridescence() { i } else { NO_TEXTURE });
     [t(textures[0]), t(textures[1]), 0.0, 0.0]
+/// GpuMaterial.anisotropy of `m` (glsl/types.glsl) with the index of its texture:
+/// isotropic where the kernels have no anisotropy.
+fn gpu_anisotropy(m: &crate::scene::Material, features: &FeatureSet, texture: u32) -> [f32; 4] {
+    if !features.anisotropy || !m.has_anisotropy() {
+        return [1.0, 0.0, 0.0, bits(NO_TEXTURE)];
+    }
+    let (s, c) = m.anisotropy_rotation.sin_cos();
+    let t = if features.textures { texture } else { NO_TEXTURE };
+    [c, s, m.anisotropy_strength.min(1.0), bits(t)]
 }
 
 /// Uploads the [`CHUNKED`] arrays: whole, each one buffer added to `buffers`, or with
@@ -602,7 +615,7 @@ impl SceneGpu {
         let (texture_refs, texture_indices, texels) = if features.textures {
             gpu_textures(scene)?
         } else {
-            (Vec::new(), vec![[NO_TEXTURE; 13]; scene.materials.len()], Vec::new())
+            (Vec::new(), vec![[NO_TEXTURE; 14]; scene.materials.len()], Vec::new())
         };
         let materials = gpu_materials(scene, features, &texture_indices);
         let env = match environment_map(scene) {

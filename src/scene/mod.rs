@@ -274,6 +274,15 @@ pub struct Material {
     /// (glsl/textures.glsl, `surface_tint`).
     pub iridescence_texture: Option<TextureRef>,
     pub iridescence_thickness_texture: Option<TextureRef>,
+    /// KHR_materials_anisotropy's anisotropyStrength in [0, 1] (0: isotropic): the GGX
+    /// lobe's alpha along the anisotropy direction is mix(alpha, 1, strength^2), across it
+    /// alpha (glsl/lobes/anisotropy.glsl). Needs the triangle's tangents.
+    pub anisotropy_strength: f32,
+    /// anisotropyRotation: radians from the tangent towards the bitangent.
+    pub anisotropy_rotation: f32,
+    /// anisotropyTexture (linear): RG the direction in tangent space ([0, 1] to [-1, 1]),
+    /// rotated by the rotation; B multiplies the strength (glsl/textures.glsl).
+    pub anisotropy_texture: Option<TextureRef>,
     /// KHR_materials_transmission's transmissionTexture and KHR_materials_specular's
     /// specularTexture and specularColorTexture, with the factors the kernels recompute the
     /// lobes from where a triangle has their texture coordinates ([`LayerTextures`]).
@@ -366,6 +375,9 @@ impl Default for Material {
             iridescence_thickness_max: 400.0,
             iridescence_texture: None,
             iridescence_thickness_texture: None,
+            anisotropy_strength: 0.0,
+            anisotropy_rotation: 0.0,
+            anisotropy_texture: None,
             layer_textures: None,
         }
     }
@@ -415,6 +427,11 @@ impl Material {
 
     /// A dielectric whose glass weight is below 1: partial transmission, its other lobes
     /// weighted by 1 - the glass weight (HAS_PARTIAL_TRANSMISSION).
+    /// Whether the material's GGX lobe is anisotropic (KHR_materials_anisotropy).
+    pub fn has_anisotropy(&self) -> bool {
+        self.anisotropy_strength > 0.0
+    }
+
     /// Whether the material has a sheen (a sheen colour above black).
     pub fn has_sheen(&self) -> bool {
         self.sheen_color.max_element() > 0.0

@@ -22,6 +22,8 @@ pub const KHR_MATERIALS_CLEARCOAT: &str = "KHR_materials_clearcoat";
 pub const KHR_MATERIALS_SHEEN: &str = "KHR_materials_sheen";
 /// A thin-film iridescence over a material (src/scene/gltf_import/materials.rs).
 pub const KHR_MATERIALS_IRIDESCENCE: &str = "KHR_materials_iridescence";
+/// An anisotropic GGX lobe (src/scene/gltf_import/materials.rs).
+pub const KHR_MATERIALS_ANISOTROPY: &str = "KHR_materials_anisotropy";
 /// Offset, rotation and scale of texture coordinates (read on `baseColorTexture`).
 pub const KHR_TEXTURE_TRANSFORM: &str = "KHR_texture_transform";
 
@@ -40,6 +42,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     KHR_MATERIALS_CLEARCOAT,
     KHR_MATERIALS_SHEEN,
     KHR_MATERIALS_IRIDESCENCE,
+    KHR_MATERIALS_ANISOTROPY,
     KHR_MESH_QUANTIZATION,
     KHR_TEXTURE_TRANSFORM,
     EXT_MESH_GPU_INSTANCING,

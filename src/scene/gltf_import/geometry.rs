@@ -79,10 +79,24 @@ impl Importer<'_> {
         };
         let (uvs, colors) = self.vertex_attributes(prim, mesh, weights, positions.len(), where_)?;
         let normal_map = self.texture_sets_present(material, &uvs, where_);
-        let tangents = match (normal_map, prim.get(&Semantic::Tangents)) {
-            (Some(_), Some(acc)) => Some(self.read_morphed_tangents(prim, &acc, weights, positions.len(), where_)?),
+        // An anisotropic GGX lobe needs tangents as a normal map does: the primitive's, or
+        // generated on its anisotropyTexture's set (TEXCOORD_0 without one).
+        let mat = &self.scene.materials[material as usize];
+        let anisotropic = mat.has_anisotropy();
+        let anisotropy_set = mat.anisotropy_texture.as_ref().map_or(0, |t| t.tex_coord as usize);
+        let tangent_set = normal_map.or((anisotropic && uvs[anisotropy_set].is_some()).then_some(anisotropy_set));
+        let tangents = match (normal_map.is_some() || anisotropic, prim.get(&Semantic::Tangents)) {
+            (true, Some(acc)) => Some(self.read_morphed_tangents(prim, &acc, weights, positions.len(), where_)?),
             _ => None,
         };
+        if anisotropic && tangents.is_none() && tangent_set.is_none() {
+            self.warnings.warn(
+                format!(
+                    "KHR_materials_anisotropy without TANGENT or TEXCOORD_{anisotropy_set} to generate tangents from (the GGX lobe is isotropic there)"
+                ),
+                where_,
+            );
+        }
         let indices: Vec<u32> = match &prim.indices() {
             Some(a) => {
                 let idx = read_indices(&self.buffers, a).with_context(|| where_.to_string())?;
@@ -102,7 +116,7 @@ impl Importer<'_> {
         let tris = self.triangle_list(mode, &indices, where_);
         let first_triangle = self.scene.triangles.len();
         self.push_triangles(&tris, &world, &uvs, colors.as_deref(), material, where_);
-        if let (Some(set), None) = (normal_map, &world.2) {
+        if let (Some(set), None) = (tangent_set, &world.2) {
             super::tangents::generate(&mut self.scene.triangles[first_triangle..], set)
                 .with_context(|| format!("{where_}: generating tangents"))?;
         }
@@ -169,6 +183,7 @@ impl Importer<'_> {
                 mat.iridescence_thickness_texture.as_ref(),
                 "the film is the thickness maximum thick",
             ),
+            ("anisotropyTexture", mat.anisotropy_texture.as_ref(), "the anisotropy strength and rotation alone apply"),
             (
                 "specularColorTexture",
                 layers.and_then(|l| l.specular_color.as_ref()),
@@ -330,7 +345,7 @@ impl Importer<'_> {
                     n = None;
                 }
             }
-            let attributes = (uvs.iter().any(Option::is_some) || colors.is_some()).then(|| {
+            let attributes = (uvs.iter().any(Option::is_some) || colors.is_some() || world_t.is_some()).then(|| {
                 Box::new(VertexAttributes {
                     uv: [0, 1].map(|k| uvs[k].as_ref().map(|uv| t.map(|i| uv[i as usize]))),
                     color: colors.map(|c| t.map(|i| c[i as usize])),

@@ -5,8 +5,8 @@
 //! transmissive meshes), `KHR_materials_clearcoat`, and vkvcm's own `VKVCM_materials_phong`.
 
 use super::extensions::{
-    ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG, KHR_MATERIALS_CLEARCOAT, KHR_MATERIALS_IRIDESCENCE,
-    KHR_MATERIALS_SHEEN,
+    ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG, KHR_MATERIALS_ANISOTROPY, KHR_MATERIALS_CLEARCOAT,
+    KHR_MATERIALS_IRIDESCENCE, KHR_MATERIALS_SHEEN,
 };
 use super::Importer;
 use crate::scene::{AlphaMode, LayerTextures, Material, GLTF_DIELECTRIC_F0};
@@ -124,6 +124,7 @@ impl Importer<'_> {
             self.set_clearcoat(m, &mut out, &label)?;
             self.set_sheen(m, &mut out, &label)?;
             self.set_iridescence(m, &mut out, &label)?;
+            self.set_anisotropy(m, &mut out, &label)?;
         }
         // glTF's doubleSided false (the default) is back-face culling: the camera does not
         // see the back side of such a surface (glsl/scene.glsl, trace_camera_segment and
@@ -336,6 +337,33 @@ impl Importer<'_> {
         }
         if out.has_iridescence() && out.ior < 0.0 && out.glossy == Vec3::ZERO && out.mirror != Vec3::ZERO {
             (out.glossy, out.roughness, out.mirror) = (out.mirror, 0.0, Vec3::ZERO);
+    /// Sets the anisotropy of `out`'s GGX lobe from `m`'s KHR_materials_anisotropy:
+    /// anisotropyStrength (default 0, clamped to [0, 1]), anisotropyRotation (default 0)
+    /// and anisotropyTexture. A smooth metal, a mirror otherwise, becomes a GGX lobe of
+    /// the smallest width, which the anisotropy widens along its direction. The rough
+    /// dielectric (transmission) and the clear coat stay isotropic (docs/scene-format.md).
+    fn set_anisotropy(&mut self, m: &gltf::Material, out: &mut Material, label: &str) -> Result<()> {
+        let Some(v) = m.extensions().and_then(|e| e.get(KHR_MATERIALS_ANISOTROPY)) else {
+            return Ok(());
+        };
+        let ctx = format!("{label}: {KHR_MATERIALS_ANISOTROPY}");
+        if !v.is_object() {
+            bail!("{ctx} must be an object");
+        }
+        out.anisotropy_strength = ext_f32(v, "anisotropyStrength", 0.0, &ctx)?.clamp(0.0, 1.0);
+        out.anisotropy_rotation = ext_f32(v, "anisotropyRotation", 0.0, &ctx)?;
+        if let Some(info) = v.get("anisotropyTexture") {
+            out.anisotropy_texture = self.json_texture(info, label, "KHR_materials_anisotropy.anisotropyTexture")?;
+        }
+        if out.anisotropy_strength > 0.0 && out.ior < 0.0 && out.glossy == Vec3::ZERO && out.mirror != Vec3::ZERO {
+            out.glossy = std::mem::take(&mut out.mirror);
+            out.roughness = 0.0;
+        }
+        if out.anisotropy_strength > 0.0 && out.ior >= 0.0 {
+            self.warnings.warn(
+                "the transmitted and refracted light stays isotropic (the anisotropy applies to the reflection lobe)",
+                &ctx,
+            );
         }
         Ok(())
     }
