@@ -499,6 +499,8 @@ fn gpu_iridescence(m: &crate::scene::Material, features: &FeatureSet) -> [f32; 4
 fn gpu_iridescence_maps(m: &crate::scene::Material, features: &FeatureSet, textures: [u32; 2]) -> [f32; 4] {
     let t = |i: u32| bits(if features.iridescence_textures && m.has_iridescence() { i } else { NO_TEXTURE });
     [t(textures[0]), t(textures[1]), 0.0, 0.0]
+}
+
 /// GpuMaterial.anisotropy of `m` (glsl/types.glsl) with the index of its texture:
 /// isotropic where the kernels have no anisotropy.
 fn gpu_anisotropy(m: &crate::scene::Material, features: &FeatureSet, texture: u32) -> [f32; 4] {

@@ -337,6 +337,10 @@ impl Importer<'_> {
         }
         if out.has_iridescence() && out.ior < 0.0 && out.glossy == Vec3::ZERO && out.mirror != Vec3::ZERO {
             (out.glossy, out.roughness, out.mirror) = (out.mirror, 0.0, Vec3::ZERO);
+        }
+        Ok(())
+    }
+
     /// Sets the anisotropy of `out`'s GGX lobe from `m`'s KHR_materials_anisotropy:
     /// anisotropyStrength (default 0, clamped to [0, 1]), anisotropyRotation (default 0)
     /// and anisotropyTexture. A smooth metal, a mirror otherwise, becomes a GGX lobe of
