@@ -328,3 +328,92 @@ fn iridescence_estimators_agree() {
         }
     });
 }
+
+fn texture_ref() -> vkvcm::scene::TextureRef {
+    vkvcm::scene::TextureRef {
+        image: 0,
+        wrap_s: vkvcm::scene::Wrap::Repeat,
+        wrap_t: vkvcm::scene::Wrap::Repeat,
+        filter: vkvcm::scene::Filter::Nearest,
+        tex_coord: 0,
+        transform: vkvcm::scene::TextureRef::IDENTITY,
+    }
+}
+
+/// glossy_floor_scene with `left` and `right` on floors whose triangles carry texture
+/// coordinates, under one texel everywhere (a 1 x 1 image, RGBA `texel`).
+fn textured_floor_scene(left: Material, right: Material, texel: [u8; 4]) -> Scene {
+    let mut sc = glossy_floor_scene(left, right);
+    for t in sc.triangles.iter_mut().filter(|t| t.material < 2) {
+        t.attributes = Some(Box::new(vkvcm::scene::VertexAttributes {
+            uv: [Some([glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y]), None],
+            color: None,
+            tangent: None,
+        }));
+    }
+    sc.images = vec![vkvcm::scene::TextureImage { name: "film".into(), width: 1, height: 1, texels: vec![texel] }];
+    sc
+}
+
+/// The feature set compiles the film in only where a used material has one, and its
+/// textures only where such a material has one and triangles have texture coordinates.
+#[test]
+fn iridescence_features() {
+    use vkvcm::render::features::FeatureSet;
+    let plain = glossy_floor_scene(Material::metallic_roughness(Vec3::ONE, 0.0, 0.5), Material::default());
+    let f = FeatureSet::new(&plain, false);
+    assert!(!f.iridescence && !f.iridescence_textures, "{f}");
+    let film = Film { factor: 0.5, ior: 1.3, thickness: 400.0 };
+    let m = filmed("f", Material::metallic_roughness(Vec3::ONE, 1.0, 0.5), film);
+    let f = FeatureSet::new(&glossy_floor_scene(m.clone(), Material::default()), false);
+    assert!(f.iridescence && !f.iridescence_textures && f.to_string().contains("iridescence"), "{f}");
+    let textured = Material { iridescence_thickness_texture: Some(texture_ref()), ..m };
+    let f = FeatureSet::new(&textured_floor_scene(textured.clone(), Material::default(), [0; 4]), false);
+    assert!(f.iridescence && f.iridescence_textures, "{f}");
+    let f = FeatureSet::new(&glossy_floor_scene(textured, Material::default()), false);
+    assert!(f.iridescence && !f.iridescence_textures, "{f}");
+}
+
+/// iridescenceTexture (R) multiplies the factor and iridescenceThicknessTexture (G) picks
+/// the thickness between minimum and maximum, both linear: floors of factor 1, thickness
+/// 200-800 nm under a texel (R, G) = (153, 64) must render as floors of factor 153/255 and
+/// thickness mix(200, 800, 64/255) without textures (PT, per pixel), and BPT on the
+/// textured floors must agree with PT (light vertices carry the point's film).
+#[test]
+fn iridescence_textures_scale_the_factors() {
+    let texel = [153u8, 64, 0, 255];
+    let textured = |name: &str, base: Material, ior: f64| Material {
+        iridescence_texture: Some(texture_ref()),
+        iridescence_thickness_texture: Some(texture_ref()),
+        iridescence_thickness_min: 200.0,
+        ..filmed(name, base, Film { factor: 1.0, ior, thickness: 800.0 })
+    };
+    let (k, t) = (texel[0] as f64 / 255.0, 200.0 + 600.0 * texel[1] as f64 / 255.0);
+    let red = Material::metallic_roughness(Vec3::new(0.8, 0.2, 0.1), 0.0, 0.5);
+    let gold = Material::metallic_roughness(Vec3::new(0.9, 0.7, 0.3), 1.0, 0.35);
+    let tex = textured_floor_scene(textured("red", red.clone(), 1.9), textured("gold", gold.clone(), 1.4), texel);
+    let plain = textured_floor_scene(
+        filmed("red", red, Film { factor: k, ior: 1.9, thickness: t }),
+        filmed("gold", gold, Film { factor: k, ior: 1.4, thickness: t }),
+        texel,
+    );
+    with_gpu(|gpu| {
+        let pt_tex = stats(gpu, &tex, Algorithm::Pt, true, 1024, 81, 4);
+        let pt_plain = stats(gpu, &plain, Algorithm::Pt, true, 1024, 82, 4);
+        let bpt_tex = stats(gpu, &tex, Algorithm::Bpt, true, 512, 83, 4);
+        eprintln!(
+            "factor {k:.3}, thickness {t:.1} nm: image mean PT textured {:.5}, PT factors {:.5}, BPT textured {:.5}",
+            image_mean(&pt_tex),
+            image_mean(&pt_plain),
+            image_mean(&bpt_tex)
+        );
+        let (ma, sa) = mean_and_error(&pt_tex);
+        let (mb, sb) = mean_and_error(&pt_plain);
+        let z = (ma - mb) / (sa * sa + sb * sb).sqrt();
+        assert!(z.abs() < MEAN_Z, "image means: PT textured {ma:.5} +- {sa:.5}, PT factors {mb:.5} +- {sb:.5}");
+        let t = welch_test(&pt_tex, &pt_plain, ALPHA).unwrap();
+        assert!(t.passed(), "textured film vs its factors: {t}");
+        let t = welch_test(&pt_plain, &bpt_tex, ALPHA).unwrap();
+        assert!(t.passed(), "PT vs BPT on the textured film: {t}");
+    });
+}
