@@ -6,7 +6,8 @@
 //!   one with its own TANGENT and a rotation, one with tangents generated from its texture
 //!   coordinates, a rotation and an anisotropyTexture), paths of 2 segments, per pixel
 //!   against a reference drawn with Mitsuba 3's anisotropic GGX distribution
-//!   (scripts/anisotropy_reference.py: its D, G1 and visible-normal sampler), PT and BPT.
+//!   (scripts/anisotropy_reference.py: its D, G1 and visible-normal sampler), PT, BPT and
+//!   VCM.
 //! - The same scene with longer paths: PT with NEE, PT without, BPT and LT agree per pixel
 //!   (bsdf_eval's forward pdf is the density bsdf_sample draws; the reverse pdfs; light
 //!   subpaths, which evaluate f with wo and wi swapped: the lobe is symmetric).
@@ -74,7 +75,13 @@ fn anisotropic_metal_matches_mitsuba_microfacets() {
     assert_eq!(tangents, 4, "both floors' triangles have tangents");
     assert!(vkvcm::render::features::FeatureSet::new(&sc, false).anisotropy);
     with_gpu(|gpu| {
-        assert_matches_mitsuba(gpu, &sc, "mitsuba_anisotropy", 2, &[(Algorithm::Pt, 4096), (Algorithm::Bpt, 2048)])
+        assert_matches_mitsuba(
+            gpu,
+            &sc,
+            "mitsuba_anisotropy",
+            2,
+            &[(Algorithm::Pt, 4096), (Algorithm::Bpt, 2048), (Algorithm::Vcm, 1024)],
+        )
     });
 }
 
