@@ -123,7 +123,8 @@ fn anisotropic_estimators_agree() {
 /// pixel sees the directional albedo of the floor at its view direction. No pixel may
 /// exceed 1 (one-sided, Šidák-corrected z); the right floor made isotropic (strength 0,
 /// the kernels still anisotropic) is the isotropic lobe's albedo at its roughness 0.2 by
-/// quadrature (tests/common/ggx.rs), per pixel.
+/// quadrature (tests/common/ggx.rs), per pixel, and bit for bit the same as with kernels
+/// compiled without the anisotropy (both floors of strength 0).
 #[test]
 fn anisotropic_furnace() {
     let mut sc = floor_scene();
@@ -186,5 +187,15 @@ fn anisotropic_furnace() {
         eprintln!("furnace: anisotropic half's mean albedo {:.5}", left_sum / left_n as f64);
         let t = one_sample_test(&masked, &expected, ALPHA).unwrap();
         assert!(t.passed(), "strength 0 vs the isotropic lobe's albedo: {t}");
+        // Both floors of strength 0: the kernels lack HAS_ANISOTROPY, and the isotropic
+        // half's pixels are the same bit for bit (same seed, same isotropic code).
+        for m in &mut sc.materials {
+            m.anisotropy_strength = 0.0;
+        }
+        assert!(!vkvcm::render::features::FeatureSet::new(&sc, false).anisotropy);
+        let iso = stats(gpu, &sc, Algorithm::Pt, true, 1024, 91, 2);
+        let same = (0..st.mean.len()).filter(|&i| masked.mean[i] != [0.0; 3]).all(|i| st.mean[i] == iso.mean[i]);
+        let n = masked.mean.iter().filter(|m| **m != [0.0; 3]).count();
+        assert!(n > 50 && same, "strength 0 with and without HAS_ANISOTROPY differ ({n} pixels compared)");
     });
 }
