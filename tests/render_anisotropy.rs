@@ -6,7 +6,8 @@
 //!   one with its own TANGENT and a rotation, one with tangents generated from its texture
 //!   coordinates, a rotation and an anisotropyTexture), paths of 2 segments, per pixel
 //!   against a reference drawn with Mitsuba 3's anisotropic GGX distribution
-//!   (scripts/anisotropy_reference.py: its D, G1 and visible-normal sampler), PT and BPT.
+//!   (scripts/anisotropy_reference.py: its D, G1 and visible-normal sampler), PT, BPT and
+//!   VCM.
 //! - The same scene with longer paths: PT with NEE, PT without, BPT and LT agree per pixel
 //!   (bsdf_eval's forward pdf is the density bsdf_sample draws; the reverse pdfs; light
 //!   subpaths, which evaluate f with wo and wi swapped: the lobe is symmetric).
@@ -74,7 +75,13 @@ fn anisotropic_metal_matches_mitsuba_microfacets() {
     assert_eq!(tangents, 4, "both floors' triangles have tangents");
     assert!(vkvcm::render::features::FeatureSet::new(&sc, false).anisotropy);
     with_gpu(|gpu| {
-        assert_matches_mitsuba(gpu, &sc, "mitsuba_anisotropy", 2, &[(Algorithm::Pt, 4096), (Algorithm::Bpt, 2048)])
+        assert_matches_mitsuba(
+            gpu,
+            &sc,
+            "mitsuba_anisotropy",
+            2,
+            &[(Algorithm::Pt, 4096), (Algorithm::Bpt, 2048), (Algorithm::Vcm, 1024)],
+        )
     });
 }
 
@@ -116,7 +123,8 @@ fn anisotropic_estimators_agree() {
 /// pixel sees the directional albedo of the floor at its view direction. No pixel may
 /// exceed 1 (one-sided, Šidák-corrected z); the right floor made isotropic (strength 0,
 /// the kernels still anisotropic) is the isotropic lobe's albedo at its roughness 0.2 by
-/// quadrature (tests/common/ggx.rs), per pixel.
+/// quadrature (tests/common/ggx.rs), per pixel, and bit for bit the same as with kernels
+/// compiled without the anisotropy (both floors of strength 0).
 #[test]
 fn anisotropic_furnace() {
     let mut sc = floor_scene();
@@ -179,5 +187,15 @@ fn anisotropic_furnace() {
         eprintln!("furnace: anisotropic half's mean albedo {:.5}", left_sum / left_n as f64);
         let t = one_sample_test(&masked, &expected, ALPHA).unwrap();
         assert!(t.passed(), "strength 0 vs the isotropic lobe's albedo: {t}");
+        // Both floors of strength 0: the kernels lack HAS_ANISOTROPY, and the isotropic
+        // half's pixels are the same bit for bit (same seed, same isotropic code).
+        for m in &mut sc.materials {
+            m.anisotropy_strength = 0.0;
+        }
+        assert!(!vkvcm::render::features::FeatureSet::new(&sc, false).anisotropy);
+        let iso = stats(gpu, &sc, Algorithm::Pt, true, 1024, 91, 2);
+        let same = (0..st.mean.len()).filter(|&i| masked.mean[i] != [0.0; 3]).all(|i| st.mean[i] == iso.mean[i]);
+        let n = masked.mean.iter().filter(|m| **m != [0.0; 3]).count();
+        assert!(n > 50 && same, "strength 0 with and without HAS_ANISOTROPY differ ({n} pixels compared)");
     });
 }
