@@ -83,6 +83,7 @@
 #endif
 #if HAS_IRIDESCENCE_TEXTURES && !HAS_IRIDESCENCE
 #error "HAS_IRIDESCENCE_TEXTURES needs HAS_IRIDESCENCE"
+#endif
 // Anisotropic GGX lobes (KHR_materials_anisotropy; glsl/lobes/anisotropy.glsl): surfaces
 // and light vertices carry the point's anisotropy direction and strength (Tint.anisotropy).
 #ifndef HAS_ANISOTROPY

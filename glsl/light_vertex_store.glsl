@@ -120,6 +120,7 @@ void lv_store(uint slot, LightVertex v) {
 #endif
 #if HAS_IRIDESCENCE_TEXTURES
     lv_scratch_b[LV_B_STRIDE * slot + LV_IRIDESCENCE] = vec4(v.tint.iridescence, 0.0, 0.0);
+#endif
 #if HAS_ANISOTROPY
     lv_scratch_b[LV_B_STRIDE * slot + LV_ANISOTROPY] = v.tint.anisotropy;
 #endif
@@ -163,6 +164,7 @@ LightVertex lv_load(uint slot) {
 #endif
 #if HAS_IRIDESCENCE_TEXTURES
     v.tint.iridescence = lv_b_at(LV_B_STRIDE * slot + LV_IRIDESCENCE).xy;
+#endif
 #if HAS_ANISOTROPY
     v.tint.anisotropy = lv_b_at(LV_B_STRIDE * slot + LV_ANISOTROPY);
 #endif

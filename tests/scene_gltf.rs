@@ -2146,6 +2146,8 @@ fn iridescence_factors_are_read() {
         json!({"index": 7});
     let e = format!("{:#}", d.load().unwrap_err());
     assert!(e.contains("iridescenceThicknessTexture"), "{e}");
+}
+
 /// KHR_materials_anisotropy: strength (clamped to [0, 1], default 0), rotation and texture
 /// reach the material without a warning; a smooth metal becomes a GGX lobe (a mirror
 /// cannot be anisotropic); the triangles get tangents generated from their texture
