@@ -2125,6 +2125,7 @@ fn anisotropy_is_read() {
     assert!(t.iter().all(|t| (t.truncate().length() - 1.0).abs() < 1e-5), "{t:?}");
     let w = &s.report.warnings;
     assert!(!w.iter().any(|x| x.contains("anisotropy")), "{w:?}");
+    assert!(vkvcm::render::features::FeatureSet::new(&s, false).anisotropy);
     // Defaults: strength 0 (isotropic), and a plain material stays as it was.
     d.json["materials"][0]["extensions"]["KHR_materials_anisotropy"] = json!({});
     let s = d.load().unwrap();
@@ -2144,6 +2145,7 @@ fn anisotropy_is_read() {
     assert!(s.triangles[0].attributes.as_ref().is_none_or(|a| a.tangent.is_none()));
     let w = &s.report.warnings;
     assert!(w.iter().any(|x| x.contains("KHR_materials_anisotropy without TANGENT")), "{w:?}");
+    assert!(!vkvcm::render::features::FeatureSet::new(&s, false).anisotropy, "no tangents, no anisotropic kernels");
     // On a transmissive material the glass stays isotropic: warned of.
     d.json["materials"][0]["extensions"]["KHR_materials_transmission"] = json!({"transmissionFactor": 1.0});
     d.json["materials"][0]["pbrMetallicRoughness"] = json!({"metallicFactor": 0.0});
