@@ -2152,7 +2152,8 @@ fn iridescence_factors_are_read() {
 /// reach the material without a warning; a smooth metal becomes a GGX lobe (a mirror
 /// cannot be anisotropic); the triangles get tangents generated from their texture
 /// coordinates (none in the file), and a primitive with neither TANGENT nor texture
-/// coordinates is warned of (its lobe stays isotropic).
+/// coordinates is warned of (its lobe stays isotropic), as is a transmissive material
+/// (its glass stays isotropic).
 #[test]
 fn anisotropy_is_read() {
     let mut d = Doc::textured();
@@ -2171,6 +2172,7 @@ fn anisotropy_is_read() {
     assert!(t.iter().all(|t| (t.truncate().length() - 1.0).abs() < 1e-5), "{t:?}");
     let w = &s.report.warnings;
     assert!(!w.iter().any(|x| x.contains("anisotropy")), "{w:?}");
+    assert!(vkvcm::render::features::FeatureSet::new(&s, false).anisotropy);
     // Defaults: strength 0 (isotropic), and a plain material stays as it was.
     d.json["materials"][0]["extensions"]["KHR_materials_anisotropy"] = json!({});
     let s = d.load().unwrap();
@@ -2190,6 +2192,13 @@ fn anisotropy_is_read() {
     assert!(s.triangles[0].attributes.as_ref().is_none_or(|a| a.tangent.is_none()));
     let w = &s.report.warnings;
     assert!(w.iter().any(|x| x.contains("KHR_materials_anisotropy without TANGENT")), "{w:?}");
+    assert!(!vkvcm::render::features::FeatureSet::new(&s, false).anisotropy, "no tangents, no anisotropic kernels");
+    // On a transmissive material the glass stays isotropic: warned of.
+    d.json["materials"][0]["extensions"]["KHR_materials_transmission"] = json!({"transmissionFactor": 1.0});
+    d.json["materials"][0]["pbrMetallicRoughness"] = json!({"metallicFactor": 0.0});
+    let s = d.load().unwrap();
+    let w = &s.report.warnings;
+    assert!(w.iter().any(|x| x.contains("transmitted and refracted light stays isotropic")), "{w:?}");
 }
 
 /// KHR_materials_transmission's transmissionTexture and KHR_materials_specular's
