@@ -9,7 +9,7 @@ use rand_pcg::Pcg64;
 use vkvcm::image::{read_exr, Image};
 use vkvcm_tools::stats::{
     dump_on_failure, image_mean_test, inverse_normal_cdf, normal_sf, one_sample_test, sidak, student_t_two_sided_p,
-    welch_test, z_test, z_test_analytic, PixelStats,
+    welch_test, z_test, z_test_analytic, MeanEstimate, PixelStats,
 };
 
 fn rel_err(got: f64, want: f64) -> f64 {
@@ -480,7 +480,6 @@ fn calibration_false_failure_rates() {
 /// over 90% of trials).
 #[test]
 fn image_mean_test_false_failures_and_power() {
-    let truth_image = || truth(16, 16);
     let mut rng = Normal::new(31);
     let (truth, block_sd, pixel_sd, k) = (0.5f64, 0.02f64, 0.3f64, 16usize);
     let n = 256.0;
@@ -496,7 +495,10 @@ fn image_mean_test_false_failures_and_power() {
             mean: vec![[ref_mean; 3]; 256],
             variance: vec![[pixel_sd * pixel_sd; 3]; 256],
         };
-        image_mean_test(&blocks, &reference).unwrap()
+        image_mean_test(
+            MeanEstimate::of_blocks(&blocks).unwrap(),
+            MeanEstimate::of_independent_pixels(&reference).unwrap(),
+        )
     };
     let false_failures = (0..2000).filter(|_| trial(0.0).p < 0.01).count();
     assert!(false_failures < 40, "{false_failures} of 2000 unbiased trials failed at 0.01");
@@ -504,7 +506,6 @@ fn image_mean_test_false_failures_and_power() {
     assert!(detected > 180, "a bias of 8 standard errors failed only {detected} of 200 trials at 1e-3");
     let one = trial(0.0);
     assert_eq!(one.df, 15.0);
-    assert!((one.reference_std_error - ref_se).abs() < 1e-12, "{one}");
-    let reference = PixelStats::from_images(&[truth_image(), truth_image()]).unwrap();
-    assert!(image_mean_test(&[0.5], &reference).is_err(), "one block has no spread");
+    assert!((one.b.std_error - ref_se).abs() < 1e-12, "{one}");
+    assert!(MeanEstimate::of_blocks(&[0.5]).is_err(), "one block has no spread");
 }

@@ -218,7 +218,7 @@ pub fn assert_matches_mitsuba(
     max_path_length: u32,
     cases: &[(vkvcm::render::Algorithm, u64)],
 ) {
-    use vkvcm::render::{Budget, RenderSettings, Renderer};
+    use vkvcm::render::{Budget, RenderSettings};
     let reference = mitsuba_reference(stem);
     for &(algo, iterations) in cases {
         assert!(iterations % IMAGE_MEAN_BLOCKS == 0, "{stem}: {iterations} iterations in {IMAGE_MEAN_BLOCKS} blocks");
@@ -235,25 +235,16 @@ pub fn assert_matches_mitsuba(
         s.sampler = Some(vkvcm::render::Sampler::Independent);
         // The iterations in blocks of one film, so that the blocks' image means (disjoint
         // iterations: independent) give the image mean's standard error.
-        let mut r = Renderer::new(gpu, scene, &s).unwrap();
-        let mut block_means = Vec::new();
-        let mut before = 0.0;
-        let out = loop {
-            r.run(Budget::Iterations(iterations / IMAGE_MEAN_BLOCKS), None, &mut |_| {}).unwrap();
-            let out = r.output().unwrap();
-            let total: f64 = out.sum.iter().flatten().sum();
-            block_means.push((total - before) / (3 * out.sum.len()) as f64 / (iterations / IMAGE_MEAN_BLOCKS) as f64);
-            before = total;
-            if out.iterations == iterations {
-                break out;
-            }
-        };
-        assert_eq!(out.rejected_samples, 0, "{stem} {algo:?}: rejected samples");
+        let (out, block_means) = TestRender(s).blocks(gpu, scene, IMAGE_MEAN_BLOCKS);
         let st = render_stats(&out, None);
         vkvcm_tools::stats::welch_test(&st, &reference, 1e-3)
             .unwrap()
             .assert_passed(&format!("{stem}_{}", algo.name()));
-        let m = vkvcm_tools::stats::image_mean_test(&block_means, &reference).unwrap();
+        use vkvcm_tools::stats::{image_mean_test, MeanEstimate};
+        let m = image_mean_test(
+            MeanEstimate::of_blocks(&block_means).unwrap(),
+            MeanEstimate::of_independent_pixels(&reference).unwrap(),
+        );
         eprintln!("{stem} {}: {m}", algo.name());
         assert!(m.p >= 1e-3, "{stem} {}: {m}, below 1e-3", algo.name());
     }
@@ -289,6 +280,33 @@ impl TestRender {
     pub fn output(&self, gpu: &Arc<Gpu>, scene: &vkvcm::scene::Scene) -> vkvcm::render::RenderOutput {
         render_checked(gpu, scene, &self.0)
     }
+    /// The render's iterations in `blocks` equal blocks of one film (the iterations a
+    /// multiple of `blocks`): its output and the image mean (every pixel and channel) of
+    /// each block, independent estimates whatever correlates the render's pixels.
+    pub fn blocks(
+        &self,
+        gpu: &Arc<Gpu>,
+        scene: &vkvcm::scene::Scene,
+        blocks: u64,
+    ) -> (vkvcm::render::RenderOutput, Vec<f64>) {
+        let vkvcm::render::Budget::Iterations(iterations) = self.0.budget else { panic!("blocks of a timed render") };
+        assert!(iterations % blocks == 0, "{iterations} iterations in {blocks} blocks");
+        let per_block = iterations / blocks;
+        let mut r = vkvcm::render::Renderer::new(gpu, scene, &self.0).unwrap();
+        let (mut block_means, mut before) = (Vec::new(), 0.0);
+        loop {
+            r.run(vkvcm::render::Budget::Iterations(per_block), None, &mut |_| {}).unwrap();
+            let out = r.output().unwrap();
+            let total: f64 = out.sum.iter().flatten().sum();
+            block_means.push((total - before) / (3 * out.sum.len()) as f64 / per_block as f64);
+            before = total;
+            if out.iterations == iterations {
+                assert_eq!(out.rejected_samples, 0, "{} {:?}: rejected samples", scene.name, self.0.algorithm);
+                assert_eq!(out.overflow_splats, 0, "{} {:?}: overflowing splats", scene.name, self.0.algorithm);
+                return (out, block_means);
+            }
+        }
+    }
     /// Per-pixel statistics of [`TestRender::output`] ([`render_stats`]).
     pub fn stats(&self, gpu: &Arc<Gpu>, scene: &vkvcm::scene::Scene) -> vkvcm_tools::stats::PixelStats {
         render_stats(&self.output(gpu, scene), None)
@@ -296,10 +314,12 @@ impl TestRender {
 }
 
 /// A material lobe's estimators agree on a closed scene, per pixel (Welch test at
-/// 1e-3), paths of at most `max_path_length` segments at `width` x `height`: pt with NEE
-/// (2048 iterations) against pt without it (2048: bsdf_eval's pdf is the density
-/// bsdf_sample draws), bpt (1024: the reverse pdfs of its MIS) and light tracing (2048:
-/// the adjoint BSDF on light subpaths).
+/// 1e-3) and on the image mean (a t-test of [`IMAGE_MEAN_BLOCKS`] blocks of each render,
+/// 1e-3 Šidák-corrected over the three comparisons: a bias of a percent or two over the
+/// whole image hides in per-pixel noise), paths of at most `max_path_length` segments at
+/// `width` x `height`, independent random numbers: pt with NEE (2048 iterations) against
+/// pt without it (2048: bsdf_eval's pdf is the density bsdf_sample draws), bpt (1024: the
+/// reverse pdfs of its MIS) and light tracing (2048: the adjoint BSDF on light subpaths).
 pub fn assert_estimators_agree(
     gpu: &Arc<Gpu>,
     scene: &vkvcm::scene::Scene,
@@ -308,19 +328,28 @@ pub fn assert_estimators_agree(
     max_path_length: u32,
 ) {
     use vkvcm::render::Algorithm::{Bpt, Lt, Pt};
+    use vkvcm_tools::stats::{image_mean_test, sidak, welch_test, MeanEstimate};
     let run = |algo, iterations, seed| {
-        TestRender::new(algo, width, height, iterations).seed(seed).max_path_length(max_path_length)
+        let mut r = TestRender::new(algo, width, height, iterations).seed(seed).max_path_length(max_path_length);
+        r.0.sampler = Some(vkvcm::render::Sampler::Independent);
+        r
     };
-    let pt = run(Pt, 2048, 71).stats(gpu, scene);
+    let stats_and_mean = |r: TestRender| {
+        let (out, blocks) = r.blocks(gpu, scene, IMAGE_MEAN_BLOCKS);
+        (render_stats(&out, None), MeanEstimate::of_blocks(&blocks).unwrap())
+    };
+    let (pt, pt_mean) = stats_and_mean(run(Pt, 2048, 71));
     assert!(image_mean(&pt) > 0.02, "{}: the scene rendered (almost) black", scene.name);
-    for (what, other) in [
-        ("PT without NEE", run(Pt, 2048, 72).nee(false).stats(gpu, scene)),
-        ("BPT", run(Bpt, 1024, 73).stats(gpu, scene)),
-        ("LT", run(Lt, 2048, 74).stats(gpu, scene)),
+    for (what, (other, other_mean)) in [
+        ("PT without NEE", stats_and_mean(run(Pt, 2048, 72).nee(false))),
+        ("BPT", stats_and_mean(run(Bpt, 1024, 73))),
+        ("LT", stats_and_mean(run(Lt, 2048, 74))),
     ] {
-        eprintln!("{}: image mean PT {:.5}, {what} {:.5}", scene.name, image_mean(&pt), image_mean(&other));
-        let t = vkvcm_tools::stats::welch_test(&pt, &other, 1e-3).unwrap();
+        let m = image_mean_test(pt_mean, other_mean);
+        eprintln!("{}: PT vs {what}: {m}", scene.name);
+        let t = welch_test(&pt, &other, 1e-3).unwrap();
         assert!(t.passed(), "{}: PT vs {what}: {t}", scene.name);
+        assert!(m.p >= sidak(1e-3, 3), "{}: PT vs {what}: {m}", scene.name);
     }
 }
 

@@ -331,13 +331,46 @@ pub fn welch_test(a: &PixelStats, b: &PixelStats, alpha: f64) -> Result<ZTest> {
     })
 }
 
-/// The image means of a render and a reference compared by [`image_mean_test`].
-#[derive(Clone, Copy, Debug)]
-pub struct ImageMeanTest {
+/// An image mean (every pixel and channel) with its standard error and the number of
+/// independent observations its error is estimated from (for the degrees of freedom).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeanEstimate {
     pub mean: f64,
     pub std_error: f64,
-    pub reference_mean: f64,
-    pub reference_std_error: f64,
+    pub samples: usize,
+}
+
+impl MeanEstimate {
+    /// From the image means of independent blocks of a render's iterations (at least 2):
+    /// their spread is the error whatever correlates the render's pixels (light tracing's
+    /// and merging's splats).
+    pub fn of_blocks(block_means: &[f64]) -> Result<MeanEstimate> {
+        if block_means.len() < 2 {
+            bail!("an image mean's error needs at least 2 blocks, got {}", block_means.len());
+        }
+        let b = block_means.len() as f64;
+        let mean = block_means.iter().sum::<f64>() / b;
+        let var_mean = block_means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / ((b - 1.0) * b);
+        Ok(MeanEstimate { mean, std_error: var_mean.sqrt(), samples: block_means.len() })
+    }
+
+    /// From per-pixel statistics whose pixels are independent (one path tracer's renders),
+    /// each pixel's channels taken as fully correlated.
+    pub fn of_independent_pixels(st: &PixelStats) -> Result<MeanEstimate> {
+        st.check("an image mean's statistics")?;
+        let n = st.mean.len() as f64;
+        let mean = st.mean.iter().flatten().sum::<f64>() / (3.0 * n);
+        let channel_sd = |v: &[f64; 3]| v.iter().map(|x| x.sqrt()).sum::<f64>() / 3.0;
+        let var_mean = st.variance.iter().map(|v| channel_sd(v).powi(2)).sum::<f64>() / (n * n * st.count as f64);
+        Ok(MeanEstimate { mean, std_error: var_mean.sqrt(), samples: st.count })
+    }
+}
+
+/// Two image means compared by [`image_mean_test`].
+#[derive(Clone, Copy, Debug)]
+pub struct ImageMeanTest {
+    pub a: MeanEstimate,
+    pub b: MeanEstimate,
     pub t: f64,
     pub df: f64,
     /// Two-sided p-value of `t` with `df` degrees of freedom.
@@ -348,43 +381,19 @@ impl fmt::Display for ImageMeanTest {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "image mean {:.5} +- {:.5}, reference {:.5} +- {:.5}: t {:.2} ({} df), p {:.2e}",
-            self.mean, self.std_error, self.reference_mean, self.reference_std_error, self.t, self.df, self.p
+            "image means {:.5} +- {:.5} and {:.5} +- {:.5}: t {:.2} ({} df), p {:.2e}",
+            self.a.mean, self.a.std_error, self.b.mean, self.b.std_error, self.t, self.df, self.p
         )
     }
 }
 
-/// Tests a render's image mean (every pixel and channel) against a reference's, the
-/// render given as the image means of independent blocks of its iterations: Welch's t
-/// with the conservative min(blocks, reference count) - 1 degrees of freedom (the module
-/// docs). The blocks' spread is the render's error whatever correlates its pixels (light
-/// tracing's and merging's splats); the reference's pixels are taken as independent (one
-/// path tracer's renders) and each pixel's channels as fully correlated.
-pub fn image_mean_test(block_means: &[f64], reference: &PixelStats) -> Result<ImageMeanTest> {
-    reference.check("image_mean_test reference")?;
-    if block_means.len() < 2 {
-        bail!("image_mean_test: need at least 2 blocks, got {}", block_means.len());
-    }
-    let b = block_means.len() as f64;
-    let mean = block_means.iter().sum::<f64>() / b;
-    let var_mean = block_means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / ((b - 1.0) * b);
-    let n = reference.mean.len() as f64;
-    let reference_mean = reference.mean.iter().flatten().sum::<f64>() / (3.0 * n);
-    let channel_sd = |v: &[f64; 3]| v.iter().map(|x| x.sqrt()).sum::<f64>() / 3.0;
-    let ref_var_mean =
-        reference.variance.iter().map(|v| channel_sd(v).powi(2)).sum::<f64>() / (n * n * reference.count as f64);
-    let se = (var_mean + ref_var_mean).sqrt();
-    let t = if mean == reference_mean { 0.0 } else { (mean - reference_mean) / se };
-    let df = (block_means.len().min(reference.count) - 1) as f64;
-    Ok(ImageMeanTest {
-        mean,
-        std_error: var_mean.sqrt(),
-        reference_mean,
-        reference_std_error: ref_var_mean.sqrt(),
-        t,
-        df,
-        p: student_t_two_sided_p(t, df),
-    })
+/// Welch's t of two image means with the conservative min(samples) - 1 degrees of freedom
+/// (the module docs), two-sided.
+pub fn image_mean_test(a: MeanEstimate, b: MeanEstimate) -> ImageMeanTest {
+    let se = a.std_error.hypot(b.std_error);
+    let t = if a.mean == b.mean { 0.0 } else { (a.mean - b.mean) / se };
+    let df = (a.samples.min(b.samples).max(2) - 1) as f64;
+    ImageMeanTest { a, b, t, df, p: student_t_two_sided_p(t, df) }
 }
 
 /// [`z_test_analytic`] on precomputed statistics.
