@@ -71,6 +71,22 @@
 #if HAS_SHEEN_TEXTURES && !HAS_SHEEN
 #error "HAS_SHEEN_TEXTURES needs HAS_SHEEN"
 #endif
+// Lambertian transmission through an opaque material (KHR_materials_diffuse_transmission;
+// glsl/lobes/diffuse_transmission.glsl).
+#ifndef HAS_DIFFUSE_TRANSMISSION
+#define HAS_DIFFUSE_TRANSMISSION 1
+#endif
+// Diffuse transmissions whose factor or colour a texture varies per point
+// (glsl/textures.glsl `surface_tint`; light vertices carry the point's values).
+#ifndef HAS_DIFFUSE_TRANSMISSION_TEXTURES
+#define HAS_DIFFUSE_TRANSMISSION_TEXTURES 1
+#endif
+#if HAS_DIFFUSE_TRANSMISSION_TEXTURES && !HAS_DIFFUSE_TRANSMISSION
+#error "HAS_DIFFUSE_TRANSMISSION_TEXTURES needs HAS_DIFFUSE_TRANSMISSION"
+#endif
+#if HAS_DIFFUSE_TRANSMISSION && !HAS_DIFFUSE
+#error "HAS_DIFFUSE_TRANSMISSION needs HAS_DIFFUSE"
+#endif
 // Light kinds (glsl/lights.glsl).
 #ifndef HAS_AREA_LIGHTS
 #define HAS_AREA_LIGHTS 1

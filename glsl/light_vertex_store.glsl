@@ -62,6 +62,7 @@ layout(std430) writeonly buffer light_vertex_chunk_counts { uint lv_chunk_count[
 //   with HAS_TRANSMISSION_TEXTURES: b[Bi+LV_TRANSMISSION] = (tint.transmission, 0, 0, 0)
 //   with HAS_SPECULAR_TEXTURES:   b[Bi+LV_SPECULAR] = tint.specular
 //   with HAS_SHEEN_TEXTURES:      b[Bi+LV_SHEEN] = tint.sheen
+//   with HAS_DIFFUSE_TRANSMISSION_TEXTURES: b[Bi+LV_DIFFUSE_TRANSMISSION] = tint.diffuse_transmission
 // B = 2 + the others (src/render/light_vertex_store.rs, LightVertexPlan, sizes the store
 // the same way; light_vertex_compact.comp copies B vec4 per vertex). The point's metallic
 // and roughness (a metallic-roughness texture's texel) fill the two vec4s' spare w, so a
@@ -72,7 +73,8 @@ layout(std430) writeonly buffer light_vertex_chunk_counts { uint lv_chunk_count[
 #define LV_TRANSMISSION (LV_COAT + (HAS_CLEARCOAT_TEXTURES != 0 ? 1u : 0u))
 #define LV_SPECULAR (LV_TRANSMISSION + (HAS_TRANSMISSION_TEXTURES != 0 ? 1u : 0u))
 #define LV_SHEEN (LV_SPECULAR + (HAS_SPECULAR_TEXTURES != 0 ? 1u : 0u))
-#define LV_B_STRIDE (LV_SHEEN + (HAS_SHEEN_TEXTURES != 0 ? 1u : 0u))
+#define LV_DIFFUSE_TRANSMISSION (LV_SHEEN + (HAS_SHEEN_TEXTURES != 0 ? 1u : 0u))
+#define LV_B_STRIDE (LV_DIFFUSE_TRANSMISSION + (HAS_DIFFUSE_TRANSMISSION_TEXTURES != 0 ? 1u : 0u))
 struct LightVertex {
     vec3 p;
     vec3 thr;
@@ -114,6 +116,9 @@ void lv_store(uint slot, LightVertex v) {
 #if HAS_SHEEN_TEXTURES
     lv_scratch_b[LV_B_STRIDE * slot + LV_SHEEN] = v.tint.sheen;
 #endif
+#if HAS_DIFFUSE_TRANSMISSION_TEXTURES
+    lv_scratch_b[LV_B_STRIDE * slot + LV_DIFFUSE_TRANSMISSION] = v.tint.diffuse_transmission;
+#endif
 }
 #endif
 
@@ -151,6 +156,9 @@ LightVertex lv_load(uint slot) {
 #endif
 #if HAS_SHEEN_TEXTURES
     v.tint.sheen = lv_b_at(LV_B_STRIDE * slot + LV_SHEEN);
+#endif
+#if HAS_DIFFUSE_TRANSMISSION_TEXTURES
+    v.tint.diffuse_transmission = lv_b_at(LV_B_STRIDE * slot + LV_DIFFUSE_TRANSMISSION);
 #endif
     uint info = floatBitsToUint(b1.w);
     v.material = info & 0xffffffu;

@@ -93,7 +93,7 @@ GpuSphere sphere_at(uint i) {
     return s;
 }
 // GpuMaterial's vec4s, in field order.
-#define MATERIAL_TEXELS 16u
+#define MATERIAL_TEXELS 18u
 GpuMaterial material_at(uint i) {
     GpuMaterial m;
     uint k = MATERIAL_TEXELS * i;
@@ -113,6 +113,8 @@ GpuMaterial material_at(uint i) {
     m.specular = texel_vec4(materials, k + 13u);
     m.sheen = texel_vec4(materials, k + 14u);
     m.sheen_maps = texel_vec4(materials, k + 15u);
+    m.diffuse_transmission = texel_vec4(materials, k + 16u);
+    m.diffuse_transmission_maps = texel_vec4(materials, k + 17u);
     return m;
 }
 vec4 material_surface(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 5u); }
@@ -121,6 +123,7 @@ vec4 material_medium(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i 
 vec4 material_coat(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 11u); }
 vec4 material_layers(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 12u); }
 vec4 material_sheen_maps(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 15u); }
+vec4 material_diffuse_transmission_maps(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 17u); }
 GpuLight light_at(uint i) {
     GpuLight l;
     l.a = texel_vec4(lights, 5u * i);
@@ -148,6 +151,7 @@ vec4 material_medium(uint i) { return material_data[i].medium; }
 vec4 material_coat(uint i) { return material_data[i].coat; }
 vec4 material_layers(uint i) { return material_data[i].layers; }
 vec4 material_sheen_maps(uint i) { return material_data[i].sheen_maps; }
+vec4 material_diffuse_transmission_maps(uint i) { return material_data[i].diffuse_transmission_maps; }
 GpuLight light_at(uint i) { return light_data[i]; }
 #endif
 

@@ -158,9 +158,12 @@ struct Tint {
                            // a: specularFactor (specularTexture's A)
     vec4 sheen;            // rgb: multiplies sheenColorFactor (sheenColorTexture's RGB),
                            // a: sheenRoughnessFactor (sheenRoughnessTexture's A)
+    vec4 diffuse_transmission;  // rgb: multiplies diffuseTransmissionColorFactor
+                                // (diffuseTransmissionColorTexture's RGB), a:
+                                // diffuseTransmissionFactor (diffuseTransmissionTexture's A)
 };
 
-Tint no_tint() { return Tint(vec3(1.0), 1.0, 1.0, 1.0, 1.0, 1.0, vec4(1.0), vec4(1.0)); }
+Tint no_tint() { return Tint(vec3(1.0), 1.0, 1.0, 1.0, 1.0, 1.0, vec4(1.0), vec4(1.0), vec4(1.0)); }
 
 // The tint (rgb) and alpha (times the material's alpha factor) of triangle `tri` with
 // material `material` at barycentric weights (u, v): (1, 1, 1, factor) where it has no
@@ -234,6 +237,23 @@ Tint surface_tint(uint tri, uint material, float u, float v) {
         }
         href = floatBitsToUint(sheen_maps.y);
         if (href != NO_TEXTURE && texture_uv(href, h0, h1, h2, 1.0 - u - v, u, v, huv)) t.sheen.a = texture_sample(href, huv).a;
+    }
+#endif
+#if HAS_DIFFUSE_TRANSMISSION_TEXTURES
+    // KHR_materials_diffuse_transmission: factor x diffuseTransmissionTexture's A (linear),
+    // colour factor x diffuseTransmissionColorTexture's RGB (sRGB).
+    vec4 dt_maps = material_diffuse_transmission_maps(material);
+    GpuVertexAttributes d0, d1, d2;
+    vec2 duv;
+    if (triangle_attributes(tri, d0, d1, d2)) {
+        uint dref = floatBitsToUint(dt_maps.x);
+        if (dref != NO_TEXTURE && texture_uv(dref, d0, d1, d2, 1.0 - u - v, u, v, duv)) {
+            t.diffuse_transmission.a = texture_sample(dref, duv).a;
+        }
+        dref = floatBitsToUint(dt_maps.y);
+        if (dref != NO_TEXTURE && texture_uv(dref, d0, d1, d2, 1.0 - u - v, u, v, duv)) {
+            t.diffuse_transmission.rgb = texture_sample(dref, duv).rgb;
+        }
     }
 #endif
 #if HAS_TRANSMISSION_TEXTURES || HAS_SPECULAR_TEXTURES

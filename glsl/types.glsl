@@ -43,6 +43,10 @@ struct GpuMaterial {
     vec4 specular;       // rgb: F0 of the IOR x specularColorFactor, w: specularFactor (glsl/bsdf.glsl, point_material)
     vec4 sheen;          // rgb: sheenColorFactor (0: none), w: sheenRoughnessFactor (glsl/lobes/sheen.glsl)
     vec4 sheen_maps;     // x, y: sheen colour and roughness textures or NO_TEXTURE (bits), z, w reserved
+    vec4 diffuse_transmission;       // rgb: diffuseTransmissionColorFactor, w: diffuseTransmissionFactor (0: none;
+                                     // glsl/lobes/diffuse_transmission.glsl)
+    vec4 diffuse_transmission_maps;  // x, y: its factor's and colour's textures or NO_TEXTURE (bits),
+                                     // z: the metallic factor, w reserved
 };
 
 struct GpuTextureRef {

@@ -87,7 +87,9 @@ fn rust_and_glsl_layouts_match() {
             layers,
             specular,
             sheen,
-            sheen_maps
+            sheen_maps,
+            diffuse_transmission,
+            diffuse_transmission_maps
         }),
         rust_layout!(GpuTextureRef { image, row0, row1 }),
         rust_layout!(GpuVertexAttributes { uv, color, tangent }),

@@ -9,7 +9,8 @@
 // f(wi, wo)). Since f_coat alone reflects at most what it receives and the base too, the
 // blend never adds energy (tests/render_clearcoat.rs). The coat faces the outside of a
 // dielectric (the side of its outward normal) and both sides of an opaque surface; on a
-// dielectric seen from inside c is 0. The coat uses the Bsdf's shading normal (the base's,
+// dielectric seen from inside c is 0 (light diffusely transmitted through an opaque
+// surface meets the coat of the side it is seen from: glsl/lobes/diffuse_transmission.glsl). The coat uses the Bsdf's shading normal (the base's,
 // normal-mapped where the base has a normal map); emission is not dimmed by it.
 //
 // Sampling: the coat with probability p(d) = c(d) / (c(d) + (1 - c(d)) A), the base with
@@ -34,7 +35,8 @@
 float coat_blend(Bsdf b, vec3 d) {
     // bsdf_init turns an opaque material's normals to wo's side and leaves a dielectric's
     // outward: in both cases the coat faces the side of b.ng.
-    if (dot(b.ng, d) <= 0.0) return 0.0;
+    // A surface that transmits diffusely is opaque and coated on both sides: d's own.
+    if (dot(b.ng, d) <= 0.0 && !transmits_diffusely(b)) return 0.0;
     return b.coat_weight * schlick(COAT_F0, min(abs(dot(b.n, d)), 1.0));
 }
 

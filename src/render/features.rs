@@ -53,6 +53,13 @@ pub struct FeatureSet {
     /// triangle texture coordinates: surfaces and light vertices carry the point's sheen
     /// colour and roughness multipliers (glsl/textures.glsl, `surface_tint`).
     pub sheen_textures: bool,
+    /// Some material transmits diffusely (`Material::has_diffuse_transmission`,
+    /// glsl/lobes/diffuse_transmission.glsl).
+    pub diffuse_transmission: bool,
+    /// Some material that transmits diffusely has a diffuse-transmission or
+    /// diffuse-transmission-colour texture and some triangle texture coordinates: surfaces
+    /// and light vertices carry the point's multipliers (glsl/textures.glsl, `surface_tint`).
+    pub diffuse_transmission_textures: bool,
     /// Light kinds.
     pub area_lights: bool,
     pub point_lights: bool,
@@ -133,6 +140,13 @@ impl FeatureSet {
             });
         let sheen_textures = vertex_attributes
             && any_mat(&|m| m.has_sheen() && (m.sheen_color_texture.is_some() || m.sheen_roughness_texture.is_some()));
+        let diffuse_transmission_textures = vertex_attributes
+            && any_mat(&|m| {
+                m.has_diffuse_transmission()
+                    && m.diffuse_transmission
+                        .as_deref()
+                        .is_some_and(|d| d.texture.is_some() || d.color_texture.is_some())
+            });
         let transmission_textured = |m: &crate::scene::Material| {
             m.is_dielectric() && m.layer_textures.as_deref().is_some_and(|l| l.transmission.is_some())
         };
@@ -177,6 +191,8 @@ impl FeatureSet {
             clearcoat_textures: g || clearcoat_textures,
             sheen: g || any_mat(&|m| m.has_sheen()),
             sheen_textures: g || sheen_textures,
+            diffuse_transmission: g || any_mat(&|m| m.has_diffuse_transmission()),
+            diffuse_transmission_textures: g || diffuse_transmission_textures,
             area_lights: g || any_light(&|l| matches!(l, Light::Area { .. })),
             point_lights: g || any_light(&|l| matches!(l, Light::Point { .. })),
             spot_lights: g || any_light(&|l| matches!(l, Light::Spot { .. })),
@@ -195,6 +211,7 @@ impl FeatureSet {
                 || metallic_roughness_textures
                 || clearcoat_textures
                 || sheen_textures
+                || diffuse_transmission_textures
                 || transmission_textures
                 || specular_textures,
             alpha_mask: g || any_mat(&|m| m.alpha_mode != crate::scene::AlphaMode::Opaque),
@@ -230,6 +247,8 @@ impl FeatureSet {
             ("HAS_CLEARCOAT_TEXTURES", self.clearcoat_textures),
             ("HAS_SHEEN", self.sheen),
             ("HAS_SHEEN_TEXTURES", self.sheen_textures),
+            ("HAS_DIFFUSE_TRANSMISSION", self.diffuse_transmission),
+            ("HAS_DIFFUSE_TRANSMISSION_TEXTURES", self.diffuse_transmission_textures),
             ("HAS_AREA_LIGHTS", self.area_lights),
             ("HAS_POINT_LIGHTS", self.point_lights),
             ("HAS_SPOT_LIGHTS", self.spot_lights),
@@ -286,6 +305,7 @@ impl fmt::Display for FeatureSet {
             ("absorbing volume", self.volume),
             ("clear coat", self.clearcoat),
             ("sheen", self.sheen),
+            ("diffuse transmission", self.diffuse_transmission),
         ];
         writeln!(f, "  materials: {}", list(&mats))?;
         let lights = [
@@ -318,6 +338,7 @@ impl fmt::Display for FeatureSet {
             ("metallic-roughness textures", self.metallic_roughness_textures),
             ("clear-coat textures", self.clearcoat_textures),
             ("sheen textures", self.sheen_textures),
+            ("diffuse-transmission textures", self.diffuse_transmission_textures),
             ("transmission textures", self.transmission_textures),
             ("specular textures", self.specular_textures),
         ];

@@ -91,6 +91,15 @@ pub struct GpuMaterial {
     /// Indices in `texture_refs` (bits, or `NO_TEXTURE`) of x: its sheenColorTexture,
     /// y: sheenRoughnessTexture; z, w: reserved.
     pub sheen_maps: [f32; 4],
+    /// The diffuse transmission (`Material::diffuse_transmission`,
+    /// glsl/lobes/diffuse_transmission.glsl): rgb: diffuseTransmissionColorFactor, w:
+    /// diffuseTransmissionFactor (0: none, also where the kernels lack
+    /// HAS_DIFFUSE_TRANSMISSION).
+    pub diffuse_transmission: [f32; 4],
+    /// Indices in `texture_refs` (bits, or `NO_TEXTURE`) of x: diffuseTransmissionTexture,
+    /// y: diffuseTransmissionColorTexture; z: the material's metallic factor (its metal
+    /// part transmits nothing); w: reserved.
+    pub diffuse_transmission_maps: [f32; 4],
 }
 
 /// A texture as a material uses it (`scene::TextureRef`): where its image's texels are,

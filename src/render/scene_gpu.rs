@@ -70,6 +70,9 @@ impl ScenePlan {
                     + m.clearcoat_roughness_texture.is_some() as u64
                     + m.sheen_color_texture.is_some() as u64
                     + m.sheen_roughness_texture.is_some() as u64
+                    + m.diffuse_transmission
+                        .as_ref()
+                        .map_or(0, |d| d.texture.is_some() as u64 + d.color_texture.is_some() as u64)
                     + m.layer_textures.as_ref().map_or(0, |l| {
                         l.transmission.is_some() as u64
                             + l.specular.is_some() as u64
@@ -176,12 +179,13 @@ fn vertex_attributes(a: Option<&VertexAttributes>, k: usize) -> GpuVertexAttribu
 /// The scene's textures on the GPU: the texture references of the materials (each
 /// material's base-colour texture, normal map, emissive texture and metallic-roughness
 /// texture, clearcoat and clearcoat-roughness textures, transmission, specular and
-/// specular-colour textures, sheen-colour and sheen-roughness textures, in material
-/// order), per material the indices of its eleven
+/// specular-colour textures, sheen-colour and sheen-roughness textures, diffuse-transmission
+/// and diffuse-transmission-colour textures, in material order), per material the indices
+/// of its thirteen
 /// (or `NO_TEXTURE`),
 /// and the texels of the scene's images (RGBA8 packed little-endian, R lowest; four to a
 /// 16-byte element).
-type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 11]>, Vec<[u32; 4]>);
+type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 13]>, Vec<[u32; 4]>);
 
 fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     let mut first = Vec::with_capacity(scene.images.len());
@@ -203,8 +207,9 @@ fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     let mut refs = Vec::new();
     let mut indices = Vec::with_capacity(scene.materials.len());
     for (i, m) in scene.materials.iter().enumerate() {
-        let mut index = [NO_TEXTURE; 11];
+        let mut index = [NO_TEXTURE; 13];
         let layers = m.layer_textures.as_deref();
+        let dt = m.diffuse_transmission.as_deref();
         // Normal maps and metallic-roughness textures hold linear values, not sRGB colours.
         let slots = [
             (m.base_color_texture.as_ref(), false),
@@ -220,6 +225,10 @@ fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
             // KHR_materials_sheen: sheenColorTexture is sRGB, sheenRoughnessTexture linear.
             (m.sheen_color_texture.as_ref(), false),
             (m.sheen_roughness_texture.as_ref(), true),
+            // KHR_materials_diffuse_transmission: the factor's texture (A) is linear, the
+            // colour's sRGB.
+            (dt.and_then(|d| d.texture.as_ref()), true),
+            (dt.and_then(|d| d.color_texture.as_ref()), false),
         ];
         for (slot, (t, linear)) in slots.into_iter().enumerate() {
             let Some(t) = t else { continue };
@@ -383,59 +392,71 @@ fn gpu_triangles(scene: &Scene, features: &FeatureSet) -> GpuGeometry {
 
 /// The materials as the kernels read them, with the texture indices of each
 /// (`texture_indices`, [`gpu_textures`]) where `features` has the textures' kind.
-fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 11]]) -> Vec<GpuMaterial> {
+fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 13]]) -> Vec<GpuMaterial> {
     scene
         .materials
         .iter()
         .zip(texture_indices)
-        .map(|(m, &[texture, normal_map, emissive, metallic_roughness, coat, coat_roughness, t, s, sc, sh, shr])| {
-            let normal_map = if features.normal_maps { normal_map } else { NO_TEXTURE };
-            let emissive = if features.emissive_textures { emissive } else { NO_TEXTURE };
-            let (metallic_roughness, mut base_metallic, mut f0_roughness) =
-                match (&m.metallic_roughness_texture, features.metallic_roughness_textures) {
-                    (Some(t), true) => (metallic_roughness, v4(t.base, t.metallic), v4(t.dielectric_f0, t.roughness)),
-                    _ => (NO_TEXTURE, [0.0; 4], [0.0; 4]),
+        .map(
+            |(
+                m,
+                &[texture, normal_map, emissive, metallic_roughness, coat, coat_roughness, t, s, sc, sh, shr, dtt, dtc],
+            )| {
+                let normal_map = if features.normal_maps { normal_map } else { NO_TEXTURE };
+                let emissive = if features.emissive_textures { emissive } else { NO_TEXTURE };
+                let (metallic_roughness, mut base_metallic, mut f0_roughness) =
+                    match (&m.metallic_roughness_texture, features.metallic_roughness_textures) {
+                        (Some(t), true) => {
+                            (metallic_roughness, v4(t.base, t.metallic), v4(t.dielectric_f0, t.roughness))
+                        }
+                        _ => (NO_TEXTURE, [0.0; 4], [0.0; 4]),
+                    };
+                let (layers, specular) = match m.layer_textures.as_deref() {
+                    Some(l) if features.transmission_textures || features.specular_textures => {
+                        // The same factors as a metallic-roughness texture's, where it has one.
+                        base_metallic = v4(l.base, l.metallic);
+                        f0_roughness = v4(l.dielectric_f0, l.roughness);
+                        let on = |i: u32, f: bool| bits(if f { i } else { NO_TEXTURE });
+                        let (ft, fs) = (features.transmission_textures, features.specular_textures);
+                        ([on(t, ft), on(s, fs), on(sc, fs), 0.0], v4(l.specular_f0, l.specular_factor))
+                    }
+                    _ => ([bits(NO_TEXTURE), bits(NO_TEXTURE), bits(NO_TEXTURE), 0.0], [0.0; 4]),
                 };
-            let (layers, specular) = match m.layer_textures.as_deref() {
-                Some(l) if features.transmission_textures || features.specular_textures => {
-                    // The same factors as a metallic-roughness texture's, where it has one.
-                    base_metallic = v4(l.base, l.metallic);
-                    f0_roughness = v4(l.dielectric_f0, l.roughness);
-                    let on = |i: u32, f: bool| bits(if f { i } else { NO_TEXTURE });
-                    let (ft, fs) = (features.transmission_textures, features.specular_textures);
-                    ([on(t, ft), on(s, fs), on(sc, fs), 0.0], v4(l.specular_f0, l.specular_factor))
+                // glsl/types.glsl, GpuMaterial.surface.z.
+                let cutoff = match m.alpha_mode {
+                    AlphaMode::Mask { cutoff } if features.alpha_mask => cutoff,
+                    AlphaMode::Blend if features.alpha_mask => ALPHA_BLEND,
+                    _ => ALPHA_OPAQUE,
+                };
+                // A dielectric's lobes beside its glass have weight lobes_weight (glsl/bsdf.glsl);
+                // of weight 0 (clear glass) they are uploaded black, so that kernels without
+                // HAS_PARTIAL_TRANSMISSION, which apply no weight, give them none too.
+                let lobe = |c: Vec3| if m.lobes_weight() > 0.0 { c } else { Vec3::ZERO };
+                GpuMaterial {
+                    diffuse: v4(lobe(m.diffuse), m.phong_exponent),
+                    phong: v4(lobe(m.phong), m.ior),
+                    mirror: v4(m.mirror, m.diffuse_fresnel_f0),
+                    emission: v4(m.emission, m.dielectric_alpha()),
+                    glossy: v4(lobe(m.glossy), (m.roughness * m.roughness).max(MIN_GGX_ALPHA)),
+                    surface: [bits(texture), m.alpha, cutoff, m.glossy_untinted],
+                    maps: [bits(normal_map), m.normal_scale, bits(emissive), bits(metallic_roughness)],
+                    base_metallic,
+                    f0_roughness,
+                    medium: v4(
+                        m.medium_attenuation(),
+                        f32::from_bits(if m.one_sided { MATERIAL_ONE_SIDED } else { 0 }),
+                    ),
+                    transmission: v4(m.transmission, 1.0 - m.lobes_weight()),
+                    coat: gpu_coat(m, features, [coat, coat_roughness]),
+                    layers,
+                    specular,
+                    sheen: gpu_sheen(m, features),
+                    sheen_maps: gpu_sheen_maps(m, features, [sh, shr]),
+                    diffuse_transmission: gpu_diffuse_transmission(m, features),
+                    diffuse_transmission_maps: gpu_diffuse_transmission_maps(m, features, [dtt, dtc]),
                 }
-                _ => ([bits(NO_TEXTURE), bits(NO_TEXTURE), bits(NO_TEXTURE), 0.0], [0.0; 4]),
-            };
-            // glsl/types.glsl, GpuMaterial.surface.z.
-            let cutoff = match m.alpha_mode {
-                AlphaMode::Mask { cutoff } if features.alpha_mask => cutoff,
-                AlphaMode::Blend if features.alpha_mask => ALPHA_BLEND,
-                _ => ALPHA_OPAQUE,
-            };
-            // A dielectric's lobes beside its glass have weight lobes_weight (glsl/bsdf.glsl);
-            // of weight 0 (clear glass) they are uploaded black, so that kernels without
-            // HAS_PARTIAL_TRANSMISSION, which apply no weight, give them none too.
-            let lobe = |c: Vec3| if m.lobes_weight() > 0.0 { c } else { Vec3::ZERO };
-            GpuMaterial {
-                diffuse: v4(lobe(m.diffuse), m.phong_exponent),
-                phong: v4(lobe(m.phong), m.ior),
-                mirror: v4(m.mirror, m.diffuse_fresnel_f0),
-                emission: v4(m.emission, m.dielectric_alpha()),
-                glossy: v4(lobe(m.glossy), (m.roughness * m.roughness).max(MIN_GGX_ALPHA)),
-                surface: [bits(texture), m.alpha, cutoff, m.glossy_untinted],
-                maps: [bits(normal_map), m.normal_scale, bits(emissive), bits(metallic_roughness)],
-                base_metallic,
-                f0_roughness,
-                medium: v4(m.medium_attenuation(), f32::from_bits(if m.one_sided { MATERIAL_ONE_SIDED } else { 0 })),
-                transmission: v4(m.transmission, 1.0 - m.lobes_weight()),
-                coat: gpu_coat(m, features, [coat, coat_roughness]),
-                layers,
-                specular,
-                sheen: gpu_sheen(m, features),
-                sheen_maps: gpu_sheen_maps(m, features, [sh, shr]),
-            }
-        })
+            },
+        )
         .collect()
 }
 
@@ -463,6 +484,26 @@ fn gpu_sheen(m: &crate::scene::Material, features: &FeatureSet) -> [f32; 4] {
 fn gpu_sheen_maps(m: &crate::scene::Material, features: &FeatureSet, textures: [u32; 2]) -> [f32; 4] {
     let t = |i: u32| bits(if features.sheen_textures && m.has_sheen() { i } else { NO_TEXTURE });
     [t(textures[0]), t(textures[1]), 0.0, 0.0]
+}
+
+/// GpuMaterial.diffuse_transmission of `m` (glsl/types.glsl): zero where the kernels have
+/// no diffuse transmission.
+fn gpu_diffuse_transmission(m: &crate::scene::Material, features: &FeatureSet) -> [f32; 4] {
+    match m.diffuse_transmission.as_deref() {
+        Some(d) if features.diffuse_transmission && m.has_diffuse_transmission() => {
+            v4(d.color.clamp(Vec3::ZERO, Vec3::ONE), d.factor.clamp(0.0, 1.0))
+        }
+        _ => [0.0; 4],
+    }
+}
+
+/// GpuMaterial.diffuse_transmission_maps of `m` with the indices of its two textures
+/// (none where the kernels have no diffuse-transmission textures) and its metallic factor.
+fn gpu_diffuse_transmission_maps(m: &crate::scene::Material, features: &FeatureSet, textures: [u32; 2]) -> [f32; 4] {
+    let on = features.diffuse_transmission_textures && m.has_diffuse_transmission();
+    let t = |i: u32| bits(if on { i } else { NO_TEXTURE });
+    let metallic = m.diffuse_transmission.as_deref().map_or(0.0, |d| d.metallic.clamp(0.0, 1.0));
+    [t(textures[0]), t(textures[1]), metallic, 0.0]
 }
 
 /// Uploads the [`CHUNKED`] arrays: whole, each one buffer added to `buffers`, or with
@@ -570,7 +611,7 @@ impl SceneGpu {
         let (texture_refs, texture_indices, texels) = if features.textures {
             gpu_textures(scene)?
         } else {
-            (Vec::new(), vec![[NO_TEXTURE; 11]; scene.materials.len()], Vec::new())
+            (Vec::new(), vec![[NO_TEXTURE; 13]; scene.materials.len()], Vec::new())
         };
         let materials = gpu_materials(scene, features, &texture_indices);
         let env = match environment_map(scene) {

@@ -258,6 +258,10 @@ pub struct Material {
     /// channel respectively (glsl/textures.glsl, `surface_tint`).
     pub sheen_color_texture: Option<TextureRef>,
     pub sheen_roughness_texture: Option<TextureRef>,
+    /// KHR_materials_diffuse_transmission on an opaque material (None: none): the diffuse
+    /// lobe becomes mix(diffuse reflection, diffuse transmission, factor)
+    /// (glsl/lobes/diffuse_transmission.glsl).
+    pub diffuse_transmission: Option<Box<DiffuseTransmission>>,
     /// KHR_materials_transmission's transmissionTexture and KHR_materials_specular's
     /// specularTexture and specularColorTexture, with the factors the kernels recompute the
     /// lobes from where a triangle has their texture coordinates ([`LayerTextures`]).
@@ -344,6 +348,7 @@ impl Default for Material {
             sheen_roughness: 0.0,
             sheen_color_texture: None,
             sheen_roughness_texture: None,
+            diffuse_transmission: None,
             layer_textures: None,
         }
     }
@@ -352,6 +357,27 @@ impl Default for Material {
 /// Specular reflectance of dielectrics at normal incidence in glTF's metallic/roughness
 /// model (its fixed F0).
 pub const GLTF_DIELECTRIC_F0: f32 = 0.04;
+
+/// KHR_materials_diffuse_transmission (glsl/lobes/diffuse_transmission.glsl): the diffuse
+/// lobe of the material's dielectric part, f_d = base / pi (reflection), becomes
+/// (1 - factor) base / pi on wo's side plus factor x color / pi on the other side (a
+/// Lambertian transmission), each under the diffuse lobe's interface weight; the metal
+/// part (`metallic`) transmits nothing.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiffuseTransmission {
+    /// diffuseTransmissionFactor in [0, 1].
+    pub factor: f32,
+    /// diffuseTransmissionColorFactor (linear, each channel in [0, 1]).
+    pub color: Vec3,
+    /// The material's metallic factor: the transmitted colour is color x (1 - metallic),
+    /// with the point's metallic where a metallic-roughness texture varies it.
+    pub metallic: f32,
+    /// diffuseTransmissionTexture (its A channel multiplies the factor, linear) and
+    /// diffuseTransmissionColorTexture (its RGB multiply the colour, sRGB), where a triangle
+    /// has their texture coordinates (glsl/textures.glsl, `surface_tint`).
+    pub texture: Option<TextureRef>,
+    pub color_texture: Option<TextureRef>,
+}
 
 impl Material {
     /// The GGX alpha of a rough dielectric (`dielectric_roughness`^2, at least
@@ -396,6 +422,13 @@ impl Material {
     /// Whether the material has a sheen (a sheen colour above black).
     pub fn has_sheen(&self) -> bool {
         self.sheen_color.max_element() > 0.0
+    }
+
+    /// Whether the material transmits diffusely: an opaque material (the kernels give a
+    /// dielectric none) with a diffuse-transmission factor and colour above zero.
+    pub fn has_diffuse_transmission(&self) -> bool {
+        !self.is_dielectric()
+            && self.diffuse_transmission.as_deref().is_some_and(|d| d.factor > 0.0 && d.color.max_element() > 0.0)
     }
 
     pub fn has_partial_transmission(&self) -> bool {

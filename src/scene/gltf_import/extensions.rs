@@ -20,6 +20,8 @@ pub const EXT_MESH_GPU_INSTANCING: &str = "EXT_mesh_gpu_instancing";
 pub const KHR_MATERIALS_CLEARCOAT: &str = "KHR_materials_clearcoat";
 /// A sheen layer over a material (src/scene/gltf_import/materials.rs).
 pub const KHR_MATERIALS_SHEEN: &str = "KHR_materials_sheen";
+/// Lambertian transmission through an opaque material (src/scene/gltf_import/materials.rs).
+pub const KHR_MATERIALS_DIFFUSE_TRANSMISSION: &str = "KHR_materials_diffuse_transmission";
 /// Offset, rotation and scale of texture coordinates (read on `baseColorTexture`).
 pub const KHR_TEXTURE_TRANSFORM: &str = "KHR_texture_transform";
 
@@ -37,6 +39,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_volume",
     KHR_MATERIALS_CLEARCOAT,
     KHR_MATERIALS_SHEEN,
+    KHR_MATERIALS_DIFFUSE_TRANSMISSION,
     KHR_MESH_QUANTIZATION,
     KHR_TEXTURE_TRANSFORM,
     EXT_MESH_GPU_INSTANCING,

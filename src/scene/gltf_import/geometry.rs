@@ -141,6 +141,7 @@ impl Importer<'_> {
         // other textures on the set it has still apply.
         let mat = &self.scene.materials[material as usize];
         let layers = mat.layer_textures.as_deref();
+        let dt = mat.diffuse_transmission.as_deref();
         let textures = [
             ("baseColorTexture", mat.base_color_texture.as_ref(), "the texture is not applied"),
             ("emissiveTexture", mat.emissive_texture.as_ref(), "the emissive factor alone applies"),
@@ -163,6 +164,16 @@ impl Importer<'_> {
             ("specularTexture", layers.and_then(|l| l.specular.as_ref()), "the specular factor alone applies"),
             ("sheenColorTexture", mat.sheen_color_texture.as_ref(), "the sheen colour factor alone applies"),
             ("sheenRoughnessTexture", mat.sheen_roughness_texture.as_ref(), "the sheen roughness factor alone applies"),
+            (
+                "diffuseTransmissionTexture",
+                dt.and_then(|d| d.texture.as_ref()),
+                "the diffuse transmission factor alone applies",
+            ),
+            (
+                "diffuseTransmissionColorTexture",
+                dt.and_then(|d| d.color_texture.as_ref()),
+                "the diffuse transmission colour factor alone applies",
+            ),
             (
                 "specularColorTexture",
                 layers.and_then(|l| l.specular_color.as_ref()),

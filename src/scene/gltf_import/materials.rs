@@ -5,10 +5,11 @@
 //! transmissive meshes), `KHR_materials_clearcoat`, and vkvcm's own `VKVCM_materials_phong`.
 
 use super::extensions::{
-    ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG, KHR_MATERIALS_CLEARCOAT, KHR_MATERIALS_SHEEN,
+    ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG, KHR_MATERIALS_CLEARCOAT, KHR_MATERIALS_DIFFUSE_TRANSMISSION,
+    KHR_MATERIALS_SHEEN,
 };
 use super::Importer;
-use crate::scene::{AlphaMode, LayerTextures, Material, GLTF_DIELECTRIC_F0};
+use crate::scene::{AlphaMode, DiffuseTransmission, LayerTextures, Material, GLTF_DIELECTRIC_F0};
 use anyhow::{bail, Result};
 use glam::Vec3;
 
@@ -122,12 +123,13 @@ impl Importer<'_> {
         if phong_ext.is_none() {
             self.set_clearcoat(m, &mut out, &label)?;
             self.set_sheen(m, &mut out, &label)?;
+            self.set_diffuse_transmission(m, &mut out, metallic, &label)?;
         }
         // glTF's doubleSided false (the default) is back-face culling: the camera does not
         // see the back side of such a surface (glsl/scene.glsl, trace_camera_segment and
         // visible_to_camera; light meets both sides). A dielectric stays two-sided: its
-        // refracted rays leave through the back side.
-        out.one_sided = !m.double_sided() && out.ior < 0.0;
+        // refracted rays leave through the back side, and so does a diffuse transmission.
+        out.one_sided = !m.double_sided() && out.ior < 0.0 && !out.has_diffuse_transmission();
         // KHR_materials_volume describes the inside of a transmissive mesh; on an opaque
         // material, or one that emits (whose surface bounds no medium:
         // Material::medium_attenuation), it has nothing to apply to.
@@ -300,6 +302,51 @@ impl Importer<'_> {
             out.sheen_roughness_texture =
                 self.json_texture(info, label, "KHR_materials_sheen.sheenRoughnessTexture")?;
         }
+        Ok(())
+    }
+
+    /// Sets the diffuse transmission of `out` from `m`'s KHR_materials_diffuse_transmission:
+    /// diffuseTransmissionFactor (default 0: none) and diffuseTransmissionColorFactor
+    /// (default white), clamped to [0, 1] as glTF's factors, and their textures. `metallic`
+    /// is the material's metallic factor (its metal part transmits nothing). On a material
+    /// with KHR_materials_transmission it is ignored with a warning.
+    fn set_diffuse_transmission(
+        &mut self,
+        m: &gltf::Material,
+        out: &mut Material,
+        metallic: f32,
+        label: &str,
+    ) -> Result<()> {
+        let Some(v) = m.extensions().and_then(|e| e.get(KHR_MATERIALS_DIFFUSE_TRANSMISSION)) else {
+            return Ok(());
+        };
+        let ctx = format!("{label}: {KHR_MATERIALS_DIFFUSE_TRANSMISSION}");
+        if !v.is_object() {
+            bail!("{ctx} must be an object");
+        }
+        let factor = ext_f32(v, "diffuseTransmissionFactor", 0.0, &ctx)?.clamp(0.0, 1.0);
+        let color = ext_vec3(v, "diffuseTransmissionColorFactor", Vec3::ONE, &ctx)?.clamp(Vec3::ZERO, Vec3::ONE);
+        let slot = |name: &str| format!("{KHR_MATERIALS_DIFFUSE_TRANSMISSION}.{name}");
+        let mut texture = None;
+        if let Some(info) = v.get("diffuseTransmissionTexture") {
+            texture = self.json_texture(info, label, &slot("diffuseTransmissionTexture"))?;
+        }
+        let mut color_texture = None;
+        if let Some(info) = v.get("diffuseTransmissionColorTexture") {
+            color_texture = self.json_texture(info, label, &slot("diffuseTransmissionColorTexture"))?;
+        }
+        if out.is_dielectric() {
+            if factor > 0.0 {
+                self.warnings.warn(
+                    "KHR_materials_diffuse_transmission beside KHR_materials_transmission is ignored (vkvcm \
+                     transmits diffusely through opaque materials only)",
+                    label,
+                );
+            }
+            return Ok(());
+        }
+        out.diffuse_transmission =
+            Some(Box::new(DiffuseTransmission { factor, color, metallic, texture, color_texture }));
         Ok(())
     }
 
