@@ -36,6 +36,18 @@ fn stats(
     render_stats(&render_checked(gpu, scene, &s), None)
 }
 
+/// A texture reference to image 0 on TEXCOORD_0.
+fn texture_ref() -> vkvcm::scene::TextureRef {
+    vkvcm::scene::TextureRef {
+        image: 0,
+        wrap_s: vkvcm::scene::Wrap::Repeat,
+        wrap_t: vkvcm::scene::Wrap::Repeat,
+        filter: vkvcm::scene::Filter::Nearest,
+        tex_coord: 0,
+        transform: vkvcm::scene::TextureRef::IDENTITY,
+    }
+}
+
 fn transmitting(name: &str, base: Material, factor: f32, color: Vec3, metallic: f32) -> Material {
     let dt = DiffuseTransmission { factor, color, metallic, texture: None, color_texture: None };
     Material { name: name.into(), diffuse_transmission: Some(Box::new(dt)), ..base }
@@ -65,8 +77,9 @@ fn uniform_sky() -> EnvironmentMap {
 
 /// Two sheets in the plane y = 0 (x in [-1.1, -0.1] and [0.1, 1.1], z in [-0.5, 0.5]),
 /// materials 0 and 1, under the sky `map`; the camera looks up at their undersides from
-/// (0, -2.5, 0) and sees nothing else but the sky above.
-fn sheet_scene(map: EnvironmentMap, left: Material, right: Material) -> Scene {
+/// (0, -2.5, 0) and sees nothing else but the sky above. With `texel`, the sheets have
+/// texture coordinates and image 0 is that one texel (RGBA).
+fn sheet_scene(map: EnvironmentMap, left: Material, right: Material, texel: Option<[u8; 4]>) -> Scene {
     let v = Vec3::new;
     let quad = |x0: f32, x1: f32, material: u32| {
         let (a, b, c, d) = (v(x0, 0.0, -0.5), v(x1, 0.0, -0.5), v(x1, 0.0, 0.5), v(x0, 0.0, 0.5));
@@ -79,7 +92,36 @@ fn sheet_scene(map: EnvironmentMap, left: Material, right: Material) -> Scene {
     tris.extend(quad(0.1, 1.1, 1));
     let light = Light::Environment(EnvironmentLight { map: Arc::new(map), scale: Vec3::ONE, rotation_deg: 0.0 });
     let cam = camera(v(0.0, -2.5, 0.0), Vec3::Y, Vec3::Z, 60.0);
-    scene("diffuse transmission sheets", tris, vec![left, right], vec![light], cam)
+    let mut sc = scene("diffuse transmission sheets", tris, vec![left, right], vec![light], cam);
+    if let Some(texel) = texel {
+        for tri in &mut sc.triangles {
+            tri.attributes = Some(Box::new(vkvcm::scene::VertexAttributes {
+                uv: [Some([glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y]), None],
+                color: None,
+                tangent: None,
+            }));
+        }
+        sc.images = vec![vkvcm::scene::TextureImage { name: "dt".into(), width: 1, height: 1, texels: vec![texel] }];
+    }
+    sc
+}
+
+/// `m` with both its diffuse-transmission textures (image 0).
+fn textured(mut m: Material) -> Material {
+    let dt = m.diffuse_transmission.as_mut().unwrap();
+    dt.texture = Some(texture_ref());
+    dt.color_texture = Some(texture_ref());
+    m
+}
+
+/// The linear value of an sRGB byte.
+fn srgb(c: u8) -> f32 {
+    let c = c as f32 / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 /// What a camera ray through image point (x, y) sees: the sky (None), or the sheet it
@@ -180,7 +222,8 @@ fn sky_integral(w: &dyn Fn(f64) -> f64) -> f64 {
 ///   (0.3, 0.9, 0.5): f_t = t c / pi, the pixel t c I, I = int L(mu) 2 mu dmu (the sky's
 ///   ramp at the horizon makes I < 1);
 /// - right, glTF's dielectric (F0 0.04, roughness 0.5) of base (0.2, 0.5, 0.8) and
-///   metallic 0.3, factor 0.8, colour (0.9, 0.6, 0.2): f_t = t c (1 - m) (1 - F(mu_o))
+///   metallic 0.3, factor 1 and colour 1 times its textures' texel (188, 137, 99, 153):
+///   t = 153/255 (A, linear), c the RGB decoded from sRGB; f_t = t c (1 - m) (1 - F(mu_o))
 ///   (1 - F(mu_i)) / (pi (1 - E_avg)), the pixel t c (1 - m) (1 - F(mu_o)) int (1 - F(mu))
 ///   L(mu) 2 mu dmu / (1 - E_avg), E_avg = F0 + (1 - F0) / 21.
 ///
@@ -189,17 +232,20 @@ fn sky_integral(w: &dyn Fn(f64) -> f64) -> f64 {
 /// fixed one, so its agreement is the reciprocity check. Then a white furnace under a
 /// uniform sky: the Lambert sheet (base and colour white, factor 0.4) returns exactly 1
 /// per pixel (reflected 0.6 + transmitted 0.4); the glTF one (white, metallic 0,
-/// roughness 0.5, factor 0.4 white) returns (1 - F(mu_o)) + the GGX lobe's albedo, which
+/// roughness 0.5, factor 0.4 from its texture, white) returns (1 - F(mu_o)) + the GGX lobe's albedo, which
 /// must not exceed 1 (one-sided, Šidák-corrected z): its loss is the single-scattering
 /// GGX lobe's. Sabotages: see the commit message.
 #[test]
 fn diffuse_transmission_matches_analytic_and_furnace() {
     let lambert = |c: Vec3| Material { diffuse: c, ..Default::default() };
     let (lc, t_l) = (Vec3::new(0.3, 0.9, 0.5), 0.6f32);
-    let (rc, t_r, m_r) = (Vec3::new(0.9, 0.6, 0.2), 0.8f32, 0.3f32);
+    // The right sheet's factor 1 and colour 1 times its textures' texel.
+    let texel = [188u8, 137, 99, 153];
+    let (rc, t_r, m_r) = (Vec3::new(srgb(texel[0]), srgb(texel[1]), srgb(texel[2])), texel[3] as f32 / 255.0, 0.3f32);
     let left = transmitting("lambert", lambert(Vec3::new(0.8, 0.3, 0.2)), t_l, lc, 0.0);
-    let right = transmitting("gltf", Material::metallic_roughness(Vec3::new(0.2, 0.5, 0.8), m_r, 0.5), t_r, rc, m_r);
-    let sc = sheet_scene(upper_sky(), left, right);
+    let gltf = Material::metallic_roughness(Vec3::new(0.2, 0.5, 0.8), m_r, 0.5);
+    let right = textured(transmitting("gltf", gltf, 1.0, Vec3::ONE, m_r));
+    let sc = sheet_scene(upper_sky(), left, right, Some(texel));
     let e_avg = 0.04 + 0.96 / 21.0;
     let i_lambert = sky_integral(&|_| 1.0);
     let i_gltf = sky_integral(&|mu| 1.0 - schlick(mu)) / (1.0 - e_avg);
@@ -209,10 +255,12 @@ fn diffuse_transmission_matches_analytic_and_furnace() {
         _ => rc * (t_r * (1.0 - m_r) * ((1.0 - schlick(mu_o)) * i_gltf) as f32),
     };
     let white = Vec3::ONE;
+    // The glTF sheet's factor 0.4 = 102/255 from its texture.
     let furnace = sheet_scene(
         uniform_sky(),
         transmitting("white lambert", lambert(white), 0.4, white, 0.0),
-        transmitting("white gltf", Material::metallic_roughness(white, 0.0, 0.5), 0.4, white, 0.0),
+        textured(transmitting("white gltf", Material::metallic_roughness(white, 0.0, 0.5), 1.0, white, 0.0)),
+        Some([255, 255, 255, 102]),
     );
     with_gpu(|gpu| {
         let expected = expected_image(&sc, &value);
@@ -260,8 +308,8 @@ fn diffuse_transmission_matches_analytic_and_furnace() {
 /// back wall) with diffuse grey floors and, between the lamp and the floor at height 0.7,
 /// two transmitting sheets: left glTF's red dielectric (roughness 0.6) transmitting 0.7 of
 /// green under a clear coat of factor 1 (the coat on both sides), right a Lambert yellow
-/// transmitting 0.5 of red under a sheen (0.5 white, roughness 0.4), tilted shading
-/// normals on both. PT with NEE against PT without (bsdf_eval's pdf is the density
+/// transmitting red under a sheen (0.5 white, roughness 0.4), its factor and colour
+/// varied by a texture (texel (230, 120, 60, 128)), tilted shading normals on both. PT with NEE against PT without (bsdf_eval's pdf is the density
 /// bsdf_sample draws, transmissions included), BPT and LT against PT (reverse pdfs, light
 /// subpaths crossing the sheets, the layers' adjoint).
 #[test]
@@ -279,7 +327,7 @@ fn diffuse_transmission_estimators_agree() {
             0.0,
         )
     };
-    let right = Material {
+    let mut right = Material {
         sheen_color: Vec3::splat(0.5),
         sheen_roughness: 0.4,
         ..transmitting(
@@ -290,6 +338,14 @@ fn diffuse_transmission_estimators_agree() {
             0.0,
         )
     };
+    // The right sheet's factor and colour vary by a texture (one texel): BPT's stored
+    // light vertices must carry the point's multipliers.
+    let dt = right.diffuse_transmission.as_mut().unwrap();
+    dt.factor = 1.0;
+    dt.texture = Some(texture_ref());
+    dt.color_texture = Some(texture_ref());
+    sc.images =
+        vec![vkvcm::scene::TextureImage { name: "dt".into(), width: 1, height: 1, texels: vec![[230, 120, 60, 128]] }];
     let first = sc.materials.len() as u32;
     sc.materials.extend([left, right]);
     let v = Vec3::new;
@@ -302,6 +358,13 @@ fn diffuse_transmission_estimators_agree() {
     let mut sheets = quad(v(-1.2, -0.6, 0.7), v(0.0, -0.6, 0.7), v(0.0, 1.8, 0.7), v(-1.2, 1.8, 0.7), first).to_vec();
     sheets.extend(quad(v(0.0, -0.6, 0.7), v(1.2, -0.6, 0.7), v(1.2, 1.8, 0.7), v(0.0, 1.8, 0.7), first + 1));
     // The lights index triangles: the sheets go after them.
+    for tri in &mut sheets {
+        tri.attributes = Some(Box::new(vkvcm::scene::VertexAttributes {
+            uv: [Some([glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y]), None],
+            color: None,
+            tangent: None,
+        }));
+    }
     sc.triangles.extend(sheets);
     tilt_shading_normals(&mut sc, 20.0, 7);
     with_gpu(|gpu| {
@@ -334,37 +397,19 @@ fn diffuse_transmission_estimators_agree() {
 fn diffuse_transmission_features() {
     use vkvcm::render::features::FeatureSet;
     let plain = Material { diffuse: Vec3::ONE, ..Default::default() };
-    let f = FeatureSet::new(&sheet_scene(uniform_sky(), plain.clone(), plain.clone()), false);
+    let f = FeatureSet::new(&sheet_scene(uniform_sky(), plain.clone(), plain.clone(), None), false);
     assert!(!f.diffuse_transmission, "{f}");
     let dt = transmitting("dt", plain.clone(), 0.5, Vec3::ONE, 0.0);
     // A factor of 0, or a dielectric, transmits nothing diffusely.
     let none = transmitting("none", plain.clone(), 0.0, Vec3::ONE, 0.0);
     let glass = Material { ior: 1.5, ..dt.clone() };
-    let f = FeatureSet::new(&sheet_scene(uniform_sky(), none, glass), false);
+    let f = FeatureSet::new(&sheet_scene(uniform_sky(), none, glass, None), false);
     assert!(!f.diffuse_transmission, "{f}");
-    let f = FeatureSet::new(&sheet_scene(uniform_sky(), dt.clone(), plain.clone()), false);
+    let f = FeatureSet::new(&sheet_scene(uniform_sky(), dt.clone(), plain.clone(), None), false);
     assert!(f.diffuse_transmission && !f.diffuse_transmission_textures, "{f}");
     assert!(f.to_string().contains("diffuse transmission"), "{f}");
-    let t = vkvcm::scene::TextureRef {
-        image: 0,
-        wrap_s: vkvcm::scene::Wrap::Repeat,
-        wrap_t: vkvcm::scene::Wrap::Repeat,
-        filter: vkvcm::scene::Filter::Nearest,
-        tex_coord: 0,
-        transform: vkvcm::scene::TextureRef::IDENTITY,
-    };
-    let mut textured = dt;
-    textured.diffuse_transmission.as_mut().unwrap().texture = Some(t);
-    let mut sc = sheet_scene(uniform_sky(), textured, plain);
-    let f = FeatureSet::new(&sc, false);
+    let f = FeatureSet::new(&sheet_scene(uniform_sky(), textured(dt.clone()), plain.clone(), None), false);
     assert!(f.diffuse_transmission && !f.diffuse_transmission_textures, "without coordinates: {f}");
-    for tri in &mut sc.triangles {
-        tri.attributes = Some(Box::new(vkvcm::scene::VertexAttributes {
-            uv: [Some([glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y]), None],
-            color: None,
-            tangent: None,
-        }));
-    }
-    let f = FeatureSet::new(&sc, false);
+    let f = FeatureSet::new(&sheet_scene(uniform_sky(), textured(dt), plain, Some([0; 4])), false);
     assert!(f.diffuse_transmission && f.diffuse_transmission_textures, "{f}");
 }
