@@ -136,6 +136,7 @@ struct Bsdf {
     // The clear coat (glsl/lobes/clearcoat.glsl): its factor, GGX alpha, its sampling
     // probability at wo, and the base's albedo its sampling probabilities use.
     float coat_weight, coat_alpha, prob_coat, coat_base_albedo;
+    vec3 coat_n;  // the coat's shading normal, on b.ng's side (b.n without its own normal map)
 #endif
 #if HAS_SHEEN
     // The sheen (glsl/lobes/sheen.glsl): its colour, max(colour), roughness, its sampling

@@ -59,6 +59,11 @@
 #if HAS_CLEARCOAT_TEXTURES && !HAS_CLEARCOAT
 #error "HAS_CLEARCOAT_TEXTURES needs HAS_CLEARCOAT"
 #endif
+// Clear coats with their own normal map (clearcoatNormalTexture; surfaces and light
+// vertices carry the coat's shading normal, Tint.coat_normal).
+#ifndef HAS_CLEARCOAT_NORMAL_MAPS
+#define HAS_CLEARCOAT_NORMAL_MAPS 1
+#endif
 // A sheen over some material (KHR_materials_sheen; glsl/lobes/sheen.glsl).
 #ifndef HAS_SHEEN
 #define HAS_SHEEN 1
@@ -159,4 +164,7 @@
 #define COUNT_RAYS 0
 #endif
 
+#if HAS_CLEARCOAT_NORMAL_MAPS && !(HAS_CLEARCOAT && HAS_SHADING_NORMALS)
+#error "HAS_CLEARCOAT_NORMAL_MAPS needs HAS_CLEARCOAT and HAS_SHADING_NORMALS"
+#endif
 #endif

@@ -161,9 +161,11 @@ struct Tint {
     vec4 diffuse_transmission;  // rgb: multiplies diffuseTransmissionColorFactor
                                 // (diffuseTransmissionColorTexture's RGB), a:
                                 // diffuseTransmissionFactor (diffuseTransmissionTexture's A)
+    vec3 coat_normal;      // the clear coat's shading normal (its normal map), on the side
+                           // of the winding's normal; 0: the base's (glsl/lobes/clearcoat.glsl)
 };
 
-Tint no_tint() { return Tint(vec3(1.0), 1.0, 1.0, 1.0, 1.0, 1.0, vec4(1.0), vec4(1.0), vec4(1.0)); }
+Tint no_tint() { return Tint(vec3(1.0), 1.0, 1.0, 1.0, 1.0, 1.0, vec4(1.0), vec4(1.0), vec4(1.0), vec3(0.0)); }
 
 // The tint (rgb) and alpha (times the material's alpha factor) of triangle `tri` with
 // material `material` at barycentric weights (u, v): (1, 1, 1, factor) where it has no
@@ -302,6 +304,11 @@ vec3 emission_tint(uint tri, float u, float v) {
 }
 #endif
 
+#if HAS_NORMAL_MAPS || HAS_CLEARCOAT_NORMAL_MAPS
+// normal_mapped below with the normal map `ref` (NO_TEXTURE: none) of scale `scale`.
+vec3 normal_mapped_by(uint ref, float scale, uint tri, uint record, float u, float v, vec3 n);
+#endif
+
 #if HAS_NORMAL_MAPS
 // The unit shading normal `n` of triangle `tri` (with per-vertex attributes) at (u, v),
 // bent by its material's normal map (glTF 2.0 section 3.9.3, normalTexture): the
@@ -314,7 +321,12 @@ vec3 emission_tint(uint tri, float u, float v) {
 // bitangent sign flipped by a mirroring transform); BVH_NO_INSTANCE for world space.
 vec3 normal_mapped(uint tri, uint record, uint material, float u, float v, vec3 n) {
     vec4 maps = material_maps(material);
-    uint ref = floatBitsToUint(maps.x);
+    return normal_mapped_by(floatBitsToUint(maps.x), maps.y, tri, record, u, v, n);
+}
+#endif
+
+#if HAS_NORMAL_MAPS || HAS_CLEARCOAT_NORMAL_MAPS
+vec3 normal_mapped_by(uint ref, float scale, uint tri, uint record, float u, float v, vec3 n) {
     if (ref == NO_TEXTURE) return n;
     GpuVertexAttributes a0, a1, a2;
     if (!triangle_attributes(tri, a0, a1, a2)) return n;
@@ -344,7 +356,7 @@ vec3 normal_mapped(uint tri, uint record, uint material, float u, float v, vec3 
     tg /= tl;
     vec3 b = cross(n, tg) * (t.w < 0.0 ? -1.0 : 1.0);
     vec3 m = texture_sample(ref, uv).xyz * 2.0 - 1.0;
-    m.xy *= maps.y;
+    m.xy *= scale;
     vec3 bent = m.x * tg + m.y * b + m.z * n;
     float bl = length(bent);
     return bl > 0.0 ? bent / bl : n;

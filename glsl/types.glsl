@@ -47,6 +47,7 @@ struct GpuMaterial {
                                      // glsl/lobes/diffuse_transmission.glsl)
     vec4 diffuse_transmission_maps;  // x, y: its factor's and colour's textures or NO_TEXTURE (bits),
                                      // z: the metallic factor, w reserved
+    vec4 coat_normal;    // x: the clear coat's normal map or NO_TEXTURE (bits), y: its scale, z, w reserved
 };
 
 struct GpuTextureRef {

@@ -89,7 +89,8 @@ fn rust_and_glsl_layouts_match() {
             sheen,
             sheen_maps,
             diffuse_transmission,
-            diffuse_transmission_maps
+            diffuse_transmission_maps,
+            coat_normal
         }),
         rust_layout!(GpuTextureRef { image, row0, row1 }),
         rust_layout!(GpuVertexAttributes { uv, color, tangent }),

@@ -2042,8 +2042,9 @@ fn singular_placements_and_mismatched_instancing_attributes() {
     assert!(e.contains("node 9 EXT_mesh_gpu_instancing") && e.contains("different counts"), "{e}");
 }
 
-/// KHR_materials_clearcoat: its factors reach the material (clamped to [0, 1]), its
-/// normal texture is warned of, a texture index out of range is an error, and the extension is no longer an unsupported one.
+/// KHR_materials_clearcoat: its factors reach the material (clamped to [0, 1]), so do its
+/// normal texture and that texture's scale (default 1) without a warning, a texture index
+/// out of range is an error, and the extension is no longer an unsupported one.
 #[test]
 fn clearcoat_factors_are_read() {
     let mut d = Doc::triangle();
@@ -2053,13 +2054,20 @@ fn clearcoat_factors_are_read() {
     d.json["materials"] = json!([
         {"name": "a", "extensions": coat(0.7, 0.25)},
         {"name": "b", "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 2.0, "clearcoatNormalTexture": {"index": 0}}}},
+        {"name": "c", "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 1.0, "clearcoatNormalTexture": {"index": 0, "scale": 0.5}}}},
     ]);
+    d.json["images"] = json!([{"name": "checker", "uri": scene::encode_data_uri(&png_2x2())}]);
+    d.json["textures"] = json!([{"source": 0}]);
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
     let s = d.load().unwrap();
     assert_eq!((s.materials[0].clearcoat, s.materials[0].clearcoat_roughness), (0.7, 0.25));
     assert_eq!((s.materials[1].clearcoat, s.materials[1].clearcoat_roughness), (1.0, 0.0));
     let w = &s.report.warnings;
-    assert!(w.iter().any(|x| x.contains("KHR_materials_clearcoat.clearcoatNormalTexture")), "{w:?}");
+    assert!(!w.iter().any(|x| x.contains("clearcoatNormalTexture")), "{w:?}");
+    assert!(s.materials[0].clearcoat_normal_texture.is_none());
+    let (b, c) = (&s.materials[1], &s.materials[2]);
+    assert!(b.clearcoat_normal_texture.is_some() && b.clearcoat_normal_scale == 1.0);
+    assert!(c.clearcoat_normal_texture.is_some() && c.clearcoat_normal_scale == 0.5);
     assert!(!w.iter().any(|x| x.contains("extension KHR_materials_clearcoat is not supported")), "{w:?}");
     // A clearcoatTexture naming no texture is an error that names it.
     d.json["materials"][1]["extensions"]["KHR_materials_clearcoat"]["clearcoatTexture"] = json!({"index": 7});

@@ -47,6 +47,10 @@ pub struct FeatureSet {
     /// triangle texture coordinates: surfaces and light vertices carry the point's coat
     /// factor and roughness multipliers (glsl/textures.glsl, `surface_tint`).
     pub clearcoat_textures: bool,
+    /// Some material with a clear coat has a clearcoatNormalTexture and some triangle
+    /// tangents: surfaces and light vertices carry the coat's own shading normal
+    /// (glsl/lobes/clearcoat.glsl, `Tint.coat_normal`).
+    pub clearcoat_normal_maps: bool,
     /// Some material has a sheen (`Material::has_sheen`, glsl/lobes/sheen.glsl).
     pub sheen: bool,
     /// Some material with a sheen has a sheen-colour or sheen-roughness texture and some
@@ -132,6 +136,7 @@ impl FeatureSet {
         let vertex_attributes = scene.triangles.iter().any(|t| t.attributes.is_some());
         let tangents = scene.triangles.iter().any(|t| t.attributes.as_ref().is_some_and(|a| a.tangent.is_some()));
         let normal_maps = tangents && any_mat(&|m| m.normal_texture.is_some());
+        let clearcoat_normal_maps = tangents && any_mat(&|m| m.clearcoat > 0.0 && m.clearcoat_normal_texture.is_some());
         let emissive_textures = vertex_attributes && any_mat(&|m| m.emissive_texture.is_some() && nonzero(m.emission));
         let metallic_roughness_textures = vertex_attributes && any_mat(&|m| m.metallic_roughness_texture.is_some());
         let clearcoat_textures = vertex_attributes
@@ -189,6 +194,7 @@ impl FeatureSet {
             volume: g || any_mat(&|m| nonzero(m.medium_attenuation())),
             clearcoat: g || any_mat(&|m| m.clearcoat > 0.0),
             clearcoat_textures: g || clearcoat_textures,
+            clearcoat_normal_maps: g || clearcoat_normal_maps,
             sheen: g || any_mat(&|m| m.has_sheen()),
             sheen_textures: g || sheen_textures,
             diffuse_transmission: g || any_mat(&|m| m.has_diffuse_transmission()),
@@ -201,12 +207,13 @@ impl FeatureSet {
             environment_map: g || any_light(&|l| matches!(l, Light::Environment(_))),
             spheres: g || !scene.spheres.is_empty(),
             instances: g || !scene.instances.is_empty(),
-            shading_normals: g || scene_has_shading_normals || normal_maps,
+            shading_normals: g || scene_has_shading_normals || normal_maps || clearcoat_normal_maps,
             scene_has_shading_normals,
             vertex_attributes: g || vertex_attributes,
             textures: g
                 || (vertex_attributes && any_mat(&|m| m.base_color_texture.is_some()))
                 || normal_maps
+                || clearcoat_normal_maps
                 || emissive_textures
                 || metallic_roughness_textures
                 || clearcoat_textures
@@ -245,6 +252,7 @@ impl FeatureSet {
             ("HAS_VOLUME", self.volume),
             ("HAS_CLEARCOAT", self.clearcoat),
             ("HAS_CLEARCOAT_TEXTURES", self.clearcoat_textures),
+            ("HAS_CLEARCOAT_NORMAL_MAPS", self.clearcoat_normal_maps),
             ("HAS_SHEEN", self.sheen),
             ("HAS_SHEEN_TEXTURES", self.sheen_textures),
             ("HAS_DIFFUSE_TRANSMISSION", self.diffuse_transmission),
@@ -337,6 +345,7 @@ impl fmt::Display for FeatureSet {
             ("emissive textures", self.emissive_textures),
             ("metallic-roughness textures", self.metallic_roughness_textures),
             ("clear-coat textures", self.clearcoat_textures),
+            ("clear-coat normal maps", self.clearcoat_normal_maps),
             ("sheen textures", self.sheen_textures),
             ("diffuse-transmission textures", self.diffuse_transmission_textures),
             ("transmission textures", self.transmission_textures),

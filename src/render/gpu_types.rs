@@ -100,6 +100,10 @@ pub struct GpuMaterial {
     /// y: diffuseTransmissionColorTexture; z: the material's metallic factor (its metal
     /// part transmits nothing); w: reserved.
     pub diffuse_transmission_maps: [f32; 4],
+    /// The clear coat's normal map (glsl/lobes/clearcoat.glsl): x: its index in
+    /// `texture_refs` (bits, or `NO_TEXTURE`: the coat shades with the base's normal), y:
+    /// its scale; z, w: reserved.
+    pub coat_normal: [f32; 4],
 }
 
 /// A texture as a material uses it (`scene::TextureRef`): where its image's texels are,

@@ -36,7 +36,8 @@ pub const LIGHT_VERTEX_A_BYTES: u64 = 32;
 /// (wo, dVM) and (normal, material and length), with shading normals or
 /// metallic-roughness textures a vec4 holding the shading normal and the point's metallic,
 /// with vertex attributes one holding the tint and its roughness, with clear-coat,
-/// transmission, specular, sheen and diffuse-transmission textures one each holding the point's multipliers
+/// clear-coat normal maps, transmission, specular, sheen and diffuse-transmission textures
+/// one each holding the point's multipliers
 /// (glsl/light_vertex_store.glsl, LV_B_STRIDE).
 pub fn light_vertex_b_bytes(features: &FeatureSet) -> u64 {
     let normal_slot = features.shading_normals || features.metallic_roughness_textures;
@@ -44,6 +45,7 @@ pub fn light_vertex_b_bytes(features: &FeatureSet) -> u64 {
         normal_slot,
         features.vertex_attributes,
         features.clearcoat_textures,
+        features.clearcoat_normal_maps,
         features.sheen_textures,
         features.diffuse_transmission_textures,
         features.transmission_textures,

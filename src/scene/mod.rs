@@ -246,6 +246,11 @@ pub struct Material {
     /// respectively (glsl/textures.glsl, `surface_tint`).
     pub clearcoat_texture: Option<TextureRef>,
     pub clearcoat_roughness_texture: Option<TextureRef>,
+    /// clearcoatNormalTexture and its scale: the coat's own normal map (linear, read as
+    /// normalTexture is), which bends the coat's shading normal where a triangle has its
+    /// texture coordinates and tangents; the base keeps its own (glsl/lobes/clearcoat.glsl).
+    pub clearcoat_normal_texture: Option<TextureRef>,
+    pub clearcoat_normal_scale: f32,
     /// KHR_materials_sheen's sheenColorFactor (linear, each channel in [0, 1]; black: no
     /// sheen): the colour of a Charlie sheen lobe over the rest of the material,
     /// f = f_sheen + f_base (1 - max(sheenColor) E) (glsl/lobes/sheen.glsl).
@@ -344,6 +349,8 @@ impl Default for Material {
             clearcoat_roughness: 0.0,
             clearcoat_texture: None,
             clearcoat_roughness_texture: None,
+            clearcoat_normal_texture: None,
+            clearcoat_normal_scale: 1.0,
             sheen_color: Vec3::ZERO,
             sheen_roughness: 0.0,
             sheen_color_texture: None,

@@ -255,7 +255,7 @@ impl Importer<'_> {
 
     /// Sets the clear coat of `out` from `m`'s KHR_materials_clearcoat: clearcoatFactor and
     /// clearcoatRoughnessFactor (both default 0, clamped to [0, 1] as glTF's factors) and
-    /// their textures; clearcoatNormalTexture is warned of.
+    /// their textures, and clearcoatNormalTexture (with its `scale`, default 1).
     fn set_clearcoat(&mut self, m: &gltf::Material, out: &mut Material, label: &str) -> Result<()> {
         let Some(v) = m.extensions().and_then(|e| e.get(KHR_MATERIALS_CLEARCOAT)) else {
             return Ok(());
@@ -273,11 +273,10 @@ impl Importer<'_> {
             let slot = "KHR_materials_clearcoat.clearcoatRoughnessTexture";
             out.clearcoat_roughness_texture = self.json_texture(info, label, slot)?;
         }
-        if v.get("clearcoatNormalTexture").is_some() {
-            self.warnings.warn(
-                "textures are not supported (the coat shades with the base's normal)",
-                format!("{label} {KHR_MATERIALS_CLEARCOAT}.clearcoatNormalTexture"),
-            );
+        if let Some(info) = v.get("clearcoatNormalTexture") {
+            let slot = "KHR_materials_clearcoat.clearcoatNormalTexture";
+            out.clearcoat_normal_texture = self.json_texture(info, label, slot)?;
+            out.clearcoat_normal_scale = ext_f32(info, "scale", 1.0, &format!("{ctx}.clearcoatNormalTexture"))?;
         }
         Ok(())
     }
