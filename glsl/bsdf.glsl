@@ -99,6 +99,10 @@
 // base at the end of this file: bsdf_init, bsdf_eval and bsdf_sample are the base's
 // (base_bsdf_*) with the layers applied.
 //
+// Diffuse transmission (glTF KHR_materials_diffuse_transmission, glsl/lobes/
+// diffuse_transmission.glsl) is part of an opaque material's diffuse lobe: lobes_eval and
+// base_bsdf_sample take a wi on the other side of the surface as its transmission.
+//
 // Requires: `material_at(i)` (GpuMaterial) declared by the kernel (scene.glsl), common.glsl, types.glsl,
 // textures.glsl (Tint).
 #ifndef BSDF_GLSL
@@ -133,6 +137,7 @@ struct Bsdf {
     // The clear coat (glsl/lobes/clearcoat.glsl): its factor, GGX alpha, its sampling
     // probability at wo, and the base's albedo its sampling probabilities use.
     float coat_weight, coat_alpha, prob_coat, coat_base_albedo;
+    vec3 coat_n;  // the coat's shading normal, on b.ng's side (b.n without its own normal map)
 #endif
 #if HAS_SHEEN
     // The sheen (glsl/lobes/sheen.glsl): its colour, max(colour), roughness, its sampling
@@ -144,6 +149,13 @@ struct Bsdf {
     // E_avg of the iridescent Fresnel term of the diffuse lobe's interface (0 where the
     // material has no iridescence or no such interface; glsl/lobes/iridescence.glsl).
     vec3 interface_e_avg;
+#endif
+#if HAS_DIFFUSE_TRANSMISSION
+    // The diffuse transmission (glsl/lobes/diffuse_transmission.glsl): 1 - its factor (the
+    // reflection's weight), its colour, and its probability within the diffuse component.
+    float dt_reflect;
+    vec3 dt_colour;
+    float prob_dt;
 #endif
 };
 
@@ -361,6 +373,8 @@ void fresnel_lobe_weights(GpuMaterial m, Tint tint, float c, inout float a_d, in
 }
 #endif
 
+#include "lobes/diffuse_transmission.glsl"
+
 // `ng`: geometric normal (for a dielectric it must point outwards); `ns`: shading normal
 // on the same side as ng (== ng for flat shading); `tint`: the point's tint (Surface.tint).
 Bsdf base_bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint tint) {
@@ -400,6 +414,9 @@ Bsdf base_bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, T
     vec3 albedo = vec3(0.0);
 #if HAS_DIFFUSE
     vec3 diffuse = diffuse_colour(m, tint.rgb);
+#if HAS_DIFFUSE_TRANSMISSION
+    diffuse = diffuse_transmission_init(b, m, diffuse);
+#endif
     a_d = luminance(diffuse);
     albedo += diffuse;
 #endif
@@ -584,7 +601,9 @@ float lobe_side(Bsdf b) {
 // weights (Phong, mirror: luminance albedos) do not depend on it.
 void lobe_probs_at(Bsdf b, GpuMaterial m, float c, inout float p_d, inout float p_g) {
     float a_d = 0.0, a_g = 0.0, rest = 0.0;
-#if HAS_DIFFUSE
+#if HAS_DIFFUSE_TRANSMISSION
+    a_d = luminance(diffuse_colour(m, b.tint.rgb) * b.dt_reflect + b.dt_colour);
+#elif HAS_DIFFUSE
     a_d = luminance(diffuse_colour(m, b.tint.rgb));
 #endif
     a_g = luminance(glossy_colour(m, b.tint.rgb));
@@ -611,11 +630,20 @@ vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
     vec3 n = side * b.n;
     float cos_o = dot(n, b.wo);
     float cos_i = dot(n, wi);
+#if HAS_DIFFUSE_TRANSMISSION
+    // wi on the other side: a diffuse transmission, evaluated at |n.wi| (the other lobes
+    // only reflect).
+    bool through = cos_i < 0.0 && b.prob_dt > 0.0;
+    if (through) cos_i = -cos_i;
+#else
+    const bool through = false;
+#endif
     if (b.delta || cos_o < EPS_COSINE || cos_i < EPS_COSINE) return vec3(0.0);
 #if HAS_SHADING_NORMALS
-    // A reflection: wi on wo's side of the geometric surface (no light leaks).
+    // A reflection: wi on wo's side of the geometric surface (no light leaks); a
+    // transmission: on the other side.
     vec3 ng = side * b.ng;
-    if (dot(ng, wi) <= 0.0 || dot(ng, b.wo) <= 0.0) return vec3(0.0);
+    if ((through ? -dot(ng, wi) : dot(ng, wi)) <= 0.0 || dot(ng, b.wo) <= 0.0) return vec3(0.0);
 #endif
     GpuMaterial m = point_material(b.material, b.tint);
     vec3 f = vec3(0.0);
@@ -625,8 +653,19 @@ vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
 #if HAS_GGX
     if (m.phong.w < 0.0) lobe_probs_at(b, m, cos_i, rev_d, rev_g);
 #endif
+#if HAS_DIFFUSE_TRANSMISSION
+    if (through) return diffuse_transmission_eval(b, m, cos_o, cos_i, rev_d, pdf_fwd, pdf_rev);
+#endif
 #if HAS_DIFFUSE
     if (b.prob_diffuse > 0.0) {
+        vec3 colour = diffuse_colour(m, b.tint.rgb);
+        float p_d = b.prob_diffuse;
+#if HAS_DIFFUSE_TRANSMISSION
+        // The reflection's share of the diffuse component (the transmission has the rest).
+        colour *= b.dt_reflect;
+        p_d *= 1.0 - b.prob_dt;
+        rev_d *= 1.0 - b.prob_dt;
+#endif
         float f0 = m.mirror.w;
         if (f0 > 0.0) {
 #if HAS_IRIDESCENCE
@@ -635,14 +674,14 @@ vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
             if (b.interface_e_avg != vec3(0.0)) {
                 vec3 w = (1.0 - specular_fresnel(m, b.tint, vec3(f0), cos_o)) *
                          (1.0 - specular_fresnel(m, b.tint, vec3(f0), cos_i)) / (1.0 - b.interface_e_avg);
-                f += diffuse_colour(m, b.tint.rgb) * w * INV_PI;
+                f += colour * w * INV_PI;
             } else
 #endif
-            f += diffuse_colour(m, b.tint.rgb) * (INV_PI * diffuse_fresnel_weight(f0, cos_o, cos_i));
+            f += colour * (INV_PI * diffuse_fresnel_weight(f0, cos_o, cos_i));
         } else {
-            f += diffuse_colour(m, b.tint.rgb) * INV_PI;
+            f += colour * INV_PI;
         }
-        pdf_fwd += b.prob_diffuse * cos_i * INV_PI;
+        pdf_fwd += p_d * cos_i * INV_PI;
         pdf_rev += rev_d * cos_o * INV_PI;
     }
 #endif
@@ -804,10 +843,16 @@ BsdfSample base_bsdf_sample(Bsdf b, vec3 u) {
     float cos_o = dot(n, b.wo);
 #if HAS_DIFFUSE || HAS_PHONG || HAS_GGX
     if (x < p_nonspec) {
+        bool through = false;  // a diffuse transmission, into the other hemisphere
         // An absent component has probability 0, so its branch is never taken.
 #if HAS_DIFFUSE
         if (x < b.prob_diffuse) {
             s.wi = to_world(sample_cosine_hemisphere(u.xy), n);
+#if HAS_DIFFUSE_TRANSMISSION
+            // x / prob_diffuse is uniform on [0, 1): the transmission with probability prob_dt.
+            through = x < b.prob_diffuse * b.prob_dt;
+            if (through) s.wi = -s.wi;
+#endif
         } else
 #endif
 #if HAS_GGX
@@ -835,7 +880,7 @@ BsdfSample base_bsdf_sample(Bsdf b, vec3 u) {
             return s;  // unreachable: x < p_nonspec selects a present component
 #endif
         }
-        if (dot(n, s.wi) < EPS_COSINE) return s;
+        if ((through ? -dot(n, s.wi) : dot(n, s.wi)) < EPS_COSINE) return s;
         return valued_sample(b, s);
     }
 #endif

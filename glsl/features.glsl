@@ -59,6 +59,11 @@
 #if HAS_CLEARCOAT_TEXTURES && !HAS_CLEARCOAT
 #error "HAS_CLEARCOAT_TEXTURES needs HAS_CLEARCOAT"
 #endif
+// Clear coats with their own normal map (clearcoatNormalTexture; surfaces and light
+// vertices carry the coat's shading normal, Tint.coat_normal).
+#ifndef HAS_CLEARCOAT_NORMAL_MAPS
+#define HAS_CLEARCOAT_NORMAL_MAPS 1
+#endif
 // A sheen over some material (KHR_materials_sheen; glsl/lobes/sheen.glsl).
 #ifndef HAS_SHEEN
 #define HAS_SHEEN 1
@@ -88,6 +93,22 @@
 // and light vertices carry the point's anisotropy direction and strength (Tint.anisotropy).
 #ifndef HAS_ANISOTROPY
 #define HAS_ANISOTROPY 1
+#endif
+// Lambertian transmission through an opaque material (KHR_materials_diffuse_transmission;
+// glsl/lobes/diffuse_transmission.glsl).
+#ifndef HAS_DIFFUSE_TRANSMISSION
+#define HAS_DIFFUSE_TRANSMISSION 1
+#endif
+// Diffuse transmissions whose factor or colour a texture varies per point
+// (glsl/textures.glsl `surface_tint`; light vertices carry the point's values).
+#ifndef HAS_DIFFUSE_TRANSMISSION_TEXTURES
+#define HAS_DIFFUSE_TRANSMISSION_TEXTURES 1
+#endif
+#if HAS_DIFFUSE_TRANSMISSION_TEXTURES && !HAS_DIFFUSE_TRANSMISSION
+#error "HAS_DIFFUSE_TRANSMISSION_TEXTURES needs HAS_DIFFUSE_TRANSMISSION"
+#endif
+#if HAS_DIFFUSE_TRANSMISSION && !HAS_DIFFUSE
+#error "HAS_DIFFUSE_TRANSMISSION needs HAS_DIFFUSE"
 #endif
 // Light kinds (glsl/lights.glsl).
 #ifndef HAS_AREA_LIGHTS
@@ -164,4 +185,7 @@
 #define COUNT_RAYS 0
 #endif
 
+#if HAS_CLEARCOAT_NORMAL_MAPS && !(HAS_CLEARCOAT && HAS_SHADING_NORMALS)
+#error "HAS_CLEARCOAT_NORMAL_MAPS needs HAS_CLEARCOAT and HAS_SHADING_NORMALS"
+#endif
 #endif

@@ -59,11 +59,13 @@ layout(std430) writeonly buffer light_vertex_chunk_counts { uint lv_chunk_count[
 //                                 b[Bi+2] = (shading normal, tint.metallic)
 //   with HAS_VERTEX_ATTRIBUTES:   b[Bi+LV_TINT] = (tint.rgb, tint.roughness)
 //   with HAS_CLEARCOAT_TEXTURES:  b[Bi+LV_COAT] = (tint.coat, tint.coat_roughness, 0, 0)
+//   with HAS_CLEARCOAT_NORMAL_MAPS: b[Bi+LV_COAT_NORMAL] = (tint.coat_normal, 0)
 //   with HAS_TRANSMISSION_TEXTURES: b[Bi+LV_TRANSMISSION] = (tint.transmission, 0, 0, 0)
 //   with HAS_SPECULAR_TEXTURES:   b[Bi+LV_SPECULAR] = tint.specular
 //   with HAS_SHEEN_TEXTURES:      b[Bi+LV_SHEEN] = tint.sheen
 //   with HAS_IRIDESCENCE_TEXTURES: b[Bi+LV_IRIDESCENCE] = (tint.iridescence, 0, 0)
 //   with HAS_ANISOTROPY:          b[Bi+LV_ANISOTROPY] = tint.anisotropy
+//   with HAS_DIFFUSE_TRANSMISSION_TEXTURES: b[Bi+LV_DIFFUSE_TRANSMISSION] = tint.diffuse_transmission
 // B = 2 + the others (src/render/light_vertex_store.rs, LightVertexPlan, sizes the store
 // the same way; light_vertex_compact.comp copies B vec4 per vertex). The point's metallic
 // and roughness (a metallic-roughness texture's texel) fill the two vec4s' spare w, so a
@@ -71,12 +73,14 @@ layout(std430) writeonly buffer light_vertex_chunk_counts { uint lv_chunk_count[
 #define LV_NORMAL_SLOTS ((HAS_SHADING_NORMALS != 0 || HAS_METALLIC_ROUGHNESS_TEXTURES != 0) ? 1u : 0u)
 #define LV_TINT (2u + LV_NORMAL_SLOTS)
 #define LV_COAT (LV_TINT + (HAS_VERTEX_ATTRIBUTES != 0 ? 1u : 0u))
-#define LV_TRANSMISSION (LV_COAT + (HAS_CLEARCOAT_TEXTURES != 0 ? 1u : 0u))
+#define LV_COAT_NORMAL (LV_COAT + (HAS_CLEARCOAT_TEXTURES != 0 ? 1u : 0u))
+#define LV_TRANSMISSION (LV_COAT_NORMAL + (HAS_CLEARCOAT_NORMAL_MAPS != 0 ? 1u : 0u))
 #define LV_SPECULAR (LV_TRANSMISSION + (HAS_TRANSMISSION_TEXTURES != 0 ? 1u : 0u))
 #define LV_SHEEN (LV_SPECULAR + (HAS_SPECULAR_TEXTURES != 0 ? 1u : 0u))
 #define LV_IRIDESCENCE (LV_SHEEN + (HAS_SHEEN_TEXTURES != 0 ? 1u : 0u))
 #define LV_ANISOTROPY (LV_IRIDESCENCE + (HAS_IRIDESCENCE_TEXTURES != 0 ? 1u : 0u))
-#define LV_B_STRIDE (LV_ANISOTROPY + (HAS_ANISOTROPY != 0 ? 1u : 0u))
+#define LV_DIFFUSE_TRANSMISSION (LV_ANISOTROPY + (HAS_ANISOTROPY != 0 ? 1u : 0u))
+#define LV_B_STRIDE (LV_DIFFUSE_TRANSMISSION + (HAS_DIFFUSE_TRANSMISSION_TEXTURES != 0 ? 1u : 0u))
 struct LightVertex {
     vec3 p;
     vec3 thr;
@@ -124,6 +128,12 @@ void lv_store(uint slot, LightVertex v) {
 #if HAS_ANISOTROPY
     lv_scratch_b[LV_B_STRIDE * slot + LV_ANISOTROPY] = v.tint.anisotropy;
 #endif
+#if HAS_DIFFUSE_TRANSMISSION_TEXTURES
+    lv_scratch_b[LV_B_STRIDE * slot + LV_DIFFUSE_TRANSMISSION] = v.tint.diffuse_transmission;
+#endif
+#if HAS_CLEARCOAT_NORMAL_MAPS
+    lv_scratch_b[LV_B_STRIDE * slot + LV_COAT_NORMAL] = vec4(v.tint.coat_normal, 0.0);
+#endif
 }
 #endif
 
@@ -167,6 +177,12 @@ LightVertex lv_load(uint slot) {
 #endif
 #if HAS_ANISOTROPY
     v.tint.anisotropy = lv_b_at(LV_B_STRIDE * slot + LV_ANISOTROPY);
+#endif
+#if HAS_DIFFUSE_TRANSMISSION_TEXTURES
+    v.tint.diffuse_transmission = lv_b_at(LV_B_STRIDE * slot + LV_DIFFUSE_TRANSMISSION);
+#endif
+#if HAS_CLEARCOAT_NORMAL_MAPS
+    v.tint.coat_normal = lv_b_at(LV_B_STRIDE * slot + LV_COAT_NORMAL).xyz;
 #endif
     uint info = floatBitsToUint(b1.w);
     v.material = info & 0xffffffu;

@@ -93,7 +93,7 @@ GpuSphere sphere_at(uint i) {
     return s;
 }
 // GpuMaterial's vec4s, in field order.
-#define MATERIAL_TEXELS 19u
+#define MATERIAL_TEXELS 22u
 GpuMaterial material_at(uint i) {
     GpuMaterial m;
     uint k = MATERIAL_TEXELS * i;
@@ -116,6 +116,9 @@ GpuMaterial material_at(uint i) {
     m.iridescence = texel_vec4(materials, k + 16u);
     m.iridescence_maps = texel_vec4(materials, k + 17u);
     m.anisotropy = texel_vec4(materials, k + 18u);
+    m.diffuse_transmission = texel_vec4(materials, k + 19u);
+    m.diffuse_transmission_maps = texel_vec4(materials, k + 20u);
+    m.coat_normal = texel_vec4(materials, k + 21u);
     return m;
 }
 vec4 material_surface(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 5u); }
@@ -126,6 +129,8 @@ vec4 material_layers(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i 
 vec4 material_sheen_maps(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 15u); }
 vec4 material_iridescence_maps(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 17u); }
 vec4 material_anisotropy(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 18u); }
+vec4 material_diffuse_transmission_maps(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 20u); }
+vec4 material_coat_normal(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 21u); }
 GpuLight light_at(uint i) {
     GpuLight l;
     l.a = texel_vec4(lights, 5u * i);
@@ -155,6 +160,8 @@ vec4 material_layers(uint i) { return material_data[i].layers; }
 vec4 material_sheen_maps(uint i) { return material_data[i].sheen_maps; }
 vec4 material_iridescence_maps(uint i) { return material_data[i].iridescence_maps; }
 vec4 material_anisotropy(uint i) { return material_data[i].anisotropy; }
+vec4 material_diffuse_transmission_maps(uint i) { return material_data[i].diffuse_transmission_maps; }
+vec4 material_coat_normal(uint i) { return material_data[i].coat_normal; }
 GpuLight light_at(uint i) { return light_data[i]; }
 #endif
 
@@ -327,6 +334,9 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
 #else
         uint record = BVH_NO_INSTANCE;
 #endif
+#if HAS_CLEARCOAT_NORMAL_MAPS
+        vec3 coat_n = vec3(0.0);  // none: the coat shades with the base's normal
+#endif
 #if HAS_SHADING_NORMALS
         uint first_normal = tri.first_vertex;
         if (first_normal != 0xffffffffu) {
@@ -347,6 +357,12 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
             vec3 n = (1.0 - h.u - h.v) * n0 + h.u * n1 + h.v * n2;
             float len = length(n);
             vec3 ns = len > 0.0 ? n / len : s.ng;
+#if HAS_CLEARCOAT_NORMAL_MAPS
+            // The coat's own normal map bends the interpolated normal (the base's does too).
+            vec4 cn = material_coat_normal(s.material);
+            coat_n = normal_mapped_by(floatBitsToUint(cn.x), cn.y, h.prim, record, h.u, h.v, ns);
+            coat_n = floatBitsToUint(cn.x) == NO_TEXTURE ? vec3(0.0) : (dot(coat_n, s.ng) < 0.0 ? -coat_n : coat_n);
+#endif
 #if HAS_NORMAL_MAPS
             ns = normal_mapped(h.prim, record, s.material, h.u, h.v, ns);
 #endif
@@ -357,6 +373,9 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
         s.tint = surface_tint(h.prim, s.material, h.u, h.v);
 #if HAS_ANISOTROPY
         s.tint.anisotropy = anisotropy_at(h.prim, record, s.material, h.u, h.v, s.ns);
+#endif
+#if HAS_CLEARCOAT_NORMAL_MAPS
+        s.tint.coat_normal = coat_n;
 #endif
 #if HAS_AREA_LIGHTS
         s.light = tri.light;

@@ -162,9 +162,16 @@ struct Tint {
                            // y: the film thickness between minimum and maximum (its thickness texture's G)
     vec4 anisotropy;       // xyz: the GGX lobe's anisotropy direction (world, unit), w: its
                            // strength, 0: isotropic (anisotropy_at)
+    vec4 diffuse_transmission;  // rgb: multiplies diffuseTransmissionColorFactor
+                                // (diffuseTransmissionColorTexture's RGB), a:
+                                // diffuseTransmissionFactor (diffuseTransmissionTexture's A)
+    vec3 coat_normal;      // the clear coat's shading normal (its normal map), on the side
+                           // of the winding's normal; 0: the base's (glsl/lobes/clearcoat.glsl)
 };
 
-Tint no_tint() { return Tint(vec3(1.0), 1.0, 1.0, 1.0, 1.0, 1.0, vec4(1.0), vec4(1.0), vec2(1.0), vec4(0.0)); }
+Tint no_tint() {
+    return Tint(vec3(1.0), 1.0, 1.0, 1.0, 1.0, 1.0, vec4(1.0), vec4(1.0), vec2(1.0), vec4(0.0), vec4(1.0), vec3(0.0));
+}
 
 // The tint (rgb) and alpha (times the material's alpha factor) of triangle `tri` with
 // material `material` at barycentric weights (u, v): (1, 1, 1, factor) where it has no
@@ -257,6 +264,23 @@ Tint surface_tint(uint tri, uint material, float u, float v) {
         }
     }
 #endif
+#if HAS_DIFFUSE_TRANSMISSION_TEXTURES
+    // KHR_materials_diffuse_transmission: factor x diffuseTransmissionTexture's A (linear),
+    // colour factor x diffuseTransmissionColorTexture's RGB (sRGB).
+    vec4 dt_maps = material_diffuse_transmission_maps(material);
+    GpuVertexAttributes d0, d1, d2;
+    vec2 duv;
+    if (triangle_attributes(tri, d0, d1, d2)) {
+        uint dref = floatBitsToUint(dt_maps.x);
+        if (dref != NO_TEXTURE && texture_uv(dref, d0, d1, d2, 1.0 - u - v, u, v, duv)) {
+            t.diffuse_transmission.a = texture_sample(dref, duv).a;
+        }
+        dref = floatBitsToUint(dt_maps.y);
+        if (dref != NO_TEXTURE && texture_uv(dref, d0, d1, d2, 1.0 - u - v, u, v, duv)) {
+            t.diffuse_transmission.rgb = texture_sample(dref, duv).rgb;
+        }
+    }
+#endif
 #if HAS_TRANSMISSION_TEXTURES || HAS_SPECULAR_TEXTURES
     // KHR_materials_transmission: factor x transmissionTexture's R (linear);
     // KHR_materials_specular: colour factor x specularColorTexture's RGB (sRGB), factor x
@@ -303,7 +327,7 @@ vec3 emission_tint(uint tri, float u, float v) {
 }
 #endif
 
-#if HAS_NORMAL_MAPS || HAS_ANISOTROPY
+#if HAS_NORMAL_MAPS || HAS_ANISOTROPY || HAS_CLEARCOAT_NORMAL_MAPS
 // The tangent frame of triangle `tri` (with per-vertex attributes a0, a1, a2, read here)
 // at (u, v) about the unit normal `n`: the interpolated tangent T made orthogonal to n and
 // B = w cross(n, T) (w: the tangent's bitangent sign); false where the triangle has no
@@ -376,19 +400,14 @@ vec4 anisotropy_at(uint tri, uint record, uint material, float u, float v, vec3 
 }
 #endif
 
-#if HAS_NORMAL_MAPS
+#if HAS_NORMAL_MAPS || HAS_CLEARCOAT_NORMAL_MAPS
 // The unit shading normal `n` of triangle `tri` (with per-vertex attributes) at (u, v),
-// bent by its material's normal map (glTF 2.0 section 3.9.3, normalTexture): the
-// texel's RGB as (x, y, z) * 2 - 1, x and y times the map's scale, in the frame of the
-// interpolated tangent T (made orthogonal to n), B = w cross(n, T) (w: the tangent's
-// bitangent sign) and n. Unchanged where the material has no normal map or the triangle
-// no texture coordinates for it or no tangent. `record`: the instance record of a shared
-// mesh's triangle (glsl/bvh.glsl), whose object-to-world rows map each vertex's tangent
-// to world space as the importer does for flattened meshes (direction normalised, the
-// bitangent sign flipped by a mirroring transform); BVH_NO_INSTANCE for world space.
-vec3 normal_mapped(uint tri, uint record, uint material, float u, float v, vec3 n) {
-    vec4 maps = material_maps(material);
-    uint ref = floatBitsToUint(maps.x);
+// bent by the normal map `ref` (NO_TEXTURE: none) of scale `scale` (glTF 2.0 section
+// 3.9.3, normalTexture; the clear coat's clearcoatNormalTexture the same way): the
+// texel's RGB as (x, y, z) * 2 - 1, x and y times the scale, in the tangent frame
+// (tangent_frame) and n. Unchanged where there is no map or the triangle has no texture
+// coordinates for it or no tangent.
+vec3 normal_mapped_by(uint ref, float scale, uint tri, uint record, float u, float v, vec3 n) {
     if (ref == NO_TEXTURE) return n;
     GpuVertexAttributes a0, a1, a2;
     vec3 tg, b;
@@ -396,10 +415,18 @@ vec3 normal_mapped(uint tri, uint record, uint material, float u, float v, vec3 
     if (!tangent_frame(tri, record, u, v, n, a0, a1, a2, tg, b) || !texture_uv(ref, a0, a1, a2, 1.0 - u - v, u, v, uv))
         return n;
     vec3 m = texture_sample(ref, uv).xyz * 2.0 - 1.0;
-    m.xy *= maps.y;
+    m.xy *= scale;
     vec3 bent = m.x * tg + m.y * b + m.z * n;
     float bl = length(bent);
     return bl > 0.0 ? bent / bl : n;
+}
+#endif
+
+#if HAS_NORMAL_MAPS
+// `n` bent by its material's normal map (normal_mapped_by).
+vec3 normal_mapped(uint tri, uint record, uint material, float u, float v, vec3 n) {
+    vec4 maps = material_maps(material);
+    return normal_mapped_by(floatBitsToUint(maps.x), maps.y, tri, record, u, v, n);
 }
 #endif
 

@@ -47,6 +47,11 @@ struct GpuMaterial {
                          // minimum and maximum in nm (glsl/lobes/iridescence.glsl)
     vec4 iridescence_maps;  // x, y: iridescence and thickness textures or NO_TEXTURE (bits), z, w reserved
     vec4 anisotropy;     // x, y: cos, sin of the rotation, z: strength (0: none), w: texture or NO_TEXTURE (bits)
+    vec4 diffuse_transmission;       // rgb: diffuseTransmissionColorFactor, w: diffuseTransmissionFactor (0: none;
+                                     // glsl/lobes/diffuse_transmission.glsl)
+    vec4 diffuse_transmission_maps;  // x, y: its factor's and colour's textures or NO_TEXTURE (bits),
+                                     // z: the metallic factor, w reserved
+    vec4 coat_normal;    // x: the clear coat's normal map or NO_TEXTURE (bits), y: its scale, z, w reserved
 };
 
 struct GpuTextureRef {

@@ -90,7 +90,10 @@ fn rust_and_glsl_layouts_match() {
             sheen_maps,
             iridescence,
             iridescence_maps,
-            anisotropy
+            anisotropy,
+            diffuse_transmission,
+            diffuse_transmission_maps,
+            coat_normal
         }),
         rust_layout!(GpuTextureRef { image, row0, row1 }),
         rust_layout!(GpuVertexAttributes { uv, color, tangent }),

@@ -2042,8 +2042,9 @@ fn singular_placements_and_mismatched_instancing_attributes() {
     assert!(e.contains("node 9 EXT_mesh_gpu_instancing") && e.contains("different counts"), "{e}");
 }
 
-/// KHR_materials_clearcoat: its factors reach the material (clamped to [0, 1]), its
-/// normal texture is warned of, a texture index out of range is an error, and the extension is no longer an unsupported one.
+/// KHR_materials_clearcoat: its factors reach the material (clamped to [0, 1]), so do its
+/// normal texture and that texture's scale (default 1) without a warning, a texture index
+/// out of range is an error, and the extension is no longer an unsupported one.
 #[test]
 fn clearcoat_factors_are_read() {
     let mut d = Doc::triangle();
@@ -2053,13 +2054,20 @@ fn clearcoat_factors_are_read() {
     d.json["materials"] = json!([
         {"name": "a", "extensions": coat(0.7, 0.25)},
         {"name": "b", "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 2.0, "clearcoatNormalTexture": {"index": 0}}}},
+        {"name": "c", "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 1.0, "clearcoatNormalTexture": {"index": 0, "scale": 0.5}}}},
     ]);
+    d.json["images"] = json!([{"name": "checker", "uri": scene::encode_data_uri(&png_2x2())}]);
+    d.json["textures"] = json!([{"source": 0}]);
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
     let s = d.load().unwrap();
     assert_eq!((s.materials[0].clearcoat, s.materials[0].clearcoat_roughness), (0.7, 0.25));
     assert_eq!((s.materials[1].clearcoat, s.materials[1].clearcoat_roughness), (1.0, 0.0));
     let w = &s.report.warnings;
-    assert!(w.iter().any(|x| x.contains("KHR_materials_clearcoat.clearcoatNormalTexture")), "{w:?}");
+    assert!(!w.iter().any(|x| x.contains("clearcoatNormalTexture")), "{w:?}");
+    assert!(s.materials[0].clearcoat_normal_texture.is_none());
+    let (b, c) = (&s.materials[1], &s.materials[2]);
+    assert!(b.clearcoat_normal_texture.is_some() && b.clearcoat_normal_scale == 1.0);
+    assert!(c.clearcoat_normal_texture.is_some() && c.clearcoat_normal_scale == 0.5);
     assert!(!w.iter().any(|x| x.contains("extension KHR_materials_clearcoat is not supported")), "{w:?}");
     // A clearcoatTexture naming no texture is an error that names it.
     d.json["materials"][1]["extensions"]["KHR_materials_clearcoat"]["clearcoatTexture"] = json!({"index": 7});
@@ -2199,6 +2207,54 @@ fn anisotropy_is_read() {
     let s = d.load().unwrap();
     let w = &s.report.warnings;
     assert!(w.iter().any(|x| x.contains("transmitted and refracted light stays isotropic")), "{w:?}");
+}
+
+/// KHR_materials_diffuse_transmission: its factors reach an opaque material (clamped to
+/// [0, 1]; defaults 0 and white) with the metallic factor, and so do its textures, without
+/// a warning; a transmitting surface is two-sided though doubleSided is false; beside
+/// KHR_materials_transmission it is ignored with a warning.
+#[test]
+fn diffuse_transmission_factors_are_read() {
+    let ext = "KHR_materials_diffuse_transmission";
+    let mut d = Doc::triangle();
+    d.json["extensionsUsed"] = json!([ext]);
+    d.json["materials"] = json!([
+        {"name": "a", "pbrMetallicRoughness": {"metallicFactor": 0.25},
+         "extensions": {ext: {"diffuseTransmissionFactor": 1.5, "diffuseTransmissionColorFactor": [0.5, 2.0, -1.0]}}},
+        {"name": "b", "extensions": {ext: {}}},
+        {"name": "c", "extensions": {ext: {"diffuseTransmissionFactor": 0.5},
+         "KHR_materials_transmission": {"transmissionFactor": 1.0}}, "pbrMetallicRoughness": {"metallicFactor": 0.0}},
+    ]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let s = d.load().unwrap();
+    let a = s.materials[0].diffuse_transmission.as_deref().unwrap();
+    assert_eq!((a.factor, a.color, a.metallic), (1.0, Vec3::new(0.5, 1.0, 0.0), 0.25));
+    assert!(s.materials[0].has_diffuse_transmission() && !s.materials[0].one_sided);
+    let b = s.materials[1].diffuse_transmission.as_deref().unwrap();
+    assert_eq!((b.factor, b.color), (0.0, Vec3::ONE));
+    assert!(!s.materials[1].has_diffuse_transmission() && s.materials[1].one_sided);
+    assert!(s.materials[2].diffuse_transmission.is_none() && !s.materials[2].has_diffuse_transmission());
+    let w = &s.report.warnings;
+    assert_eq!(w.iter().filter(|x| x.contains(ext)).count(), 1, "{w:?}");
+    assert!(
+        w.iter().any(|x| x.contains(ext) && x.contains("KHR_materials_transmission") && x.contains("'c'")),
+        "{w:?}"
+    );
+    // A colour that is not three numbers is an error that names it.
+    d.json["materials"][1]["extensions"][ext]["diffuseTransmissionColorFactor"] = json!([1.0, 1.0]);
+    let e = format!("{:#}", d.load().unwrap_err());
+    assert!(e.contains(ext) && e.contains("diffuseTransmissionColorFactor"), "{e}");
+    // Its textures reach the material; one naming no texture is an error that names it.
+    let mut d = Doc::textured();
+    d.json["materials"][0]["extensions"] = json!({ext: {"diffuseTransmissionFactor": 1.0,
+        "diffuseTransmissionTexture": {"index": 0}, "diffuseTransmissionColorTexture": {"index": 0}}});
+    let s = d.load().unwrap();
+    let t = s.materials[0].diffuse_transmission.as_deref().unwrap();
+    assert!(t.texture.is_some() && t.color_texture.is_some());
+    assert!(!s.report.warnings.iter().any(|x| x.contains("iffuse")), "{:?}", s.report.warnings);
+    d.json["materials"][0]["extensions"][ext]["diffuseTransmissionColorTexture"] = json!({"index": 7});
+    let e = format!("{:#}", d.load().unwrap_err());
+    assert!(e.contains("diffuseTransmissionColorTexture"), "{e}");
 }
 
 /// KHR_materials_transmission's transmissionTexture and KHR_materials_specular's

@@ -9,8 +9,17 @@
 // f(wi, wo)). Since f_coat alone reflects at most what it receives and the base too, the
 // blend never adds energy (tests/render_clearcoat.rs). The coat faces the outside of a
 // dielectric (the side of its outward normal) and both sides of an opaque surface; on a
-// dielectric seen from inside c is 0. The coat uses the Bsdf's shading normal (the base's,
-// normal-mapped where the base has a normal map); emission is not dimmed by it.
+// dielectric seen from inside c is 0 (light diffusely transmitted through an opaque
+// surface meets the coat of the side it is seen from: glsl/lobes/diffuse_transmission.glsl).
+// Emission is not dimmed by it.
+//
+// The coat's shading normal m is its own where it has a normal map (clearcoatNormalTexture,
+// HAS_CLEARCOAT_NORMAL_MAPS: Tint.coat_normal, carried by light vertices), else the
+// base's n. c(v) and f_coat are taken about m; since the estimators multiply f by the
+// base's cosine (bsdf_cos: |n.wi| on camera subpaths, |n.wo| |ng.wi| / |ng.wo| on light
+// subpaths, Veach 1997, 5.3), the coat's term is multiplied by |m.wi| / |n.wi| (camera) or
+// |m.wo| / |n.wo| (light), so that each subpath transports f_coat |m.w|, the coat's own
+// shading-normal BSDF and its adjoint.
 //
 // Sampling: the coat with probability p(d) = c(d) / (c(d) + (1 - c(d)) A), the base with
 // 1 - p(d), where d is the fixed direction and A a direction-free luminance albedo of the
@@ -34,8 +43,9 @@
 float coat_blend(Bsdf b, vec3 d) {
     // bsdf_init turns an opaque material's normals to wo's side and leaves a dielectric's
     // outward: in both cases the coat faces the side of b.ng.
-    if (dot(b.ng, d) <= 0.0) return 0.0;
-    return b.coat_weight * schlick(COAT_F0, min(abs(dot(b.n, d)), 1.0));
+    // A surface that transmits diffusely is opaque and coated on both sides: d's own.
+    if (dot(b.ng, d) <= 0.0 && !transmits_diffusely(b)) return 0.0;
+    return b.coat_weight * schlick(COAT_F0, min(abs(dot(b.coat_n, d)), 1.0));
 }
 
 // The probability of sampling the coat at a vertex whose fixed direction is d.
@@ -48,6 +58,12 @@ float coat_prob(Bsdf b, vec3 d) {
 // Adds the coat to the base's Bsdf `b` (bsdf_init): its weight, the coat's sampling
 // probability at wo, and the continuation probability and delta flag of the blend.
 void clearcoat_init(inout Bsdf b, GpuMaterial m) {
+    b.coat_n = b.n;
+#if HAS_CLEARCOAT_NORMAL_MAPS
+    // Tint.coat_normal lies on the winding normal's side: turned as bsdf_init turned b.n.
+    vec3 cn = b.tint.coat_normal;
+    if (cn != vec3(0.0)) b.coat_n = dot(cn, b.ng) < 0.0 ? -cn : cn;
+#endif
     b.coat_weight = m.coat.x;
     b.coat_alpha = m.coat.y;
 #if HAS_CLEARCOAT_TEXTURES
@@ -80,12 +96,18 @@ vec3 clearcoat_eval(Bsdf b, vec3 wi, vec3 f_base, inout float pdf_fwd, inout flo
     vec3 f = f_base * (1.0 - c);
     pdf_fwd *= 1.0 - p_o;
     pdf_rev *= 1.0 - p_i;
-    float cos_o = dot(b.n, b.wo);
-    float cos_i = dot(b.n, wi);
+    float cos_o = dot(b.coat_n, b.wo);
+    float cos_i = dot(b.coat_n, wi);
     // A reflection on the coat's side: both directions on it, geometrically too.
     if (c > 0.0 && cos_o >= EPS_COSINE && cos_i >= EPS_COSINE && dot(b.ng, b.wo) > 0.0 && dot(b.ng, wi) > 0.0) {
         float pf, pr;
-        f += c * ggx_eval(b.n, b.wo, wi, cos_o, cos_i, vec3(1.0), b.coat_alpha, pf, pr);
+        float r = 1.0;
+#if HAS_CLEARCOAT_NORMAL_MAPS
+        // The coat's cosine in place of the base's (the header).
+        float base_cos = abs(dot(b.n, b.from_light ? b.wo : wi));
+        r = base_cos >= EPS_COSINE ? (b.from_light ? cos_o : cos_i) / base_cos : 0.0;
+#endif
+        f += (c * r) * ggx_eval(b.coat_n, b.wo, wi, cos_o, cos_i, vec3(1.0), b.coat_alpha, pf, pr);
         pdf_fwd += p_o * pf;
         pdf_rev += p_i * pr;
     }
@@ -98,12 +120,12 @@ BsdfSample clearcoat_sample(Bsdf b, vec2 u) {
     BsdfSample s = no_sample();
     // Visible normals need wo above the coat (ggx_sample_h); clearcoat_eval gives the coat
     // no pdf otherwise either.
-    if (dot(b.n, b.wo) < EPS_COSINE) return s;
-    vec3 h = ggx_sample_h(b.n, b.wo, b.coat_alpha, u);
+    if (dot(b.coat_n, b.wo) < EPS_COSINE) return s;
+    vec3 h = ggx_sample_h(b.coat_n, b.wo, b.coat_alpha, u);
     float oh = dot(b.wo, h);
     if (oh <= 0.0) return s;
     s.wi = 2.0 * oh * h - b.wo;
-    if (dot(b.n, s.wi) < EPS_COSINE) return s;
+    if (dot(b.coat_n, s.wi) < EPS_COSINE) return s;
     return valued_sample(b, s);
 }
 

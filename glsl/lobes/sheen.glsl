@@ -49,9 +49,11 @@ float sheen_albedo(float c, float r) {
     return mix(lo, hi, fy);
 }
 
-// E seen from unit direction d, 0 where the sheen does not face d.
+// E seen from unit direction d, 0 where the sheen does not face d (on a surface that
+// transmits diffusely it faces both sides, glsl/lobes/diffuse_transmission.glsl).
 float sheen_albedo_at(Bsdf b, vec3 d) {
-    if (dot(b.ng, d) <= 0.0) return 0.0;
+    // A surface that transmits diffusely has the sheen on both sides: d's own.
+    if (dot(b.ng, d) <= 0.0 && !transmits_diffusely(b)) return 0.0;
     return sheen_albedo(abs(dot(b.n, d)), b.sheen_roughness);
 }
 

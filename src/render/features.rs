@@ -47,6 +47,10 @@ pub struct FeatureSet {
     /// triangle texture coordinates: surfaces and light vertices carry the point's coat
     /// factor and roughness multipliers (glsl/textures.glsl, `surface_tint`).
     pub clearcoat_textures: bool,
+    /// Some material with a clear coat has a clearcoatNormalTexture and some triangle
+    /// tangents: surfaces and light vertices carry the coat's own shading normal
+    /// (glsl/lobes/clearcoat.glsl, `Tint.coat_normal`).
+    pub clearcoat_normal_maps: bool,
     /// Some material has a sheen (`Material::has_sheen`, glsl/lobes/sheen.glsl).
     pub sheen: bool,
     /// Some material with a sheen has a sheen-colour or sheen-roughness texture and some
@@ -64,6 +68,13 @@ pub struct FeatureSet {
     /// triangle has tangents: surfaces and light vertices carry the point's anisotropy
     /// direction and strength (glsl/lobes/anisotropy.glsl).
     pub anisotropy: bool,
+    /// Some material transmits diffusely (`Material::has_diffuse_transmission`,
+    /// glsl/lobes/diffuse_transmission.glsl).
+    pub diffuse_transmission: bool,
+    /// Some material that transmits diffusely has a diffuse-transmission or
+    /// diffuse-transmission-colour texture and some triangle texture coordinates: surfaces
+    /// and light vertices carry the point's multipliers (glsl/textures.glsl, `surface_tint`).
+    pub diffuse_transmission_textures: bool,
     /// Light kinds.
     pub area_lights: bool,
     pub point_lights: bool,
@@ -136,6 +147,7 @@ impl FeatureSet {
         let vertex_attributes = scene.triangles.iter().any(|t| t.attributes.is_some());
         let tangents = scene.triangles.iter().any(|t| t.attributes.as_ref().is_some_and(|a| a.tangent.is_some()));
         let normal_maps = tangents && any_mat(&|m| m.normal_texture.is_some());
+        let clearcoat_normal_maps = tangents && any_mat(&|m| m.clearcoat > 0.0 && m.clearcoat_normal_texture.is_some());
         let emissive_textures = vertex_attributes && any_mat(&|m| m.emissive_texture.is_some() && nonzero(m.emission));
         let metallic_roughness_textures = vertex_attributes && any_mat(&|m| m.metallic_roughness_texture.is_some());
         let clearcoat_textures = vertex_attributes
@@ -149,6 +161,13 @@ impl FeatureSet {
                 m.has_iridescence() && (m.iridescence_texture.is_some() || m.iridescence_thickness_texture.is_some())
             });
         let anisotropy = tangents && any_mat(&|m| m.has_anisotropy());
+        let diffuse_transmission_textures = vertex_attributes
+            && any_mat(&|m| {
+                m.has_diffuse_transmission()
+                    && m.diffuse_transmission
+                        .as_deref()
+                        .is_some_and(|d| d.texture.is_some() || d.color_texture.is_some())
+            });
         let transmission_textured = |m: &crate::scene::Material| {
             m.is_dielectric() && m.layer_textures.as_deref().is_some_and(|l| l.transmission.is_some())
         };
@@ -191,11 +210,14 @@ impl FeatureSet {
             volume: g || any_mat(&|m| nonzero(m.medium_attenuation())),
             clearcoat: g || any_mat(&|m| m.clearcoat > 0.0),
             clearcoat_textures: g || clearcoat_textures,
+            clearcoat_normal_maps: g || clearcoat_normal_maps,
             sheen: g || any_mat(&|m| m.has_sheen()),
             sheen_textures: g || sheen_textures,
             iridescence: g || any_mat(&|m| m.has_iridescence()),
             iridescence_textures: g || iridescence_textures,
             anisotropy: g || anisotropy,
+            diffuse_transmission: g || any_mat(&|m| m.has_diffuse_transmission()),
+            diffuse_transmission_textures: g || diffuse_transmission_textures,
             area_lights: g || any_light(&|l| matches!(l, Light::Area { .. })),
             point_lights: g || any_light(&|l| matches!(l, Light::Point { .. })),
             spot_lights: g || any_light(&|l| matches!(l, Light::Spot { .. })),
@@ -204,18 +226,20 @@ impl FeatureSet {
             environment_map: g || any_light(&|l| matches!(l, Light::Environment(_))),
             spheres: g || !scene.spheres.is_empty(),
             instances: g || !scene.instances.is_empty(),
-            shading_normals: g || scene_has_shading_normals || normal_maps,
+            shading_normals: g || scene_has_shading_normals || normal_maps || clearcoat_normal_maps,
             scene_has_shading_normals,
             vertex_attributes: g || vertex_attributes,
             textures: g
                 || (vertex_attributes && any_mat(&|m| m.base_color_texture.is_some()))
                 || normal_maps
+                || clearcoat_normal_maps
                 || emissive_textures
                 || metallic_roughness_textures
                 || clearcoat_textures
                 || sheen_textures
                 || iridescence_textures
                 || (anisotropy && any_mat(&|m| m.has_anisotropy() && m.anisotropy_texture.is_some()))
+                || diffuse_transmission_textures
                 || transmission_textures
                 || specular_textures,
             alpha_mask: g || any_mat(&|m| m.alpha_mode != crate::scene::AlphaMode::Opaque),
@@ -249,11 +273,14 @@ impl FeatureSet {
             ("HAS_VOLUME", self.volume),
             ("HAS_CLEARCOAT", self.clearcoat),
             ("HAS_CLEARCOAT_TEXTURES", self.clearcoat_textures),
+            ("HAS_CLEARCOAT_NORMAL_MAPS", self.clearcoat_normal_maps),
             ("HAS_SHEEN", self.sheen),
             ("HAS_SHEEN_TEXTURES", self.sheen_textures),
             ("HAS_IRIDESCENCE", self.iridescence),
             ("HAS_IRIDESCENCE_TEXTURES", self.iridescence_textures),
             ("HAS_ANISOTROPY", self.anisotropy),
+            ("HAS_DIFFUSE_TRANSMISSION", self.diffuse_transmission),
+            ("HAS_DIFFUSE_TRANSMISSION_TEXTURES", self.diffuse_transmission_textures),
             ("HAS_AREA_LIGHTS", self.area_lights),
             ("HAS_POINT_LIGHTS", self.point_lights),
             ("HAS_SPOT_LIGHTS", self.spot_lights),
@@ -312,6 +339,7 @@ impl fmt::Display for FeatureSet {
             ("sheen", self.sheen),
             ("iridescence", self.iridescence),
             ("anisotropic GGX", self.anisotropy),
+            ("diffuse transmission", self.diffuse_transmission),
         ];
         writeln!(f, "  materials: {}", list(&mats))?;
         let lights = [
@@ -343,8 +371,10 @@ impl fmt::Display for FeatureSet {
             ("emissive textures", self.emissive_textures),
             ("metallic-roughness textures", self.metallic_roughness_textures),
             ("clear-coat textures", self.clearcoat_textures),
+            ("clear-coat normal maps", self.clearcoat_normal_maps),
             ("sheen textures", self.sheen_textures),
             ("iridescence textures", self.iridescence_textures),
+            ("diffuse-transmission textures", self.diffuse_transmission_textures),
             ("transmission textures", self.transmission_textures),
             ("specular textures", self.specular_textures),
         ];

@@ -102,6 +102,19 @@ pub struct GpuMaterial {
     /// x, y: cos and sin of anisotropyRotation; z: anisotropyStrength (0: isotropic, also
     /// where the kernels lack HAS_ANISOTROPY); w: anisotropyTexture or NO_TEXTURE (bits).
     pub anisotropy: [f32; 4],
+    /// The diffuse transmission (`Material::diffuse_transmission`,
+    /// glsl/lobes/diffuse_transmission.glsl): rgb: diffuseTransmissionColorFactor, w:
+    /// diffuseTransmissionFactor (0: none, also where the kernels lack
+    /// HAS_DIFFUSE_TRANSMISSION).
+    pub diffuse_transmission: [f32; 4],
+    /// Indices in `texture_refs` (bits, or `NO_TEXTURE`) of x: diffuseTransmissionTexture,
+    /// y: diffuseTransmissionColorTexture; z: the material's metallic factor (its metal
+    /// part transmits nothing); w: reserved.
+    pub diffuse_transmission_maps: [f32; 4],
+    /// The clear coat's normal map (glsl/lobes/clearcoat.glsl): x: its index in
+    /// `texture_refs` (bits, or `NO_TEXTURE`: the coat shades with the base's normal), y:
+    /// its scale; z, w: reserved.
+    pub coat_normal: [f32; 4],
 }
 
 /// A texture as a material uses it (`scene::TextureRef`): where its image's texels are,

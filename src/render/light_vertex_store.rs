@@ -36,8 +36,9 @@ pub const LIGHT_VERTEX_A_BYTES: u64 = 32;
 /// (wo, dVM) and (normal, material and length), with shading normals or
 /// metallic-roughness textures a vec4 holding the shading normal and the point's metallic,
 /// with vertex attributes one holding the tint and its roughness, with clear-coat,
-/// transmission, specular, sheen and iridescence textures one each holding the point's
-/// multipliers, with anisotropy one holding the point's anisotropy direction and strength
+/// transmission, specular, sheen, iridescence and diffuse-transmission textures one each
+/// holding the point's multipliers, with clear-coat normal maps one holding the coat's
+/// normal, with anisotropy one holding the point's anisotropy direction and strength
 /// (glsl/light_vertex_store.glsl, LV_B_STRIDE).
 pub fn light_vertex_b_bytes(features: &FeatureSet) -> u64 {
     let normal_slot = features.shading_normals || features.metallic_roughness_textures;
@@ -45,9 +46,11 @@ pub fn light_vertex_b_bytes(features: &FeatureSet) -> u64 {
         normal_slot,
         features.vertex_attributes,
         features.clearcoat_textures,
+        features.clearcoat_normal_maps,
         features.sheen_textures,
         features.iridescence_textures,
         features.anisotropy,
+        features.diffuse_transmission_textures,
         features.transmission_textures,
         features.specular_textures,
     ];

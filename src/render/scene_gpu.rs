@@ -68,11 +68,15 @@ impl ScenePlan {
                     + m.metallic_roughness_texture.is_some() as u64
                     + m.clearcoat_texture.is_some() as u64
                     + m.clearcoat_roughness_texture.is_some() as u64
+                    + m.clearcoat_normal_texture.is_some() as u64
                     + m.sheen_color_texture.is_some() as u64
                     + m.sheen_roughness_texture.is_some() as u64
                     + m.iridescence_texture.is_some() as u64
                     + m.iridescence_thickness_texture.is_some() as u64
                     + m.anisotropy_texture.is_some() as u64
+                    + m.diffuse_transmission
+                        .as_ref()
+                        .map_or(0, |d| d.texture.is_some() as u64 + d.color_texture.is_some() as u64)
                     + m.layer_textures.as_ref().map_or(0, |l| {
                         l.transmission.is_some() as u64
                             + l.specular.is_some() as u64
@@ -180,11 +184,12 @@ fn vertex_attributes(a: Option<&VertexAttributes>, k: usize) -> GpuVertexAttribu
 /// material's base-colour texture, normal map, emissive texture and metallic-roughness
 /// texture, clearcoat and clearcoat-roughness textures, transmission, specular and
 /// specular-colour textures, sheen-colour and sheen-roughness textures, iridescence and
-/// iridescence-thickness textures, the anisotropy texture, in material order), per
-/// material the indices of its fourteen (or `NO_TEXTURE`),
+/// iridescence-thickness textures, the anisotropy texture, diffuse-transmission and
+/// diffuse-transmission-colour textures, the clear coat's normal map, in material order),
+/// per material the indices of its seventeen (or `NO_TEXTURE`),
 /// and the texels of the scene's images (RGBA8 packed little-endian, R lowest; four to a
 /// 16-byte element).
-type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 14]>, Vec<[u32; 4]>);
+type GpuTextures = (Vec<GpuTextureRef>, Vec<[u32; 17]>, Vec<[u32; 4]>);
 
 fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     let mut first = Vec::with_capacity(scene.images.len());
@@ -206,8 +211,9 @@ fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     let mut refs = Vec::new();
     let mut indices = Vec::with_capacity(scene.materials.len());
     for (i, m) in scene.materials.iter().enumerate() {
-        let mut index = [NO_TEXTURE; 14];
+        let mut index = [NO_TEXTURE; 17];
         let layers = m.layer_textures.as_deref();
+        let dt = m.diffuse_transmission.as_deref();
         // Normal maps and metallic-roughness textures hold linear values, not sRGB colours.
         let slots = [
             (m.base_color_texture.as_ref(), false),
@@ -228,6 +234,12 @@ fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
             (m.iridescence_thickness_texture.as_ref(), true),
             // KHR_materials_anisotropy: a direction and a strength, linear.
             (m.anisotropy_texture.as_ref(), true),
+            // KHR_materials_diffuse_transmission: the factor's texture (A) is linear, the
+            // colour's sRGB.
+            (dt.and_then(|d| d.texture.as_ref()), true),
+            (dt.and_then(|d| d.color_texture.as_ref()), false),
+            // KHR_materials_clearcoat's normal map: linear, as normalTexture.
+            (m.clearcoat_normal_texture.as_ref(), true),
         ];
         for (slot, (t, linear)) in slots.into_iter().enumerate() {
             let Some(t) = t else { continue };
@@ -391,7 +403,7 @@ fn gpu_triangles(scene: &Scene, features: &FeatureSet) -> GpuGeometry {
 
 /// The materials as the kernels read them, with the texture indices of each
 /// (`texture_indices`, [`gpu_textures`]) where `features` has the textures' kind.
-fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 14]]) -> Vec<GpuMaterial> {
+fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 17]]) -> Vec<GpuMaterial> {
     scene
         .materials
         .iter()
@@ -399,7 +411,7 @@ fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 
         .map(
             |(
                 m,
-                &[texture, normal_map, emissive, metallic_roughness, coat, coat_roughness, t, s, sc, sh, shr, ir, irt, an],
+                &[texture, normal_map, emissive, metallic_roughness, coat, coat_roughness, t, s, sc, sh, shr, ir, irt, an, dtt, dtc, cn],
             )| {
                 let normal_map = if features.normal_maps { normal_map } else { NO_TEXTURE };
                 let emissive = if features.emissive_textures { emissive } else { NO_TEXTURE };
@@ -454,6 +466,9 @@ fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 
                     iridescence: gpu_iridescence(m, features),
                     iridescence_maps: gpu_iridescence_maps(m, features, [ir, irt]),
                     anisotropy: gpu_anisotropy(m, features, an),
+                    diffuse_transmission: gpu_diffuse_transmission(m, features),
+                    diffuse_transmission_maps: gpu_diffuse_transmission_maps(m, features, [dtt, dtc]),
+                    coat_normal: gpu_coat_normal(m, features, cn),
                 }
             },
         )
@@ -469,6 +484,13 @@ fn gpu_coat(m: &crate::scene::Material, features: &FeatureSet, textures: [u32; 2
     let t = |i: u32| bits(if features.clearcoat_textures { i } else { NO_TEXTURE });
     let r = m.clearcoat_roughness.clamp(0.0, 1.0);
     [m.clearcoat.min(1.0), (r * r).max(MIN_GGX_ALPHA), t(textures[0]), t(textures[1])]
+}
+
+/// GpuMaterial.coat_normal of `m` with the index of its clearcoatNormalTexture: none
+/// where the kernels have no clear-coat normal maps or `m` no coat.
+fn gpu_coat_normal(m: &crate::scene::Material, features: &FeatureSet, texture: u32) -> [f32; 4] {
+    let on = features.clearcoat_normal_maps && m.clearcoat > 0.0;
+    [bits(if on { texture } else { NO_TEXTURE }), m.clearcoat_normal_scale, 0.0, 0.0]
 }
 
 /// GpuMaterial.sheen of `m` (glsl/types.glsl): zero where the kernels have no sheen.
@@ -510,6 +532,26 @@ fn gpu_anisotropy(m: &crate::scene::Material, features: &FeatureSet, texture: u3
     let (s, c) = m.anisotropy_rotation.sin_cos();
     let t = if features.textures { texture } else { NO_TEXTURE };
     [c, s, m.anisotropy_strength.min(1.0), bits(t)]
+}
+
+/// GpuMaterial.diffuse_transmission of `m` (glsl/types.glsl): zero where the kernels have
+/// no diffuse transmission.
+fn gpu_diffuse_transmission(m: &crate::scene::Material, features: &FeatureSet) -> [f32; 4] {
+    match m.diffuse_transmission.as_deref() {
+        Some(d) if features.diffuse_transmission && m.has_diffuse_transmission() => {
+            v4(d.color.clamp(Vec3::ZERO, Vec3::ONE), d.factor.clamp(0.0, 1.0))
+        }
+        _ => [0.0; 4],
+    }
+}
+
+/// GpuMaterial.diffuse_transmission_maps of `m` with the indices of its two textures
+/// (none where the kernels have no diffuse-transmission textures) and its metallic factor.
+fn gpu_diffuse_transmission_maps(m: &crate::scene::Material, features: &FeatureSet, textures: [u32; 2]) -> [f32; 4] {
+    let on = features.diffuse_transmission_textures && m.has_diffuse_transmission();
+    let t = |i: u32| bits(if on { i } else { NO_TEXTURE });
+    let metallic = m.diffuse_transmission.as_deref().map_or(0.0, |d| d.metallic.clamp(0.0, 1.0));
+    [t(textures[0]), t(textures[1]), metallic, 0.0]
 }
 
 /// Uploads the [`CHUNKED`] arrays: whole, each one buffer added to `buffers`, or with
@@ -617,7 +659,7 @@ impl SceneGpu {
         let (texture_refs, texture_indices, texels) = if features.textures {
             gpu_textures(scene)?
         } else {
-            (Vec::new(), vec![[NO_TEXTURE; 14]; scene.materials.len()], Vec::new())
+            (Vec::new(), vec![[NO_TEXTURE; 17]; scene.materials.len()], Vec::new())
         };
         let materials = gpu_materials(scene, features, &texture_indices);
         let env = match environment_map(scene) {

@@ -246,6 +246,11 @@ pub struct Material {
     /// respectively (glsl/textures.glsl, `surface_tint`).
     pub clearcoat_texture: Option<TextureRef>,
     pub clearcoat_roughness_texture: Option<TextureRef>,
+    /// clearcoatNormalTexture and its scale: the coat's own normal map (linear, read as
+    /// normalTexture is), which bends the coat's shading normal where a triangle has its
+    /// texture coordinates and tangents; the base keeps its own (glsl/lobes/clearcoat.glsl).
+    pub clearcoat_normal_texture: Option<TextureRef>,
+    pub clearcoat_normal_scale: f32,
     /// KHR_materials_sheen's sheenColorFactor (linear, each channel in [0, 1]; black: no
     /// sheen): the colour of a Charlie sheen lobe over the rest of the material,
     /// f = f_sheen + f_base (1 - max(sheenColor) E) (glsl/lobes/sheen.glsl).
@@ -283,6 +288,10 @@ pub struct Material {
     /// anisotropyTexture (linear): RG the direction in tangent space ([0, 1] to [-1, 1]),
     /// rotated by the rotation; B multiplies the strength (glsl/textures.glsl).
     pub anisotropy_texture: Option<TextureRef>,
+    /// KHR_materials_diffuse_transmission on an opaque material (None: none): the diffuse
+    /// lobe becomes mix(diffuse reflection, diffuse transmission, factor)
+    /// (glsl/lobes/diffuse_transmission.glsl).
+    pub diffuse_transmission: Option<Box<DiffuseTransmission>>,
     /// KHR_materials_transmission's transmissionTexture and KHR_materials_specular's
     /// specularTexture and specularColorTexture, with the factors the kernels recompute the
     /// lobes from where a triangle has their texture coordinates ([`LayerTextures`]).
@@ -365,6 +374,8 @@ impl Default for Material {
             clearcoat_roughness: 0.0,
             clearcoat_texture: None,
             clearcoat_roughness_texture: None,
+            clearcoat_normal_texture: None,
+            clearcoat_normal_scale: 1.0,
             sheen_color: Vec3::ZERO,
             sheen_roughness: 0.0,
             sheen_color_texture: None,
@@ -378,6 +389,7 @@ impl Default for Material {
             anisotropy_strength: 0.0,
             anisotropy_rotation: 0.0,
             anisotropy_texture: None,
+            diffuse_transmission: None,
             layer_textures: None,
         }
     }
@@ -386,6 +398,27 @@ impl Default for Material {
 /// Specular reflectance of dielectrics at normal incidence in glTF's metallic/roughness
 /// model (its fixed F0).
 pub const GLTF_DIELECTRIC_F0: f32 = 0.04;
+
+/// KHR_materials_diffuse_transmission (glsl/lobes/diffuse_transmission.glsl): the diffuse
+/// lobe of the material's dielectric part, f_d = base / pi (reflection), becomes
+/// (1 - factor) base / pi on wo's side plus factor x color / pi on the other side (a
+/// Lambertian transmission), each under the diffuse lobe's interface weight; the metal
+/// part (`metallic`) transmits nothing.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiffuseTransmission {
+    /// diffuseTransmissionFactor in [0, 1].
+    pub factor: f32,
+    /// diffuseTransmissionColorFactor (linear, each channel in [0, 1]).
+    pub color: Vec3,
+    /// The material's metallic factor: the transmitted colour is color x (1 - metallic),
+    /// with the point's metallic where a metallic-roughness texture varies it.
+    pub metallic: f32,
+    /// diffuseTransmissionTexture (its A channel multiplies the factor, linear) and
+    /// diffuseTransmissionColorTexture (its RGB multiply the colour, sRGB), where a triangle
+    /// has their texture coordinates (glsl/textures.glsl, `surface_tint`).
+    pub texture: Option<TextureRef>,
+    pub color_texture: Option<TextureRef>,
+}
 
 impl Material {
     /// The GGX alpha of a rough dielectric (`dielectric_roughness`^2, at least
@@ -440,6 +473,13 @@ impl Material {
     /// Whether the material has a thin-film iridescence (a factor above 0).
     pub fn has_iridescence(&self) -> bool {
         self.iridescence > 0.0
+    }
+
+    /// Whether the material transmits diffusely: an opaque material (the kernels give a
+    /// dielectric none) with a diffuse-transmission factor and colour above zero.
+    pub fn has_diffuse_transmission(&self) -> bool {
+        !self.is_dielectric()
+            && self.diffuse_transmission.as_deref().is_some_and(|d| d.factor > 0.0 && d.color.max_element() > 0.0)
     }
 
     pub fn has_partial_transmission(&self) -> bool {

@@ -24,6 +24,8 @@ pub const KHR_MATERIALS_SHEEN: &str = "KHR_materials_sheen";
 pub const KHR_MATERIALS_IRIDESCENCE: &str = "KHR_materials_iridescence";
 /// An anisotropic GGX lobe (src/scene/gltf_import/materials.rs).
 pub const KHR_MATERIALS_ANISOTROPY: &str = "KHR_materials_anisotropy";
+/// Lambertian transmission through an opaque material (src/scene/gltf_import/materials.rs).
+pub const KHR_MATERIALS_DIFFUSE_TRANSMISSION: &str = "KHR_materials_diffuse_transmission";
 /// Offset, rotation and scale of texture coordinates (read on `baseColorTexture`).
 pub const KHR_TEXTURE_TRANSFORM: &str = "KHR_texture_transform";
 
@@ -43,6 +45,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     KHR_MATERIALS_SHEEN,
     KHR_MATERIALS_IRIDESCENCE,
     KHR_MATERIALS_ANISOTROPY,
+    KHR_MATERIALS_DIFFUSE_TRANSMISSION,
     KHR_MESH_QUANTIZATION,
     KHR_TEXTURE_TRANSFORM,
     EXT_MESH_GPU_INSTANCING,

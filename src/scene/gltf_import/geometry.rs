@@ -148,13 +148,15 @@ impl Importer<'_> {
     }
 
     /// Warns of each texture of `material` on texture coordinates the primitive lacks
-    /// (`uvs`); returns the set of its normal map when the primitive has it.
+    /// (`uvs`); returns the set of its normal map (else of its clear coat's normal map) when
+    /// the primitive has it: MikkTSpace's tangents are generated on that set.
     fn texture_sets_present(&mut self, material: u32, uvs: &[Option<Vec<Vec2>>; 2], where_: &str) -> Option<usize> {
         // A texture on texture coordinates the primitive lacks cannot apply: the kernels
         // find that set missing (NaN) and use the factors alone, while the material's
         // other textures on the set it has still apply.
         let mat = &self.scene.materials[material as usize];
         let layers = mat.layer_textures.as_deref();
+        let dt = mat.diffuse_transmission.as_deref();
         let textures = [
             ("baseColorTexture", mat.base_color_texture.as_ref(), "the texture is not applied"),
             ("emissiveTexture", mat.emissive_texture.as_ref(), "the emissive factor alone applies"),
@@ -164,6 +166,11 @@ impl Importer<'_> {
                 "the metallic and roughness factors alone apply",
             ),
             ("clearcoatTexture", mat.clearcoat_texture.as_ref(), "the clear coat factor alone applies"),
+            (
+                "clearcoatNormalTexture",
+                mat.clearcoat_normal_texture.as_ref(),
+                "the clear coat shades with the base's normal",
+            ),
             (
                 "clearcoatRoughnessTexture",
                 mat.clearcoat_roughness_texture.as_ref(),
@@ -185,6 +192,16 @@ impl Importer<'_> {
             ),
             ("anisotropyTexture", mat.anisotropy_texture.as_ref(), "the anisotropy strength and rotation alone apply"),
             (
+                "diffuseTransmissionTexture",
+                dt.and_then(|d| d.texture.as_ref()),
+                "the diffuse transmission factor alone applies",
+            ),
+            (
+                "diffuseTransmissionColorTexture",
+                dt.and_then(|d| d.color_texture.as_ref()),
+                "the diffuse transmission colour factor alone applies",
+            ),
+            (
                 "specularColorTexture",
                 layers.and_then(|l| l.specular_color.as_ref()),
                 "the specular colour factor alone applies",
@@ -198,7 +215,9 @@ impl Importer<'_> {
         }
         // A normal map needs its texture coordinates, and tangents: the primitive's
         // TANGENT, or MikkTSpace's (glTF 2.0 section 3.7.2.1) generated after.
+        let coat_normal = mat.clearcoat_normal_texture.as_ref().filter(|_| mat.clearcoat > 0.0);
         match mat.normal_texture.as_ref().map(|t| t.tex_coord as usize) {
+            None => coat_normal.map(|t| t.tex_coord as usize).filter(|&k| uvs[k].is_some()),
             Some(k) if uvs[k].is_none() => {
                 self.warnings.warn(
                     format!("normalTexture on TEXCOORD_{k}, which the primitive does not have (the normal map is not applied)"),

@@ -6,10 +6,10 @@
 
 use super::extensions::{
     ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG, KHR_MATERIALS_ANISOTROPY, KHR_MATERIALS_CLEARCOAT,
-    KHR_MATERIALS_IRIDESCENCE, KHR_MATERIALS_SHEEN,
+    KHR_MATERIALS_DIFFUSE_TRANSMISSION, KHR_MATERIALS_IRIDESCENCE, KHR_MATERIALS_SHEEN,
 };
 use super::Importer;
-use crate::scene::{AlphaMode, LayerTextures, Material, GLTF_DIELECTRIC_F0};
+use crate::scene::{AlphaMode, DiffuseTransmission, LayerTextures, Material, GLTF_DIELECTRIC_F0};
 use anyhow::{bail, Result};
 use glam::Vec3;
 
@@ -125,12 +125,13 @@ impl Importer<'_> {
             self.set_sheen(m, &mut out, &label)?;
             self.set_iridescence(m, &mut out, &label)?;
             self.set_anisotropy(m, &mut out, &label)?;
+            self.set_diffuse_transmission(m, &mut out, metallic, &label)?;
         }
         // glTF's doubleSided false (the default) is back-face culling: the camera does not
         // see the back side of such a surface (glsl/scene.glsl, trace_camera_segment and
         // visible_to_camera; light meets both sides). A dielectric stays two-sided: its
-        // refracted rays leave through the back side.
-        out.one_sided = !m.double_sided() && out.ior < 0.0;
+        // refracted rays leave through the back side, and so does a diffuse transmission.
+        out.one_sided = !m.double_sided() && out.ior < 0.0 && !out.has_diffuse_transmission();
         // KHR_materials_volume describes the inside of a transmissive mesh; on an opaque
         // material, or one that emits (whose surface bounds no medium:
         // Material::medium_attenuation), it has nothing to apply to.
@@ -256,7 +257,7 @@ impl Importer<'_> {
 
     /// Sets the clear coat of `out` from `m`'s KHR_materials_clearcoat: clearcoatFactor and
     /// clearcoatRoughnessFactor (both default 0, clamped to [0, 1] as glTF's factors) and
-    /// their textures; clearcoatNormalTexture is warned of.
+    /// their textures, and clearcoatNormalTexture (with its `scale`, default 1).
     fn set_clearcoat(&mut self, m: &gltf::Material, out: &mut Material, label: &str) -> Result<()> {
         let Some(v) = m.extensions().and_then(|e| e.get(KHR_MATERIALS_CLEARCOAT)) else {
             return Ok(());
@@ -274,11 +275,10 @@ impl Importer<'_> {
             let slot = "KHR_materials_clearcoat.clearcoatRoughnessTexture";
             out.clearcoat_roughness_texture = self.json_texture(info, label, slot)?;
         }
-        if v.get("clearcoatNormalTexture").is_some() {
-            self.warnings.warn(
-                "textures are not supported (the coat shades with the base's normal)",
-                format!("{label} {KHR_MATERIALS_CLEARCOAT}.clearcoatNormalTexture"),
-            );
+        if let Some(info) = v.get("clearcoatNormalTexture") {
+            let slot = "KHR_materials_clearcoat.clearcoatNormalTexture";
+            out.clearcoat_normal_texture = self.json_texture(info, label, slot)?;
+            out.clearcoat_normal_scale = ext_f32(info, "scale", 1.0, &format!("{ctx}.clearcoatNormalTexture"))?;
         }
         Ok(())
     }
@@ -369,6 +369,51 @@ impl Importer<'_> {
                 &ctx,
             );
         }
+        Ok(())
+    }
+
+    /// Sets the diffuse transmission of `out` from `m`'s KHR_materials_diffuse_transmission:
+    /// diffuseTransmissionFactor (default 0: none) and diffuseTransmissionColorFactor
+    /// (default white), clamped to [0, 1] as glTF's factors, and their textures. `metallic`
+    /// is the material's metallic factor (its metal part transmits nothing). On a material
+    /// with KHR_materials_transmission it is ignored with a warning.
+    fn set_diffuse_transmission(
+        &mut self,
+        m: &gltf::Material,
+        out: &mut Material,
+        metallic: f32,
+        label: &str,
+    ) -> Result<()> {
+        let Some(v) = m.extensions().and_then(|e| e.get(KHR_MATERIALS_DIFFUSE_TRANSMISSION)) else {
+            return Ok(());
+        };
+        let ctx = format!("{label}: {KHR_MATERIALS_DIFFUSE_TRANSMISSION}");
+        if !v.is_object() {
+            bail!("{ctx} must be an object");
+        }
+        let factor = ext_f32(v, "diffuseTransmissionFactor", 0.0, &ctx)?.clamp(0.0, 1.0);
+        let color = ext_vec3(v, "diffuseTransmissionColorFactor", Vec3::ONE, &ctx)?.clamp(Vec3::ZERO, Vec3::ONE);
+        let slot = |name: &str| format!("{KHR_MATERIALS_DIFFUSE_TRANSMISSION}.{name}");
+        let mut texture = None;
+        if let Some(info) = v.get("diffuseTransmissionTexture") {
+            texture = self.json_texture(info, label, &slot("diffuseTransmissionTexture"))?;
+        }
+        let mut color_texture = None;
+        if let Some(info) = v.get("diffuseTransmissionColorTexture") {
+            color_texture = self.json_texture(info, label, &slot("diffuseTransmissionColorTexture"))?;
+        }
+        if out.is_dielectric() {
+            if factor > 0.0 {
+                self.warnings.warn(
+                    "KHR_materials_diffuse_transmission beside KHR_materials_transmission is ignored (vkvcm \
+                     transmits diffusely through opaque materials only)",
+                    label,
+                );
+            }
+            return Ok(());
+        }
+        out.diffuse_transmission =
+            Some(Box::new(DiffuseTransmission { factor, color, metallic, texture, color_texture }));
         Ok(())
     }
 
