@@ -84,7 +84,10 @@ def sphere(cx, rings=32, segs=64, r=0.45):
     for i in range(rings):
         for j in range(segs):
             a, b = i * (segs + 1) + j, (i + 1) * (segs + 1) + j
-            idx += [a, a + 1, b, b, a + 1, b + 1]
+            if i > 0:  # not at the top pole, where a and a + 1 coincide
+                idx += [a, a + 1, b]
+            if i < rings - 1:  # nor at the bottom one
+                idx += [b, a + 1, b + 1]
     return pos, nrm, uv, tan, idx
 
 
@@ -136,6 +139,11 @@ def write_scene(ext, out):
         return len(gltf["materials"]) - 1
 
     for k, (label, base, metallic, roughness, e) in enumerate(VARIANTS[ext]):
+        if e and "iridescenceThicknessMaximum" in e:
+            # Blender 5.3's importer reads the maximum thickness under this key, not the
+            # extension's iridescenceThicknessMaximum (else every film is 400 nm there);
+            # vkvcm ignores it.
+            e = dict(e, iridescenceThickness=e["iridescenceThicknessMaximum"])
         add_mesh(sphere(-1.5 + k), material(label, base, metallic, roughness, {EXTENSION[ext]: e} if e else None))
     add_mesh(quad(0.0, 4.0, False), material("floor", [0.5, 0.5, 0.5], 0.0, 0.8))
     add_mesh(quad(3.0, 1.0, True), material("lamp", [0.0, 0.0, 0.0], 0.0, 1.0, emission=8.0))
