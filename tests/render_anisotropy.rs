@@ -20,15 +20,12 @@
 
 mod common;
 
-use std::sync::Arc;
-
 use common::ggx::ggx_albedo;
-use common::{assert_matches_mitsuba, image_mean, render_checked, render_stats, with_gpu};
+use common::{assert_matches_mitsuba, image_mean, with_gpu, TestRender};
 use glam::Vec3;
-use vkvcm::gpu::Gpu;
-use vkvcm::render::{Algorithm, Budget, RenderSettings};
+use vkvcm::render::Algorithm;
 use vkvcm::scene::{Light, Scene};
-use vkvcm_tools::stats::{one_sample_test, welch_test, PixelStats};
+use vkvcm_tools::stats::one_sample_test;
 
 const ALPHA: f64 = 1e-3;
 /// scripts/anisotropy_reference.py's SIZE and CAMERA.
@@ -44,23 +41,6 @@ fn floor_scene() -> Scene {
     let (from, to) = (Vec3::new(0.0, 2.0, 2.5), Vec3::new(0.0, 0.0, 0.5));
     sc.camera = common::scenes::camera(from, to - from, Vec3::Y, 40.0);
     sc
-}
-
-fn stats(
-    gpu: &Arc<Gpu>,
-    scene: &Scene,
-    algo: Algorithm,
-    nee: bool,
-    iterations: u64,
-    seed: u32,
-    len: u32,
-) -> PixelStats {
-    let mut s = RenderSettings::new(algo, SIZE, SIZE, Budget::Iterations(iterations));
-    s.frame.seed = seed;
-    s.frame.max_path_length = len;
-    s.nee = nee;
-    s.sampler = Some(vkvcm::render::Sampler::Independent);
-    render_stats(&render_checked(gpu, scene, &s), None)
 }
 
 /// The importer made both floors anisotropic with tangents (the left from its TANGENT, the
@@ -85,13 +65,6 @@ fn anisotropic_metal_matches_mitsuba_microfacets() {
     });
 }
 
-/// The image mean (green) of `st` and its standard error (pixels independent).
-fn image_mean_se(st: &PixelStats) -> (f64, f64) {
-    let n = st.mean.len() as f64;
-    let var: f64 = st.variance.iter().map(|v| v[1]).sum::<f64>() / st.count as f64;
-    (st.mean.iter().map(|m| m[1]).sum::<f64>() / n, var.sqrt() / n)
-}
-
 /// PT with NEE against PT without, BPT and LT on the floor scene with 4 segments (the lamp's
 /// own dielectric GGX lobe adds interreflections): per pixel, and their image means (a
 /// two-sided z-test, Šidák-corrected over the three comparisons), which sees a bias of a
@@ -100,23 +73,7 @@ fn image_mean_se(st: &PixelStats) -> (f64, f64) {
 #[test]
 fn anisotropic_estimators_agree() {
     let sc = floor_scene();
-    with_gpu(|gpu| {
-        let pt = stats(gpu, &sc, Algorithm::Pt, true, 2048, 81, 4);
-        assert!(image_mean(&pt) > 0.05, "the scene rendered (almost) black");
-        for (what, other) in [
-            ("PT without NEE", stats(gpu, &sc, Algorithm::Pt, false, 2048, 82, 4)),
-            ("BPT", stats(gpu, &sc, Algorithm::Bpt, true, 1024, 83, 4)),
-            ("LT", stats(gpu, &sc, Algorithm::Lt, true, 2048, 84, 4)),
-        ] {
-            let ((a, sa), (b, sb)) = (image_mean_se(&pt), image_mean_se(&other));
-            let z = (a - b) / (sa * sa + sb * sb).sqrt();
-            eprintln!("image mean PT {a:.5} +- {sa:.5}, {what} {b:.5} +- {sb:.5}: z = {z:.2}");
-            let t = welch_test(&pt, &other, ALPHA).unwrap();
-            assert!(t.passed(), "PT vs {what}: {t}");
-            let z_max = vkvcm_tools::stats::inverse_normal_cdf(1.0 - vkvcm_tools::stats::sidak(ALPHA, 3) / 2.0);
-            assert!(z.abs() <= z_max, "PT vs {what}: image means {a} and {b} differ by z = {z} (|z| <= {z_max})");
-        }
-    });
+    with_gpu(|gpu| common::assert_estimators_agree(gpu, &sc, SIZE, SIZE, 4, 2048));
 }
 
 /// The floor under a uniform sky of radiance 1 (the lamp's emission off), 2 segments: a
@@ -141,7 +98,8 @@ fn anisotropic_furnace() {
     sc.materials[right].anisotropy_strength = 0.0;
     let a = (sc.materials[right].roughness as f64).powi(2);
     with_gpu(|gpu| {
-        let st = stats(gpu, &sc, Algorithm::Pt, true, 1024, 91, 2);
+        let st =
+            TestRender::new(Algorithm::Pt, SIZE, SIZE, 1024).seed(91).max_path_length(2).independent().stats(gpu, &sc);
         let z = vkvcm_tools::stats::inverse_normal_cdf(1.0 - vkvcm_tools::stats::sidak(ALPHA, 3 * st.mean.len()));
         let mut worst = 0.0f64;
         for (m, v) in st.mean.iter().zip(&st.variance) {
@@ -193,7 +151,8 @@ fn anisotropic_furnace() {
             m.anisotropy_strength = 0.0;
         }
         assert!(!vkvcm::render::features::FeatureSet::new(&sc, false).anisotropy);
-        let iso = stats(gpu, &sc, Algorithm::Pt, true, 1024, 91, 2);
+        let iso =
+            TestRender::new(Algorithm::Pt, SIZE, SIZE, 1024).seed(91).max_path_length(2).independent().stats(gpu, &sc);
         let same = (0..st.mean.len()).filter(|&i| masked.mean[i] != [0.0; 3]).all(|i| st.mean[i] == iso.mean[i]);
         let n = masked.mean.iter().filter(|m| **m != [0.0; 3]).count();
         assert!(n > 50 && same, "strength 0 with and without HAS_ANISOTROPY differ ({n} pixels compared)");

@@ -163,7 +163,7 @@ fn clearcoat_estimators_agree() {
     let left = coated("coated_red", Material::metallic_roughness(Vec3::new(0.8, 0.2, 0.1), 0.0, 0.6), 1.0, 0.4);
     let right = coated("coated_gold", Material::metallic_roughness(Vec3::new(0.9, 0.7, 0.3), 1.0, 0.5), 0.5, 0.3);
     let sc = glossy_floor_scene(left, right);
-    with_gpu(|gpu| common::assert_estimators_agree(gpu, &sc, W, H, 4));
+    with_gpu(|gpu| common::assert_estimators_agree(gpu, &sc, W, H, 4, 2048));
 }
 
 /// clearcoatTexture (R) and clearcoatRoughnessTexture (G) multiply the factors per point:

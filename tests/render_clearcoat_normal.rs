@@ -2,28 +2,17 @@
 //! shades with its own normal map while the base keeps its normal.
 mod common;
 
-use std::sync::Arc;
-
 use common::scenes::*;
-use common::{image_mean, render_checked, render_stats, with_gpu};
+use common::{image_mean, with_gpu, TestRender};
 use glam::{Vec3, Vec4};
-use vkvcm::gpu::Gpu;
-use vkvcm::render::{Algorithm, Budget, RenderSettings};
+use vkvcm::render::Algorithm;
 use vkvcm::scene::{Material, Scene, TextureRef};
-use vkvcm_tools::stats::{welch_test, PixelStats};
+use vkvcm_tools::stats::welch_test;
 
 /// Family-wise false-alarm rate of each image comparison (Šidák-corrected per pixel).
 const ALPHA: f64 = 1e-3;
 const W: u32 = 20;
 const H: u32 = 20;
-
-fn stats(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, nee: bool, iterations: u64, seed: u32) -> PixelStats {
-    let mut s = RenderSettings::new(algo, W, H, Budget::Iterations(iterations));
-    s.frame.seed = seed;
-    s.frame.max_path_length = 4;
-    s.nee = nee;
-    render_stats(&render_checked(gpu, scene, &s), None)
-}
 
 fn normal_map() -> TextureRef {
     TextureRef {
@@ -102,21 +91,26 @@ fn coat_normal_map_tilts_the_coat() {
         texel(Vec3::Z),
     );
     with_gpu(|gpu| {
-        let a = stats(gpu, &own, Algorithm::Pt, true, 1024, 31);
+        let a = TestRender::new(Algorithm::Pt, W, H, 1024).seed(31).max_path_length(4).stats(gpu, &own);
         for (what, algo, x, y) in [
-            ("PT", Algorithm::Pt, a.clone(), stats(gpu, &via_base, Algorithm::Pt, true, 1024, 32)),
+            (
+                "PT",
+                Algorithm::Pt,
+                a.clone(),
+                TestRender::new(Algorithm::Pt, W, H, 1024).seed(32).max_path_length(4).stats(gpu, &via_base),
+            ),
             (
                 "LT",
                 Algorithm::Lt,
-                stats(gpu, &own, Algorithm::Lt, true, 1024, 34),
-                stats(gpu, &via_base, Algorithm::Lt, true, 1024, 35),
+                TestRender::new(Algorithm::Lt, W, H, 1024).seed(34).max_path_length(4).stats(gpu, &own),
+                TestRender::new(Algorithm::Lt, W, H, 1024).seed(35).max_path_length(4).stats(gpu, &via_base),
             ),
         ] {
             eprintln!("{what} ({algo:?}): coat's own map {:.5}, the base's map {:.5}", image_mean(&x), image_mean(&y));
             let t = welch_test(&x, &y, ALPHA).unwrap();
             assert!(t.passed(), "{what}: coat normal map vs the base's: {t}");
         }
-        let c = stats(gpu, &flat, Algorithm::Pt, true, 1024, 33);
+        let c = TestRender::new(Algorithm::Pt, W, H, 1024).seed(33).max_path_length(4).stats(gpu, &flat);
         let t = welch_test(&a, &c, ALPHA).unwrap();
         eprintln!("tilted vs flat coat normal: {t}");
         assert!(!t.passed() && t.failed >= 20, "the coat's normal map does not move its highlight: {t}");
@@ -139,11 +133,14 @@ fn coat_normal_map_estimators_agree() {
         texel(tilted()),
     );
     with_gpu(|gpu| {
-        let pt = stats(gpu, &sc, Algorithm::Pt, true, 2048, 41);
+        let pt = TestRender::new(Algorithm::Pt, W, H, 2048).seed(41).max_path_length(4).stats(gpu, &sc);
         assert!(image_mean(&pt) > 0.02, "the scene rendered (almost) black");
         for (what, other) in [
-            ("PT without NEE", stats(gpu, &sc, Algorithm::Pt, false, 2048, 42)),
-            ("BPT", stats(gpu, &sc, Algorithm::Bpt, true, 1024, 43)),
+            (
+                "PT without NEE",
+                TestRender::new(Algorithm::Pt, W, H, 2048).seed(42).max_path_length(4).nee(false).stats(gpu, &sc),
+            ),
+            ("BPT", TestRender::new(Algorithm::Bpt, W, H, 1024).seed(43).max_path_length(4).stats(gpu, &sc)),
         ] {
             eprintln!("image mean PT {:.5}, {what} {:.5}", image_mean(&pt), image_mean(&other));
             let t = welch_test(&pt, &other, ALPHA).unwrap();

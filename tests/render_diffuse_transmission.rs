@@ -8,45 +8,16 @@ mod common;
 use std::sync::Arc;
 
 use common::scenes::*;
-use common::{image_mean, render_checked, render_stats, with_gpu};
+use common::{image_mean, with_gpu, TestRender};
 use glam::Vec3;
-use vkvcm::gpu::Gpu;
-use vkvcm::render::{Algorithm, Budget, RenderSettings};
+use vkvcm::render::Algorithm;
 use vkvcm::scene::{DiffuseTransmission, EnvironmentLight, EnvironmentMap, Light, Material, Scene, Triangle};
-use vkvcm_tools::stats::{one_sample_test, welch_test, PixelStats};
+use vkvcm_tools::stats::{one_sample_test, PixelStats};
 
 /// Family-wise false-alarm rate of each image comparison (Šidák-corrected per pixel).
 const ALPHA: f64 = 1e-3;
 const W: u32 = 20;
 const H: u32 = 20;
-
-fn stats(
-    gpu: &Arc<Gpu>,
-    scene: &Scene,
-    algo: Algorithm,
-    nee: bool,
-    iterations: u64,
-    seed: u32,
-    len: u32,
-) -> PixelStats {
-    let mut s = RenderSettings::new(algo, W, H, Budget::Iterations(iterations));
-    s.frame.seed = seed;
-    s.frame.max_path_length = len;
-    s.nee = nee;
-    render_stats(&render_checked(gpu, scene, &s), None)
-}
-
-/// A texture reference to image 0 on TEXCOORD_0.
-fn texture_ref() -> vkvcm::scene::TextureRef {
-    vkvcm::scene::TextureRef {
-        image: 0,
-        wrap_s: vkvcm::scene::Wrap::Repeat,
-        wrap_t: vkvcm::scene::Wrap::Repeat,
-        filter: vkvcm::scene::Filter::Nearest,
-        tex_coord: 0,
-        transform: vkvcm::scene::TextureRef::IDENTITY,
-    }
-}
 
 fn transmitting(name: &str, base: Material, factor: f32, color: Vec3, metallic: f32) -> Material {
     let dt = DiffuseTransmission { factor, color, metallic, texture: None, color_texture: None };
@@ -109,8 +80,8 @@ fn sheet_scene(map: EnvironmentMap, left: Material, right: Material, texel: Opti
 /// `m` with both its diffuse-transmission textures (image 0).
 fn textured(mut m: Material) -> Material {
     let dt = m.diffuse_transmission.as_mut().unwrap();
-    dt.texture = Some(texture_ref());
-    dt.color_texture = Some(texture_ref());
+    dt.texture = Some(nearest_texture(0));
+    dt.color_texture = Some(nearest_texture(0));
     m
 }
 
@@ -270,11 +241,11 @@ fn diffuse_transmission_matches_analytic_and_furnace() {
         for (what, algo, seed, expected) in
             [("PT", Algorithm::Pt, 11u32, &expected), ("LT", Algorithm::Lt, 12, &sheets)]
         {
-            let st = stats(gpu, &sc, algo, true, 512, seed, 2);
+            let st = TestRender::new(algo, W, H, 512).seed(seed).max_path_length(2).stats(gpu, &sc);
             eprintln!("sheets lit from behind, {what}: image mean {:.5}", image_mean(&st));
             test_against(&st, expected, &format!("{what} vs the analytic transmission"));
         }
-        let st = stats(gpu, &furnace, Algorithm::Pt, true, 512, 13, 2);
+        let st = TestRender::new(Algorithm::Pt, W, H, 512).seed(13).max_path_length(2).stats(gpu, &furnace);
         let lambert_one = |k: usize, _: f64| if k == 0 { Vec3::ONE } else { Vec3::ZERO };
         let mut ones = expected_image(&furnace, &lambert_one);
         // The glTF sheet's pixels: their sum, its variance, their number (channel R).
@@ -342,8 +313,8 @@ fn diffuse_transmission_estimators_agree() {
     // light vertices must carry the point's multipliers.
     let dt = right.diffuse_transmission.as_mut().unwrap();
     dt.factor = 1.0;
-    dt.texture = Some(texture_ref());
-    dt.color_texture = Some(texture_ref());
+    dt.texture = Some(nearest_texture(0));
+    dt.color_texture = Some(nearest_texture(0));
     sc.images =
         vec![vkvcm::scene::TextureImage { name: "dt".into(), width: 1, height: 1, texels: vec![[230, 120, 60, 128]] }];
     let first = sc.materials.len() as u32;
@@ -367,28 +338,7 @@ fn diffuse_transmission_estimators_agree() {
     }
     sc.triangles.extend(sheets);
     tilt_shading_normals(&mut sc, 20.0, 7);
-    with_gpu(|gpu| {
-        let pt = stats(gpu, &sc, Algorithm::Pt, true, 4096, 71, 5);
-        assert!(image_mean(&pt) > 0.02, "the scene rendered (almost) black");
-        for (what, other) in [
-            ("PT without NEE", stats(gpu, &sc, Algorithm::Pt, false, 4096, 72, 5)),
-            ("BPT", stats(gpu, &sc, Algorithm::Bpt, true, 2048, 73, 5)),
-            ("LT", stats(gpu, &sc, Algorithm::Lt, true, 4096, 74, 5)),
-        ] {
-            eprintln!("image mean PT {:.5}, {what} {:.5}", image_mean(&pt), image_mean(&other));
-            let t = welch_test(&pt, &other, ALPHA).unwrap();
-            assert!(t.passed(), "PT vs {what}: {t}");
-            // The images' sums (the per-pixel test misses a bias of a few per cent in
-            // many pixels): independent pixels, |z| < 4.5 (two-sided 7e-6 per channel).
-            for c in 0..3 {
-                let sum = |s: &PixelStats| s.mean.iter().map(|m| m[c]).sum::<f64>();
-                let var = |s: &PixelStats| s.variance.iter().map(|v| v[c] / s.count as f64).sum::<f64>();
-                let z = (sum(&pt) - sum(&other)) / (var(&pt) + var(&other)).sqrt();
-                eprintln!("PT vs {what}: channel {c}, pooled z {z:.2}");
-                assert!(z.abs() < 4.5, "PT vs {what}: channel {c}: the images' sums differ (z = {z:.2})");
-            }
-        }
-    });
+    with_gpu(|gpu| common::assert_estimators_agree(gpu, &sc, W, H, 5, 4096));
 }
 
 /// The feature set compiles the diffuse transmission in only where a used opaque

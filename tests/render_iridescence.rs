@@ -16,36 +16,17 @@
 
 mod common;
 
-use std::sync::Arc;
-
 use common::iridescence::*;
 use common::scenes::*;
-use common::{image_mean, render_checked, render_stats, with_gpu};
+use common::{image_mean, with_gpu, TestRender};
 use glam::Vec3;
-use vkvcm::gpu::Gpu;
-use vkvcm::render::{Algorithm, Budget, RenderSettings};
+use vkvcm::render::Algorithm;
 use vkvcm::scene::{Light, Material, Scene, Sphere};
-use vkvcm_tools::stats::{one_sample_test, welch_test, PixelStats};
+use vkvcm_tools::stats::{one_sample_test, PixelStats};
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 20;
 const H: u32 = 20;
-
-fn stats(
-    gpu: &Arc<Gpu>,
-    scene: &Scene,
-    algo: Algorithm,
-    nee: bool,
-    iterations: u64,
-    seed: u32,
-    len: u32,
-) -> PixelStats {
-    let mut s = RenderSettings::new(algo, W, H, Budget::Iterations(iterations));
-    s.frame.seed = seed;
-    s.frame.max_path_length = len;
-    s.nee = nee;
-    render_stats(&render_checked(gpu, scene, &s), None)
-}
 
 /// `base` with a film of factor `factor`, IOR `ior`, `thickness` nm thick (no texture:
 /// the maximum).
@@ -248,7 +229,7 @@ fn iridescence_matches_formula_and_furnace() {
     }
     with_gpu(|gpu| {
         for (k, (sc, albedo)) in scenes.iter().zip(albedos).enumerate() {
-            let st = stats(gpu, sc, Algorithm::Pt, true, 1024, 91 + k as u32, 2);
+            let st = TestRender::new(Algorithm::Pt, W, H, 1024).seed(91 + k as u32).max_path_length(2).stats(gpu, sc);
             let name = &sc.materials[0].name;
             eprintln!("{name}: image mean {:.5}", image_mean(&st));
             test_against(&st, &expected_image(sc, &[albedo]), &format!("{name} vs the formula"));
@@ -277,17 +258,6 @@ fn iridescence_matches_formula_and_furnace() {
     });
 }
 
-/// |z| bound of the image-mean tests: two-sided false-failure probability 1e-5.
-const MEAN_Z: f64 = 4.42;
-
-/// The mean over `st`'s pixels and channels and its standard error, for estimators whose
-/// pixels are independent (PT).
-fn mean_and_error(st: &PixelStats) -> (f64, f64) {
-    let n = (3 * st.mean.len()) as f64;
-    let var: f64 = st.variance.iter().flatten().sum::<f64>() / st.count as f64;
-    (image_mean(st), var.sqrt() / n)
-}
-
 /// glossy_floor_scene with iridescent floors: left a red glTF dielectric (roughness 0.5)
 /// under a film of IOR 1.9, 380 nm (the diffuse coupling and the GGX lobe), right a gold
 /// metal of roughness 0.35 under a film of IOR 1.4, 600 nm, factor 0.8. PT with NEE
@@ -307,52 +277,7 @@ fn iridescence_estimators_agree() {
         Film { factor: 0.8, ior: 1.4, thickness: 600.0 },
     );
     let sc = glossy_floor_scene(left, right);
-    with_gpu(|gpu| {
-        let pt = stats(gpu, &sc, Algorithm::Pt, true, 1024, 71, 4);
-        assert!(image_mean(&pt) > 0.02, "the scene rendered (almost) black");
-        let no_nee = stats(gpu, &sc, Algorithm::Pt, false, 1024, 72, 4);
-        // The image means too: PT's pixels are independent, so the mean's variance is the
-        // sum of theirs; a bias of a few percent over the floors hides in per-pixel noise.
-        let (ma, sa) = mean_and_error(&pt);
-        let (mb, sb) = mean_and_error(&no_nee);
-        let z = (ma - mb) / (sa * sa + sb * sb).sqrt();
-        assert!(z.abs() < MEAN_Z, "image means: PT {ma:.5} +- {sa:.5}, PT without NEE {mb:.5} +- {sb:.5}, z = {z:.2}");
-        for (what, other) in [
-            ("PT without NEE", no_nee),
-            ("BPT", stats(gpu, &sc, Algorithm::Bpt, true, 512, 73, 4)),
-            ("LT", stats(gpu, &sc, Algorithm::Lt, true, 1024, 74, 4)),
-        ] {
-            eprintln!("image mean PT {:.5}, {what} {:.5}", image_mean(&pt), image_mean(&other));
-            let t = welch_test(&pt, &other, ALPHA).unwrap();
-            assert!(t.passed(), "PT vs {what}: {t}");
-        }
-    });
-}
-
-fn texture_ref() -> vkvcm::scene::TextureRef {
-    vkvcm::scene::TextureRef {
-        image: 0,
-        wrap_s: vkvcm::scene::Wrap::Repeat,
-        wrap_t: vkvcm::scene::Wrap::Repeat,
-        filter: vkvcm::scene::Filter::Nearest,
-        tex_coord: 0,
-        transform: vkvcm::scene::TextureRef::IDENTITY,
-    }
-}
-
-/// glossy_floor_scene with `left` and `right` on floors whose triangles carry texture
-/// coordinates, under one texel everywhere (a 1 x 1 image, RGBA `texel`).
-fn textured_floor_scene(left: Material, right: Material, texel: [u8; 4]) -> Scene {
-    let mut sc = glossy_floor_scene(left, right);
-    for t in sc.triangles.iter_mut().filter(|t| t.material < 2) {
-        t.attributes = Some(Box::new(vkvcm::scene::VertexAttributes {
-            uv: [Some([glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y]), None],
-            color: None,
-            tangent: None,
-        }));
-    }
-    sc.images = vec![vkvcm::scene::TextureImage { name: "film".into(), width: 1, height: 1, texels: vec![texel] }];
-    sc
+    with_gpu(|gpu| common::assert_estimators_agree(gpu, &sc, W, H, 4, 1024));
 }
 
 /// The feature set compiles the film in only where a used material has one, and its
@@ -367,7 +292,7 @@ fn iridescence_features() {
     let m = filmed("f", Material::metallic_roughness(Vec3::ONE, 1.0, 0.5), film);
     let f = FeatureSet::new(&glossy_floor_scene(m.clone(), Material::default()), false);
     assert!(f.iridescence && !f.iridescence_textures && f.to_string().contains("iridescence"), "{f}");
-    let textured = Material { iridescence_thickness_texture: Some(texture_ref()), ..m };
+    let textured = Material { iridescence_thickness_texture: Some(nearest_texture(0)), ..m };
     let f = FeatureSet::new(&textured_floor_scene(textured.clone(), Material::default(), [0; 4]), false);
     assert!(f.iridescence && f.iridescence_textures, "{f}");
     let f = FeatureSet::new(&glossy_floor_scene(textured, Material::default()), false);
@@ -383,8 +308,8 @@ fn iridescence_features() {
 fn iridescence_textures_scale_the_factors() {
     let texel = [153u8, 64, 0, 255];
     let textured = |name: &str, base: Material, ior: f64| Material {
-        iridescence_texture: Some(texture_ref()),
-        iridescence_thickness_texture: Some(texture_ref()),
+        iridescence_texture: Some(nearest_texture(0)),
+        iridescence_thickness_texture: Some(nearest_texture(0)),
         iridescence_thickness_min: 200.0,
         ..filmed(name, base, Film { factor: 1.0, ior, thickness: 800.0 })
     };
@@ -397,23 +322,5 @@ fn iridescence_textures_scale_the_factors() {
         filmed("gold", gold, Film { factor: k, ior: 1.4, thickness: t }),
         texel,
     );
-    with_gpu(|gpu| {
-        let pt_tex = stats(gpu, &tex, Algorithm::Pt, true, 1024, 81, 4);
-        let pt_plain = stats(gpu, &plain, Algorithm::Pt, true, 1024, 82, 4);
-        let bpt_tex = stats(gpu, &tex, Algorithm::Bpt, true, 512, 83, 4);
-        eprintln!(
-            "factor {k:.3}, thickness {t:.1} nm: image mean PT textured {:.5}, PT factors {:.5}, BPT textured {:.5}",
-            image_mean(&pt_tex),
-            image_mean(&pt_plain),
-            image_mean(&bpt_tex)
-        );
-        let (ma, sa) = mean_and_error(&pt_tex);
-        let (mb, sb) = mean_and_error(&pt_plain);
-        let z = (ma - mb) / (sa * sa + sb * sb).sqrt();
-        assert!(z.abs() < MEAN_Z, "image means: PT textured {ma:.5} +- {sa:.5}, PT factors {mb:.5} +- {sb:.5}");
-        let t = welch_test(&pt_tex, &pt_plain, ALPHA).unwrap();
-        assert!(t.passed(), "textured film vs its factors: {t}");
-        let t = welch_test(&pt_plain, &bpt_tex, ALPHA).unwrap();
-        assert!(t.passed(), "PT vs BPT on the textured film: {t}");
-    });
+    with_gpu(|gpu| common::assert_textures_match_factors(gpu, &tex, &plain, W, H));
 }

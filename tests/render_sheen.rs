@@ -214,7 +214,7 @@ fn sheen_estimators_agree() {
         0.25,
     );
     let sc = glossy_floor_scene(left, right);
-    with_gpu(|gpu| common::assert_estimators_agree(gpu, &sc, W, H, 4));
+    with_gpu(|gpu| common::assert_estimators_agree(gpu, &sc, W, H, 4, 2048));
 }
 
 /// The feature set compiles the sheen in only where a used material has one.
