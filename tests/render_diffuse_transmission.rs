@@ -12,7 +12,7 @@ use common::{image_mean, with_gpu, TestRender};
 use glam::Vec3;
 use vkvcm::render::Algorithm;
 use vkvcm::scene::{DiffuseTransmission, EnvironmentLight, EnvironmentMap, Light, Material, Scene, Triangle};
-use vkvcm_tools::stats::{one_sample_test, PixelStats};
+use vkvcm_tools::stats::PixelStats;
 
 /// Family-wise false-alarm rate of each image comparison (Šidák-corrected per pixel).
 const ALPHA: f64 = 1e-3;
@@ -140,19 +140,7 @@ fn expected_image(sc: &Scene, value: &dyn Fn(usize, f64) -> Vec3) -> Vec<Option<
 }
 
 fn test_against(st: &PixelStats, values: &[Option<[f32; 3]>], what: &str) {
-    let mut expected = vkvcm::image::Image::filled(W, H, [0.0; 3]);
-    let mut masked = st.clone();
-    for (i, v) in values.iter().enumerate() {
-        match v {
-            Some(v) => expected.data[i] = *v,
-            None => {
-                masked.mean[i] = [0.0; 3];
-                masked.variance[i] = [0.0; 3];
-            }
-        }
-    }
-    let t = one_sample_test(&masked, &expected, ALPHA).unwrap();
-    assert!(t.passed(), "{what}: {t}");
+    common::assert_matches_values(st, values, what);
     // The pixels' sum against the expected sum: the per-pixel test misses a bias of a few
     // per cent that every pixel shares. Pixels are independent estimates, so the sum's
     // variance is the sum of theirs; |z| < 4.5 (two-sided 7e-6 per channel).

@@ -22,7 +22,6 @@ use common::{image_mean, with_gpu, TestRender};
 use glam::Vec3;
 use vkvcm::render::Algorithm;
 use vkvcm::scene::{Light, Material, Scene, Sphere};
-use vkvcm_tools::stats::{one_sample_test, PixelStats};
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 20;
@@ -100,23 +99,6 @@ fn expected_image(sc: &Scene, albedo: &[&dyn Fn(f64) -> [f64; 3]]) -> Vec<Option
         Some(e.map(|v| v as f32))
     };
     (0..W * H).map(pixel).collect()
-}
-
-/// A one-sample per-pixel z-test of `st` against `values` (None: left out).
-fn test_against(st: &PixelStats, values: &[Option<[f32; 3]>], what: &str) {
-    let mut expected = vkvcm::image::Image::filled(W, H, [0.0; 3]);
-    let mut masked = st.clone();
-    for (i, v) in values.iter().enumerate() {
-        match v {
-            Some(v) => expected.data[i] = *v,
-            None => {
-                masked.mean[i] = [0.0; 3];
-                masked.variance[i] = [0.0; 3];
-            }
-        }
-    }
-    let t = one_sample_test(&masked, &expected, ALPHA).unwrap();
-    assert!(t.passed(), "{what}: {t}");
 }
 
 /// `f(mu)` at 65 cosines, interpolated linearly (the quadratures are slow per pixel).
@@ -232,7 +214,7 @@ fn iridescence_matches_formula_and_furnace() {
             let st = TestRender::new(Algorithm::Pt, W, H, 1024).seed(91 + k as u32).max_path_length(2).stats(gpu, sc);
             let name = &sc.materials[0].name;
             eprintln!("{name}: image mean {:.5}", image_mean(&st));
-            test_against(&st, &expected_image(sc, &[albedo]), &format!("{name} vs the formula"));
+            common::assert_matches_values(&st, &expected_image(sc, &[albedo]), &format!("{name} vs the formula"));
             if k < 2 {
                 continue;
             }

@@ -22,7 +22,6 @@ use common::{image_mean, with_gpu, TestRender};
 use glam::Vec3;
 use vkvcm::render::Algorithm;
 use vkvcm::scene::{Light, Material, Scene, Sphere};
-use vkvcm_tools::stats::{one_sample_test, PixelStats};
 
 const ALPHA: f64 = 1e-3;
 const W: u32 = 20;
@@ -76,23 +75,6 @@ fn expected_image(sc: &Scene, colour: Vec3, albedo: &dyn Fn(f64) -> f64) -> Vec<
         }
     };
     (0..W * H).map(pixel).collect()
-}
-
-/// A one-sample per-pixel z-test of `st` against `values` (None: left out).
-fn test_against(st: &PixelStats, values: &[Option<[f32; 3]>], what: &str) {
-    let mut expected = vkvcm::image::Image::filled(W, H, [0.0; 3]);
-    let mut masked = st.clone();
-    for (i, v) in values.iter().enumerate() {
-        match v {
-            Some(v) => expected.data[i] = *v,
-            None => {
-                masked.mean[i] = [0.0; 3];
-                masked.variance[i] = [0.0; 3];
-            }
-        }
-    }
-    let t = one_sample_test(&masked, &expected, ALPHA).unwrap();
-    assert!(t.passed(), "{what}: {t}");
 }
 
 /// E(mu) at 65 cosines (from `f`), interpolated linearly.
@@ -160,7 +142,11 @@ fn sheen_matches_quadrature_and_furnace() {
             let e = tabulated(&|mu| sheen_albedo_capped(&table, mu, r, 128));
             let st = TestRender::new(Algorithm::Pt, W, H, 1024).seed(seed).max_path_length(2).stats(gpu, &sc);
             eprintln!("sheen alone, roughness {roughness}: image mean {:.5}", image_mean(&st));
-            test_against(&st, &expected_image(&sc, colour, &e), &format!("sheen alone r {roughness} vs quadrature"));
+            common::assert_matches_values(
+                &st,
+                &expected_image(&sc, colour, &e),
+                &format!("sheen alone r {roughness} vs quadrature"),
+            );
 
             let white = Material { diffuse: Vec3::ONE, ..Default::default() };
             let sc = sphere_scene(sheened("white sheen", white, Vec3::ONE, roughness));
@@ -179,7 +165,11 @@ fn sheen_matches_quadrature_and_furnace() {
             };
             let furnace = tabulated(&scaled);
             let st = TestRender::new(Algorithm::Pt, W, H, 1024).seed(seed + 10).max_path_length(2).stats(gpu, &sc);
-            test_against(&st, &expected_image(&sc, Vec3::ONE, &furnace), &format!("sheen furnace r {roughness}"));
+            common::assert_matches_values(
+                &st,
+                &expected_image(&sc, Vec3::ONE, &furnace),
+                &format!("sheen furnace r {roughness}"),
+            );
             let z = vkvcm_tools::stats::inverse_normal_cdf(1.0 - vkvcm_tools::stats::sidak(ALPHA, 3 * st.mean.len()));
             let mut worst = 0.0f64;
             for (m, v) in st.mean.iter().zip(&st.variance) {

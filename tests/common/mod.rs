@@ -393,6 +393,25 @@ pub fn assert_textures_match_factors(
     }
 }
 
+/// A render's per-pixel statistics against known values (an analytic answer or a CPU
+/// quadrature): the one-sample test at 1e-3 over the pixels that have a value (`None`:
+/// left out, e.g. a pixel the object covers only in part).
+pub fn assert_matches_values(st: &vkvcm_tools::stats::PixelStats, values: &[Option<[f32; 3]>], what: &str) {
+    let mut expected = vkvcm::image::Image::filled(st.width, st.height, [0.0; 3]);
+    let mut masked = st.clone();
+    for (i, v) in values.iter().enumerate() {
+        match v {
+            Some(v) => expected.data[i] = *v,
+            None => {
+                masked.mean[i] = [0.0; 3];
+                masked.variance[i] = [0.0; 3];
+            }
+        }
+    }
+    let t = vkvcm_tools::stats::one_sample_test(&masked, &expected, 1e-3).unwrap();
+    assert!(t.passed(), "{what}: {t}");
+}
+
 /// `render::render` of `scene` with `s`, failing on rejected samples or overflowing splats.
 pub fn render_checked(
     gpu: &Arc<Gpu>,
