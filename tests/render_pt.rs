@@ -88,31 +88,13 @@ fn point_light_on_plane_matches_analytic_irradiance() {
     let scene = scene("plane", plane, vec![mat], lights, cam.clone());
     let (w, h) = (24u32, 24u32);
     // CPU expectation, with the same camera model as glsl/scene.glsl.
-    let forward = cam.forward;
-    let right = forward.cross(cam.up).normalize();
-    let up = right.cross(forward);
-    let dist = h as f32 / (2.0 * (0.5 * cam.yfov).tan());
-    let mut expected = vec![[0f32; 3]; (w * h) as usize];
-    let sub = 16;
-    for py in 0..h {
-        for px in 0..w {
-            let mut acc = 0.0f64;
-            for sy in 0..sub {
-                for sx in 0..sub {
-                    let rx = px as f32 + (sx as f32 + 0.5) / sub as f32;
-                    let ry = py as f32 + (sy as f32 + 0.5) / sub as f32;
-                    let d = (forward * dist + right * (rx - 0.5 * w as f32) + up * (0.5 * h as f32 - ry)).normalize();
-                    let t = -cam_pos.z / d.z;
-                    let x = cam_pos + t * d;
-                    let l = light_pos - x;
-                    let cos = l.z / l.length();
-                    acc += (rho / std::f32::consts::PI * intensity * cos / l.length_squared()) as f64;
-                }
-            }
-            let v = (acc / (sub * sub) as f64) as f32;
-            expected[(py * w + px) as usize] = [v; 3];
-        }
-    }
+    let expected = pixel_means(&cam, w, h, |d| {
+        let t = -cam_pos.z / d.z;
+        let x = cam_pos + t * d;
+        let l = light_pos - x;
+        let cos = l.z / l.length();
+        (rho / std::f32::consts::PI * intensity * cos / l.length_squared()) as f64
+    });
     with_gpu(|gpu| {
         let s = RenderSettings::new(Algorithm::Pt, w, h, Budget::Iterations(8));
         let runs = render_runs(gpu, &scene, &s, 4);
@@ -154,38 +136,20 @@ fn large_area_light_on_plane_matches_analytic_irradiance() {
     let scene = scene("large_light", tris, materials, lights, cam.clone());
     let (w, h) = (24u32, 24u32);
     // CPU expectation, with the same camera model as glsl/scene.glsl.
-    let forward = cam.forward;
-    let right = forward.cross(cam.up).normalize();
-    let up = right.cross(forward);
-    let dist = h as f32 / (2.0 * (0.5 * cam.yfov).tan());
-    let mut expected = vec![[0f32; 3]; (w * h) as usize];
-    let sub = 16;
-    for py in 0..h {
-        for px in 0..w {
-            let mut acc = 0.0f64;
-            for sy in 0..sub {
-                for sx in 0..sub {
-                    let rx = px as f32 + (sx as f32 + 0.5) / sub as f32;
-                    let ry = py as f32 + (sy as f32 + 0.5) / sub as f32;
-                    let d = (forward * dist + right * (rx - 0.5 * w as f32) + up * (0.5 * h as f32 - ry)).normalize();
-                    let x = (cam_pos + (-cam_pos.z / d.z) * d).as_dvec3();
-                    let u: Vec<_> = corners.iter().map(|c| (c.as_dvec3() - x).normalize()).collect();
-                    let e: f64 = (0..4)
-                        .map(|i| {
-                            let (a, b) = (u[i], u[(i + 1) % 4]);
-                            a.dot(b).clamp(-1.0, 1.0).acos() * a.cross(b).normalize().z
-                        })
-                        .sum::<f64>()
-                        .abs()
-                        * 0.5
-                        * le as f64;
-                    acc += rho as f64 / std::f64::consts::PI * e;
-                }
-            }
-            let v = (acc / (sub * sub) as f64) as f32;
-            expected[(py * w + px) as usize] = [v; 3];
-        }
-    }
+    let expected = pixel_means(&cam, w, h, |d| {
+        let x = (cam_pos + (-cam_pos.z / d.z) * d).as_dvec3();
+        let u: Vec<_> = corners.iter().map(|c| (c.as_dvec3() - x).normalize()).collect();
+        let e: f64 = (0..4)
+            .map(|i| {
+                let (a, b) = (u[i], u[(i + 1) % 4]);
+                a.dot(b).clamp(-1.0, 1.0).acos() * a.cross(b).normalize().z
+            })
+            .sum::<f64>()
+            .abs()
+            * 0.5
+            * le as f64;
+        rho as f64 / std::f64::consts::PI * e
+    });
     with_gpu(|gpu| {
         let mut s = RenderSettings::new(Algorithm::Pt, w, h, Budget::Iterations(64));
         s.frame.max_path_length = 2;
@@ -261,4 +225,30 @@ fn renders_are_deterministic() {
         let c = render::render(gpu, &scene, &s2, None, &mut |_| {}).unwrap().pixels;
         assert_ne!(bits(&a), bits(&c));
     });
+}
+
+/// Each pixel's mean of `value(d)` over a 16 x 16 grid of its camera directions d (the
+/// camera model of glsl/scene.glsl), as an RGB image's texels.
+fn pixel_means(cam: &vkvcm::scene::Camera, w: u32, h: u32, value: impl Fn(Vec3) -> f64) -> Vec<[f32; 3]> {
+    let right = cam.forward.cross(cam.up).normalize();
+    let up = right.cross(cam.forward);
+    let dist = h as f32 / (2.0 * (0.5 * cam.yfov).tan());
+    let sub = 16;
+    let mut out = vec![[0f32; 3]; (w * h) as usize];
+    for py in 0..h {
+        for px in 0..w {
+            let mut acc = 0.0f64;
+            for sy in 0..sub {
+                for sx in 0..sub {
+                    let rx = px as f32 + (sx as f32 + 0.5) / sub as f32;
+                    let ry = py as f32 + (sy as f32 + 0.5) / sub as f32;
+                    acc += value(
+                        (cam.forward * dist + right * (rx - 0.5 * w as f32) + up * (0.5 * h as f32 - ry)).normalize(),
+                    );
+                }
+            }
+            out[(py * w + px) as usize] = [(acc / (sub * sub) as f64) as f32; 3];
+        }
+    }
+    out
 }

@@ -19,10 +19,16 @@ pub fn ggx_lambda(c: f64, a: f64) -> f64 {
 /// Directional albedo of the F = 1 GGX lobe at cos(theta_o) = `mu`: the integral of
 /// f cos(theta_i) over the hemisphere, by a midpoint rule over the half vector with `nt` x
 /// `np` cells (importance-free, so it checks the normalisation of D independently of
-/// sampling): f cos_i dw_i = D G2 / (4 cos_o cos_i) cos_i 4 (wo.h) dw_h.
+/// sampling). [`ggx_albedo_with`] with F = 1.
 pub fn ggx_albedo(mu: f64, a: f64, nt: usize, np: usize) -> f64 {
+    ggx_albedo_with(mu, a, nt, np, &|_| [1.0; 3])[0]
+}
+
+/// [`ggx_albedo`] per channel of the lobe whose Fresnel term is `fr(wo.h)`:
+/// f cos_i dw_i = F D G2 / (4 cos_o cos_i) cos_i 4 (wo.h) dw_h.
+pub fn ggx_albedo_with(mu: f64, a: f64, nt: usize, np: usize, fr: &dyn Fn(f64) -> [f64; 3]) -> [f64; 3] {
     let wo = [(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu];
-    let mut sum = 0.0;
+    let mut sum = [0.0; 3];
     for i in 0..nt {
         // theta_h in [0, pi/2); substitute theta_h = atan(a tan(s)) to resolve narrow lobes.
         let s = (i as f64 + 0.5) / nt as f64 * FRAC_PI_2;
@@ -38,8 +44,11 @@ pub fn ggx_albedo(mu: f64, a: f64, nt: usize, np: usize) -> f64 {
                 continue;
             }
             let g2 = 1.0 / (1.0 + ggx_lambda(mu, a) + ggx_lambda(ci, a));
-            let f_cos_jac = ggx_d(ct, a) * g2 / (4.0 * mu * ci) * ci * 4.0 * oh;
-            sum += f_cos_jac * st * dth_ds * (FRAC_PI_2 / nt as f64) * (2.0 * PI / np as f64);
+            let w = ggx_d(ct, a) * g2 / mu * oh * st * dth_ds * (FRAC_PI_2 / nt as f64) * (2.0 * PI / np as f64);
+            let f = fr(oh);
+            for k in 0..3 {
+                sum[k] += w * f[k];
+            }
         }
     }
     sum

@@ -4,9 +4,7 @@
 //! tests/render_iridescence.rs.
 #![allow(dead_code)]
 
-use std::f64::consts::{FRAC_PI_2, PI};
-
-use super::ggx::{ggx_d, ggx_lambda};
+use std::f64::consts::PI;
 
 /// A thin film: iridescenceFactor, the film's IOR and thickness (nm).
 #[derive(Clone, Copy, Debug)]
@@ -89,36 +87,6 @@ pub fn fresnel(film: &Film, f0: [f64; 3], c: f64) -> [f64; 3] {
         out[k] = s + (i[k].clamp(0.0, 1.0) - s) * film.factor;
     }
     out
-}
-
-/// Directional albedo (per channel) at cos(theta_o) = `mu` of the GGX lobe of width `a`
-/// whose Fresnel term is `fr(wo.h)`: the midpoint rule over the half vector of
-/// tests/common/ggx.rs (`ggx_albedo`) with the Fresnel term inside.
-pub fn ggx_albedo_rgb(mu: f64, a: f64, nt: usize, np: usize, fr: &dyn Fn(f64) -> [f64; 3]) -> [f64; 3] {
-    let wo = [(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu];
-    let mut sum = [0.0; 3];
-    for i in 0..nt {
-        let s = (i as f64 + 0.5) / nt as f64 * FRAC_PI_2;
-        let th = (a * s.tan()).atan();
-        let dth_ds = a / (s.cos().powi(2) + a * a * s.sin().powi(2));
-        let (st, ct) = (th.sin(), th.cos());
-        for j in 0..np {
-            let phi = (j as f64 + 0.5) / np as f64 * 2.0 * PI;
-            let h = [st * phi.cos(), st * phi.sin(), ct];
-            let oh = wo[0] * h[0] + wo[2] * h[2];
-            let ci = 2.0 * oh * h[2] - wo[2];
-            if oh <= 0.0 || ci <= 0.0 {
-                continue;
-            }
-            let g2 = 1.0 / (1.0 + ggx_lambda(mu, a) + ggx_lambda(ci, a));
-            let w = ggx_d(ct, a) * g2 / mu * oh * st * dth_ds * (FRAC_PI_2 / nt as f64) * (2.0 * PI / np as f64);
-            let f = fr(oh);
-            for k in 0..3 {
-                sum[k] += w * f[k];
-            }
-        }
-    }
-    sum
 }
 
 /// E_avg = 2 int_0^1 F(mu) mu dmu per channel by the midpoint rule in mu over `n` cells

@@ -412,6 +412,26 @@ pub fn assert_matches_values(st: &vkvcm_tools::stats::PixelStats, values: &[Opti
     assert!(t.passed(), "{what}: {t}");
 }
 
+/// A white furnace returns no more than it receives: no pixel (of those `keep` holds, all
+/// without a mask) and channel above 1 by more than its one-sided z at 1e-3 Šidák-corrected
+/// over the image's tests. Returns the brightest of them.
+pub fn assert_no_pixel_above_one(st: &vkvcm_tools::stats::PixelStats, keep: Option<&[bool]>, what: &str) -> f64 {
+    use vkvcm_tools::stats::{inverse_normal_cdf, sidak};
+    let z = inverse_normal_cdf(1.0 - sidak(1e-3, 3 * st.mean.len()));
+    let mut brightest = 0.0f64;
+    for (i, (m, v)) in st.mean.iter().zip(&st.variance).enumerate() {
+        if keep.is_some_and(|k| !k[i]) {
+            continue;
+        }
+        for c in 0..3 {
+            let se = (v[c] / st.count as f64).sqrt();
+            brightest = brightest.max(m[c]);
+            assert!(m[c] <= 1.0 + z * se + 1e-6, "{what}: a pixel returns {} +- {se} > 1", m[c]);
+        }
+    }
+    brightest
+}
+
 /// `render::render` of `scene` with `s`, failing on rejected samples or overflowing splats.
 pub fn render_checked(
     gpu: &Arc<Gpu>,

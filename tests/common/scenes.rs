@@ -240,3 +240,18 @@ pub fn nearest_texture(image: u32) -> vkvcm::scene::TextureRef {
         transform: vkvcm::scene::TextureRef::IDENTITY,
     }
 }
+
+/// The cos(view ray, normal) of the first hit of the unit sphere at the origin along the
+/// camera ray through (x, y) of a `w` x `h` frame (glsl/scene.glsl's camera model), or None.
+pub fn unit_sphere_hit_cos(cam: &Camera, w: u32, h: u32, x: f32, y: f32) -> Option<f64> {
+    let plane = 0.5 * h as f32 / (0.5 * cam.yfov).tan();
+    let right = cam.forward.cross(cam.up).normalize();
+    let up = right.cross(cam.forward);
+    let d = (cam.forward * plane + right * (x - 0.5 * w as f32) + up * (0.5 * h as f32 - y)).normalize();
+    let b = cam.position.dot(d);
+    let disc = b * b - (cam.position.length_squared() - 1.0);
+    (disc >= 0.0).then(|| {
+        let p = cam.position + d * (-b - disc.sqrt());
+        -d.dot(p.normalize()) as f64
+    })
+}
