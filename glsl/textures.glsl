@@ -196,113 +196,101 @@ vec4 surface_tint_alpha(uint tri, uint material, float u, float v) {
     return r;
 }
 
+#define HAS_TINT_TEXTURES                                                                                   \
+    (HAS_METALLIC_ROUGHNESS_TEXTURES || HAS_CLEARCOAT_TEXTURES || HAS_SHEEN_TEXTURES || HAS_IRIDESCENCE_TEXTURES || \
+     HAS_DIFFUSE_TRANSMISSION_TEXTURES || HAS_TRANSMISSION_TEXTURES || HAS_SPECULAR_TEXTURES)
+
+#if HAS_TINT_TEXTURES
+// A triangle's vertex attributes (`ok` false where it has none) at barycentric weights
+// (u, v), read once for all the textures of a point.
+struct PointAttributes {
+    GpuVertexAttributes a0, a1, a2;
+    float u, v;
+    bool ok;
+};
+
+PointAttributes point_attributes(uint tri, float u, float v) {
+    PointAttributes pa;
+    pa.u = u;
+    pa.v = v;
+    pa.ok = triangle_attributes(tri, pa.a0, pa.a1, pa.a2);
+    return pa;
+}
+
+// The texel of texture `ref` at the point; false where there is no texture
+// (NO_TEXTURE) or the triangle lacks its coordinates (the factor alone applies).
+bool point_texel(uint ref, PointAttributes pa, out vec4 texel) {
+    vec2 uv;
+    texel = vec4(1.0);
+    if (ref == NO_TEXTURE || !pa.ok || !texture_uv(ref, pa.a0, pa.a1, pa.a2, 1.0 - pa.u - pa.v, pa.u, pa.v, uv))
+        return false;
+    texel = texture_sample(ref, uv);
+    return true;
+}
+#endif
+
 // The tint of triangle `tri` with material `material` at barycentric weights (u, v):
-// its base colour's (surface_tint_alpha) and, with HAS_METALLIC_ROUGHNESS_TEXTURES, the
-// metallic-roughness texel (linear, TEXTURE_LINEAR) at the point's texture coordinates:
-// glTF 2.0 section 3.9.2, roughness = roughnessFactor x G, metallic = metallicFactor x B
-// (R is unused). Where the material has no such texture or the triangle lacks its
-// coordinates, roughness and metallic stay 1 (the factors alone).
+// its base colour's (surface_tint_alpha) and the texels of the material's other
+// textures at the point's texture coordinates (each where the material has the texture
+// and the triangle its coordinates; else the factors alone apply). Linear texels but
+// the colours' (sRGB), as glTF and its extensions say:
+// * metallicRoughnessTexture (glTF 2.0 section 3.9.2): roughness = factor x G,
+//   metallic = factor x B (R is unused);
+// * KHR_materials_clearcoat: factor x clearcoatTexture's R, roughness x
+//   clearcoatRoughnessTexture's G;
+// * KHR_materials_sheen: colour factor x sheenColorTexture's RGB, roughness x
+//   sheenRoughnessTexture's A;
+// * KHR_materials_iridescence: factor x iridescenceTexture's R, thickness
+//   mix(minimum, maximum, iridescenceThicknessTexture's G);
+// * KHR_materials_diffuse_transmission: factor x diffuseTransmissionTexture's A, colour
+//   factor x diffuseTransmissionColorTexture's RGB;
+// * KHR_materials_transmission: factor x transmissionTexture's R;
+// * KHR_materials_specular: colour factor x specularColorTexture's RGB, factor x
+//   specularTexture's A.
 Tint surface_tint(uint tri, uint material, float u, float v) {
     Tint t = no_tint();
 #if HAS_VERTEX_ATTRIBUTES
     t.rgb = surface_tint_alpha(tri, material, u, v).rgb;
 #endif
+#if HAS_TINT_TEXTURES
+    PointAttributes pa = point_attributes(tri, u, v);
+    vec4 texel;
+#endif
 #if HAS_METALLIC_ROUGHNESS_TEXTURES
-    uint ref = floatBitsToUint(material_maps(material).w);
-    GpuVertexAttributes a0, a1, a2;
-    vec2 uv;
-    if (ref != NO_TEXTURE && triangle_attributes(tri, a0, a1, a2) && texture_uv(ref, a0, a1, a2, 1.0 - u - v, u, v, uv)) {
-        vec4 texel = texture_sample(ref, uv);
+    if (point_texel(floatBitsToUint(material_maps(material).w), pa, texel)) {
         t.roughness = texel.g;
         t.metallic = texel.b;
     }
 #endif
 #if HAS_CLEARCOAT_TEXTURES
-    // KHR_materials_clearcoat: factor x clearcoatTexture's R, roughness x
-    // clearcoatRoughnessTexture's G (linear texels).
     vec4 coat = material_coat(material);
-    GpuVertexAttributes c0, c1, c2;
-    vec2 cuv;
-    if (triangle_attributes(tri, c0, c1, c2)) {
-        uint cref = floatBitsToUint(coat.z);
-        if (cref != NO_TEXTURE && texture_uv(cref, c0, c1, c2, 1.0 - u - v, u, v, cuv)) t.coat = texture_sample(cref, cuv).r;
-        cref = floatBitsToUint(coat.w);
-        if (cref != NO_TEXTURE && texture_uv(cref, c0, c1, c2, 1.0 - u - v, u, v, cuv)) {
-            t.coat_roughness = texture_sample(cref, cuv).g;
-        }
-    }
+    if (point_texel(floatBitsToUint(coat.z), pa, texel)) t.coat = texel.r;
+    if (point_texel(floatBitsToUint(coat.w), pa, texel)) t.coat_roughness = texel.g;
 #endif
 #if HAS_SHEEN_TEXTURES
-    // KHR_materials_sheen: colour factor x sheenColorTexture's RGB (sRGB), roughness x
-    // sheenRoughnessTexture's A (linear).
     vec4 sheen_maps = material_sheen_maps(material);
-    GpuVertexAttributes h0, h1, h2;
-    vec2 huv;
-    if (triangle_attributes(tri, h0, h1, h2)) {
-        uint href = floatBitsToUint(sheen_maps.x);
-        if (href != NO_TEXTURE && texture_uv(href, h0, h1, h2, 1.0 - u - v, u, v, huv)) {
-            t.sheen.rgb = texture_sample(href, huv).rgb;
-        }
-        href = floatBitsToUint(sheen_maps.y);
-        if (href != NO_TEXTURE && texture_uv(href, h0, h1, h2, 1.0 - u - v, u, v, huv)) t.sheen.a = texture_sample(href, huv).a;
-    }
+    if (point_texel(floatBitsToUint(sheen_maps.x), pa, texel)) t.sheen.rgb = texel.rgb;
+    if (point_texel(floatBitsToUint(sheen_maps.y), pa, texel)) t.sheen.a = texel.a;
 #endif
 #if HAS_IRIDESCENCE_TEXTURES
-    // KHR_materials_iridescence: factor x iridescenceTexture's R, thickness
-    // mix(minimum, maximum, iridescenceThicknessTexture's G) (linear texels).
     vec4 iridescence_maps = material_iridescence_maps(material);
-    GpuVertexAttributes i0, i1, i2;
-    vec2 iuv;
-    if (triangle_attributes(tri, i0, i1, i2)) {
-        uint iref = floatBitsToUint(iridescence_maps.x);
-        if (iref != NO_TEXTURE && texture_uv(iref, i0, i1, i2, 1.0 - u - v, u, v, iuv)) {
-            t.iridescence.x = texture_sample(iref, iuv).r;
-        }
-        iref = floatBitsToUint(iridescence_maps.y);
-        if (iref != NO_TEXTURE && texture_uv(iref, i0, i1, i2, 1.0 - u - v, u, v, iuv)) {
-            t.iridescence.y = texture_sample(iref, iuv).g;
-        }
-    }
+    if (point_texel(floatBitsToUint(iridescence_maps.x), pa, texel)) t.iridescence.x = texel.r;
+    if (point_texel(floatBitsToUint(iridescence_maps.y), pa, texel)) t.iridescence.y = texel.g;
 #endif
 #if HAS_DIFFUSE_TRANSMISSION_TEXTURES
-    // KHR_materials_diffuse_transmission: factor x diffuseTransmissionTexture's A (linear),
-    // colour factor x diffuseTransmissionColorTexture's RGB (sRGB).
     vec4 dt_maps = material_diffuse_transmission_maps(material);
-    GpuVertexAttributes d0, d1, d2;
-    vec2 duv;
-    if (triangle_attributes(tri, d0, d1, d2)) {
-        uint dref = floatBitsToUint(dt_maps.x);
-        if (dref != NO_TEXTURE && texture_uv(dref, d0, d1, d2, 1.0 - u - v, u, v, duv)) {
-            t.diffuse_transmission.a = texture_sample(dref, duv).a;
-        }
-        dref = floatBitsToUint(dt_maps.y);
-        if (dref != NO_TEXTURE && texture_uv(dref, d0, d1, d2, 1.0 - u - v, u, v, duv)) {
-            t.diffuse_transmission.rgb = texture_sample(dref, duv).rgb;
-        }
-    }
+    if (point_texel(floatBitsToUint(dt_maps.x), pa, texel)) t.diffuse_transmission.a = texel.a;
+    if (point_texel(floatBitsToUint(dt_maps.y), pa, texel)) t.diffuse_transmission.rgb = texel.rgb;
 #endif
 #if HAS_TRANSMISSION_TEXTURES || HAS_SPECULAR_TEXTURES
-    // KHR_materials_transmission: factor x transmissionTexture's R (linear);
-    // KHR_materials_specular: colour factor x specularColorTexture's RGB (sRGB), factor x
-    // specularTexture's A (linear).
     vec4 layers = material_layers(material);
-    GpuVertexAttributes l0, l1, l2;
-    vec2 luv;
-    if (triangle_attributes(tri, l0, l1, l2)) {
-        float w0 = 1.0 - u - v;
+#endif
 #if HAS_TRANSMISSION_TEXTURES
-        uint lref = floatBitsToUint(layers.x);
-        if (lref != NO_TEXTURE && texture_uv(lref, l0, l1, l2, w0, u, v, luv)) t.transmission = texture_sample(lref, luv).r;
+    if (point_texel(floatBitsToUint(layers.x), pa, texel)) t.transmission = texel.r;
 #endif
 #if HAS_SPECULAR_TEXTURES
-        uint sref = floatBitsToUint(layers.y);
-        if (sref != NO_TEXTURE && texture_uv(sref, l0, l1, l2, w0, u, v, luv)) t.specular.a = texture_sample(sref, luv).a;
-        sref = floatBitsToUint(layers.z);
-        if (sref != NO_TEXTURE && texture_uv(sref, l0, l1, l2, w0, u, v, luv)) {
-            t.specular.rgb = texture_sample(sref, luv).rgb;
-        }
-#endif
-    }
+    if (point_texel(floatBitsToUint(layers.y), pa, texel)) t.specular.a = texel.a;
+    if (point_texel(floatBitsToUint(layers.z), pa, texel)) t.specular.rgb = texel.rgb;
 #endif
     return t;
 }
