@@ -281,19 +281,25 @@ float ggx_lambda(float c, float a) {
     return 0.5 * (sqrt(1.0 + a * a * tan2) - 1.0);
 }
 
-// A half vector drawn from the GGX normals visible from `wo` (n.wo > 0), width `a`,
-// uniform `u`: density D_wo(h) = G1(wo) D(h) max(0, wo.h) / (n.wo) (the header). Dupuy &
-// Benyoub 2023: in the configuration stretched to a = 1 the visible normals are h = c +
-// wo', with c uniform on the spherical cap z >= -wo'.z of the unit sphere; unstretch.
-vec3 ggx_sample_h(vec3 n, vec3 wo, float a, vec2 u) {
-    vec3 t, b;
-    make_frame(n, t, b);
-    vec3 v = normalize(vec3(a * dot(wo, t), a * dot(wo, b), dot(wo, n)));
+// A half vector drawn from the GGX normals visible from `wo` (n.wo > 0) in the frame
+// (t, b, n), widths `ab` along t and b, uniform `u`: density D_wo(h) = G1(wo) D(h)
+// max(0, wo.h) / (n.wo) (the header). Dupuy & Benyoub 2023: in the configuration
+// stretched to width 1 the visible normals are h = c + wo', with c uniform on the
+// spherical cap z >= -wo'.z of the unit sphere; unstretch.
+vec3 ggx_sample_h_stretched(vec3 t, vec3 b, vec3 n, vec2 ab, vec3 wo, vec2 u) {
+    vec3 v = normalize(vec3(ab.x * dot(wo, t), ab.y * dot(wo, b), dot(wo, n)));
     float phi = 2.0 * PI * u.x;
     float z = (1.0 - u.y) * (1.0 + v.z) - v.z;
     float r = sqrt(clamp(1.0 - z * z, 0.0, 1.0));
     vec3 h = vec3(r * cos(phi), r * sin(phi), z) + v;
-    return normalize(a * h.x * t + a * h.y * b + max(h.z, 0.0) * n);
+    return normalize(ab.x * h.x * t + ab.y * h.y * b + max(h.z, 0.0) * n);
+}
+
+// The same for the isotropic width `a` about n.
+vec3 ggx_sample_h(vec3 n, vec3 wo, float a, vec2 u) {
+    vec3 t, b;
+    make_frame(n, t, b);
+    return ggx_sample_h_stretched(t, b, n, vec2(a), wo, u);
 }
 
 // A half vector drawn from D(h) cos(theta_h) about n for width `a` and uniform `u`:
@@ -310,6 +316,27 @@ vec3 ggx_sample_h_d(vec3 n, float a, vec2 u) {
 // Smith's G1 = 1 / (1 + Lambda) for GGX at |cos(theta)| = `c` > 0.
 float ggx_g1(float c, float a) { return 1.0 / (1.0 + ggx_lambda(c, a)); }
 
+// The half vector h of the reflection pair (wo, wi) about n; false where h, wo or wi is
+// (nearly) below its partner (n.h, wo.h, wi.h < EPS_COSINE): the lobe is 0 there.
+bool ggx_reflection_h(vec3 n, vec3 wo, vec3 wi, out vec3 h) {
+    vec3 hs = wo + wi;
+    float hl = length(hs);
+    h = vec3(0.0);
+    if (hl < 1e-7) return false;
+    h = hs / hl;
+    return dot(n, h) >= EPS_COSINE && dot(wo, h) >= EPS_COSINE && dot(wi, h) >= EPS_COSINE;
+}
+
+// The GGX lobe's f = F D G2 / (4 cos_o cos_i), G2 = 1 / (1 + Lambda(wo) + Lambda(wi)), and
+// its visible-normal pdfs G1(wo) D / (4 cos_o) (fwd) and G1(wi) D / (4 cos_i) (rev), from
+// F = `fr`, D = `d` and the Lambdas: isotropic (ggx_eval) and anisotropic alike.
+vec3 ggx_lobe(vec3 fr, float d, float lambda_o, float lambda_i, float cos_o, float cos_i, out float pdf_fwd,
+              out float pdf_rev) {
+    pdf_fwd = d / ((1.0 + lambda_o) * 4.0 * cos_o);
+    pdf_rev = d / ((1.0 + lambda_i) * 4.0 * cos_i);
+    return fr * (d / (1.0 + lambda_o + lambda_i) / (4.0 * cos_o * cos_i));
+}
+
 // The GGX lobe for unit wo, wi above the surface (cos_o, cos_i > 0): f, and the pdfs of
 // sampling wi given wo (fwd) and wo given wi (rev) by the visible normals (ggx_sample_h),
 // without the component probability.
@@ -317,20 +344,10 @@ vec3 ggx_eval(vec3 n, vec3 wo, vec3 wi, float cos_o, float cos_i, vec3 f0, float
               out float pdf_rev) {
     pdf_fwd = 0.0;
     pdf_rev = 0.0;
-    vec3 hs = wo + wi;
-    float hl = length(hs);
-    if (hl < 1e-7) return vec3(0.0);
-    vec3 h = hs / hl;
-    float ch = dot(n, h);
-    float oh = dot(wo, h);
-    float ih = dot(wi, h);
-    if (ch < EPS_COSINE || oh < EPS_COSINE || ih < EPS_COSINE) return vec3(0.0);
-    float d = ggx_d(ch, a);
-    float g2 = 1.0 / (1.0 + ggx_lambda(cos_o, a) + ggx_lambda(cos_i, a));
-    vec3 fr = schlick(f0, oh);
-    pdf_fwd = ggx_g1(cos_o, a) * d / (4.0 * cos_o);
-    pdf_rev = ggx_g1(cos_i, a) * d / (4.0 * cos_i);
-    return fr * (d * g2 / (4.0 * cos_o * cos_i));
+    vec3 h;
+    if (!ggx_reflection_h(n, wo, wi, h)) return vec3(0.0);
+    return ggx_lobe(schlick(f0, dot(wo, h)), ggx_d(dot(n, h), a), ggx_lambda(cos_o, a), ggx_lambda(cos_i, a), cos_o,
+                    cos_i, pdf_fwd, pdf_rev);
 }
 
 // The GGX lobe made anisotropic by KHR_materials_anisotropy (Tint.anisotropy).

@@ -62,36 +62,22 @@ vec3 ggx_anisotropic_eval(vec3 n, vec4 an, vec3 wo, vec3 wi, float cos_o, float 
     if (!anisotropic_frame(n, an, a, t, b, ab)) return ggx_eval(n, wo, wi, cos_o, cos_i, f0, a, pdf_fwd, pdf_rev);
     pdf_fwd = 0.0;
     pdf_rev = 0.0;
-    vec3 hs = wo + wi;
-    float hl = length(hs);
-    if (hl < 1e-7) return vec3(0.0);
-    vec3 h = hs / hl;
-    float ch = dot(n, h);
-    float oh = dot(wo, h);
-    float ih = dot(wi, h);
-    if (ch < EPS_COSINE || oh < EPS_COSINE || ih < EPS_COSINE) return vec3(0.0);
-    float d = ggx_anisotropic_d(vec3(dot(t, h), dot(b, h), ch), ab);
+    vec3 h;
+    if (!ggx_reflection_h(n, wo, wi, h)) return vec3(0.0);
+    float d = ggx_anisotropic_d(vec3(dot(t, h), dot(b, h), dot(n, h)), ab);
     float lo = ggx_anisotropic_lambda(vec3(dot(t, wo), dot(b, wo), cos_o), ab);
     float li = ggx_anisotropic_lambda(vec3(dot(t, wi), dot(b, wi), cos_i), ab);
-    vec3 fr = schlick(f0, oh);
-    pdf_fwd = d / ((1.0 + lo) * 4.0 * cos_o);
-    pdf_rev = d / ((1.0 + li) * 4.0 * cos_i);
-    return fr * (d / (1.0 + lo + li) / (4.0 * cos_o * cos_i));
+    return ggx_lobe(schlick(f0, dot(wo, h)), d, lo, li, cos_o, cos_i, pdf_fwd, pdf_rev);
 }
 
 // A half vector drawn from the normals visible from `wo` at anisotropy `an` (ggx_sample_h's
 // arguments otherwise): ggx_sample_h's spherical caps in the configuration stretched by
-// (alpha_t, alpha_b) along (t, b).
+// (alpha_t, alpha_b) along (t, b) (ggx_sample_h_stretched).
 vec3 ggx_anisotropic_sample_h(vec3 n, vec4 an, vec3 wo, float a, vec2 u) {
     vec3 t, b;
     vec2 ab;
     if (!anisotropic_frame(n, an, a, t, b, ab)) return ggx_sample_h(n, wo, a, u);
-    vec3 v = normalize(vec3(ab.x * dot(wo, t), ab.y * dot(wo, b), dot(wo, n)));
-    float phi = 2.0 * PI * u.x;
-    float z = (1.0 - u.y) * (1.0 + v.z) - v.z;
-    float r = sqrt(clamp(1.0 - z * z, 0.0, 1.0));
-    vec3 h = vec3(r * cos(phi), r * sin(phi), z) + v;
-    return normalize(ab.x * h.x * t + ab.y * h.y * b + max(h.z, 0.0) * n);
+    return ggx_sample_h_stretched(t, b, n, ab, wo, u);
 }
 #endif
 
