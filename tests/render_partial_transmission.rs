@@ -206,30 +206,15 @@ fn partial_transmission_furnace() {
             let mut sc = scene("furnace", vec![], vec![mat], vec![Light::Background { radiance: Vec3::ONE }], cam);
             sc.spheres = vec![Sphere { center: Vec3::ZERO, radius: 1.0, material: 0 }];
             let st = render_stats(&render(gpu, &sc, Algorithm::Pt, 512, 41, 24), None);
-            let z = vkvcm_tools::stats::inverse_normal_cdf(1.0 - vkvcm_tools::stats::sidak(ALPHA, 3 * st.mean.len()));
-            let (mut worst, mut least) = (0.0f64, f64::INFINITY);
-            for (m, v) in st.mean.iter().zip(&st.variance) {
-                for c in 0..3 {
-                    let se = (v[c] / st.count as f64).sqrt();
-                    worst = worst.max(m[c]);
-                    least = least.min(m[c]);
-                    assert!(
-                        m[c] <= 1.0 + z * se + 1e-6,
-                        "roughness {roughness}, transmission {transmission}, metallic {metallic}: a pixel returns {} \
-                         +- {se} > 1",
-                        m[c]
-                    );
-                }
-            }
+            let what = format!("roughness {roughness}, transmission {transmission}, metallic {metallic}");
+            let worst = common::assert_no_pixel_above_one(&st, None, &what);
+            let least = st.mean.iter().flatten().fold(f64::INFINITY, |a, &b| a.min(b));
             // The image's mean (the channels of a pixel are not independent: their sum's
             // variance is at most 3 times the sum of theirs, Cauchy-Schwarz).
             let n = 3.0 * st.mean.len() as f64;
             let mean = st.mean.iter().flatten().sum::<f64>() / n;
             let se = st.variance.iter().map(|v| 3.0 * (v[0] + v[1] + v[2]) / st.count as f64).sum::<f64>().sqrt() / n;
-            eprintln!(
-                "roughness {roughness}, transmission {transmission}, metallic {metallic}: pixels from {least:.4} to \
-                 {worst:.4}, image mean {mean:.5} +- {se:.5}"
-            );
+            eprintln!("{what}: pixels from {least:.4} to {worst:.4}, image mean {mean:.5} +- {se:.5}");
             assert!(mean <= 1.0 + 4.0 * se, "the image's mean {mean} +- {se} exceeds 1");
             assert!(mean >= floor, "the image's mean {mean} +- {se} is below {floor}: energy lost");
         }
