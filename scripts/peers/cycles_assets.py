@@ -324,9 +324,10 @@ def gen_glass(path):
     return ((0.0, 1.6, 3.2), (0.0, 0.4, 0.2), 40.0)
 
 
-def gen_emitters(path, count=2000):
-    """A closed white room lit only by `count` small emissive triangles of many colours on
-    its ceiling and walls (the sky cannot enter): light selection's case."""
+def white_room(sphere_at, box_top):
+    """A Builder holding a closed white 4 x 2.5 x 4 room (inward faces) with a metal sphere
+    of radius 0.45 centred at `sphere_at` and a white box from the floor to `box_top`: the
+    room of the `emitters` and `panel` assets, which add their lights."""
     b = Builder()
     white = b.material(pbrMetallicRoughness={"baseColorFactor": [0.7, 0.7, 0.7, 1], "metallicFactor": 0,
                                              "roughnessFactor": 0.8}, doubleSided=True)
@@ -335,9 +336,16 @@ def gen_emitters(path, count=2000):
     pos, nrm, uv, idx = box((-2, 0, -2), (2, 2.5, 2), inward=True)
     b.mesh(pos, nrm, idx, white)
     spos, snrm, sidx = sphere(0.45)
-    b.mesh(spos, snrm, sidx, metal, translation=(0.5, 0.45, -0.4))
-    bpos, bnrm, _, bidx = box((-1.2, 0, -0.8), (-0.4, 0.9, 0.0))
+    b.mesh(spos, snrm, sidx, metal, translation=sphere_at)
+    bpos, bnrm, _, bidx = box((-1.2, 0, -0.8), (-0.4, box_top, 0.0))
     b.mesh(bpos, bnrm, bidx, white)
+    return b
+
+
+def gen_emitters(path, count=2000):
+    """A closed white room lit only by `count` small emissive triangles of many colours on
+    its ceiling and walls (the sky cannot enter): light selection's case."""
+    b = white_room(sphere_at=(0.5, 0.45, -0.4), box_top=0.9)
     # Emitters: tiny triangles just inside the ceiling and the back and left walls; a
     # linear congruential generator keeps the scene the same everywhere.
     state = 12345
@@ -438,17 +446,7 @@ def gen_panel(path):
     """A closed white room lit only by one large emissive panel (two triangles, 2.4 x 2.4)
     just below its 2.5-high ceiling, over a metal sphere and a box whose top is 0.9 below
     the panel: a large nearby area light, solid-angle sampling's case."""
-    b = Builder()
-    white = b.material(pbrMetallicRoughness={"baseColorFactor": [0.7, 0.7, 0.7, 1], "metallicFactor": 0,
-                                             "roughnessFactor": 0.8}, doubleSided=True)
-    metal = b.material(pbrMetallicRoughness={"baseColorFactor": [0.9, 0.8, 0.6, 1], "metallicFactor": 1,
-                                             "roughnessFactor": 0.25}, doubleSided=True)
-    pos, nrm, uv, idx = box((-2, 0, -2), (2, 2.5, 2), inward=True)
-    b.mesh(pos, nrm, idx, white)
-    spos, snrm, sidx = sphere(0.45)
-    b.mesh(spos, snrm, sidx, metal, translation=(0.6, 0.45, -0.3))
-    bpos, bnrm, _, bidx = box((-1.2, 0, -0.8), (-0.4, 1.6, 0.0))
-    b.mesh(bpos, bnrm, bidx, white)
+    b = white_room(sphere_at=(0.6, 0.45, -0.3), box_top=1.6)
     glow = b.material(emissiveFactor=[1.0, 0.9, 0.8], pbrMetallicRoughness={"baseColorFactor": [0, 0, 0, 1],
                                                                           "metallicFactor": 0})
     y = 2.499
