@@ -119,7 +119,8 @@ struct Bsdf {
     uint material;
     float prob_diffuse, prob_phong, prob_glossy, prob_reflect, prob_refract;
     float prob_rough; // the rough dielectric (1 for its materials, else 0)
-    float cont_prob;
+    float cont_prob;        // Russian roulette's continuation probability at wo
+    bool cont_prob_varies;  // ... which depends on wo (cont_prob_from)
     float fresnel;   // reflectance F (1 for non-dielectrics; unused by the rough dielectric)
     float eta_ratio; // eta on the wo side / eta on the other side (dielectrics)
     bool valid;
@@ -402,6 +403,7 @@ Bsdf base_bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, T
     b.wo = wo;
     b.from_light = from_light;
     b.tint = tint;
+    b.cont_prob_varies = false;
 #if HAS_IRIDESCENCE
     b.interface_e_avg = vec3(0.0);
     if (m.mirror.w > 0.0 && iridescence_at(m, tint).x > 0.0) b.interface_e_avg = iridescence_average(m, tint, m.mirror.w);
@@ -530,6 +532,8 @@ Bsdf base_bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, T
 #else
     b.cont_prob = clamp(max3(albedo) + (1.0 - b.fresnel), 0.0, 1.0);
 #endif
+    // A dielectric's Fresnel term F(wo) weighs its reflection and refraction.
+    b.cont_prob_varies = ior >= 0.0;
     b.delta = b.prob_diffuse == 0.0 && b.prob_phong == 0.0 && b.prob_glossy == 0.0 && b.prob_rough == 0.0;
 #if defined(AOV) && AOV
     // Rough glass beside other lobes and transmission count as colour 1 (OIDN's glass).
@@ -985,6 +989,17 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint t
     clearcoat_init(b, point_material(material, tint));
 #endif
     return b;
+}
+
+// The continuation probability of the vertex of `b` were `d` its fixed direction
+// (b.cont_prob is it at wo): the reverse pdfs of the MIS quantities include it, as the
+// forward ones include b.cont_prob (a reverse pdf is the density of the path's other
+// direction, sampled at this vertex from d). SmallVCM multiplies both by the vertex's own,
+// exact where it does not depend on the direction; here it does under a clear coat or a
+// sheen (their shares of the albedo depend on it) and on a dielectric (F).
+float cont_prob_from(Bsdf b, vec3 d) {
+    if (!b.cont_prob_varies) return b.cont_prob;
+    return bsdf_init(b.material, b.ng, b.n, d, b.from_light, b.tint).cont_prob;
 }
 
 // f(wo, wi) of the non-specular part and the solid-angle pdfs of sampling wi given wo

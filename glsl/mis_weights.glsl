@@ -32,7 +32,7 @@ float nee_eval(SubpathState st, Bsdf b, LightSample ls, float pick, out vec3 f, 
     cos_x = bsdf_cos(b, ls.wi);
     if (max3(f) <= 0.0) return 0.0;
     pf = ls.delta ? 0.0 : pf * b.cont_prob;
-    pr *= b.cont_prob;
+    pr *= cont_prob_from(b, ls.wi);
     float w_light = pf / (pick * ls.pdf_w);
     float cos_g = bsdf_cos_geometric(b, ls.wi);
     float w_camera = (ls.emission_pdf_w * cos_g / (ls.pdf_w * ls.cos_light)) * (push.mis_vm + st.dvcm + st.dvc * pr);
@@ -57,8 +57,8 @@ float connection_eval(SubpathState st, vec3 p, Bsdf b, LightVertex v, out vec3 f
     float lpf, lpr;
     fl = bsdf_eval(lb, -dir, lpf, lpr);
     if (max3(fl) <= 0.0) return 0.0;
-    cpf *= b.cont_prob; cpr *= b.cont_prob;
-    lpf *= lb.cont_prob; lpr *= lb.cont_prob;
+    cpf *= b.cont_prob; cpr *= cont_prob_from(b, dir);
+    lpf *= lb.cont_prob; lpr *= cont_prob_from(lb, -dir);
     g = bsdf_cos(b, dir) * bsdf_cos(lb, -dir) / dist2;
     float cos_c = bsdf_cos_geometric(b, dir);
     float cos_l = bsdf_cos_geometric(lb, dir);
@@ -111,7 +111,7 @@ bool camera_connection_eval(SubpathState st, vec3 p, Bsdf b, bool weight_one, ou
     float pf, pr;
     f = bsdf_eval(b, to_cam, pf, pr);
     if (max3(f) <= 0.0) return true;
-    pr *= b.cont_prob;
+    pr *= cont_prob_from(b, to_cam);
     float cos_cam = dot(params.cam_forward.xyz, -to_cam);
     float plane = params.cam_pos.w;
     // Pdf of the camera generating this point, per unit area at p (pixel area 1).

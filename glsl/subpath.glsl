@@ -72,8 +72,9 @@ void mis_on_hit(inout SubpathState st, float dist, float cos_fix, bool first_fro
 
 // MIS update after scattering into a direction with |cos| `cos_wi` (non-specular: eq.
 // 34-36; specular: eq. 53-55; docs/smallvcm.md 4.4.5-4.4.6): `pdf` and `pdf_rev` are the
-// solid-angle pdfs of that direction and of the reverse one, both times the
-// Russian-roulette continuation probability.
+// solid-angle pdfs of that direction and of the reverse one, each times the
+// Russian-roulette continuation probability of the vertex sampling it (b.cont_prob,
+// cont_prob_from(b, wi)).
 void mis_on_scatter(inout SubpathState st, float pdf, float pdf_rev, float cos_wi, bool specular) {
     if (specular) {
         st.dvcm = 0.0;
@@ -99,7 +100,7 @@ void mis_on_scatter_to(inout SubpathState st, Bsdf b, vec3 wi) {
     }
     float pf, pr;
     bsdf_eval(b, wi, pf, pr);
-    mis_on_scatter(st, pf * b.cont_prob, pr * b.cont_prob, cos_wi, false);
+    mis_on_scatter(st, pf * b.cont_prob, pr * cont_prob_from(b, wi), cos_wi, false);
 }
 
 // Samples the continuation at a vertex from `u_bsdf` (bsdf_sample's direction and lobe)
@@ -110,7 +111,8 @@ bool scatter(inout SubpathState st, Bsdf b, vec3 p, vec3 ng, vec3 u_bsdf, float 
     BsdfSample bs = bsdf_sample(b, u_bsdf);
     if (!bs.ok) return false;
     if (u_roulette >= b.cont_prob) return false;
-    mis_on_scatter(st, bs.pdf * b.cont_prob, bs.pdf_rev * b.cont_prob, bs.cos_wi, bs.specular);
+    float cont_rev = bs.specular ? 0.0 : cont_prob_from(b, bs.wi);  // specular: no pdfs
+    mis_on_scatter(st, bs.pdf * b.cont_prob, bs.pdf_rev * cont_rev, bs.cos_wi, bs.specular);
     st.thr *= bs.weight / b.cont_prob;
     st.o = offset_ray(p, ng, bs.wi, scene_radius());
     st.d = bs.wi;

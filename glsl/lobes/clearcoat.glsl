@@ -86,6 +86,7 @@ void clearcoat_init(inout Bsdf b, GpuMaterial m) {
     }
     float cw = coat_blend(b, b.wo);
     b.cont_prob = clamp(b.cont_prob * (1.0 - cw) + cw, 0.0, 1.0);
+    b.cont_prob_varies = true;
 }
 
 // The blend of the base's f and pdfs (bsdf_eval's, without the coat) with the coat's.

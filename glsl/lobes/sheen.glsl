@@ -86,6 +86,7 @@ void sheen_init(inout Bsdf b, GpuMaterial m) {
     }
     float s = b.sheen_max * min(sheen_albedo_at(b, b.wo), 1.0);
     b.cont_prob = clamp(b.cont_prob * (1.0 - s) + s, 0.0, 1.0);
+    b.cont_prob_varies = true;
 }
 
 // The base's scaling 1 - max(sheenColor) max(E(n.wo), E(n.wi)) (E at most 1).
