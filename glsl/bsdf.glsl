@@ -193,6 +193,9 @@ vec3 transmission_colour(GpuMaterial m, vec3 tint) {
     return m.transmission.rgb;
 }
 
+// dispersed_ior: a dispersive glass's IOR for the channel a subpath carries.
+#include "lobes/dispersion.glsl"
+
 // The material `material` at a point of tint `tint`. Where a metallic-roughness texture
 // gave the point a metallic or roughness other than the factors
 // (HAS_METALLIC_ROUGHNESS_TEXTURES), the lobes that depend on them are glTF's at the
@@ -209,7 +212,6 @@ vec3 transmission_colour(GpuMaterial m, vec3 tint) {
 // and the lobes beside it have metallic / (1 - w) (Material::transmissive). Elsewhere
 // the material's own values, bit for bit. A dispersive glass has the IOR of the point's
 // channel (HAS_DISPERSION, glsl/lobes/dispersion.glsl).
-#include "lobes/dispersion.glsl"
 GpuMaterial point_material(uint material, Tint tint) {
     GpuMaterial m = material_at(material);
 #if HAS_METALLIC_ROUGHNESS_TEXTURES || HAS_TRANSMISSION_TEXTURES || HAS_SPECULAR_TEXTURES

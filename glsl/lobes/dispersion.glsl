@@ -16,9 +16,10 @@
 // before the choice hold for all three.
 //
 // A connection or merge of a camera vertex of channel a with a light vertex of channel b
-// contributes nothing when both have chosen and a != b (`channels_meet`); otherwise the
-// product of the throughputs carries the masks: the subpaths choose independently, so
-// E[9 e_a e_b [a = b]] = 1 per channel, the undispersed expectation. The MIS weights are
+// contributes nothing when both have chosen and a != b: the product of the throughputs
+// carries both masks, 9 e_a e_b, zero then, so `channels_meet` only skips the work (the
+// shadow ray) before it; the subpaths choose independently, so E[9 e_a e_b] = 1 per
+// channel, the undispersed expectation. The MIS weights are
 // unchanged: every technique evaluates each dispersive vertex of a path with the path's
 // channel, so the weights of a (path, channel) still sum to 1; the channel probabilities
 // are left out of them (unbiased, possibly not the best weighting: docs/scene-format.md).

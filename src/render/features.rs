@@ -138,8 +138,7 @@ impl FeatureSet {
     pub fn new(scene: &Scene, generic: bool) -> FeatureSet {
         // Only materials that a primitive uses can be evaluated.
         let mut used = vec![false; scene.materials.len()];
-        let prims = scene.triangles.iter().map(|t| t.material).chain(scene.spheres.iter().map(|s| s.material));
-        for m in prims {
+        for m in scene.triangles.iter().map(|t| t.material).chain(scene.spheres.iter().map(|s| s.material)) {
             if let Some(u) = used.get_mut(m as usize) {
                 *u = true;
             }
