@@ -2295,7 +2295,7 @@ fn transmission_and_specular_textures_are_read() {
 fn dispersion_is_read() {
     let ext = "KHR_materials_dispersion";
     let mut d = Doc::triangle();
-    d.json["extensionsUsed"] = json!([ext, "KHR_materials_transmission", "KHR_materials_ior"]);
+    d.json["extensionsUsed"] = json!([ext, "KHR_materials_transmission", "KHR_materials_ior", "VKVCM_materials_phong"]);
     d.json["extensionsRequired"] = json!([ext]);
     d.json["materials"] = json!([
         {"name": "a", "pbrMetallicRoughness": {"metallicFactor": 0.0},
@@ -2304,6 +2304,8 @@ fn dispersion_is_read() {
         {"name": "b", "extensions": {ext: {"dispersion": 1.0}}},
         {"name": "c", "pbrMetallicRoughness": {"metallicFactor": 0.0},
          "extensions": {ext: {}, "KHR_materials_transmission": {"transmissionFactor": 1.0}}},
+        {"name": "d", "extensions": {ext: {"dispersion": 0.5},
+                                     "VKVCM_materials_phong": {"mirror": [1.0, 1.0, 1.0], "ior": 1.5}}},
     ]);
     d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
     let s = d.load().unwrap();
@@ -2313,6 +2315,8 @@ fn dispersion_is_read() {
     assert!((a.dispersion_iors() - Vec3::new(1.57, 1.6, 1.63)).abs().max_element() < 1e-6, "{}", a.dispersion_iors());
     assert!(!s.materials[1].has_dispersion() && s.materials[1].dispersion == 0.0);
     assert!(!s.materials[2].has_dispersion() && s.materials[2].dispersion == 0.0);
+    // SmallVCM's glass (VKVCM_materials_phong) disperses too.
+    assert!(s.materials[3].has_dispersion() && s.materials[3].dispersion == 0.5);
     let w = &s.report.warnings;
     assert_eq!(w.iter().filter(|x| x.contains(ext)).count(), 1, "{w:?}");
     assert!(w.iter().any(|x| x.contains(ext) && x.contains("'b'")), "{w:?}");

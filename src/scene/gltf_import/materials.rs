@@ -126,8 +126,9 @@ impl Importer<'_> {
             self.set_iridescence(m, &mut out, &label)?;
             self.set_anisotropy(m, &mut out, &label)?;
             self.set_diffuse_transmission(m, &mut out, metallic, &label)?;
-            self.set_dispersion(m, &mut out, &label)?;
         }
+        // Also on VKVCM_materials_phong's glass (an IOR >= 0), whose interface is the same.
+        self.set_dispersion(m, &mut out, &label)?;
         // glTF's doubleSided false (the default) is back-face culling: the camera does not
         // see the back side of such a surface (glsl/scene.glsl, trace_camera_segment and
         // visible_to_camera; light meets both sides). A dielectric stays two-sided: its
@@ -423,7 +424,8 @@ impl Importer<'_> {
     /// builds on KHR_materials_volume's refraction, which vkvcm's glass always has (a
     /// transmissive mesh is a closed volume: docs/scene-format.md), so it applies to every
     /// transmissive material, with KHR_materials_volume or without; on a material that does
-    /// not transmit it is ignored with a warning.
+    /// not transmit it is ignored with a warning. It applies to `VKVCM_materials_phong`'s
+    /// glass too.
     fn set_dispersion(&mut self, m: &gltf::Material, out: &mut Material, label: &str) -> Result<()> {
         let Some(v) = m.extensions().and_then(|e| e.get(KHR_MATERIALS_DISPERSION)) else {
             return Ok(());
