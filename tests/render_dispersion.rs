@@ -2,9 +2,9 @@
 //! colour channel, rendered by subpaths that each choose one channel at their first
 //! dispersive vertex. Checked per channel against the same scene without dispersion at
 //! that channel's IOR (the independent reference: plain glass, which the rest of the suite
-//! checks against Mitsuba), for PT and VCM; the estimators against each other on rough
+//! checks against Mitsuba), for PT, VCM and BPT; the estimators against each other on rough
 //! dispersive glass (connections and merges at dispersive vertices of other channels); a
-//! white furnace; and the feature switch. Lavapipe, validation on.
+//! white furnace per channel; and the feature switch. Lavapipe, validation on.
 //!
 //! Statistics: per-pixel Welch tests at ALPHA, Šidák-corrected over the image (tests/common).
 

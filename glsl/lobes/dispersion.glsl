@@ -36,13 +36,13 @@ float dispersed_ior(GpuMaterial m, Tint tint) {
     return m.dispersion[tint.channel];
 }
 
-// On reaching a point of material `material` with channel `channel` (NO_CHANNEL: none
-// yet): a dispersive material makes a subpath without a channel draw one from `u`
-// (uniform in [0, 1)) and keep 3 e_c of its throughput `thr`. Draws nothing elsewhere (the
-// caller draws `u` only where `channel_needed` says so).
+// Whether a subpath of channel `channel` (NO_CHANNEL: none yet) that reaches a point of
+// material `material` must choose its channel there: a dispersive glass and no channel.
+// The caller draws choose_channel's `u` only then, so no random number is drawn elsewhere.
 bool channel_needed(uint channel, uint material) {
     return channel == NO_CHANNEL && material_dispersion(material).w > 0.0;
 }
+// The subpath's channel c from `u` (uniform in [0, 1)), its throughput `thr` times 3 e_c.
 void choose_channel(inout uint channel, inout vec3 thr, float u) {
     channel = min(uint(u * 3.0), 2u);
     vec3 keep = vec3(0.0);
