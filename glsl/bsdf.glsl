@@ -194,6 +194,9 @@ vec3 transmission_colour(GpuMaterial m, vec3 tint) {
     return m.transmission.rgb;
 }
 
+// dispersed_ior: a dispersive glass's IOR for the channel a subpath carries.
+#include "lobes/dispersion.glsl"
+
 // The material `material` at a point of tint `tint`. Where a metallic-roughness texture
 // gave the point a metallic or roughness other than the factors
 // (HAS_METALLIC_ROUGHNESS_TEXTURES), the lobes that depend on them are glTF's at the
@@ -208,7 +211,8 @@ vec3 transmission_colour(GpuMaterial m, vec3 tint) {
 // (Material::metallic_roughness_with_f0). Where a transmissionTexture varies the glass
 // weight (HAS_TRANSMISSION_TEXTURES), w = (1 - metallic) transmissionFactor x texel R
 // and the lobes beside it have metallic / (1 - w) (Material::transmissive). Elsewhere
-// the material's own values, bit for bit.
+// the material's own values, bit for bit. A dispersive glass has the IOR of the point's
+// channel (HAS_DISPERSION, glsl/lobes/dispersion.glsl).
 GpuMaterial point_material(uint material, Tint tint) {
     GpuMaterial m = material_at(material);
 #if HAS_METALLIC_ROUGHNESS_TEXTURES || HAS_TRANSMISSION_TEXTURES || HAS_SPECULAR_TEXTURES
@@ -239,6 +243,9 @@ GpuMaterial point_material(uint material, Tint tint) {
         m.glossy.w = max(roughness * roughness, MIN_GGX_ALPHA);
         m.surface.w = (f0.r + f0.g + f0.b) / 3.0 * (1.0 - metallic);
     }
+#endif
+#if HAS_DISPERSION
+    m.phong.w = dispersed_ior(m, tint);
 #endif
     return m;
 }
@@ -550,6 +557,9 @@ vec3 rough_dielectric_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev
     pdf_rev = 0.0;
     GpuMaterial m = material_at(b.material);
     float ior = m.phong.w;
+#if HAS_DISPERSION
+    ior = dispersed_ior(m, b.tint);
+#endif
     float a = m.emission.w;
     // Normals turned to wo's side of the geometric surface (b.valid: wo is off it, and above
     // the shading surface on that side).
@@ -844,6 +854,9 @@ BsdfSample base_bsdf_sample(Bsdf b, vec3 u) {
         vec3 h = ggx_sample_h_d(side * b.n, mr.emission.w, u.xy);
         float oh = dot(b.wo, h);
         if (oh < EPS_COSINE) return s;
+#if HAS_DISPERSION
+        mr.phong.w = dispersed_ior(mr, b.tint);
+#endif
         bool reflect_h = x_rough < fresnel_dielectric(side * oh, mr.phong.w);
         if (reflect_h) {
             s.wi = 2.0 * oh * h - b.wo;

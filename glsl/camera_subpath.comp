@@ -73,6 +73,9 @@ vec3 connect_to_lights(SubpathState st, Surface s, Bsdf b, inout PathSampler ps)
 
 // One vertex connection, unweighted by the light vertex's throughput (eq. 40-41).
 vec3 connect_vertices(SubpathState st, Surface s, Bsdf b, LightVertex v) {
+#if HAS_DISPERSION
+    if (!channels_meet(s.tint.channel, v.tint.channel)) return vec3(0.0);
+#endif
     vec3 fc, fl;
     float g;
     float w = connection_eval(st, s.p, b, v, fc, fl, g);
@@ -144,6 +147,9 @@ vec3 merge(SubpathState st, Surface s, Bsdf b) {
             vec3 d = uintBitsToFloat(e.xyz) - s.p;
             if (dot(d, d) > r2) continue;
             LightVertex v = lv_load(e.w);
+#if HAS_DISPERSION
+            if (!channels_meet(s.tint.channel, v.tint.channel)) continue;
+#endif
             uint total = v.len + st.len;
             if (total > max_len || total < min_len) continue;
             float w;
@@ -170,6 +176,9 @@ void start_path(uint pixel, out SubpathState st, out PathSampler ps) {
     st.from_ng = vec3(0.0);
     st.from_p = params.cam_pos.xyz;
     st.light = NO_LIGHT;
+#if HAS_DISPERSION
+    st.channel = NO_CHANNEL;
+#endif
     mis_camera_start(st, st.d);
 }
 
@@ -194,6 +203,15 @@ void reach_surface(inout SubpathState st, Hit h, Surface s) {
     st.thr *= segment_transmittance(st.from_material, st.from_ng, s.material, s.ng, st.d, h.t);
     mis_on_hit(st, h.t, abs(dot(s.ng, st.d)), false);
 }
+
+#if HAS_DISPERSION
+// The subpath reached surface `s`: a dispersive glass makes a subpath without a colour
+// channel choose one (glsl/lobes/dispersion.glsl); the point carries the subpath's channel.
+void take_channel(inout SubpathState st, inout Surface s, inout PathSampler ps) {
+    if (channel_needed(st.channel, s.material)) choose_channel(st.channel, st.thr, sample_1d(ps, DIM1_CHANNEL));
+    s.tint.channel = st.channel;
+}
+#endif
 
 // The subpath hit an emitter (eq. 42-43).
 void add_emission(SubpathState st, Hit h, Surface s, inout vec3 L) {
@@ -301,6 +319,9 @@ void main() {
         reach_surface(st, h, s);
         add_emission(st, h, s, L);
         if (st.len >= max_len) continue;
+#if HAS_DISPERSION
+        take_channel(st, s, ps);
+#endif
         Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, false, s.tint);
 #if AOV
         if (st.len == 1u) aov_first_hit(aov, h.t, s.p);

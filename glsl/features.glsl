@@ -110,6 +110,15 @@
 #if HAS_DIFFUSE_TRANSMISSION && !HAS_DIFFUSE
 #error "HAS_DIFFUSE_TRANSMISSION needs HAS_DIFFUSE"
 #endif
+// Glass whose IOR depends on the colour channel (KHR_materials_dispersion;
+// glsl/lobes/dispersion.glsl): subpaths that meet it choose a channel (Tint.channel), light
+// vertices carry it.
+#ifndef HAS_DISPERSION
+#define HAS_DISPERSION 1
+#endif
+#if HAS_DISPERSION && !HAS_DIELECTRIC
+#error "HAS_DISPERSION needs HAS_DIELECTRIC (only glass disperses)"
+#endif
 // Light kinds (glsl/lights.glsl).
 #ifndef HAS_AREA_LIGHTS
 #define HAS_AREA_LIGHTS 1

@@ -36,6 +36,9 @@ layout(local_size_x = WORKGROUP_SIZE) in;
 // the emitting point to the camera); false when it has nothing to trace.
 bool start_path(uint path, out SubpathState st, out uint rng) {
     rng = rng_init(params.misc.x, push.iteration, path, 1u);
+#if HAS_DISPERSION
+    st.channel = NO_CHANNEL;
+#endif
     uint nl = light_count();
     uint li = pick_light(rng);
     float pick = light_pick_prob(li);
@@ -161,6 +164,11 @@ void main() {
         // The segment's transmittance (glsl/medium.glsl) before the vertex is stored: light
         // vertices (connections, merges) carry it in their throughput.
         st.thr *= segment_transmittance(st.from_material, st.from_ng, s.material, s.ng, st.d, h.t);
+#if HAS_DISPERSION
+        // A dispersive glass: the subpath's colour channel (glsl/lobes/dispersion.glsl).
+        if (channel_needed(st.channel, s.material)) choose_channel(st.channel, st.thr, rnd(rng));
+        s.tint.channel = st.channel;
+#endif
         Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, true, s.tint);
         if (!b.valid) continue;
         if (st.len == 1u) mis_light_first_hit(st, s.p);

@@ -66,6 +66,7 @@ layout(std430) writeonly buffer light_vertex_chunk_counts { uint lv_chunk_count[
 //   with HAS_IRIDESCENCE_TEXTURES: b[Bi+LV_IRIDESCENCE] = (tint.iridescence, 0, 0)
 //   with HAS_ANISOTROPY:          b[Bi+LV_ANISOTROPY] = tint.anisotropy
 //   with HAS_DIFFUSE_TRANSMISSION_TEXTURES: b[Bi+LV_DIFFUSE_TRANSMISSION] = tint.diffuse_transmission
+//   with HAS_DISPERSION:          b[Bi+LV_CHANNEL] = (tint.channel (bits), 0, 0, 0)
 // B = 2 + the others (src/render/light_vertex_store.rs, LightVertexPlan, sizes the store
 // the same way; light_vertex_compact.comp copies B vec4 per vertex). The point's metallic
 // and roughness (a metallic-roughness texture's texel) fill the two vec4s' spare w, so a
@@ -80,7 +81,8 @@ layout(std430) writeonly buffer light_vertex_chunk_counts { uint lv_chunk_count[
 #define LV_IRIDESCENCE (LV_SHEEN + (HAS_SHEEN_TEXTURES != 0 ? 1u : 0u))
 #define LV_ANISOTROPY (LV_IRIDESCENCE + (HAS_IRIDESCENCE_TEXTURES != 0 ? 1u : 0u))
 #define LV_DIFFUSE_TRANSMISSION (LV_ANISOTROPY + (HAS_ANISOTROPY != 0 ? 1u : 0u))
-#define LV_B_STRIDE (LV_DIFFUSE_TRANSMISSION + (HAS_DIFFUSE_TRANSMISSION_TEXTURES != 0 ? 1u : 0u))
+#define LV_CHANNEL (LV_DIFFUSE_TRANSMISSION + (HAS_DIFFUSE_TRANSMISSION_TEXTURES != 0 ? 1u : 0u))
+#define LV_B_STRIDE (LV_CHANNEL + (HAS_DISPERSION != 0 ? 1u : 0u))
 struct LightVertex {
     vec3 p;
     vec3 thr;
@@ -134,6 +136,9 @@ void lv_store(uint slot, LightVertex v) {
 #if HAS_CLEARCOAT_NORMAL_MAPS
     lv_scratch_b[LV_B_STRIDE * slot + LV_COAT_NORMAL] = vec4(v.tint.coat_normal, 0.0);
 #endif
+#if HAS_DISPERSION
+    lv_scratch_b[LV_B_STRIDE * slot + LV_CHANNEL] = vec4(uintBitsToFloat(v.tint.channel), 0.0, 0.0, 0.0);
+#endif
 }
 #endif
 
@@ -183,6 +188,9 @@ LightVertex lv_load(uint slot) {
 #endif
 #if HAS_CLEARCOAT_NORMAL_MAPS
     v.tint.coat_normal = lv_b_at(LV_B_STRIDE * slot + LV_COAT_NORMAL).xyz;
+#endif
+#if HAS_DISPERSION
+    v.tint.channel = floatBitsToUint(lv_b_at(LV_B_STRIDE * slot + LV_CHANNEL).x);
 #endif
     uint info = floatBitsToUint(b1.w);
     v.material = info & 0xffffffu;

@@ -43,6 +43,9 @@ PathSampler path_sampler(uint pixel) {
 #define DIM1_PICK(len) (3u * (len))
 #define DIM1_LOBE(len) (3u * (len) + 1u)
 #define DIM1_ROULETTE(len) (3u * (len) + 2u)
+// The colour channel a path chooses at its first dispersive vertex, whichever that is (once
+// per path; glsl/lobes/dispersion.glsl): a dimension of its own that no vertex's reaches.
+#define DIM1_CHANNEL 0xfffffff0u
 
 vec2 sample_2d(inout PathSampler ps, uint dim) {
 #if SOBOL

@@ -46,6 +46,9 @@ struct PtPath {
     float last_pdf;     // solid-angle pdf of the last BSDF sample, for MIS at emitters
     bool last_specular;
     float eta_scale;    // refraction's radiance scaling, undone for the roulette
+#if HAS_DISPERSION
+    uint channel;       // the colour channel the path carries, or NO_CHANNEL (glsl/lobes/dispersion.glsl)
+#endif
 };
 
 // Starts the path of `pixel`.
@@ -61,6 +64,9 @@ void start_path(uint pixel, out PtPath path, out PathSampler ps) {
     path.from_material = NO_MATERIAL;
     path.from_ng = vec3(0.0);
     path.from_p = params.cam_pos.xyz;
+#if HAS_DISPERSION
+    path.channel = NO_CHANNEL;
+#endif
 }
 
 // ---- The stages of a vertex, in the order main() runs them.
@@ -93,6 +99,15 @@ void add_emission(PtPath path, Hit h, Surface s, inout vec3 L) {
         }
     }
 }
+
+#if HAS_DISPERSION
+// The path reached surface `s`: a dispersive glass makes a path without a colour channel
+// choose one (glsl/lobes/dispersion.glsl); the point carries the path's channel.
+void take_channel(inout PtPath path, inout Surface s, inout PathSampler ps) {
+    if (channel_needed(path.channel, s.material)) choose_channel(path.channel, path.thr, sample_1d(ps, DIM1_CHANNEL));
+    s.tint.channel = path.channel;
+}
+#endif
 
 #if NEE
 // Next-event estimation at a non-delta vertex: one light sample, weighted against BSDF
@@ -183,6 +198,9 @@ void main() {
         path.thr *= segment_transmittance(path.from_material, path.from_ng, s.material, s.ng, path.d, h.t);
         add_emission(path, h, s, L);
         if (path.len >= max_len) continue;
+#if HAS_DISPERSION
+        take_channel(path, s, ps);
+#endif
         Bsdf b = bsdf_init(s.material, s.ng, s.ns, -path.d, false, s.tint);
 #if AOV
         if (path.len == 1u) aov_first_hit(aov, h.t, s.p);

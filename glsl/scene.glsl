@@ -93,7 +93,7 @@ GpuSphere sphere_at(uint i) {
     return s;
 }
 // GpuMaterial's vec4s, in field order.
-#define MATERIAL_TEXELS 22u
+#define MATERIAL_TEXELS 23u
 GpuMaterial material_at(uint i) {
     GpuMaterial m;
     uint k = MATERIAL_TEXELS * i;
@@ -119,6 +119,7 @@ GpuMaterial material_at(uint i) {
     m.diffuse_transmission = texel_vec4(materials, k + 19u);
     m.diffuse_transmission_maps = texel_vec4(materials, k + 20u);
     m.coat_normal = texel_vec4(materials, k + 21u);
+    m.dispersion = texel_vec4(materials, k + 22u);
     return m;
 }
 vec4 material_surface(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 5u); }
@@ -131,6 +132,7 @@ vec4 material_iridescence_maps(uint i) { return texel_vec4(materials, MATERIAL_T
 vec4 material_anisotropy(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 18u); }
 vec4 material_diffuse_transmission_maps(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 20u); }
 vec4 material_coat_normal(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 21u); }
+vec4 material_dispersion(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 22u); }
 GpuLight light_at(uint i) {
     GpuLight l;
     l.a = texel_vec4(lights, 5u * i);
@@ -162,6 +164,7 @@ vec4 material_iridescence_maps(uint i) { return material_data[i].iridescence_map
 vec4 material_anisotropy(uint i) { return material_data[i].anisotropy; }
 vec4 material_diffuse_transmission_maps(uint i) { return material_data[i].diffuse_transmission_maps; }
 vec4 material_coat_normal(uint i) { return material_data[i].coat_normal; }
+vec4 material_dispersion(uint i) { return material_data[i].dispersion; }
 GpuLight light_at(uint i) { return light_data[i]; }
 #endif
 

@@ -31,6 +31,9 @@ struct SubpathState {
     // the direct pdf of an emitter hit depends on it (lights.glsl area_light_direct_pdf_a).
     vec3 from_p;
     uint light;        // light subpaths: the light they start on
+#if HAS_DISPERSION
+    uint channel;      // the colour channel the subpath carries, or NO_CHANNEL (glsl/lobes/dispersion.glsl)
+#endif
 };
 
 // Light subpath start (eq. 31-33; delta lights eq. 48-50; docs/smallvcm.md 4.4.2).

@@ -167,10 +167,20 @@ struct Tint {
                                 // diffuseTransmissionFactor (diffuseTransmissionTexture's A)
     vec3 coat_normal;      // the clear coat's shading normal (its normal map), on the side
                            // of the winding's normal; 0: the base's (glsl/lobes/clearcoat.glsl)
+#if HAS_DISPERSION
+    uint channel;          // the colour channel (0-2) the subpath carries, or NO_CHANNEL: the
+                           // glass's IOR there (glsl/lobes/dispersion.glsl). Not a texture's
+                           // value: the subpath's, set where it reaches the point.
+#endif
 };
 
 Tint no_tint() {
+#if HAS_DISPERSION
+    return Tint(vec3(1.0), 1.0, 1.0, 1.0, 1.0, 1.0, vec4(1.0), vec4(1.0), vec2(1.0), vec4(0.0), vec4(1.0), vec3(0.0),
+                NO_CHANNEL);
+#else
     return Tint(vec3(1.0), 1.0, 1.0, 1.0, 1.0, 1.0, vec4(1.0), vec4(1.0), vec2(1.0), vec4(0.0), vec4(1.0), vec3(0.0));
+#endif
 }
 
 // The tint (rgb) and alpha (times the material's alpha factor) of triangle `tri` with

@@ -18,6 +18,7 @@
 #define MIN_GGX_ALPHA 1e-3
 #define MIN_SHEEN_ROUGHNESS 0.07  // src/render/gpu_types.rs, tests/common/sheen.rs
 #define MATERIAL_ONE_SIDED 1u
+#define NO_CHANNEL 3u  // a subpath that has chosen no colour channel (glsl/lobes/dispersion.glsl)
 
 struct GpuMaterial {
     vec4 diffuse;   // rgb, w: Phong exponent
@@ -52,6 +53,7 @@ struct GpuMaterial {
     vec4 diffuse_transmission_maps;  // x, y: its factor's and colour's textures or NO_TEXTURE (bits),
                                      // z: the metallic factor, w reserved
     vec4 coat_normal;    // x: the clear coat's normal map or NO_TEXTURE (bits), y: its scale, z, w reserved
+    vec4 dispersion;     // xyz: the glass's IORs for R, G, B, w: its dispersion (0: none; glsl/lobes/dispersion.glsl)
 };
 
 struct GpuTextureRef {

@@ -93,7 +93,8 @@ fn rust_and_glsl_layouts_match() {
             anisotropy,
             diffuse_transmission,
             diffuse_transmission_maps,
-            coat_normal
+            coat_normal,
+            dispersion
         }),
         rust_layout!(GpuTextureRef { image, row0, row1 }),
         rust_layout!(GpuVertexAttributes { uv, color, tangent }),

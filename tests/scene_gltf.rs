@@ -2287,3 +2287,40 @@ fn transmission_and_specular_textures_are_read() {
     let e = err_of(d.load());
     assert!(e.contains("specularTexture"), "{e}");
 }
+
+/// KHR_materials_dispersion reaches a transmissive material, also when the file requires
+/// it, with the three IORs of the extension's implementation note; on a material that does
+/// not transmit it is ignored with a warning; a negative dispersion is an error naming it.
+#[test]
+fn dispersion_is_read() {
+    let ext = "KHR_materials_dispersion";
+    let mut d = Doc::triangle();
+    d.json["extensionsUsed"] = json!([ext, "KHR_materials_transmission", "KHR_materials_ior", "VKVCM_materials_phong"]);
+    d.json["extensionsRequired"] = json!([ext]);
+    d.json["materials"] = json!([
+        {"name": "a", "pbrMetallicRoughness": {"metallicFactor": 0.0},
+         "extensions": {ext: {"dispersion": 2.0}, "KHR_materials_transmission": {"transmissionFactor": 1.0},
+                        "KHR_materials_ior": {"ior": 1.6}}},
+        {"name": "b", "extensions": {ext: {"dispersion": 1.0}}},
+        {"name": "c", "pbrMetallicRoughness": {"metallicFactor": 0.0},
+         "extensions": {ext: {}, "KHR_materials_transmission": {"transmissionFactor": 1.0}}},
+        {"name": "d", "extensions": {ext: {"dispersion": 0.5},
+                                     "VKVCM_materials_phong": {"mirror": [1.0, 1.0, 1.0], "ior": 1.5}}},
+    ]);
+    d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let s = d.load().unwrap();
+    let a = &s.materials[0];
+    assert!(a.has_dispersion() && a.dispersion == 2.0);
+    // halfSpread = (ior - 1) 0.025 dispersion = 0.03 either side of 1.6.
+    assert!((a.dispersion_iors() - Vec3::new(1.57, 1.6, 1.63)).abs().max_element() < 1e-6, "{}", a.dispersion_iors());
+    assert!(!s.materials[1].has_dispersion() && s.materials[1].dispersion == 0.0);
+    assert!(!s.materials[2].has_dispersion() && s.materials[2].dispersion == 0.0);
+    // SmallVCM's glass (VKVCM_materials_phong) disperses too.
+    assert!(s.materials[3].has_dispersion() && s.materials[3].dispersion == 0.5);
+    let w = &s.report.warnings;
+    assert_eq!(w.iter().filter(|x| x.contains(ext)).count(), 1, "{w:?}");
+    assert!(w.iter().any(|x| x.contains(ext) && x.contains("'b'")), "{w:?}");
+    d.json["materials"][0]["extensions"][ext]["dispersion"] = json!(-0.5);
+    let e = format!("{:#}", d.load().unwrap_err());
+    assert!(e.contains(ext) && e.contains("dispersion"), "{e}");
+}

@@ -75,6 +75,10 @@ pub struct FeatureSet {
     /// diffuse-transmission-colour texture and some triangle texture coordinates: surfaces
     /// and light vertices carry the point's multipliers (glsl/textures.glsl, `surface_tint`).
     pub diffuse_transmission_textures: bool,
+    /// Some dielectric's glass disperses (`Material::has_dispersion`,
+    /// glsl/lobes/dispersion.glsl): subpaths that meet one choose a colour channel, and
+    /// light vertices carry it.
+    pub dispersion: bool,
     /// Light kinds.
     pub area_lights: bool,
     pub point_lights: bool,
@@ -134,8 +138,7 @@ impl FeatureSet {
     pub fn new(scene: &Scene, generic: bool) -> FeatureSet {
         // Only materials that a primitive uses can be evaluated.
         let mut used = vec![false; scene.materials.len()];
-        let prims = scene.triangles.iter().map(|t| t.material).chain(scene.spheres.iter().map(|s| s.material));
-        for m in prims {
+        for m in scene.triangles.iter().map(|t| t.material).chain(scene.spheres.iter().map(|s| s.material)) {
             if let Some(u) = used.get_mut(m as usize) {
                 *u = true;
             }
@@ -218,6 +221,7 @@ impl FeatureSet {
             anisotropy: g || anisotropy,
             diffuse_transmission: g || any_mat(&|m| m.has_diffuse_transmission()),
             diffuse_transmission_textures: g || diffuse_transmission_textures,
+            dispersion: g || any_mat(&|m| m.has_dispersion()),
             area_lights: g || any_light(&|l| matches!(l, Light::Area { .. })),
             point_lights: g || any_light(&|l| matches!(l, Light::Point { .. })),
             spot_lights: g || any_light(&|l| matches!(l, Light::Spot { .. })),
@@ -281,6 +285,7 @@ impl FeatureSet {
             ("HAS_ANISOTROPY", self.anisotropy),
             ("HAS_DIFFUSE_TRANSMISSION", self.diffuse_transmission),
             ("HAS_DIFFUSE_TRANSMISSION_TEXTURES", self.diffuse_transmission_textures),
+            ("HAS_DISPERSION", self.dispersion),
             ("HAS_AREA_LIGHTS", self.area_lights),
             ("HAS_POINT_LIGHTS", self.point_lights),
             ("HAS_SPOT_LIGHTS", self.spot_lights),
@@ -340,6 +345,7 @@ impl fmt::Display for FeatureSet {
             ("iridescence", self.iridescence),
             ("anisotropic GGX", self.anisotropy),
             ("diffuse transmission", self.diffuse_transmission),
+            ("dispersion", self.dispersion),
         ];
         writeln!(f, "  materials: {}", list(&mats))?;
         let lights = [

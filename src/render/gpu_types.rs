@@ -115,6 +115,10 @@ pub struct GpuMaterial {
     /// `texture_refs` (bits, or `NO_TEXTURE`: the coat shades with the base's normal), y:
     /// its scale; z, w: reserved.
     pub coat_normal: [f32; 4],
+    /// The glass's dispersion (KHR_materials_dispersion, glsl/lobes/dispersion.glsl): x, y,
+    /// z: its IORs for R, G and B (`Material::dispersion_iors`); w: the dispersion (0:
+    /// none, also where the kernels lack HAS_DISPERSION).
+    pub dispersion: [f32; 4],
 }
 
 /// A texture as a material uses it (`scene::TextureRef`): where its image's texels are,

@@ -38,8 +38,9 @@ pub const LIGHT_VERTEX_A_BYTES: u64 = 32;
 /// with vertex attributes one holding the tint and its roughness, with clear-coat,
 /// transmission, specular, sheen, iridescence and diffuse-transmission textures one each
 /// holding the point's multipliers, with clear-coat normal maps one holding the coat's
-/// normal, with anisotropy one holding the point's anisotropy direction and strength
-/// (glsl/light_vertex_store.glsl, LV_B_STRIDE).
+/// normal, with anisotropy one holding the point's anisotropy direction and strength,
+/// with dispersion one holding the subpath's colour channel (glsl/light_vertex_store.glsl,
+/// LV_B_STRIDE).
 pub fn light_vertex_b_bytes(features: &FeatureSet) -> u64 {
     let normal_slot = features.shading_normals || features.metallic_roughness_textures;
     let slots = [
@@ -51,6 +52,7 @@ pub fn light_vertex_b_bytes(features: &FeatureSet) -> u64 {
         features.iridescence_textures,
         features.anisotropy,
         features.diffuse_transmission_textures,
+        features.dispersion,
         features.transmission_textures,
         features.specular_textures,
     ];

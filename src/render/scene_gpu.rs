@@ -469,6 +469,7 @@ fn gpu_materials(scene: &Scene, features: &FeatureSet, texture_indices: &[[u32; 
                     diffuse_transmission: gpu_diffuse_transmission(m, features),
                     diffuse_transmission_maps: gpu_diffuse_transmission_maps(m, features, [dtt, dtc]),
                     coat_normal: gpu_coat_normal(m, features, cn),
+                    dispersion: gpu_dispersion(m, features),
                 }
             },
         )
@@ -491,6 +492,15 @@ fn gpu_coat(m: &crate::scene::Material, features: &FeatureSet, textures: [u32; 2
 fn gpu_coat_normal(m: &crate::scene::Material, features: &FeatureSet, texture: u32) -> [f32; 4] {
     let on = features.clearcoat_normal_maps && m.clearcoat > 0.0;
     [bits(if on { texture } else { NO_TEXTURE }), m.clearcoat_normal_scale, 0.0, 0.0]
+}
+
+/// GpuMaterial.dispersion of `m` (glsl/types.glsl): no dispersion where the kernels have
+/// none.
+fn gpu_dispersion(m: &crate::scene::Material, features: &FeatureSet) -> [f32; 4] {
+    if !features.dispersion || !m.has_dispersion() {
+        return [m.ior, m.ior, m.ior, 0.0];
+    }
+    v4(m.dispersion_iors(), m.dispersion)
 }
 
 /// GpuMaterial.sheen of `m` (glsl/types.glsl): zero where the kernels have no sheen.

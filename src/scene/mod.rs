@@ -292,6 +292,10 @@ pub struct Material {
     /// lobe becomes mix(diffuse reflection, diffuse transmission, factor)
     /// (glsl/lobes/diffuse_transmission.glsl).
     pub diffuse_transmission: Option<Box<DiffuseTransmission>>,
+    /// KHR_materials_dispersion's dispersion (20 / Abbe number; 0: none) on a dielectric:
+    /// its glass refracts channel c of RGB with its own IOR ([`Material::dispersion_iors`],
+    /// glsl/lobes/dispersion.glsl).
+    pub dispersion: f32,
     /// KHR_materials_transmission's transmissionTexture and KHR_materials_specular's
     /// specularTexture and specularColorTexture, with the factors the kernels recompute the
     /// lobes from where a triangle has their texture coordinates ([`LayerTextures`]).
@@ -390,6 +394,7 @@ impl Default for Material {
             anisotropy_rotation: 0.0,
             anisotropy_texture: None,
             diffuse_transmission: None,
+            dispersion: 0.0,
             layer_textures: None,
         }
     }
@@ -480,6 +485,21 @@ impl Material {
     pub fn has_diffuse_transmission(&self) -> bool {
         !self.is_dielectric()
             && self.diffuse_transmission.as_deref().is_some_and(|d| d.factor > 0.0 && d.color.max_element() > 0.0)
+    }
+
+    /// Whether the material's glass disperses (KHR_materials_dispersion): a dielectric with
+    /// a glass weight above 0 and a dispersion above 0.
+    pub fn has_dispersion(&self) -> bool {
+        self.is_dielectric() && self.glass_weight > 0.0 && self.dispersion > 0.0
+    }
+
+    /// The IORs of the glass for R, G and B under KHR_materials_dispersion, as the
+    /// extension's implementation note (what glTF viewers do) computes them: half the
+    /// spread n_F - n_C = (ior - 1) / V_d = (ior - 1) dispersion / 20 either side of
+    /// green's `ior`, red the smallest, each at least 1.
+    pub fn dispersion_iors(&self) -> Vec3 {
+        let half_spread = (self.ior - 1.0) * 0.025 * self.dispersion;
+        Vec3::new(self.ior - half_spread, self.ior, self.ior + half_spread).max(Vec3::ONE)
     }
 
     pub fn has_partial_transmission(&self) -> bool {

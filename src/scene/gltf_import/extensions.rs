@@ -26,6 +26,8 @@ pub const KHR_MATERIALS_IRIDESCENCE: &str = "KHR_materials_iridescence";
 pub const KHR_MATERIALS_ANISOTROPY: &str = "KHR_materials_anisotropy";
 /// Lambertian transmission through an opaque material (src/scene/gltf_import/materials.rs).
 pub const KHR_MATERIALS_DIFFUSE_TRANSMISSION: &str = "KHR_materials_diffuse_transmission";
+/// A per-channel IOR of transmissive glass (src/scene/gltf_import/materials.rs).
+pub const KHR_MATERIALS_DISPERSION: &str = "KHR_materials_dispersion";
 /// Offset, rotation and scale of texture coordinates (read on `baseColorTexture`).
 pub const KHR_TEXTURE_TRANSFORM: &str = "KHR_texture_transform";
 
@@ -46,6 +48,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     KHR_MATERIALS_IRIDESCENCE,
     KHR_MATERIALS_ANISOTROPY,
     KHR_MATERIALS_DIFFUSE_TRANSMISSION,
+    KHR_MATERIALS_DISPERSION,
     KHR_MESH_QUANTIZATION,
     KHR_TEXTURE_TRANSFORM,
     EXT_MESH_GPU_INSTANCING,

@@ -6,7 +6,7 @@
 
 use super::extensions::{
     ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG, KHR_MATERIALS_ANISOTROPY, KHR_MATERIALS_CLEARCOAT,
-    KHR_MATERIALS_DIFFUSE_TRANSMISSION, KHR_MATERIALS_IRIDESCENCE, KHR_MATERIALS_SHEEN,
+    KHR_MATERIALS_DIFFUSE_TRANSMISSION, KHR_MATERIALS_DISPERSION, KHR_MATERIALS_IRIDESCENCE, KHR_MATERIALS_SHEEN,
 };
 use super::Importer;
 use crate::scene::{AlphaMode, DiffuseTransmission, LayerTextures, Material, GLTF_DIELECTRIC_F0};
@@ -127,6 +127,8 @@ impl Importer<'_> {
             self.set_anisotropy(m, &mut out, &label)?;
             self.set_diffuse_transmission(m, &mut out, metallic, &label)?;
         }
+        // Also on VKVCM_materials_phong's glass (an IOR >= 0), whose interface is the same.
+        self.set_dispersion(m, &mut out, &label)?;
         // glTF's doubleSided false (the default) is back-face culling: the camera does not
         // see the back side of such a surface (glsl/scene.glsl, trace_camera_segment and
         // visible_to_camera; light meets both sides). A dielectric stays two-sided: its
@@ -414,6 +416,37 @@ impl Importer<'_> {
         }
         out.diffuse_transmission =
             Some(Box::new(DiffuseTransmission { factor, color, metallic, texture, color_texture }));
+        Ok(())
+    }
+
+    /// Sets the dispersion of `out` from `m`'s KHR_materials_dispersion: `dispersion`
+    /// (20 / Abbe number, default 0: none; an error below 0 or not finite). The extension
+    /// builds on KHR_materials_volume's refraction, which vkvcm's glass always has (a
+    /// transmissive mesh is a closed volume: docs/scene-format.md), so it applies to every
+    /// transmissive material, with KHR_materials_volume or without; on a material that does
+    /// not transmit it is ignored with a warning. It applies to `VKVCM_materials_phong`'s
+    /// glass too.
+    fn set_dispersion(&mut self, m: &gltf::Material, out: &mut Material, label: &str) -> Result<()> {
+        let Some(v) = m.extensions().and_then(|e| e.get(KHR_MATERIALS_DISPERSION)) else {
+            return Ok(());
+        };
+        let ctx = format!("{label}: {KHR_MATERIALS_DISPERSION}");
+        if !v.is_object() {
+            bail!("{ctx} must be an object");
+        }
+        let dispersion = ext_f32(v, "dispersion", 0.0, &ctx)?;
+        if !(dispersion >= 0.0 && dispersion.is_finite()) {
+            bail!("{ctx}.dispersion must be a finite number >= 0, is {dispersion}");
+        }
+        if dispersion > 0.0 && !out.is_dielectric() {
+            self.warnings.warn(
+                "KHR_materials_dispersion without KHR_materials_transmission is ignored (it disperses the \
+                 refracted light)",
+                label,
+            );
+            return Ok(());
+        }
+        out.dispersion = dispersion;
         Ok(())
     }
 
