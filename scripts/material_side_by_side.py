@@ -4,7 +4,7 @@ the two models differ and no per-pixel test applies (docs/scene-format.md, "Mate
 writes docs/img/EXT_side_by_side.png, vkvcm (pt) | Cycles | their luminance ratio (grey:
 equal; red: vkvcm brighter; blue: darker; full colour at a factor of 2).
 
-    python3 scripts/material_side_by_side.py clearcoat|sheen|iridescence|anisotropy
+    python3 scripts/material_side_by_side.py clearcoat|sheen|iridescence|anisotropy|dispersion
         [--vkvcm target/release/vkvcm] [--iterations 256] [--samples 256] [--out docs/img]
     python3 scripts/material_side_by_side.py sheen --scene-only sheen.gltf
 
@@ -65,8 +65,22 @@ VARIANTS = {
         ("strength 1, turned 90 deg", [0.9, 0.9, 0.9], 1.0, 0.4,
          {"anisotropyStrength": 1.0, "anisotropyRotation": math.pi / 2}),
     ],
+    # Glass (transmission 1, IOR 1.5, a volume so that Blender's importer makes it solid
+    # glass as vkvcm does): the colour fringes of the caustics and of the floor seen
+    # through the spheres.
+    "dispersion": [
+        ("glass", [1.0, 1.0, 1.0], 0.0, 0.0, None),
+        ("dispersion 1", [1.0, 1.0, 1.0], 0.0, 0.0, {"dispersion": 1.0}),
+        ("dispersion 4", [1.0, 1.0, 1.0], 0.0, 0.0, {"dispersion": 4.0}),
+        ("rough 0.2, dispersion 4", [1.0, 1.0, 1.0], 0.0, 0.2, {"dispersion": 4.0}),
+    ],
 }
 EXTENSION = {k: f"KHR_materials_{k}" for k in VARIANTS}
+# Extensions every sphere of a variant set carries besides its own.
+SPHERE_EXTENSIONS = {
+    "dispersion": {"KHR_materials_transmission": {"transmissionFactor": 1.0},
+                   "KHR_materials_volume": {"thicknessFactor": 1.0}, "KHR_materials_ior": {"ior": 1.5}},
+}
 
 
 def sphere(cx, rings=32, segs=64, r=0.45):
@@ -101,7 +115,8 @@ def quad(y, s, down):
 
 def write_scene(ext, out):
     buf = bytearray()
-    gltf = {"asset": {"version": "2.0"}, "extensionsUsed": [EXTENSION[ext], "KHR_materials_emissive_strength"],
+    used = [EXTENSION[ext], "KHR_materials_emissive_strength", *SPHERE_EXTENSIONS.get(ext, {})]
+    gltf = {"asset": {"version": "2.0"}, "extensionsUsed": used,
             "buffers": [], "bufferViews": [], "accessors": [], "meshes": [], "nodes": [], "materials": []}
 
     def accessor(data, fmt, kind, target, bounds=False):
@@ -144,7 +159,8 @@ def write_scene(ext, out):
             # extension's iridescenceThicknessMaximum (else every film is 400 nm there);
             # vkvcm ignores it.
             e = dict(e, iridescenceThickness=e["iridescenceThicknessMaximum"])
-        add_mesh(sphere(-1.5 + k), material(label, base, metallic, roughness, {EXTENSION[ext]: e} if e else None))
+        extensions = dict(SPHERE_EXTENSIONS.get(ext, {}), **({EXTENSION[ext]: e} if e else {}))
+        add_mesh(sphere(-1.5 + k), material(label, base, metallic, roughness, extensions or None))
     add_mesh(quad(0.0, 4.0, False), material("floor", [0.5, 0.5, 0.5], 0.0, 0.8))
     add_mesh(quad(3.0, 1.0, True), material("lamp", [0.0, 0.0, 0.0], 0.0, 1.0, emission=8.0))
     gltf["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.6, "aspectRatio": 2.0, "znear": 0.05}}]

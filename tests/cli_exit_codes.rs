@@ -33,6 +33,10 @@ fn each_class_of_failure_has_its_code() {
     render_exits(d, &["--no-such-option"], 2);
     render_exits(d, &["--width", "0", "--height", "8"], 2);
     render_exits(d, &["--width", "8", "--height", "8", "--connect", "cache"], 2);
+    // -o writes OpenEXR: another image extension is refused, pointing at --png.
+    let o = render_exits(d, &["--width", "8", "--height", "8", "-o", "x.png"], 2);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--png"), "{o:?}");
+    assert!(!d.join("x.png").exists());
     // Settings the estimator refuses (lt traces no camera paths for AOVs).
     render_exits(d, &[&["--algo", "lt", "--aov", "albedo"][..], &small].concat(), 2);
     render_exits(d, &[&["--algo", "pt", "--light-paths", "4"][..], &small].concat(), 2);

@@ -22,7 +22,7 @@ pub struct ReferenceArgs {
     /// A glTF file (.gltf/.glb) or a built-in scene: gbs_s, glm_c, gbs_p, gbs_b.
     pub scene: String,
     /// Output EXR. Default: <scene>_reference.exr.
-    #[arg(long, short = 'o')]
+    #[arg(long, short = 'o', value_parser = super::parse_exr_path)]
     pub output: Option<PathBuf>,
     /// Estimator. Use an unbiased one (bpt, pt). vcm, ppm and bpm are only consistent:
     /// their merging bias shrinks with time but is there at any finite time, and the

@@ -25,7 +25,7 @@ pub struct DenoiseArgs {
     pub input: PathBuf,
     /// The denoised EXR (R, G, B, the input's AOV layers and its attributes but not the
     /// resume data). Default: IN_denoised.exr.
-    #[arg(long, short = 'o')]
+    #[arg(long, short = 'o', value_parser = super::parse_exr_path)]
     pub output: Option<PathBuf>,
     /// Denoise the colour alone even where the EXR has albedo and normal layers.
     #[arg(long)]

@@ -18,7 +18,7 @@ pub struct MergeArgs {
     pub inputs: Vec<PathBuf>,
     /// The merged render's EXR (resumable like a render's), or the reference's (the
     /// file `vkvcm reference` writes).
-    #[arg(long, short = 'o')]
+    #[arg(long, short = 'o', value_parser = super::parse_exr_path)]
     pub output: PathBuf,
     /// Also write a tone-mapped sRGB PNG.
     #[arg(long)]

@@ -77,7 +77,7 @@ pub struct RenderArgs {
     pub cache_connections: u32,
     /// Output EXR (linear float32, with the second moment and settings to resume it).
     /// Default: <scene>_<algo>.exr.
-    #[arg(long, short = 'o')]
+    #[arg(long, short = 'o', value_parser = super::parse_exr_path)]
     pub output: Option<PathBuf>,
     /// Also write a tone-mapped sRGB PNG (at the end).
     #[arg(long)]
