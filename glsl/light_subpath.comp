@@ -163,7 +163,7 @@ void main() {
         st.thr *= segment_transmittance(st.from_material, st.from_ng, s.material, s.ng, st.d, h.t);
         Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, true, s.tint);
         if (!b.valid) continue;
-        if (st.len == 1u) mis_light_first_hit(st, s.p);
+        if (st.len == 1u) mis_light_first_hit(st, s.p, s.ng);
         mis_on_hit(st, h.t, abs(dot(s.ng, st.d)), st.len == 1u && !st.finite_light);
         if (!b.delta) {
 #if STORE_VERTICES

@@ -13,6 +13,7 @@ use super::environment::EnvironmentTables;
 use super::features::FeatureSet;
 use super::gpu_types::*;
 use super::light_selection::LightDistribution;
+use super::light_tree::LightTree;
 use super::reads::Reads;
 use super::settings::{FrameSettings, LightSelection};
 use super::sizes::{Access, BufferSize, SizeLimits};
@@ -25,7 +26,7 @@ use crate::scene::{AlphaMode, EnvironmentMap, Filter, Light, Scene, VertexAttrib
 /// Upper bounds of the scene's buffers, known before the BVH is built.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ScenePlan {
-    pub buffers: [BufferSize; 14],
+    pub buffers: [BufferSize; 15],
     /// The chunk size in bytes when the kernels read [`CHUNKED`] in chunks.
     pub chunk_bytes: Option<u64>,
 }
@@ -84,6 +85,8 @@ impl ScenePlan {
                     })
             })
             .sum::<u64>();
+        let lights = scene.lights.len() as u64;
+        let area_lights = scene.lights.iter().filter(|l| matches!(l, Light::Area { .. })).count() as u64;
         let texels: u64 = scene.images.iter().map(|i| i.texels.len() as u64).sum();
         let (env_w, env_h) = environment_map(scene).map_or((0, 0), |m| (m.width as u64, m.height as u64));
         ScenePlan {
@@ -98,6 +101,8 @@ impl ScenePlan {
                 texel(BufferSize::new("spheres", size::<GpuSphere>(scene.spheres.len() as u64))),
                 texel(BufferSize::new("materials", size::<GpuMaterial>(scene.materials.len() as u64))),
                 texel(BufferSize::new("lights", size::<GpuLight>(scene.lights.len() as u64))),
+                // Bound only with --light-selection tree; its size at most.
+                texel(BufferSize::new("light_tree", size::<[u32; 4]>(LightTree::max_elements(lights, area_lights)))),
                 texel(BufferSize::new("shading_normals", size::<[f32; 4]>(vertices))),
                 BufferSize::new("vertex_attributes", size::<GpuVertexAttributes>(vertices)),
                 BufferSize::new("texture_refs", size::<GpuTextureRef>(refs)),
@@ -684,6 +689,14 @@ impl SceneGpu {
             gpu.buffer_from_slice("env_texels", &env.texels)?,
             gpu.buffer_from_slice("env_distribution", &env.distribution)?,
         ]);
+        // --light-selection tree on a scene with area lights: LIGHT_TREE kernels.
+        let light_tree = match frame.light_selection {
+            LightSelection::Tree => LightTree::new(scene),
+            _ => None,
+        };
+        if let Some(t) = &light_tree {
+            buffers.push(gpu.buffer_from_slice("light_tree", &t.gpu_elements())?);
+        }
         let addresses = scene_addresses(gpu, &buffers, chunk_first)?;
         buffers.push(gpu.buffer_from_slice("scene_addresses", &[addresses])?);
         let variant = SceneVariant {
@@ -693,6 +706,7 @@ impl SceneGpu {
             atomics,
             device_addresses: gpu.has(BUFFER_DEVICE_ADDRESS),
             chunk_shift: chunk_bytes.map(|b| (b / 16).trailing_zeros()),
+            light_tree: light_tree.is_some(),
         };
         Ok(SceneGpu { params, buffers, chunks, variant })
     }
