@@ -104,3 +104,65 @@ fn tree_selection_matches_power_selection() {
         }
     });
 }
+
+/// The GPU's descent against its pdf (glsl/tests/light_tree.comp) at 16 random points
+/// and normals (a quarter without a normal) of cloud_scene, M = 4096 stratified draws
+/// each: every draw's probability is nee_light_prob of the light drawn (to float
+/// rounding, 1e-4 relative: the descent multiplies the per-node factors root first, the
+/// pdf leaf first), each light's share of the draws is its nee_light_prob (within 4 / M:
+/// the u of one light form one interval in the tree, a few in the alias table of the
+/// other lights, so stratified draws miss its probability by at most that many 1 / M),
+/// and the probabilities sum to at most 1 (less only where no light can shine).
+#[test]
+fn gpu_descent_follows_the_pdf() {
+    use vkvcm::gpu::{groups_2d, Bind};
+    use vkvcm::render::gpu_types::GpuPush;
+    use vkvcm::render::reads::Reads;
+    use vkvcm::render::{FrameSettings, SceneGpu};
+    let scene = cloud_scene();
+    let (queries, m) = (16usize, 4096usize);
+    let lights = scene.lights.len();
+    assert!(lights <= m);
+    let out: Vec<[f32; 4]> = with_gpu(|gpu| {
+        let frame = FrameSettings {
+            width: 4,
+            height: 4,
+            seed: 5,
+            max_path_length: 4,
+            min_path_length: 0,
+            light_selection: LightSelection::Tree,
+        };
+        let sg = SceneGpu::new(gpu, &scene, &frame, Reads::resolve(gpu, None).unwrap()).unwrap();
+        assert!(sg.variant.light_tree);
+        let count = (queries * m) as u32;
+        let results = gpu.buffer_zeroed::<[f32; 4]>("tree_results", count as usize).unwrap();
+        let mut binds = sg.binds();
+        binds.push(Bind::own(&results));
+        let kernel = gpu.kernel("tests/light_tree.comp", &sg.variant.defines().pairs(), &binds).unwrap();
+        let push = GpuPush { count, light_paths: m as u32, ..Default::default() };
+        let mut batch = gpu.batch().unwrap();
+        batch.dispatch(&kernel, groups_2d(count, 64), bytemuck::bytes_of(&push)).unwrap();
+        batch.submit_wait(None).unwrap();
+        results.read::<[f32; 4]>().unwrap()
+    });
+    for q in 0..queries {
+        let draws = &out[q * m..(q + 1) * m];
+        let mut count = vec![0usize; lights];
+        for (j, [li, prob, pdf, _]) in draws.iter().enumerate() {
+            let li = li.to_bits();
+            if li == u32::MAX {
+                assert_eq!(*prob, 0.0, "query {q} draw {j}: no light but probability {prob}");
+                continue;
+            }
+            count[li as usize] += 1;
+            assert!((prob - pdf).abs() <= 1e-4 * prob, "query {q} draw {j}: light {li} drawn with {prob}, pdf {pdf}");
+        }
+        let pdf: Vec<f64> = draws[..lights].iter().map(|d| d[3] as f64).collect();
+        for (i, (&c, &p)) in count.iter().zip(&pdf).enumerate() {
+            let f = c as f64 / m as f64;
+            assert!((f - p).abs() <= 4.0 / m as f64, "query {q} light {i}: drawn {f}, pdf {p}");
+        }
+        let total: f64 = pdf.iter().sum();
+        assert!(total <= 1.0 + 1e-5 && total > 0.5, "query {q}: probabilities sum to {total}");
+    }
+}
