@@ -4,11 +4,12 @@
 //! takes that probability for the direct pdf of an emitter hit and of a light subpath's
 //! start (glsl/mis_weights.glsl, glsl/subpath.glsl), while light subpaths still start by
 //! power. So the image must not change: on glossy_floor_scene with a point light and 300
-//! small emitters facing every way, pt with the tree, pt without next-event estimation
-//! (no light pick at all), and bpt and vcm with the tree against pt picking by power, per
-//! pixel (Welch test at 1e-3, Šidák over the pixels) and on the image mean (a t-test of
-//! 16 blocks per render, 1e-3 Šidák over the four comparisons: a bias of a percent over
-//! the image hides in per-pixel noise).
+//! small emitters facing every way, pt with the tree, and bpt and vcm with the tree
+//! against pt picking by power, per pixel (Welch test at 1e-3, Šidák over the pixels) and
+//! on the image mean (a t-test of 16 blocks per render, 1e-3 Šidák over the three
+//! comparisons: a bias of a percent over the image hides in per-pixel noise). (Not pt
+//! without NEE: BSDF sampling cannot reach the point light, which keeps the tree's
+//! other-lights branch in use.)
 //! A wrong pdf (the tree's probability at an emitter hit 0.9 times the descent's, or
 //! the pdf without the normal bound that the descent uses) fails the pt comparison.
 //! tests/mis_weights.rs checks the weights of every technique of a path sum to 1 with
@@ -94,7 +95,6 @@ fn tree_selection_matches_power_selection() {
         assert!(image_mean(&pt) > 0.02, "the scene rendered (almost) black");
         for (what, (other, other_mean)) in [
             ("PT, tree", stats_and_mean(run(Algorithm::Pt, 512, 82, LightSelection::Tree))),
-            ("PT, tree, without NEE", stats_and_mean(run(Algorithm::Pt, 512, 85, LightSelection::Tree).nee(false))),
             ("BPT, tree", stats_and_mean(run(Algorithm::Bpt, 256, 83, LightSelection::Tree))),
             ("VCM, tree", stats_and_mean(run(Algorithm::Vcm, 256, 84, LightSelection::Tree))),
         ] {
@@ -102,7 +102,7 @@ fn tree_selection_matches_power_selection() {
             eprintln!("PT by power vs {what}: {m}");
             let t = welch_test(&pt, &other, 1e-3).unwrap();
             assert!(t.passed(), "PT by power vs {what}: {t}");
-            assert!(m.p >= sidak(1e-3, 4), "PT by power vs {what}: {m}");
+            assert!(m.p >= sidak(1e-3, 3), "PT by power vs {what}: {m}");
         }
     });
 }
