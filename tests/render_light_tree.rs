@@ -168,3 +168,28 @@ fn gpu_descent_follows_the_pdf() {
         assert!(total <= 1.0 + 1e-5 && total > 0.5, "query {q}: probabilities sum to {total}");
     }
 }
+
+/// Next-event estimation through the tree against BSDF sampling alone (no light pick at
+/// all) on cloud_scene without its point light (which BSDF sampling cannot reach): pt
+/// with the tree against pt without NEE, per pixel (Welch test at 1e-3) and on the
+/// image mean (blocks, 1e-3).
+#[test]
+fn tree_nee_matches_bsdf_sampling() {
+    let mut scene = cloud_scene();
+    scene.lights.retain(|l| matches!(l, Light::Area { .. }));
+    let run =
+        |seed| TestRender::new(Algorithm::Pt, W, H, 512).seed(seed).max_path_length(MAX_PATH_LENGTH).independent();
+    with_gpu(|gpu| {
+        let stats_and_mean = |r: TestRender| {
+            let (out, blocks) = r.blocks(gpu, &scene, IMAGE_MEAN_BLOCKS);
+            (render_stats(&out, None), MeanEstimate::of_blocks(&blocks).unwrap())
+        };
+        let (tree, tree_mean) = stats_and_mean(run(91).light_selection(LightSelection::Tree));
+        let (bsdf, bsdf_mean) = stats_and_mean(run(92).nee(false));
+        let m = image_mean_test(tree_mean, bsdf_mean);
+        eprintln!("PT with the tree vs PT without NEE: {m}");
+        let t = welch_test(&tree, &bsdf, 1e-3).unwrap();
+        assert!(t.passed(), "PT with the tree vs PT without NEE: {t}");
+        assert!(m.p >= 1e-3, "PT with the tree vs PT without NEE: {m}");
+    });
+}
