@@ -58,13 +58,14 @@ uvec4 grid_point_at(uint j) { return bucket_points[j]; }
 // Next-event estimation: one light sample, weighted against reaching the light by BSDF
 // sampling and by the light subpaths (eq. 44-45).
 vec3 connect_to_lights(SubpathState st, Surface s, Bsdf b, inout PathSampler ps) {
-    uint li = pick_light_at(sample_1d(ps, DIM1_PICK(st.len)));
-    float pick = light_pick_prob(li);
+    float pick;
+    uint li = nee_pick_light(sample_1d(ps, DIM1_PICK(st.len)), s.p, s.ng, pick);
+    if (li == NO_LIGHT) return vec3(0.0);
     LightSample ls = light_illuminate(li, s.p, sample_2d(ps, DIM2_LIGHT(st.len)));
     if (!ls.ok) return vec3(0.0);
     vec3 f;
     float cos_x;
-    float w = nee_eval(st, b, ls, pick, f, cos_x);
+    float w = nee_eval(st, b, ls, pick, light_pick_prob(li), f, cos_x);
     if (max3(f) <= 0.0) return vec3(0.0);
     if (!light_sample_visible(s.p, s.ng, ls)) return vec3(0.0);
     vec3 tr = segment_transmittance(s.material, s.ng, NO_MATERIAL, vec3(0.0), ls.wi, ls.dist);
@@ -192,7 +193,8 @@ void add_background(inout SubpathState st, inout vec3 L) {
     if (bg != NO_LIGHT && st.len >= min_path_length()) {
         float dpdf, epdf;
         vec3 le = background_radiance(bg, st.d, dpdf, epdf);
-        L += st.thr * le * mis_weight_hit(st, dpdf, epdf, light_pick_prob(bg), VERTEX_CONNECTION != 0);
+        L += st.thr * le * mis_weight_hit(st, dpdf, epdf, nee_light_prob(bg, st.from_p, st.from_ng), light_pick_prob(bg),
+                                            VERTEX_CONNECTION != 0);
     }
 }
 
@@ -219,7 +221,8 @@ void add_emission(SubpathState st, Hit h, Surface s, inout vec3 L) {
         float dpdf_a, epdf;
         vec3 le = area_light_radiance(s.light, h.u, h.v, st.d, st.from_p, s.p, dpdf_a, epdf);
         if (max3(le) > 0.0) {
-            L += st.thr * le * mis_weight_hit(st, dpdf_a, epdf, light_pick_prob(s.light), VERTEX_CONNECTION != 0);
+            float direct_pick = nee_light_prob(s.light, st.from_p, st.from_ng);
+            L += st.thr * le * mis_weight_hit(st, dpdf_a, epdf, direct_pick, light_pick_prob(s.light), VERTEX_CONNECTION != 0);
         }
     }
 }

@@ -171,7 +171,7 @@ void main() {
 #endif
         Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, true, s.tint);
         if (!b.valid) continue;
-        if (st.len == 1u) mis_light_first_hit(st, s.p);
+        if (st.len == 1u) mis_light_first_hit(st, s.p, s.ng);
         mis_on_hit(st, h.t, abs(dot(s.ng, st.d)), st.len == 1u && !st.finite_light);
         if (!b.delta) {
 #if STORE_VERTICES

@@ -2,7 +2,9 @@
 // event estimation) and the pdfs of hitting an emitter, with the quantities the MIS of
 // docs/smallvcm.md 4.4 needs. A light is picked by the selection table of
 // src/render/light_selection.rs (by power, or uniformly: --light-selection), and every
-// pdf that includes the pick uses `light_pick_prob` of the light picked or hit.
+// pdf that includes the pick uses `light_pick_prob` of the light picked or hit; with
+// --light-selection tree next-event estimation picks area lights by the light tree
+// (`nee_pick_light`, `nee_light_prob`), light subpaths still by the table.
 //
 // Light kinds the scene lacks are compiled out (HAS_AREA_LIGHTS, HAS_POINT_LIGHTS,
 // HAS_SPOT_LIGHTS, HAS_DIRECTIONAL_LIGHTS, HAS_BACKGROUND: glsl/features.glsl): each kind
@@ -132,6 +134,37 @@ uint pick_light(inout uint rng) { return pick_light_at(rnd(rng)); }
 
 // The probability that pick_light picks light `index`.
 float light_pick_prob(uint index) { return light_at(index).d.x; }
+
+// Next-event estimation's pick of a light for shading point x with geometric normal n
+// (n = 0: none), with its probability `prob`: the selection table's (as light subpaths
+// start), or with LIGHT_TREE the light tree's for area lights (glsl/light_tree.glsl),
+// which depends on x and n; NO_LIGHT where the tree has no light that can shine on x.
+// nee_light_prob is the same probability for a given light: the direct pdf of an
+// emitter hit takes it at the previous vertex, its emission pdf light_pick_prob.
+#ifndef LIGHT_TREE
+#define LIGHT_TREE 0
+#endif
+#if LIGHT_TREE
+#include "light_tree.glsl"
+#endif
+
+uint nee_pick_light(float u, vec3 x, vec3 n, out float prob) {
+#if LIGHT_TREE
+    return tree_nee_pick(u, x, n, prob);
+#else
+    uint li = pick_light_at(u);
+    prob = light_pick_prob(li);
+    return li;
+#endif
+}
+
+float nee_light_prob(uint index, vec3 x, vec3 n) {
+#if LIGHT_TREE
+    return tree_nee_prob(index, x, n);
+#else
+    return light_pick_prob(index);
+#endif
+}
 
 // Spot falloff between the outer and inner cone (smoothstep in cos, as glTF suggests).
 float spot_falloff(GpuLight l, vec3 dir_from_light) {

@@ -13,12 +13,15 @@
 // Camera subpath hits an emitter (area light or background; eq. 42-43, docs/smallvcm.md
 // 4.4.8), pdfs without the pick probability (`direct_pdf`: next-event estimation's from the
 // previous vertex, st.from_p, which for area lights depends on it: lights.glsl
-// area_light_direct_pdf_a): weight 1 / (1 + w_camera), 1 for the primary ray. Without connections
+// area_light_direct_pdf_a), and the picks (`direct_pick`: next-event estimation's at the
+// previous vertex, nee_light_prob; `emission_pick`: the light subpaths', light_pick_prob;
+// the same without the light tree): weight 1 / (1 + w_camera), 1 for the primary ray. Without connections
 // (ppm, bpm) only purely specular camera paths may see emitters, with weight 1.
-float mis_weight_hit(SubpathState st, float direct_pdf, float emission_pdf, float pick, bool use_vc) {
+float mis_weight_hit(SubpathState st, float direct_pdf, float emission_pdf, float direct_pick, float emission_pick,
+                     bool use_vc) {
     if (st.len == 1u) return 1.0;
     if (!use_vc) return st.specular ? 1.0 : 0.0;
-    float w_camera = direct_pdf * pick * st.dvcm + emission_pdf * pick * st.dvc;
+    float w_camera = direct_pdf * direct_pick * st.dvcm + emission_pdf * emission_pick * st.dvc;
     return 1.0 / (1.0 + w_camera);
 }
 
@@ -26,7 +29,9 @@ float mis_weight_hit(SubpathState st, float direct_pdf, float emission_pdf, floa
 // 44-45, docs/smallvcm.md 4.4.9):
 // returns the MIS weight, with f the BSDF value (zero: no contribution) and cos_x the
 // cosine that multiplies it (bsdf_cos).
-float nee_eval(SubpathState st, Bsdf b, LightSample ls, float pick, out vec3 f, out float cos_x) {
+// `pick` is the probability that picked the light here, `emission_pick` the one a light
+// subpath starts on it with (they differ with the light tree).
+float nee_eval(SubpathState st, Bsdf b, LightSample ls, float pick, float emission_pick, out vec3 f, out float cos_x) {
     float pf, pr;
     f = bsdf_eval(b, ls.wi, pf, pr);
     cos_x = bsdf_cos(b, ls.wi);
@@ -36,6 +41,9 @@ float nee_eval(SubpathState st, Bsdf b, LightSample ls, float pick, out vec3 f, 
     float w_light = pf / (pick * ls.pdf_w);
     float cos_g = bsdf_cos_geometric(b, ls.wi);
     float w_camera = (ls.emission_pdf_w * cos_g / (ls.pdf_w * ls.cos_light)) * (push.mis_vm + st.dvcm + st.dvc * pr);
+#if LIGHT_TREE
+    w_camera *= emission_pick / pick;
+#endif
     return 1.0 / (w_light + 1.0 + w_camera);
 }
 

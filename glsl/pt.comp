@@ -41,7 +41,7 @@ struct PtPath {
     // The surface the current segment leaves (its material and geometric normal; the
     // camera: NO_MATERIAL), for the segment's transmittance (glsl/medium.glsl).
     uint from_material;
-    vec3 from_ng;
+    vec3 from_ng;       // (and its NEE pick, with the light tree: nee_light_prob)
     vec3 from_p;        // the vertex it leaves: an emitter hit's NEE pdf depends on it
     float last_pdf;     // solid-angle pdf of the last BSDF sample, for MIS at emitters
     bool last_specular;
@@ -79,7 +79,7 @@ void add_background(inout PtPath path, inout vec3 L) {
     if (bg != NO_LIGHT && path.len >= min_path_length()) {
         float dpdf, epdf;
         vec3 Le = background_radiance(bg, path.d, dpdf, epdf);
-        float wgt = (NEE == 0 || path.last_specular) ? 1.0 : balance(path.last_pdf, light_pick_prob(bg) * dpdf);
+        float wgt = (NEE == 0 || path.last_specular) ? 1.0 : balance(path.last_pdf, nee_light_prob(bg, path.from_p, path.from_ng) * dpdf);
         L += path.thr * Le * wgt;
     }
 }
@@ -93,8 +93,8 @@ void add_emission(PtPath path, Hit h, Surface s, inout vec3 L) {
         if (max3(Le) > 0.0) {
             float cos_l = abs(dot(s.ng, path.d));
             float dpdf_w = dpdf_a * h.t * h.t / cos_l;
-            float wgt =
-                (NEE == 0 || path.last_specular) ? 1.0 : balance(path.last_pdf, light_pick_prob(s.light) * dpdf_w);
+            float pick = nee_light_prob(s.light, path.from_p, path.from_ng);
+            float wgt = (NEE == 0 || path.last_specular) ? 1.0 : balance(path.last_pdf, pick * dpdf_w);
             L += path.thr * Le * wgt;
         }
     }
@@ -113,8 +113,9 @@ void take_channel(inout PtPath path, inout Surface s, inout PathSampler ps) {
 // Next-event estimation at a non-delta vertex: one light sample, weighted against BSDF
 // sampling.
 void connect_to_lights(PtPath path, Surface s, Bsdf b, inout PathSampler ps, inout vec3 L) {
-    uint li = pick_light_at(sample_1d(ps, DIM1_PICK(path.len)));
-    float pick = light_pick_prob(li);
+    float pick;
+    uint li = nee_pick_light(sample_1d(ps, DIM1_PICK(path.len)), s.p, s.ng, pick);
+    if (li == NO_LIGHT) return;
     LightSample ls = light_illuminate(li, s.p, sample_2d(ps, DIM2_LIGHT(path.len)));
     if (!ls.ok) return;
     float pf, pr;

@@ -28,7 +28,8 @@ struct SubpathState {
     uint from_material;
     vec3 from_ng;
     // The vertex the current segment leaves (the camera, the light point, a surface point):
-    // the direct pdf of an emitter hit depends on it (lights.glsl area_light_direct_pdf_a).
+    // the direct pdf of an emitter hit depends on it (lights.glsl area_light_direct_pdf_a),
+    // and with the light tree its pick too, on it and from_ng (nee_light_prob).
     vec3 from_p;
     uint light;        // light subpaths: the light they start on
 #if HAS_DISPERSION
@@ -49,8 +50,13 @@ void mis_light_start(inout SubpathState st, float emission_pdf, float direct_pdf
 // a pdf that depends on the receiving point (solid-angle sampling, lights.glsl), so the
 // direct pdf that mis_light_start took (the area sampler's 1 / area, light_emit) is
 // replaced at the first hit y1, once it is known (with mis_on_hit, before anything uses
-// dvcm). Other lights: nothing to do.
-void mis_light_first_hit(inout SubpathState st, vec3 y1) {
+// dvcm). Other lights: nothing to do. With the light tree (LIGHT_TREE) the pick of the
+// direct pdf is also y1's (nee_light_prob at y1 and its geometric normal n1), not the
+// selection table's that started the subpath.
+void mis_light_first_hit(inout SubpathState st, vec3 y1, vec3 n1) {
+#if LIGHT_TREE
+    st.dvcm *= nee_light_prob(st.light, y1, n1) / light_pick_prob(st.light);
+#endif
     GpuLight l = light_at(st.light);
     if (light_kind(l) != LIGHT_AREA) return;
     st.dvcm *= area_light_direct_pdf_a(st.light, y1, st.from_p) * l.d.w;

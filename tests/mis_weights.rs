@@ -21,7 +21,7 @@ use vkvcm::gpu::{groups_2d, Bind, Buffer, Gpu, Kernel};
 use vkvcm::render::gpu_types::GpuPush;
 use vkvcm::render::radius::{RadiusSchedule, DEFAULT_ALPHA, DEFAULT_RADIUS_FACTOR};
 use vkvcm::render::reads::Reads;
-use vkvcm::render::{FrameSettings, SceneGpu};
+use vkvcm::render::{FrameSettings, LightSelection, SceneGpu};
 use vkvcm::scene::{Light, Material, Scene};
 
 /// Tolerance on |sum - 1|. Every weight is 1 / (1 + sum of positive terms), each term a
@@ -166,14 +166,14 @@ struct Bench {
 }
 
 impl Bench {
-    fn new(gpu: &Arc<Gpu>, scene: &Scene, seed: u32) -> Bench {
+    fn new(gpu: &Arc<Gpu>, scene: &Scene, seed: u32, light_selection: LightSelection) -> Bench {
         let frame = FrameSettings {
             width: RES,
             height: RES,
             seed,
             max_path_length: MAX_PATH_LENGTH,
             min_path_length: 0,
-            light_selection: vkvcm::render::DEFAULT_LIGHT_SELECTION,
+            light_selection,
         };
         let sg = SceneGpu::new(gpu, scene, &frame, Reads::resolve(gpu, None).unwrap()).unwrap();
         // The film, splats and light-vertex store are declared by the includes of the kernels
@@ -238,6 +238,16 @@ fn ggx_scene() -> Scene {
     let mut s = glossy_floor_scene(metal, plastic);
     s.lights.push(Light::Point { position: Vec3::new(0.5, 1.0, 1.0), intensity: Vec3::splat(3.0) });
     s.name = "ggx + point".into();
+    s
+}
+
+/// ggx_scene with 60 small emitters of four colours facing every way: with
+/// `--light-selection tree` next-event estimation's pick depends on the receiving point
+/// (src/render/light_tree.rs), the light subpaths' does not (glsl/mis_weights.glsl).
+fn emitter_cloud_scene() -> Scene {
+    let mut s = ggx_scene();
+    add_emitter_cloud(&mut s, 60, 3);
+    s.name = "ggx + point + emitter cloud".into();
     s
 }
 
@@ -397,7 +407,7 @@ fn check_mode(mode: Mode, s: &Summary) {
 
 #[test]
 fn mis_weights_sum_to_one() {
-    let scenes: Vec<Scene> = ["glm_c", "gbs_b", "gbs_p", "gbs_s"]
+    let scenes: Vec<(Scene, LightSelection)> = ["glm_c", "gbs_b", "gbs_p", "gbs_s"]
         .iter()
         .map(|n| vkvcm::scene::load_named(n).unwrap())
         .chain(std::iter::once(ggx_scene()))
@@ -405,14 +415,16 @@ fn mis_weights_sum_to_one() {
         .chain(std::iter::once(rough_glass_scene()))
         .chain(std::iter::once(layered_scene()))
         .chain(std::iter::once(environment_scene(smooth_sky(16, 9), 40.0)))
+        .map(|s| (s, LightSelection::Power))
+        .chain(std::iter::once((emitter_cloud_scene(), LightSelection::Tree)))
         .collect();
     // The last mode is the negative control: the check can fail.
     let bad = Mode { name: "vcm, mis_vc x2", vc_scale: 2.0, ..VCM_WIDE };
     let modes = [BPT, BPM, VCM, VCM_WIDE, bad];
     let mut sums: Vec<Summary> = modes.iter().map(|_| Summary::default()).collect();
     with_gpu(|gpu| {
-        for (i, scene) in scenes.iter().enumerate() {
-            let bench = Bench::new(gpu, scene, 1234 + i as u32);
+        for (i, (scene, selection)) in scenes.iter().enumerate() {
+            let bench = Bench::new(gpu, scene, 1234 + i as u32, *selection);
             for (m, mode) in modes.iter().enumerate() {
                 check_paths(&scene.name, *mode, &bench.run(gpu, *mode), &mut sums[m]);
             }

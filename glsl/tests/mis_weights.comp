@@ -211,6 +211,10 @@ void main() {
         if (!visible(vp[a], vn[a], params.cam_pos.xyz, vec3(0.0))) return;
     }
     uint kind = light_kind(light_at(li));
+    // The light the path ends on (an emitter hit may meet another than the one picked):
+    // the light subpaths' pick, and next-event estimation's at y_1.
+    pick = light_pick_prob(li);
+    float nee_pick = nee_light_prob(li, vp[1], vn[1]);
     // The start of a light subpath leaving y_0 towards y_1: light_emit's pdfs, whose
     // only dependences on the sample are an area light's cosine and an environment map's
     // direction.
@@ -241,7 +245,7 @@ void main() {
     for (uint i = 1u; i < k; ++i) {
         vec3 d = dir_to(i - 1u, i);
         st.len = i;
-        if (i == 1u) mis_light_first_hit(st, vp[1]);
+        if (i == 1u) mis_light_first_hit(st, vp[1], vn[1]);
         mis_on_hit(st, i == 1u && infinite0 ? 0.0 : distance(vp[i - 1u], vp[i]), abs(dot(vn[i], d)),
                    i == 1u && infinite0);
         L[i] = st;
@@ -272,7 +276,7 @@ void main() {
         vec3 le = kind == LIGHT_AREA ? area_light_radiance(li, 0.0, 0.0, dir_to(1u, 0u), vp[1], vp[0], dp, ep) : background_radiance(li, dir_to(1u, 0u), dp, ep);
         // Without connections only purely specular camera paths count an emitter hit.
         if (max3(le) > 0.0 && (use_vc || C[0].specular || k == 1u)) {
-            w = mis_weight_hit(C[0], dp, ep, pick, use_vc);
+            w = mis_weight_hit(C[0], dp, ep, nee_pick, pick, use_vc);
             write_out(base, 8u, w);
             sum += w; n += 1u; bad += (w >= 0.0 && !isinf(w)) ? 0u : 1u;
         }
@@ -283,7 +287,7 @@ void main() {
             LightSample ls = light_sample_fixed(li, vp[1]);
             vec3 f;
             float cos_x;
-            w = nee_eval(C[1], bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false, vtint[1]), ls, pick, f, cos_x);
+            w = nee_eval(C[1], bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false, vtint[1]), ls, nee_pick, pick, f, cos_x);
             if (!ls.ok || max3(f) <= 0.0) w = -2.0;  // cannot happen for a sampled path
             write_out(base, 9u, w);
             sum += w; n += 1u; bad += (w >= 0.0 && !isinf(w)) ? 0u : 1u;

@@ -6,6 +6,9 @@ moment, interleaved over seeds. Runs in the Cycles harness's venv (numpy, OpenEX
     python scripts/peers/ab_variance.py --a /tmp/glsl-before --b glsl \\
         --iterations 64 --seeds 3 SCENE.gltf [-- extra vkvcm render arguments]
 
+or of two settings with the same shaders (--a-args and --b-args: each side's own render
+arguments, e.g. --a-args="--light-selection power" --b-args="--light-selection tree").
+
 Each render draws independent samples (--sampler independent: the per-pixel variance of
 Sobol samples is no error estimate). Per pixel and channel, the variance of one sample is
 (moment2 - mean^2) n / (n - 1); the figure is its mean weighted as the harness's relMSE,
@@ -39,8 +42,10 @@ def read(path):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("scene")
-    ap.add_argument("--a", required=True, help="GLSL folder of side A (e.g. a `git archive` of glsl/)")
-    ap.add_argument("--b", required=True, help="GLSL folder of side B")
+    ap.add_argument("--a", default=str(REPO / "glsl"), help="GLSL folder of side A (e.g. a `git archive` of glsl/)")
+    ap.add_argument("--b", default=str(REPO / "glsl"), help="GLSL folder of side B")
+    ap.add_argument("--a-args", default="", help="render arguments of side A only")
+    ap.add_argument("--b-args", default="", help="render arguments of side B only")
     ap.add_argument("--iterations", type=int, default=64)
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--size", type=int, default=128)
@@ -57,7 +62,8 @@ def main():
             env = dict(os.environ, VKVCM_GLSL_DIR=str(Path(getattr(args, side)).resolve()))
             cmd = [args.vkvcm, "render", args.scene, "--algo", "pt", "--sampler", "independent",
                    "--width", str(args.size), "--height", str(args.size), "--seed", str(seed),
-                   "--iterations", str(args.iterations), "-o", str(exr), "--quiet", *args.extra]
+                   "--iterations", str(args.iterations), "-o", str(exr), "--quiet", *args.extra,
+                   *getattr(args, f"{side}_args").split()]
             r = subprocess.run(cmd, env=env, capture_output=True, text=True)
             if r.returncode != 0:
                 sys.exit(f"{' '.join(cmd)} failed:\n{r.stderr[-2000:]}")

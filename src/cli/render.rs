@@ -41,8 +41,10 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 10)]
     pub max_path_length: u32,
     /// How next-event estimation and light subpaths pick a light: `power`, in proportion
-    /// to each light's emitted power (pbrt-v4's rule), or `uniform`, 1 / #lights
-    /// (SmallVCM's). Unbiased either way; docs/performance.md measures the difference.
+    /// to each light's emitted power (pbrt-v4's rule), `uniform`, 1 / #lights
+    /// (SmallVCM's), or `tree`, next-event estimation picking emissive triangles by a light
+    /// tree that weighs them at the shading point (for many emissive triangles).
+    /// Unbiased either way; docs/performance.md measures the difference.
     #[arg(long, value_enum, default_value_t = vkvcm::render::DEFAULT_LIGHT_SELECTION)]
     pub light_selection: vkvcm::render::LightSelection,
     /// Where the camera paths' random numbers come from: `sobol`, Owen-scrambled Sobol

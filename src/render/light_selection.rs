@@ -42,7 +42,8 @@ impl LightDistribution {
     pub fn new(scene: &Scene, selection: LightSelection) -> LightDistribution {
         match selection {
             LightSelection::Uniform => LightDistribution::uniform(scene.lights.len()),
-            LightSelection::Power => {
+            // The tree's light subpaths start by power (src/render/light_tree.rs).
+            LightSelection::Power | LightSelection::Tree => {
                 let (_, radius) = scene.bounding_sphere();
                 let power: Vec<f64> = scene.lights.iter().map(|l| light_power(l, &scene.triangles, radius)).collect();
                 LightDistribution::from_weights(&power)

@@ -18,6 +18,7 @@ pub mod features;
 pub mod film;
 pub mod gpu_types;
 pub mod light_selection;
+pub mod light_tree;
 pub mod light_vertex_store;
 pub mod merge;
 pub mod output;

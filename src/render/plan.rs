@@ -20,7 +20,7 @@ use super::light_vertex_store::{
 use super::passes::hash_grid::{grid_buckets, GridPlan, GRID_KEY_BYTES, GRID_POINT_BYTES};
 use super::reads::Reads;
 use super::scene_gpu::ScenePlan;
-use super::settings::RenderSettings;
+use super::settings::{LightSelection, RenderSettings};
 use super::sizes::{check_sizes, Access, BufferSize, SizeLimits};
 use super::techniques::Techniques;
 use crate::gpu::Gpu;
@@ -118,7 +118,7 @@ impl FramePlan {
             store_reads: reads,
             reads_chosen: false,
             device_addresses,
-            scene: ScenePlan::new(scene, reads, device_addresses),
+            scene: ScenePlan::new(scene, reads, device_addresses, s.frame.light_selection == LightSelection::Tree),
             film: FilmPlan::new(s.frame.width, s.frame.height, frame_access).with_aov(s.aov.any()),
             light_vertices,
             grid,
@@ -162,7 +162,7 @@ impl FramePlan {
         let mut changed = false;
         if self.reads == Reads::Texel && self.scene.buffers().iter().any(over) {
             self.reads = Reads::Storage;
-            self.scene = ScenePlan::new(scene, Reads::Storage, self.device_addresses);
+            self.scene = ScenePlan::new(scene, Reads::Storage, self.device_addresses, self.scene.light_tree);
             self.scene.chunk_if_over_binding(limits, self.device_addresses);
             changed = true;
         }

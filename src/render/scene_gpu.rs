@@ -13,6 +13,7 @@ use super::environment::EnvironmentTables;
 use super::features::FeatureSet;
 use super::gpu_types::*;
 use super::light_selection::LightDistribution;
+use super::light_tree::LightTree;
 use super::reads::Reads;
 use super::settings::{FrameSettings, LightSelection};
 use super::sizes::{Access, BufferSize, SizeLimits};
@@ -25,9 +26,11 @@ use crate::scene::{AlphaMode, EnvironmentMap, Filter, Light, Scene, VertexAttrib
 /// Upper bounds of the scene's buffers, known before the BVH is built.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ScenePlan {
-    pub buffers: [BufferSize; 14],
+    pub buffers: [BufferSize; 15],
     /// The chunk size in bytes when the kernels read [`CHUNKED`] in chunks.
     pub chunk_bytes: Option<u64>,
+    /// The light tree is uploaded (`--light-selection tree`; else its buffer has 0 bytes).
+    pub light_tree: bool,
 }
 
 /// The scene's arrays that the kernels read by device address in chunks, each chunk its
@@ -51,7 +54,7 @@ impl ScenePlan {
     /// The buffers of `scene`, read as `reads` (with texel reads the BVH and the geometry
     /// are bound only as texel buffers, glsl/scene.glsl and glsl/bvh.glsl), with
     /// [`ADDRESSED`] reached by address when `device_addresses`.
-    pub fn new(scene: &Scene, reads: Reads, device_addresses: bool) -> ScenePlan {
+    pub fn new(scene: &Scene, reads: Reads, device_addresses: bool, light_tree: bool) -> ScenePlan {
         let texel = |b: BufferSize| if reads == Reads::Texel { b.reached(Access::Texel) } else { b };
         let tris = scene.triangles.len() as u64;
         // Instances: one primitive in the top-level tree and a two-slot record each.
@@ -84,6 +87,9 @@ impl ScenePlan {
                     })
             })
             .sum::<u64>();
+        let lights = scene.lights.len() as u64;
+        let area_lights = scene.lights.iter().filter(|l| matches!(l, Light::Area { .. })).count() as u64;
+        let tree_elements = if light_tree { LightTree::max_elements(lights, area_lights) } else { 0 };
         let texels: u64 = scene.images.iter().map(|i| i.texels.len() as u64).sum();
         let (env_w, env_h) = environment_map(scene).map_or((0, 0), |m| (m.width as u64, m.height as u64));
         ScenePlan {
@@ -98,6 +104,8 @@ impl ScenePlan {
                 texel(BufferSize::new("spheres", size::<GpuSphere>(scene.spheres.len() as u64))),
                 texel(BufferSize::new("materials", size::<GpuMaterial>(scene.materials.len() as u64))),
                 texel(BufferSize::new("lights", size::<GpuLight>(scene.lights.len() as u64))),
+                // With --light-selection tree: its size at most.
+                texel(BufferSize::new("light_tree", size::<[u32; 4]>(tree_elements))),
                 texel(BufferSize::new("shading_normals", size::<[f32; 4]>(vertices))),
                 BufferSize::new("vertex_attributes", size::<GpuVertexAttributes>(vertices)),
                 BufferSize::new("texture_refs", size::<GpuTextureRef>(refs)),
@@ -115,6 +123,7 @@ impl ScenePlan {
                 }
             }),
             chunk_bytes: None,
+            light_tree,
         }
     }
 
@@ -694,6 +703,14 @@ impl SceneGpu {
             gpu.buffer_from_slice("env_texels", &env.texels)?,
             gpu.buffer_from_slice("env_distribution", &env.distribution)?,
         ]);
+        // --light-selection tree on a scene with area lights: LIGHT_TREE kernels.
+        let light_tree = match frame.light_selection {
+            LightSelection::Tree => LightTree::new(scene),
+            _ => None,
+        };
+        if let Some(t) = &light_tree {
+            buffers.push(gpu.buffer_from_slice("light_tree", &t.gpu_elements())?);
+        }
         let addresses = scene_addresses(gpu, &buffers, chunk_first)?;
         buffers.push(gpu.buffer_from_slice("scene_addresses", &[addresses])?);
         let variant = SceneVariant {
@@ -703,6 +720,7 @@ impl SceneGpu {
             atomics,
             device_addresses: gpu.has(BUFFER_DEVICE_ADDRESS),
             chunk_shift: chunk_bytes.map(|b| (b / 16).trailing_zeros()),
+            light_tree: light_tree.is_some(),
         };
         Ok(SceneGpu { params, buffers, chunks, variant })
     }

@@ -349,6 +349,10 @@ pub enum LightSelection {
     Power,
     /// Each light with probability 1 / #lights (SmallVCM).
     Uniform,
+    /// Next-event estimation picks emissive triangles by a light tree that weighs them by
+    /// their importance at the shading point (src/render/light_tree.rs), the other lights
+    /// and light subpaths' starts by power.
+    Tree,
 }
 
 impl LightSelection {
@@ -357,6 +361,7 @@ impl LightSelection {
         match self {
             LightSelection::Power => "power",
             LightSelection::Uniform => "uniform",
+            LightSelection::Tree => "tree",
         }
     }
 
@@ -365,6 +370,7 @@ impl LightSelection {
         match s {
             "power" => Some(LightSelection::Power),
             "uniform" => Some(LightSelection::Uniform),
+            "tree" => Some(LightSelection::Tree),
             _ => None,
         }
     }

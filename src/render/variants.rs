@@ -82,6 +82,9 @@ pub struct SceneVariant {
     /// SCENE_CHUNK_SHIFT: the kernels read the BVH and the geometry in chunks of 2^shift
     /// 16-byte elements (src/render/scene_gpu.rs, CHUNKED).
     pub chunk_shift: Option<u32>,
+    /// LIGHT_TREE: next-event estimation picks area lights by the light tree
+    /// (src/render/light_tree.rs, glsl/light_tree.glsl).
+    pub light_tree: bool,
 }
 
 impl SceneVariant {
@@ -91,6 +94,7 @@ impl SceneVariant {
             .defines()
             .flag("TEXEL_READS", self.reads == Reads::Texel)
             .flag("BVH_INT64", self.int64_loads)
+            .flag("LIGHT_TREE", self.light_tree)
             .with(&self.film_defines())
             .with(&workgroup_defines());
         match self.chunk_shift {

@@ -272,6 +272,10 @@ impl TestRender {
         self.0.frame.max_path_length = segments;
         self
     }
+    pub fn light_selection(mut self, selection: vkvcm::render::LightSelection) -> Self {
+        self.0.frame.light_selection = selection;
+        self
+    }
     pub fn nee(mut self, on: bool) -> Self {
         self.0.nee = on;
         self

@@ -255,3 +255,34 @@ pub fn unit_sphere_hit_cos(cam: &Camera, w: u32, h: u32, x: f32, y: f32) -> Opti
         -d.dot(p.normalize()) as f64
     })
 }
+
+/// Adds `count` small emissive triangles (sides about 0.1) of four colours, facing random
+/// directions, scattered over the box [-2, 2] x [-1, 2.5] x [0.2, 1.4] (deterministic in
+/// `seed`), and makes the scene's area lights again (other lights stay): the light tree's
+/// case (src/render/light_tree.rs), many lights whose importance varies over the scene.
+pub fn add_emitter_cloud(s: &mut Scene, count: usize, seed: u32) {
+    let mut rng = seed | 1;
+    let mut rnd = move || {
+        rng ^= rng << 13;
+        rng ^= rng >> 17;
+        rng ^= rng << 5;
+        rng as f32 / u32::MAX as f32
+    };
+    let first = s.materials.len() as u32;
+    for (i, c) in [Vec3::new(8.0, 2.0, 1.0), Vec3::new(1.0, 6.0, 2.0), Vec3::new(1.0, 2.0, 9.0), Vec3::splat(4.0)]
+        .into_iter()
+        .enumerate()
+    {
+        s.materials.push(Material { name: format!("emitter {i}"), emission: c, ..Default::default() });
+    }
+    for i in 0..count {
+        let centre = Vec3::new(-2.0 + 4.0 * rnd(), -1.0 + 3.5 * rnd(), 0.2 + 1.2 * rnd());
+        let (a, b) =
+            (Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5), Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5));
+        let p = [centre, centre + 0.15 * a, centre + 0.15 * b];
+        s.triangles.push(Triangle { p, n: None, material: first + (i % 4) as u32, attributes: None });
+    }
+    let others: Vec<Light> = s.lights.iter().filter(|l| !matches!(l, Light::Area { .. })).cloned().collect();
+    s.lights = area_lights(&s.triangles, &s.materials);
+    s.lights.extend(others);
+}
