@@ -346,14 +346,26 @@ def gen_emitters(path, count=2000):
     """A closed white room lit only by `count` small emissive triangles of many colours on
     its ceiling and walls (the sky cannot enter): light selection's case."""
     b = white_room(sphere_at=(0.5, 0.45, -0.4), box_top=0.9)
-    # Emitters: tiny triangles just inside the ceiling and the back and left walls; a
-    # linear congruential generator keeps the scene the same everywhere.
+    # Emitters: tiny triangles just inside the ceiling and the back and left walls, each in
+    # a cell of its own of a 0.105 m grid on its wall: coplanar emitters that overlapped
+    # would make the scene ill-defined (a ray meets one of them where next-event
+    # estimation and light subpaths count both: pt, bpt and lt then disagree by several
+    # per cent). A linear congruential generator keeps the scene the same everywhere.
     state = 12345
+    cell, used = 0.105, set()
 
     def rnd():
         nonlocal state
         state = (state * 1103515245 + 12345) % 2**31
         return state / 2**31
+
+    def free_cell(wall, rows):
+        """A random unused cell (i, j) of the 36 x `rows` grid of `wall`."""
+        while True:
+            key = (wall, int(rnd() * 36), int(rnd() * rows))
+            if key not in used:
+                used.add(key)
+                return key[1:]
     colours = [[1.0, 0.9, 0.7], [0.6, 0.8, 1.0], [1.0, 0.5, 0.4], [0.7, 1.0, 0.6]]
     mats = [b.material(emissiveFactor=c, extensions={"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}},
                        pbrMetallicRoughness={"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0}, doubleSided=True)
@@ -364,13 +376,15 @@ def gen_emitters(path, count=2000):
         for _ in range(count // len(mats)):
             wall = rnd()
             s = 0.04 + 0.06 * rnd()
-            u, v = -1.9 + 3.8 * rnd(), 0.1 + 2.3 * rnd()
             if wall < 0.5:  # ceiling, facing down
-                c, tri, n = (u, 2.499, -1.9 + 3.8 * rnd()), [(0, 0, 0), (s, 0, 0), (0, 0, s)], (0, -1, 0)
+                i, j = free_cell(0, 36)
+                c, tri, n = (-1.9 + cell * i, 2.499, -1.9 + cell * j), [(0, 0, 0), (s, 0, 0), (0, 0, s)], (0, -1, 0)
             elif wall < 0.75:  # back wall z = -2, facing +z
-                c, tri, n = (u, v, -1.999), [(0, 0, 0), (s, 0, 0), (0, s, 0)], (0, 0, 1)
-            else:  # left wall x = -2, facing +x
-                c, tri, n = (-1.999, v, u), [(0, 0, 0), (0, 0, s), (0, s, 0)], (1, 0, 0)
+                i, j = free_cell(1, 21)
+                c, tri, n = (-1.9 + cell * i, 0.1 + cell * j, -1.999), [(0, 0, 0), (s, 0, 0), (0, s, 0)], (0, 0, 1)
+            else:  # left wall x = -2, facing +x (the winding's normal: vkvcm emits on its side)
+                i, j = free_cell(2, 21)
+                c, tri, n = (-1.999, 0.1 + cell * j, -1.9 + cell * i), [(0, 0, 0), (0, s, 0), (0, 0, s)], (1, 0, 0)
             base = len(epos)
             for t in tri:
                 epos.append(tuple(c[k] + t[k] for k in range(3)))

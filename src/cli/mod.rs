@@ -102,19 +102,18 @@ impl EnvArgs {
 
 pub use vkvcm::gpu::GpuArgs;
 
-/// An output path that must name an OpenEXR file (`-o` of render, reference, merge and
-/// denoise: linear float32 with AOVs and resume data, which no 8-bit format holds): a
-/// name ending in another image extension is refused, pointing at `--png`, rather than
-/// written as EXR under a misleading name.
+/// An output path for an OpenEXR file (`-o` of render, reference, merge and denoise:
+/// linear float32 with AOVs and resume data, which no 8-bit format holds): a name ending
+/// in another image format's extension is refused, pointing at `--png`, rather than
+/// written as EXR under a misleading name; any other name is taken as it is.
 pub fn parse_exr_path(s: &str) -> std::result::Result<std::path::PathBuf, String> {
     let p = std::path::PathBuf::from(s);
     match p.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-        Some("exr") => Ok(p),
         Some(e @ ("png" | "jpg" | "jpeg" | "hdr" | "tif" | "tiff" | "bmp" | "webp")) => Err(format!(
             "{s:?}: -o writes OpenEXR (.exr); for a tone-mapped .{e} image add --png FILE.png (render, merge) \
              beside an .exr output"
         )),
-        _ => Err(format!("{s:?}: expected an OpenEXR file name ending in .exr")),
+        _ => Ok(p),
     }
 }
 
