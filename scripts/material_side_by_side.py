@@ -174,6 +174,21 @@ def write_scene(ext, out):
     Path(out).write_text(json.dumps(gltf))
 
 
+def set_cycles_dispersion(bpy):
+    """Blender 5.3's importer leaves the Principled BSDF's Transmission Dispersion Scale at
+    0 (no dispersion) whatever KHR_materials_dispersion says: set it from the variants.
+    With the node's default Abbe number 20, scale d gives Abbe number 20 / d, glTF's
+    dispersion d (OpenPBR's convention, which glTF adopted)."""
+    for label, _, _, _, e in VARIANTS["dispersion"]:
+        node = bpy.data.materials[label].node_tree.nodes.get("Principled BSDF")
+        if node is not None and e:
+            node.inputs["Transmission Dispersion Abbe Number"].default_value = 20.0
+            node.inputs["Transmission Dispersion Scale"].default_value = e["dispersion"]
+
+
+AFTER_IMPORT = {"dispersion": set_cycles_dispersion}
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("extension", choices=sorted(VARIANTS))
@@ -204,7 +219,8 @@ def main():
         subprocess.run([a.vkvcm, "render", str(scene), "--algo", "pt", "--env", "none", "--width", str(width),
                         "--height", str(height), "--max-path-length", "10", "--iterations", str(a.iterations),
                         "-o", str(vk), "--quiet"], check=True)
-        blender_cycles.render_cycles(scene, None, 1, a.samples, cy, width, height, a.threads, (0.0, 0.0, 0.0))
+        blender_cycles.render_cycles(scene, None, 1, a.samples, cy, width, height, a.threads, (0.0, 0.0, 0.0),
+                                     AFTER_IMPORT.get(a.extension))
         vk_img, cy_img = blender_cycles.read_rgb(vk), blender_cycles.read_rgb(cy)
     out = Path(a.out) / f"{a.extension}_side_by_side.png"
     blender_cycles.montage(out, [vk_img, cy_img, blender_cycles.ratio_map(vk_img, cy_img)])

@@ -122,14 +122,17 @@ def cycles_child(scene, seed, spp, out, size, threads):
     render_cycles(scene, cycles_assets.CAMERA, seed, spp, out, size, size, threads, (1.0, 1.0, 1.0))
 
 
-def render_cycles(scene, camera, seed, spp, out, width, height, threads, world_rgb):
+def render_cycles(scene, camera, seed, spp, out, width, height, threads, world_rgb, after_import=None):
     """Runs inside the venv: imports the glTF with Blender's importer and renders it with
     Cycles through the camera whose name starts with `camera` (None: the file's first) to a
-    float EXR, settings matched to vkvcm's (below), a uniform world of colour world_rgb."""
+    float EXR, settings matched to vkvcm's (below), a uniform world of colour world_rgb.
+    `after_import(bpy)`, if given, adjusts what the importer made (what it does not read)."""
     import bpy
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.ops.preferences.addon_enable(module="cycles")  # the empty factory settings leave it off
     bpy.ops.import_scene.gltf(filepath=str(scene))
+    if after_import is not None:
+        after_import(bpy)
     sc = bpy.context.scene
     cams = [o for o in sc.objects if o.type == "CAMERA" and (camera is None or o.name.startswith(camera))]
     if not cams:
