@@ -121,6 +121,11 @@ struct Bsdf {
     float prob_rough; // the rough dielectric (1 for its materials, else 0)
     float cont_prob;        // Russian roulette's continuation probability at wo
     bool cont_prob_varies;  // ... which depends on wo (cont_prob_from)
+    // The base's continuation probability (before a sheen or a coat) as a function of its
+    // Fresnel term F (base_cont_prob): max3(lobes + F mirror) + (1 - F) transmit + rough.
+    vec3 cont_lobes, cont_mirror;
+    float cont_transmit, cont_rough;
+    float ior;       // a dielectric's IOR (phong.w); negative for opaque materials
     float fresnel;   // reflectance F (1 for non-dielectrics; unused by the rough dielectric)
     float eta_ratio; // eta on the wo side / eta on the other side (dielectrics)
     bool valid;
@@ -402,6 +407,14 @@ void fresnel_lobe_weights(GpuMaterial m, Tint tint, float c, inout float a_d, in
 
 // `ng`: geometric normal (for a dielectric it must point outwards); `ns`: shading normal
 // on the same side as ng (== ng for flat shading); `tint`: the point's tint (Surface.tint).
+// The base's continuation probability for the Fresnel term `fresnel` of its interface
+// (1 on opaque materials): the largest channel of its albedo plus what the interface
+// transmits, at most 1.
+float base_cont_prob(Bsdf b, float fresnel) {
+    return clamp(max3(b.cont_lobes + fresnel * b.cont_mirror) + (1.0 - fresnel) * b.cont_transmit + b.cont_rough, 0.0,
+                 1.0);
+}
+
 Bsdf base_bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint tint) {
     Bsdf b;
     GpuMaterial m = point_material(material, tint);
@@ -410,6 +423,7 @@ Bsdf base_bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, T
     b.wo = wo;
     b.from_light = from_light;
     b.tint = tint;
+    b.ior = ior;
     b.cont_prob_varies = false;
 #if HAS_IRIDESCENCE
     b.interface_e_avg = vec3(0.0);
@@ -484,6 +498,8 @@ Bsdf base_bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, T
 #if HAS_ROUGH_DIELECTRIC && HAS_PARTIAL_TRANSMISSION
     if (rough && b.lobes_weight > 0.0) a_rough = b.interface_weight;
 #endif
+    b.cont_lobes = albedo;
+    b.cont_mirror = vec3(0.0);
 #if HAS_MIRROR
     vec3 mirror = mirror_colour(m, tint.rgb);
     a_r = b.fresnel * luminance(mirror);
@@ -496,6 +512,7 @@ Bsdf base_bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, T
     }
 #endif
     albedo += b.fresnel * mirror;
+    b.cont_mirror = mirror;
 #endif
 #if HAS_DIELECTRIC
     a_t = ior < 0.0 ? 0.0 : 1.0 - b.fresnel;
@@ -513,6 +530,9 @@ Bsdf base_bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, T
         b.prob_reflect = 0.0;
         b.prob_refract = 0.0;
         b.prob_rough = 1.0;
+        b.cont_lobes = b.cont_mirror = vec3(0.0);
+        b.cont_transmit = 0.0;
+        b.cont_rough = 1.0;
         b.cont_prob = 1.0;
         b.delta = false;
 #if defined(AOV) && AOV
@@ -533,12 +553,15 @@ Bsdf base_bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, T
     b.prob_glossy = a_g / total;
     b.prob_reflect = a_r / total;
     b.prob_refract = a_t / total;
+    // Russian roulette: the albedo's largest channel plus the interface's transmission.
+    b.cont_transmit = 1.0;
+    b.cont_rough = 0.0;
 #if HAS_PARTIAL_TRANSMISSION
     b.prob_rough = a_rough / total;
-    b.cont_prob = clamp(max3(albedo) + a_t + a_rough, 0.0, 1.0);
-#else
-    b.cont_prob = clamp(max3(albedo) + (1.0 - b.fresnel), 0.0, 1.0);
+    b.cont_transmit = ior < 0.0 || a_rough > 0.0 ? 0.0 : b.interface_weight;
+    b.cont_rough = a_rough;
 #endif
+    b.cont_prob = base_cont_prob(b, b.fresnel);
     // A dielectric's Fresnel term F(wo) weighs its reflection and refraction.
     b.cont_prob_varies = ior >= 0.0;
     b.delta = b.prob_diffuse == 0.0 && b.prob_phong == 0.0 && b.prob_glossy == 0.0 && b.prob_rough == 0.0;
@@ -977,10 +1000,11 @@ BsdfSample base_bsdf_sample(Bsdf b, vec3 u) {
 // (their sampling probabilities): its lobes' colours, plus the glass weight of a
 // dielectric's interface (which reflects and transmits all it receives) or the mirror
 // colour of an opaque material.
-bool bsdf_wo_seen(Bsdf b) {
-    float c = dot(b.ng, b.wo);
-    return abs(c) >= EPS_COSINE && (c >= 0.0 ? dot(b.n, b.wo) : -dot(b.n, b.wo)) >= EPS_COSINE;
+bool bsdf_seen(Bsdf b, vec3 d) {
+    float c = dot(b.ng, d);
+    return abs(c) >= EPS_COSINE && (c >= 0.0 ? dot(b.n, d) : -dot(b.n, d)) >= EPS_COSINE;
 }
+bool bsdf_wo_seen(Bsdf b) { return bsdf_seen(b, b.wo); }
 float base_albedo_luminance(GpuMaterial m, Tint tint) {
     float lobes = luminance(diffuse_colour(m, tint.rgb) + m.phong.rgb + glossy_colour(m, tint.rgb));
     if (m.phong.w >= 0.0) return lobes * (1.0 - m.transmission.w) + m.transmission.w;
@@ -1012,7 +1036,14 @@ Bsdf bsdf_init(uint material, vec3 ng, vec3 ns, vec3 wo, bool from_light, Tint t
 // sheen (their shares of the albedo depend on it) and on a dielectric (F).
 float cont_prob_from(Bsdf b, vec3 d) {
     if (!b.cont_prob_varies) return b.cont_prob;
-    return bsdf_init(b.material, b.ng, b.n, d, b.from_light, b.tint).cont_prob;
+    float p = base_cont_prob(b, b.ior < 0.0 ? 1.0 : fresnel_dielectric(dot(b.n, d), b.ior));
+#if HAS_SHEEN
+    p = sheen_cont_prob(b, d, p);
+#endif
+#if HAS_CLEARCOAT
+    p = coat_cont_prob(b, d, p);
+#endif
+    return p;
 }
 
 // f(wo, wi) of the non-specular part and the solid-angle pdfs of sampling wi given wo

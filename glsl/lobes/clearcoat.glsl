@@ -55,6 +55,14 @@ float coat_prob(Bsdf b, vec3 d) {
     return den > 0.0 ? c / den : 0.0;
 }
 
+// The continuation probability `p` of the base under the coat, were `d` the vertex's
+// fixed direction: the coat's share c(d) continues, p of the rest.
+float coat_cont_prob(Bsdf b, vec3 d, float p) {
+    if (b.coat_weight <= 0.0 || !bsdf_seen(b, d)) return p;
+    float c = coat_blend(b, d);
+    return clamp(p * (1.0 - c) + c, 0.0, 1.0);
+}
+
 // Adds the coat to the base's Bsdf `b` (bsdf_init): its weight, the coat's sampling
 // probability at wo, and the continuation probability and delta flag of the blend.
 void clearcoat_init(inout Bsdf b, GpuMaterial m) {
@@ -84,8 +92,7 @@ void clearcoat_init(inout Bsdf b, GpuMaterial m) {
         b.valid = true;
         b.delta = false;
     }
-    float cw = coat_blend(b, b.wo);
-    b.cont_prob = clamp(b.cont_prob * (1.0 - cw) + cw, 0.0, 1.0);
+    b.cont_prob = coat_cont_prob(b, b.wo, b.cont_prob);
     b.cont_prob_varies = true;
 }
 

@@ -66,6 +66,14 @@ float sheen_prob(Bsdf b, vec3 d) {
 
 // Adds the sheen to the base's Bsdf `b`: its colour and roughness, its sampling
 // probability at wo, and the continuation probability and delta flag of the sum.
+// The continuation probability `p` of the base under the sheen, were `d` the vertex's
+// fixed direction: the sheen's share s = max(colour) E(d) continues, p of the rest.
+float sheen_cont_prob(Bsdf b, vec3 d, float p) {
+    if (b.sheen_max <= 0.0 || !bsdf_seen(b, d)) return p;
+    float s = b.sheen_max * min(sheen_albedo_at(b, d), 1.0);
+    return clamp(p * (1.0 - s) + s, 0.0, 1.0);
+}
+
 void sheen_init(inout Bsdf b, GpuMaterial m) {
     b.sheen_colour = m.sheen.rgb;
     b.sheen_roughness = m.sheen.w;
@@ -84,8 +92,7 @@ void sheen_init(inout Bsdf b, GpuMaterial m) {
         b.valid = true;
         b.delta = false;
     }
-    float s = b.sheen_max * min(sheen_albedo_at(b, b.wo), 1.0);
-    b.cont_prob = clamp(b.cont_prob * (1.0 - s) + s, 0.0, 1.0);
+    b.cont_prob = sheen_cont_prob(b, b.wo, b.cont_prob);
     b.cont_prob_varies = true;
 }
 
