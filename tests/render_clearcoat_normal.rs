@@ -123,11 +123,9 @@ fn coat_normal_map_tilts_the_coat() {
 /// with NEE against PT without and BPT (light vertices carry the coat's normal). Not LT:
 /// its samples of the coats' narrow highlights are rare and large (heavy-tailed), so its
 /// per-pixel means there converge slowly from below with too small a variance estimate
-/// and no per-pixel test of it is fair at a test's cost. Measured (lavapipe, 2026-12-06,
-/// seeds 41 and 44/46): pixel (13, 8) channel B, PT 0.1108 at 2048 iterations, LT 0.0509
-/// at 16,384 (z 19.6; 17 pixels beyond |z| 4.9, likewise without any normal map) and
-/// 0.1042 at 131,072 (4 pixels, z at most 9.0), while LT's image mean is PT's within
-/// 0.2% at both.
+/// and no per-pixel test of it is fair at a test's cost (at 16,384 iterations some highlight
+/// pixels are still half PT's value, with or without any normal map; LT's image mean is
+/// PT's within 0.2%).
 #[test]
 fn coat_normal_map_estimators_agree() {
     let sc = mapped_floor_scene(

@@ -140,18 +140,24 @@ pub fn smooth_sky(width: u32, height: u32) -> vkvcm::scene::EnvironmentMap {
     vkvcm::scene::EnvironmentMap::new("smooth_sky", width, height, texels).expect("map")
 }
 
+/// Uniform numbers in [0, 1] from a 32-bit xorshift generator (Marsaglia 2003) seeded
+/// with `seed`: deterministic test scenes.
+pub fn xorshift(seed: u32) -> impl FnMut() -> f32 {
+    let mut rng = seed | 1;
+    move || {
+        rng ^= rng << 13;
+        rng ^= rng >> 17;
+        rng ^= rng << 5;
+        rng as f32 / u32::MAX as f32
+    }
+}
+
 /// Gives every triangle of `scene` vertex normals tilted off its geometric normal by
 /// random angles of up to `max_tilt_deg` (deterministic in `seed`), on the geometric
 /// normal's side: shading normals that disagree with the geometry everywhere, as a coarse
 /// mesh's interpolated normals do.
 pub fn tilt_shading_normals(scene: &mut Scene, max_tilt_deg: f32, seed: u32) {
-    let mut rng = seed | 1;
-    let mut rnd = move || {
-        rng ^= rng << 13;
-        rng ^= rng >> 17;
-        rng ^= rng << 5;
-        rng as f32 / u32::MAX as f32
-    };
+    let mut rnd = xorshift(seed);
     let tan_max = max_tilt_deg.to_radians().tan();
     for t in &mut scene.triangles {
         let ng = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]).normalize();
@@ -261,13 +267,7 @@ pub fn unit_sphere_hit_cos(cam: &Camera, w: u32, h: u32, x: f32, y: f32) -> Opti
 /// `seed`), and makes the scene's area lights again (other lights stay): the light tree's
 /// case (src/render/light_tree.rs), many lights whose importance varies over the scene.
 pub fn add_emitter_cloud(s: &mut Scene, count: usize, seed: u32) {
-    let mut rng = seed | 1;
-    let mut rnd = move || {
-        rng ^= rng << 13;
-        rng ^= rng >> 17;
-        rng ^= rng << 5;
-        rng as f32 / u32::MAX as f32
-    };
+    let mut rnd = xorshift(seed);
     let first = s.materials.len() as u32;
     for (i, c) in [Vec3::new(8.0, 2.0, 1.0), Vec3::new(1.0, 6.0, 2.0), Vec3::new(1.0, 2.0, 9.0), Vec3::splat(4.0)]
         .into_iter()
