@@ -25,7 +25,10 @@ render: build
 # (GpuOptions::for_tests). It covers the workspace (the renderer and tools/) with the
 # fault-injection feature, which the tests of device loss and device limits need, and runs
 # every test binary even after a failure, so that one CI run names every failing test.
+# Without incremental compilation (here and in the SwiftShader set, which reuses the build):
+# a fresh clone builds once, and its incremental state (3.5 GB) would only fill the disk.
 TEST_KERNEL_CACHE := $(CURDIR)/target/test-kernel-cache
+test test-swiftshader: export CARGO_INCREMENTAL := 0
 
 #
 # Then a set of the tests on SwiftShader, a second Vulkan implementation with other limits

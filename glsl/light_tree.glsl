@@ -144,7 +144,7 @@ float tree_prob(uint index, vec3 x, vec3 n) {
 }
 
 // Next-event estimation's pick: into the tree with probability tree_share(), else one of
-// the other lights from their alias table (as pick_from_table's), with its power
+// the other lights from their alias table (as pick_light_at's), with its power
 // probability. `prob` is the probability of the light returned (NO_LIGHT: 0).
 uint tree_nee_pick(float u, vec3 x, vec3 n, out float prob) {
     float share = tree_share();

@@ -1,11 +1,10 @@
 // Light sources, written once for every estimator: direct-illumination sampling (next-
 // event estimation) and the pdfs of hitting an emitter, with the quantities the MIS of
-// docs/smallvcm.md 4.4 needs. A light is picked by the selection tables of
-// src/render/light_selection.rs (by power, or uniformly: --light-selection): light
-// subpaths start by one (`pick_light`, `light_pick_prob`), next-event estimation picks by
-// the other (`nee_pick_light`, `nee_light_prob`), which leaves a constant background to
-// BSDF sampling and with --light-selection tree picks area lights by the light tree. Every
-// pdf that includes a pick uses the probability of the pick that would have made it.
+// docs/smallvcm.md 4.4 needs. A light is picked by the selection table of
+// src/render/light_selection.rs (by power, or uniformly: --light-selection), and every
+// pdf that includes the pick uses `light_pick_prob` of the light picked or hit; with
+// --light-selection tree next-event estimation picks area lights by the light tree
+// (`nee_pick_light`, `nee_light_prob`), light subpaths still by the table.
 //
 // Light kinds the scene lacks are compiled out (HAS_AREA_LIGHTS, HAS_POINT_LIGHTS,
 // HAS_SPOT_LIGHTS, HAS_DIRECTIONAL_LIGHTS, HAS_BACKGROUND: glsl/features.glsl): each kind
@@ -119,32 +118,29 @@ float area_light_direct_pdf_a(uint index, vec3 x, vec3 y) {
     return area_light_pdf_w(l, triangle_solid_angle(l, x), d2, cos_l) * cos_l / d2;
 }
 
-// A draw from a selection table (Walker's alias method, one random number: slot
-// i = floor(u n); the fraction u n - i below the slot's threshold (table.y) keeps light
-// i, else its alias (table.z) is taken). Uniform selection's table keeps every slot
-// whole: min(floor(u n), n - 1), SmallVCM's draw. `next_event`: next-event estimation's
-// table (GpuLight.e), else the light subpaths' (GpuLight.d).
-uint pick_from_table(float u, bool next_event) {
+// Picks a light with probability light_pick_prob (Walker's alias method, one random
+// number: slot i = floor(u n); the fraction u n - i below the slot's threshold (d.y)
+// keeps light i, else its alias (d.z) is taken). Uniform selection's table keeps every
+// slot whole: min(floor(u n), n - 1), SmallVCM's draw.
+uint pick_light_at(float u) {
     uint n = params.dims.z;
     float x = u * float(n);
     uint i = min(uint(x), n - 1u);
     GpuLight l = light_at(i);
-    vec4 table = next_event ? l.e : l.d;
-    return x - float(i) < table.y ? i : floatBitsToUint(table.z);
+    return x - float(i) < l.d.y ? i : floatBitsToUint(l.d.z);
 }
 
-// Picks the light a light subpath starts on, with probability light_pick_prob.
-uint pick_light(inout uint rng) { return pick_from_table(rnd(rng), false); }
+uint pick_light(inout uint rng) { return pick_light_at(rnd(rng)); }
 
 // The probability that pick_light picks light `index`.
 float light_pick_prob(uint index) { return light_at(index).d.x; }
 
 // Next-event estimation's pick of a light for shading point x with geometric normal n
-// (n = 0: none), with its probability `prob`: its table's, or with LIGHT_TREE the light
-// tree's for area lights (glsl/light_tree.glsl), which depends on x and n; NO_LIGHT
-// where no light is left to it (only a constant background) or the tree has no light that
-// can shine on x. nee_light_prob is the same probability for a given light: the direct
-// pdf of an emitter hit takes it at the previous vertex, its emission pdf light_pick_prob.
+// (n = 0: none), with its probability `prob`: the selection table's (as light subpaths
+// start), or with LIGHT_TREE the light tree's for area lights (glsl/light_tree.glsl),
+// which depends on x and n; NO_LIGHT where the tree has no light that can shine on x.
+// nee_light_prob is the same probability for a given light: the direct pdf of an
+// emitter hit takes it at the previous vertex, its emission pdf light_pick_prob.
 #ifndef LIGHT_TREE
 #define LIGHT_TREE 0
 #endif
@@ -156,9 +152,9 @@ uint nee_pick_light(float u, vec3 x, vec3 n, out float prob) {
 #if LIGHT_TREE
     return tree_nee_pick(u, x, n, prob);
 #else
-    uint li = pick_from_table(u, true);
-    prob = light_at(li).e.x;
-    return prob > 0.0 ? li : NO_LIGHT;
+    uint li = pick_light_at(u);
+    prob = light_pick_prob(li);
+    return li;
 #endif
 }
 
@@ -166,7 +162,7 @@ float nee_light_prob(uint index, vec3 x, vec3 n) {
 #if LIGHT_TREE
     return tree_nee_prob(index, x, n);
 #else
-    return light_at(index).e.x;
+    return light_pick_prob(index);
 #endif
 }
 

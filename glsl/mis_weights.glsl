@@ -29,8 +29,8 @@ float mis_weight_hit(SubpathState st, float direct_pdf, float emission_pdf, floa
 // 44-45, docs/smallvcm.md 4.4.9):
 // returns the MIS weight, with f the BSDF value (zero: no contribution) and cos_x the
 // cosine that multiplies it (bsdf_cos).
-// `pick` is the probability that picked the light here (positive), `emission_pick` the one
-// a light subpath starts on it with (lights.glsl: the two tables differ).
+// `pick` is the probability that picked the light here, `emission_pick` the one a light
+// subpath starts on it with (they differ with the light tree).
 float nee_eval(SubpathState st, Bsdf b, LightSample ls, float pick, float emission_pick, out vec3 f, out float cos_x) {
     float pf, pr;
     f = bsdf_eval(b, ls.wi, pf, pr);
@@ -41,7 +41,9 @@ float nee_eval(SubpathState st, Bsdf b, LightSample ls, float pick, float emissi
     float w_light = pf / (pick * ls.pdf_w);
     float cos_g = bsdf_cos_geometric(b, ls.wi);
     float w_camera = (ls.emission_pdf_w * cos_g / (ls.pdf_w * ls.cos_light)) * (push.mis_vm + st.dvcm + st.dvc * pr);
+#if LIGHT_TREE
     w_camera *= emission_pick / pick;
+#endif
     return 1.0 / (w_light + 1.0 + w_camera);
 }
 

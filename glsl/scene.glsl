@@ -133,15 +133,13 @@ vec4 material_anisotropy(uint i) { return texel_vec4(materials, MATERIAL_TEXELS 
 vec4 material_diffuse_transmission_maps(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 20u); }
 vec4 material_coat_normal(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 21u); }
 vec4 material_dispersion(uint i) { return texel_vec4(materials, MATERIAL_TEXELS * i + 22u); }
-#define LIGHT_TEXELS 6u  // GpuLight's vec4s
 GpuLight light_at(uint i) {
     GpuLight l;
-    l.a = texel_vec4(lights, LIGHT_TEXELS * i);
-    l.b = texel_vec4(lights, LIGHT_TEXELS * i + 1u);
-    l.c = texel_vec4(lights, LIGHT_TEXELS * i + 2u);
-    l.d = texel_vec4(lights, LIGHT_TEXELS * i + 3u);
-    l.e = texel_vec4(lights, LIGHT_TEXELS * i + 4u);
-    l.radiance = texel_vec4(lights, LIGHT_TEXELS * i + 5u);
+    l.a = texel_vec4(lights, 5u * i);
+    l.b = texel_vec4(lights, 5u * i + 1u);
+    l.c = texel_vec4(lights, 5u * i + 2u);
+    l.d = texel_vec4(lights, 5u * i + 3u);
+    l.radiance = texel_vec4(lights, 5u * i + 4u);
     return l;
 }
 #else

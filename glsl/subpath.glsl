@@ -50,11 +50,13 @@ void mis_light_start(inout SubpathState st, float emission_pdf, float direct_pdf
 // a pdf that depends on the receiving point (solid-angle sampling, lights.glsl), so the
 // direct pdf that mis_light_start took (the area sampler's 1 / area, light_emit) is
 // replaced at the first hit y1, once it is known (with mis_on_hit, before anything uses
-// dvcm). The pick of the direct pdf is next-event estimation's too (nee_light_prob at y1
-// and its geometric normal n1: the light tree's depends on them), not the light subpaths'
-// that mis_light_start took.
+// dvcm). Other lights: nothing to do. With the light tree (LIGHT_TREE) the pick of the
+// direct pdf is also y1's (nee_light_prob at y1 and its geometric normal n1), not the
+// selection table's that started the subpath.
 void mis_light_first_hit(inout SubpathState st, vec3 y1, vec3 n1) {
+#if LIGHT_TREE
     st.dvcm *= nee_light_prob(st.light, y1, n1) / light_pick_prob(st.light);
+#endif
     GpuLight l = light_at(st.light);
     if (light_kind(l) != LIGHT_AREA) return;
     st.dvcm *= area_light_direct_pdf_a(st.light, y1, st.from_p) * l.d.w;

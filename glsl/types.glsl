@@ -85,8 +85,7 @@ struct GpuLight {
     vec4 a;
     vec4 b;
     vec4 c;
-    vec4 d;         // the light subpaths' selection table (src/render/gpu_types.rs)
-    vec4 e;         // next-event estimation's
+    vec4 d;
     vec4 radiance;  // w: kind (bits)
 };
 

@@ -100,7 +100,7 @@ fn rust_and_glsl_layouts_match() {
         rust_layout!(GpuVertexAttributes { uv, color, tangent }),
         rust_layout!(GpuTriangle { material, light, first_vertex, _pad }),
         rust_layout!(GpuSphere { center_radius, info }),
-        rust_layout!(GpuLight { a, b, c, d, e, radiance }),
+        rust_layout!(GpuLight { a, b, c, d, radiance }),
         rust_layout!(GpuParams { cam_pos, cam_forward, cam_right, cam_up, scene_sphere, dims, misc }),
         rust_layout!(GpuAddresses {
             film,

@@ -4,9 +4,8 @@
 //! follow the same probabilities, so the image must not change. A scene with six lights of
 //! very different power (two large area-light triangles, the two triangles of a small
 //! bright emitter, a point light and a dim constant background): PT, BPT and LT picking
-//! by power against PT picking uniformly, per pixel; in both, next-event estimation
-//! leaves the background to BSDF sampling. (tests/mis_weights.rs checks that the weights of
-//! every technique of a path sum to 1 with the power-based probabilities.)
+//! by power against PT picking uniformly, per pixel. (tests/mis_weights.rs checks that
+//! the weights of every technique of a path sum to 1 with the power-based probabilities.)
 //!
 //! Statistics as in tests/render_ggx.rs: K = iterations independent samples per pixel,
 //! per-pixel Welch test, Šidák-corrected so that each comparison has false-failure
@@ -83,36 +82,6 @@ fn power_selection_table_of_the_test_scene() {
     assert!(lo > 0.0 && hi > 3.0 * lo, "probabilities {:?}", d.prob);
     assert!((d.prob.iter().sum::<f32>() - 1.0).abs() < 1e-5);
     assert_eq!(LightDistribution::new(&scene, LightSelection::Uniform), LightDistribution::uniform(6));
-}
-
-/// Next-event estimation's table (LightDistribution::next_event) leaves the constant
-/// background to BSDF sampling and keeps the other lights' proportions; with nothing else
-/// left it picks nothing; an environment map stays in it. The render tests below check
-/// that the kernels' weights follow it (the background is lit by BSDF sampling alone).
-#[test]
-fn next_event_table_leaves_a_constant_background_out() {
-    let mut scene = many_lights_scene();
-    let background = scene.lights.iter().position(|l| matches!(l, Light::Background { .. })).unwrap();
-    for selection in [LightSelection::Power, LightSelection::Uniform, LightSelection::Tree] {
-        let all = LightDistribution::new(&scene, selection);
-        let nee = LightDistribution::next_event(&scene, selection);
-        assert!(all.prob[background] > 0.0, "{selection:?}: light subpaths start on the background");
-        assert_eq!(nee.prob[background], 0.0, "{selection:?}");
-        assert!(nee.alias.iter().zip(&nee.threshold).all(|(&a, &t)| a as usize != background || t == 1.0));
-        let others = 1.0 - all.prob[background];
-        for (i, (&p, &q)) in all.prob.iter().zip(&nee.prob).enumerate().filter(|&(i, _)| i != background) {
-            assert!((p / others - q).abs() < 1e-5, "{selection:?}: light {i} {q}, want {}", p / others);
-        }
-    }
-    scene.lights.retain(|l| matches!(l, Light::Background { .. }));
-    assert_eq!(LightDistribution::next_event(&scene, LightSelection::Power), LightDistribution::none(1));
-    let map = Arc::new(vkvcm::scene::environment::EnvironmentMap::constant(4, 3, [1.0; 3]));
-    scene.lights = vec![Light::Environment(vkvcm::scene::environment::EnvironmentLight {
-        map,
-        scale: Vec3::ONE,
-        rotation_deg: 0.0,
-    })];
-    assert_eq!(LightDistribution::next_event(&scene, LightSelection::Power).prob, vec![1.0]);
 }
 
 /// PT, BPT and LT picking lights by power against PT picking them uniformly, per pixel.

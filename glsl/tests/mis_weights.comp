@@ -282,8 +282,8 @@ void main() {
         }
     }
     if (use_vc && k >= 2u) {
-        // s = 1: next-event estimation at y_1 (not for a light it leaves to BSDF sampling).
-        if (!vdelta[1] && nee_pick > 0.0) {
+        // s = 1: next-event estimation at y_1.
+        if (!vdelta[1]) {
             LightSample ls = light_sample_fixed(li, vp[1]);
             vec3 f;
             float cos_x;

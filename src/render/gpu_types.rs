@@ -186,9 +186,8 @@ pub struct GpuSphere {
 /// `d.w` = area; point: `a` = position; spot: `a` = position, `b` = direction (w: cos
 /// inner), `c.w` = cos outer; directional: `b` = propagation direction; background:
 /// nothing; environment map: `a.xy` = size (bits), `b.xy` = cos, sin of the rotation.
-/// Every kind: `d.x` = the probability that a light subpath starts on it, `d.y` and `d.z`
-/// (bits) its slot's threshold and alias in the selection table; `e.xyz` the same in
-/// next-event estimation's table (src/render/light_selection.rs).
+/// Every kind: `d.x` = the probability of picking it, `d.y` and `d.z` (bits) its slot's
+/// threshold and alias in the selection table (src/render/light_selection.rs).
 /// `radiance`: rgb radiance (area, background), intensity (point, spot) or
 /// irradiance (directional); w: kind (bits).
 #[repr(C)]
@@ -198,7 +197,6 @@ pub struct GpuLight {
     pub b: [f32; 4],
     pub c: [f32; 4],
     pub d: [f32; 4],
-    pub e: [f32; 4],
     pub radiance: [f32; 4],
 }
 

@@ -1,15 +1,7 @@
-//! The probability with which light subpaths and next-event estimation choose each light,
-//! and the tables the kernels draw it from (glsl/lights.glsl: `pick_light` and
-//! `light_pick_prob` for light subpaths, `nee_pick_light` and `nee_light_prob` for
-//! next-event estimation). Every estimator's MIS weights use the same probabilities, so
-//! any choice is unbiased; what it changes is variance.
-//!
-//! Next-event estimation draws from its own table ([`LightDistribution::next_event`]): the
-//! same weights but a constant background's, which is 0. At a surface point its integrand
-//! is f cos times a constant, which BSDF sampling follows and the background's uniform
-//! sphere sampling does not, so its light samples only add variance (and a shadow ray);
-//! Cycles does the same (a constant world is not a light there). Light subpaths still
-//! start on it.
+//! The probability with which next-event estimation and light subpaths choose each light,
+//! and the table the kernels draw it from (glsl/lights.glsl, `pick_light`,
+//! `light_pick_prob`). Every estimator's MIS weights use the same probabilities, so any
+//! choice is unbiased; what it changes is variance.
 //!
 //! [`LightSelection::Power`] picks a light in proportion to its emitted power, as pbrt-v4's
 //! `PowerLightSampler` does (Pharr, Jakob, Humphreys, "Physically Based Rendering", 4th
@@ -57,31 +49,6 @@ impl LightDistribution {
                 LightDistribution::from_weights(&power)
             }
         }
-    }
-
-    /// Next-event estimation's table for `scene`'s lights under `selection`: as
-    /// [`LightDistribution::new`]'s with a constant background weighted 0 (the module's
-    /// header); no light at all (every probability 0) when nothing else is left.
-    pub fn next_event(scene: &Scene, selection: LightSelection) -> LightDistribution {
-        let weights: Vec<f64> = match selection {
-            LightSelection::Uniform => scene.lights.iter().map(|_| 1.0).collect(),
-            LightSelection::Power | LightSelection::Tree => {
-                let (_, radius) = scene.bounding_sphere();
-                scene.lights.iter().map(|l| light_power(l, &scene.triangles, radius)).collect()
-            }
-        };
-        let weights: Vec<f64> =
-            scene.lights.iter().zip(weights).map(|(l, w)| if left_to_bsdf_sampling(l) { 0.0 } else { w }).collect();
-        if weights.iter().all(|&w| !(w.is_finite() && w > 0.0)) {
-            return LightDistribution::none(weights.len());
-        }
-        LightDistribution::from_weights(&weights)
-    }
-
-    /// A table that picks nothing: every probability 0 (the kernels' pick returns
-    /// NO_LIGHT), each slot its own light.
-    pub fn none(n: usize) -> LightDistribution {
-        LightDistribution { prob: vec![0.0; n], threshold: vec![1.0; n], alias: (0..n as u32).collect() }
     }
 
     /// Every one of `n` lights with probability 1 / n: each slot keeps its own light, so
@@ -137,12 +104,6 @@ impl LightDistribution {
         let prob = mass.iter().map(|m| (m / n as f64) as f32).collect();
         LightDistribution { prob, threshold, alias }
     }
-}
-
-/// Whether next-event estimation leaves `light` to BSDF sampling: a constant background
-/// (the module's header).
-pub fn left_to_bsdf_sampling(light: &Light) -> bool {
-    matches!(light, Light::Background { .. })
 }
 
 /// The power of `light` for [`LightSelection::Power`] (the module's header), in the

@@ -6,12 +6,11 @@
 //! surface-area-orientation split cost, SAOH). Written here from the paper and pbrt-v4's
 //! description; the GLSL half is glsl/light_tree.glsl.
 //!
-//! Only area lights are in the tree. The other lights (point, spot, directional, an
-//! environment map) keep their power probability: next-event estimation goes into the
-//! tree with probability `p_tree`, the area lights' share of the power, and otherwise
-//! picks one of the others from an alias table over them alone (area lights weight 0), so
-//! each of them is picked with its power probability as before; a constant background is
-//! left to BSDF sampling, as in [`LightDistribution::next_event`]. Light subpaths still
+//! Only area lights are in the tree. The other lights (point, spot, directional, the
+//! background) keep their power probability: next-event estimation goes into the tree
+//! with probability `p_tree`, the area lights' share of the power, and otherwise picks
+//! one of the others from an alias table over them alone (area lights weight 0), so
+//! each of them is picked with its power probability as before. Light subpaths still
 //! start by the global power table (src/render/light_selection.rs): the emission pdf
 //! keeps the global pick, the direct (NEE) pdf takes the tree's (glsl/lights.glsl).
 //!
@@ -23,7 +22,7 @@
 
 use glam::{Quat, Vec3};
 
-use super::light_selection::{left_to_bsdf_sampling, light_power, LightDistribution};
+use super::light_selection::{light_power, LightDistribution};
 use crate::scene::{Light, Scene};
 
 /// A missing child or leaf (u32::MAX, as glsl/light_tree.glsl's NO_NODE).
@@ -159,11 +158,7 @@ impl LightTree {
     /// The tree over `scene`'s area lights of positive power; None when it has none.
     pub fn new(scene: &Scene) -> Option<LightTree> {
         let (_, radius) = scene.bounding_sphere();
-        let power: Vec<f64> = scene
-            .lights
-            .iter()
-            .map(|l| if left_to_bsdf_sampling(l) { 0.0 } else { light_power(l, &scene.triangles, radius) })
-            .collect();
+        let power: Vec<f64> = scene.lights.iter().map(|l| light_power(l, &scene.triangles, radius)).collect();
         let mut items: Vec<(u32, LightBounds)> = Vec::new();
         for (i, l) in scene.lights.iter().enumerate() {
             if let Some(b) = area_bounds(scene, l, radius) {

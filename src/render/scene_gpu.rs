@@ -279,15 +279,13 @@ fn gpu_textures(scene: &Scene) -> Result<GpuTextures> {
     Ok((refs, indices, texels))
 }
 
-/// The lights in GPU form, with their selection tables (`d.xyz`: the probability that a
-/// light subpath starts on the light, its slot's threshold and alias; `e.xyz`: next-event
-/// estimation's; src/render/light_selection.rs), and
+/// The lights in GPU form, with their selection table (`d.xyz`: the probability of
+/// picking the light, its slot's threshold and alias, src/render/light_selection.rs), and
 /// the index of the background light (constant or environment map) if any.
 pub fn gpu_lights(scene: &Scene, selection: LightSelection) -> Result<(Vec<GpuLight>, u32)> {
     let mut out = Vec::with_capacity(scene.lights.len());
     let mut background = NO_LIGHT;
     let table = LightDistribution::new(scene, selection);
-    let next_event = LightDistribution::next_event(scene, selection);
     for (i, l) in scene.lights.iter().enumerate() {
         let mut g = match *l {
             Light::Area { triangle, radiance } => {
@@ -303,7 +301,6 @@ pub fn gpu_lights(scene: &Scene, selection: LightSelection) -> Result<(Vec<GpuLi
                     b: v4(e1, 0.0),
                     c: v4(e2, 0.0),
                     d: [0.0, 0.0, 0.0, area],
-                    e: [0.0; 4],
                     radiance: v4(radiance, bits(LIGHT_AREA)),
                 }
             }
@@ -344,7 +341,6 @@ pub fn gpu_lights(scene: &Scene, selection: LightSelection) -> Result<(Vec<GpuLi
         g.d[0] = table.prob[i];
         g.d[1] = table.threshold[i];
         g.d[2] = bits(table.alias[i]);
-        g.e = [next_event.prob[i], next_event.threshold[i], bits(next_event.alias[i]), 0.0];
         out.push(g);
     }
     Ok((out, background))
