@@ -5,6 +5,8 @@
 #define PI 3.14159265358979
 #define INV_PI 0.318309886183791
 #define INV_4PI 0.0795774715459477
+// The largest float below 1: a remapped random number stays in [0, 1).
+#define ONE_MINUS_EPSILON 0.99999994
 
 float luminance(vec3 c) { return dot(c, vec3(0.212671, 0.715160, 0.072169)); }
 float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }

@@ -11,8 +11,6 @@
 #define LIGHT_TREE_GLSL
 
 #define NO_NODE 0xffffffffu
-// The largest float below 1: a remapped random number stays in [0, 1).
-#define TREE_ONE_MINUS_EPSILON 0.99999994
 
 #if TEXEL_READS
 uniform utextureBuffer light_tree;
@@ -118,7 +116,7 @@ uint tree_pick(float u, vec3 x, vec3 n, out float prob) {
             return NO_LIGHT;
         }
         bool first = u < p0;
-        u = min(first ? u / p0 : (u - p0) / (1.0 - p0), TREE_ONE_MINUS_EPSILON);
+        u = min(first ? u / p0 : (u - p0) / (1.0 - p0), ONE_MINUS_EPSILON);
         prob *= first ? p0 : 1.0 - p0;
         nd = tree_node(first ? nd.links.x : nd.links.y);
     }
@@ -149,12 +147,12 @@ float tree_prob(uint index, vec3 x, vec3 n) {
 uint tree_nee_pick(float u, vec3 x, vec3 n, out float prob) {
     float share = tree_share();
     if (u < share) {
-        uint li = tree_pick(min(u / share, TREE_ONE_MINUS_EPSILON), x, n, prob);
+        uint li = tree_pick(min(u / share, ONE_MINUS_EPSILON), x, n, prob);
         prob *= share;
         return li;
     }
     uint count = params.dims.z;
-    float y = min((u - share) / (1.0 - share), TREE_ONE_MINUS_EPSILON) * float(count);
+    float y = min((u - share) / (1.0 - share), ONE_MINUS_EPSILON) * float(count);
     uint i = min(uint(y), count - 1u);
     uvec4 e = tree_light(i);
     uint li = y - float(i) < uintBitsToFloat(e.z) ? i : e.y;

@@ -190,7 +190,36 @@ struct LightSample {
     bool ok;
 };
 
-LightSample light_illuminate(uint index, vec3 x, vec2 u) {
+// A background without a map.
+bool is_constant_background(GpuLight l) {
+#if HAS_ENVIRONMENT_MAP
+    return light_kind(l) == LIGHT_BACKGROUND && !env_has_map(l);
+#else
+    return light_kind(l) == LIGHT_BACKGROUND;
+#endif
+}
+
+// Next-event estimation's directions towards a constant background from a point of
+// geometric normal n: |cos| / (2 pi) about n, on either side with probability 1/2
+// (transmitted light too), so that a diffuse surface's light samples follow its integrand
+// as its BSDF samples do (uniform sphere sampling wastes them below the surface and near
+// the horizon); uniform on the sphere where there is no normal (n = 0: the camera).
+// Light subpaths emit uniformly; the direct pdf of one that starts there is this one at
+// its first hit (mis_light_first_hit).
+float background_direct_pdf_w(vec3 wi, vec3 n) {
+    return n == vec3(0.0) ? INV_4PI : abs(dot(wi, n)) * (0.5 * INV_PI);
+}
+
+vec3 sample_background_direction(vec2 u, vec3 n) {
+    if (n == vec3(0.0)) return sample_uniform_sphere(u);
+    bool front = u.x < 0.5;
+    u.x = min(front ? 2.0 * u.x : 2.0 * u.x - 1.0, ONE_MINUS_EPSILON);
+    vec3 local = sample_cosine_hemisphere(u);
+    return to_world(local, front ? n : -n);
+}
+
+// A light sample for the point x of geometric normal n (0: none).
+LightSample light_illuminate(uint index, vec3 x, vec3 n, vec2 u) {
     GpuLight l = light_at(index);
     uint kind = light_kind(l);
     LightSample s;
@@ -262,13 +291,15 @@ LightSample light_illuminate(uint index, vec3 x, vec2 u) {
             bool ok;
             s.radiance *= env_sample(l, u, s.wi, s.pdf_w, ok);
             if (!ok) return s;
+            s.emission_pdf_w = s.pdf_w / (PI * r_scene * r_scene);
         } else
 #endif
         {
-            s.wi = sample_uniform_sphere(u);
-            s.pdf_w = INV_4PI;
+            s.wi = sample_background_direction(u, n);
+            s.pdf_w = background_direct_pdf_w(s.wi, n);
+            if (!(s.pdf_w > 0.0)) return s;
+            s.emission_pdf_w = INV_4PI / (PI * r_scene * r_scene);
         }
-        s.emission_pdf_w = s.pdf_w / (PI * r_scene * r_scene);
     }
 #endif
     s.ok = max3(s.radiance) > 0.0;
@@ -296,9 +327,9 @@ vec3 area_light_radiance(uint index, float u, float v, vec3 dir, vec3 x, vec3 y,
 #endif
 }
 
-// The background seen along `dir` (a ray direction that left the scene), with its direct
-// (solid angle) and emission pdfs.
-vec3 background_radiance(uint index, vec3 dir, out float direct_pdf_w, out float emission_pdf_w) {
+// The background seen along `dir` (a ray direction that left the scene from a point of
+// geometric normal n, 0: none), with its direct (solid angle) and emission pdfs.
+vec3 background_radiance(uint index, vec3 dir, vec3 n, out float direct_pdf_w, out float emission_pdf_w) {
     float r = params.scene_sphere.w;
     GpuLight l = light_at(index);
 #if HAS_ENVIRONMENT_MAP
@@ -308,7 +339,7 @@ vec3 background_radiance(uint index, vec3 dir, out float direct_pdf_w, out float
         return le;
     }
 #endif
-    direct_pdf_w = INV_4PI;
+    direct_pdf_w = background_direct_pdf_w(dir, n);
     emission_pdf_w = INV_4PI / (PI * r * r);
     return l.radiance.rgb;
 }

@@ -78,7 +78,7 @@ void add_background(inout PtPath path, inout vec3 L) {
     uint bg = background_light();
     if (bg != NO_LIGHT && path.len >= min_path_length()) {
         float dpdf, epdf;
-        vec3 Le = background_radiance(bg, path.d, dpdf, epdf);
+        vec3 Le = background_radiance(bg, path.d, path.from_ng, dpdf, epdf);
         float wgt = (NEE == 0 || path.last_specular) ? 1.0 : balance(path.last_pdf, nee_light_prob(bg, path.from_p, path.from_ng) * dpdf);
         L += path.thr * Le * wgt;
     }
@@ -116,7 +116,7 @@ void connect_to_lights(PtPath path, Surface s, Bsdf b, inout PathSampler ps, ino
     float pick;
     uint li = nee_pick_light(sample_1d(ps, DIM1_PICK(path.len)), s.p, s.ng, pick);
     if (li == NO_LIGHT) return;
-    LightSample ls = light_illuminate(li, s.p, sample_2d(ps, DIM2_LIGHT(path.len)));
+    LightSample ls = light_illuminate(li, s.p, s.ng, sample_2d(ps, DIM2_LIGHT(path.len)));
     if (!ls.ok) return;
     float pf, pr;
     vec3 f = bsdf_eval(b, ls.wi, pf, pr);

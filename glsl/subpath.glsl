@@ -46,18 +46,20 @@ void mis_light_start(inout SubpathState st, float emission_pdf, float direct_pdf
     st.dvm = st.dvc * push.mis_vc;
 }
 
-// Light subpaths from an area light: next-event estimation samples the start point y0 with
-// a pdf that depends on the receiving point (solid-angle sampling, lights.glsl), so the
-// direct pdf that mis_light_start took (the area sampler's 1 / area, light_emit) is
-// replaced at the first hit y1, once it is known (with mis_on_hit, before anything uses
-// dvcm). Other lights: nothing to do. With the light tree (LIGHT_TREE) the pick of the
-// direct pdf is also y1's (nee_light_prob at y1 and its geometric normal n1), not the
-// selection table's that started the subpath.
+// Light subpaths from an area light or a constant background: next-event estimation
+// samples the start point y0 (the direction st.d) with a pdf that depends on the receiving
+// point (solid-angle sampling, the background's cosine about the normal: lights.glsl), so
+// the direct pdf that mis_light_start took (light_emit's: the area sampler's 1 / area,
+// 1 / (4 pi)) is replaced at the first hit y1, once it is known (with mis_on_hit, before
+// anything uses dvcm). Other lights: nothing to do. With the light tree (LIGHT_TREE) the
+// pick of the direct pdf is also y1's (nee_light_prob at y1 and its geometric normal n1),
+// not the selection table's that started the subpath.
 void mis_light_first_hit(inout SubpathState st, vec3 y1, vec3 n1) {
 #if LIGHT_TREE
     st.dvcm *= nee_light_prob(st.light, y1, n1) / light_pick_prob(st.light);
 #endif
     GpuLight l = light_at(st.light);
+    if (is_constant_background(l)) st.dvcm *= background_direct_pdf_w(-st.d, n1) / INV_4PI;
     if (light_kind(l) != LIGHT_AREA) return;
     st.dvcm *= area_light_direct_pdf_a(st.light, y1, st.from_p) * l.d.w;
 }

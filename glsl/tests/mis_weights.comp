@@ -63,9 +63,9 @@ vec3 dir_to(uint i, uint j) {
 // production light_illuminate, with its area branch repeated for a given point instead of
 // a sampled one (the pdf of the point by solid angle or by area, as light_illuminate
 // chooses at x) and the background's pdfs taken along the fixed direction (the pdfs of
-// the other lights do not depend on the sample).
-LightSample light_sample_fixed(uint li, vec3 x) {
-    LightSample s = light_illuminate(li, x, vec2(0.5));
+// the other lights do not depend on the sample). n: y_1's geometric normal.
+LightSample light_sample_fixed(uint li, vec3 x, vec3 n) {
+    LightSample s = light_illuminate(li, x, n, vec2(0.5));
     uint kind = light_kind(light_at(li));
     if (kind == LIGHT_AREA) {
         GpuLight l = light_at(li);
@@ -79,10 +79,11 @@ LightSample light_sample_fixed(uint li, vec3 x) {
         s.light_point = vp[0];
         s.ok = s.cos_light > EPS_COSINE_LIGHT && max3(s.radiance) > 0.0;
     } else if (kind == LIGHT_BACKGROUND) {
-        // The background's pdfs depend on the direction when it is a map.
+        // The background's pdfs depend on the direction (a map's, and a constant one's
+        // direct pdf about y_1's normal).
         s.wi = -dir0;
         float dp, ep;
-        s.radiance = background_radiance(li, s.wi, dp, ep);
+        s.radiance = background_radiance(li, s.wi, n, dp, ep);
         s.pdf_w = dp;
         s.emission_pdf_w = ep;
         s.ok = dp > 0.0 && max3(s.radiance) > 0.0;
@@ -178,7 +179,7 @@ void main() {
     // Join.
     if (s_gen == 1u) {
         if (vdelta[1]) return;
-        LightSample ls = light_illuminate(li, vp[1], u_pos);
+        LightSample ls = light_illuminate(li, vp[1], vn[1], u_pos);
         if (!ls.ok) return;
         if (ls.dist >= 1e29) {
             infinite0 = true;
@@ -226,7 +227,8 @@ void main() {
         e.emission_pdf_w = e.direct_pdf * e.cos_light * INV_PI;
     } else if (kind == LIGHT_BACKGROUND) {
         float dp, ep;
-        if (max3(background_radiance(li, -d01, dp, ep)) <= 0.0 || dp <= 0.0) return;
+        // light_emit's direct pdf (no normal), which mis_light_first_hit replaces at y_1.
+        if (max3(background_radiance(li, -d01, vec3(0.0), dp, ep)) <= 0.0 || dp <= 0.0) return;
         e.direct_pdf = dp;
         e.emission_pdf_w = ep;
     }
@@ -242,6 +244,7 @@ void main() {
     mis_light_start(st, e.emission_pdf_w * pick, e.direct_pdf * pick, e.cos_light, e.delta, e.finite);
     st.from_p = vp[0];
     st.light = li;
+    st.d = dir_to(0u, 1u);
     for (uint i = 1u; i < k; ++i) {
         vec3 d = dir_to(i - 1u, i);
         st.len = i;
@@ -273,7 +276,7 @@ void main() {
     if (kind == LIGHT_AREA || kind == LIGHT_BACKGROUND) {
         float dp, ep;
         // (Any point of the light: these scenes' lights are untextured, only the side matters.)
-        vec3 le = kind == LIGHT_AREA ? area_light_radiance(li, 0.0, 0.0, dir_to(1u, 0u), vp[1], vp[0], dp, ep) : background_radiance(li, dir_to(1u, 0u), dp, ep);
+        vec3 le = kind == LIGHT_AREA ? area_light_radiance(li, 0.0, 0.0, dir_to(1u, 0u), vp[1], vp[0], dp, ep) : background_radiance(li, dir_to(1u, 0u), vn[1], dp, ep);
         // Without connections only purely specular camera paths count an emitter hit.
         if (max3(le) > 0.0 && (use_vc || C[0].specular || k == 1u)) {
             w = mis_weight_hit(C[0], dp, ep, nee_pick, pick, use_vc);
@@ -284,7 +287,7 @@ void main() {
     if (use_vc && k >= 2u) {
         // s = 1: next-event estimation at y_1.
         if (!vdelta[1]) {
-            LightSample ls = light_sample_fixed(li, vp[1]);
+            LightSample ls = light_sample_fixed(li, vp[1], vn[1]);
             vec3 f;
             float cos_x;
             w = nee_eval(C[1], bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false, vtint[1]), ls, nee_pick, pick, f, cos_x);
