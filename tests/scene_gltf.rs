@@ -2288,6 +2288,27 @@ fn transmission_and_specular_textures_are_read() {
     assert!(e.contains("specularTexture"), "{e}");
 }
 
+/// A material extension that is not a JSON object is an error naming the material and the
+/// extension, for each of the extensions read by name (gltf_import's material_extension).
+#[test]
+fn material_extension_that_is_not_an_object_is_an_error() {
+    for ext in [
+        "KHR_materials_clearcoat",
+        "KHR_materials_sheen",
+        "KHR_materials_iridescence",
+        "KHR_materials_anisotropy",
+        "KHR_materials_diffuse_transmission",
+        "KHR_materials_dispersion",
+    ] {
+        let mut d = Doc::triangle();
+        d.json["extensionsUsed"] = json!([ext]);
+        d.json["materials"] = json!([{"name": "m", "extensions": {ext: 3}}]);
+        d.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+        let e = err_of(d.load());
+        assert!(e.contains(&format!("material 0 'm': {ext} must be an object")), "{ext}: {e}");
+    }
+}
+
 /// KHR_materials_dispersion reaches a transmissive material, also when the file requires
 /// it, with the three IORs of the extension's implementation note; on a material that does
 /// not transmit it is ignored with a warning; a negative dispersion is an error naming it.

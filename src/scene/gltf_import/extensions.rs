@@ -129,6 +129,21 @@ pub(super) fn ext_vec3(v: &Value, field: &str, default: Vec3, ctx: &str) -> Resu
     }
 }
 
+/// Material `m`'s extension `name` (None when absent) and the path of it used in errors,
+/// `"{label}: {name}"`; an error when it is not a JSON object.
+pub(super) fn material_extension<'a>(
+    m: &'a gltf::Material,
+    name: &str,
+    label: &str,
+) -> Result<Option<(&'a Value, String)>> {
+    let Some(v) = m.extensions().and_then(|e| e.get(name)) else { return Ok(None) };
+    let ctx = format!("{label}: {name}");
+    if !v.is_object() {
+        bail!("{ctx} must be an object");
+    }
+    Ok(Some((v, ctx)))
+}
+
 /// The finite number `v[field]` of an extension payload, `default` when absent; `ctx` is
 /// the JSON path of `v` used in errors.
 pub(super) fn ext_f32(v: &Value, field: &str, default: f32, ctx: &str) -> Result<f32> {

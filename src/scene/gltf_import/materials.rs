@@ -5,8 +5,9 @@
 //! transmissive meshes), `KHR_materials_clearcoat`, and vkvcm's own `VKVCM_materials_phong`.
 
 use super::extensions::{
-    ext_f32, ext_vec3, non_negative, EXT_MATERIALS_PHONG, KHR_MATERIALS_ANISOTROPY, KHR_MATERIALS_CLEARCOAT,
-    KHR_MATERIALS_DIFFUSE_TRANSMISSION, KHR_MATERIALS_DISPERSION, KHR_MATERIALS_IRIDESCENCE, KHR_MATERIALS_SHEEN,
+    ext_f32, ext_vec3, material_extension, non_negative, EXT_MATERIALS_PHONG, KHR_MATERIALS_ANISOTROPY,
+    KHR_MATERIALS_CLEARCOAT, KHR_MATERIALS_DIFFUSE_TRANSMISSION, KHR_MATERIALS_DISPERSION, KHR_MATERIALS_IRIDESCENCE,
+    KHR_MATERIALS_SHEEN,
 };
 use super::Importer;
 use crate::scene::{AlphaMode, DiffuseTransmission, LayerTextures, Material, GLTF_DIELECTRIC_F0};
@@ -261,13 +262,9 @@ impl Importer<'_> {
     /// clearcoatRoughnessFactor (both default 0, clamped to [0, 1] as glTF's factors) and
     /// their textures, and clearcoatNormalTexture (with its `scale`, default 1).
     fn set_clearcoat(&mut self, m: &gltf::Material, out: &mut Material, label: &str) -> Result<()> {
-        let Some(v) = m.extensions().and_then(|e| e.get(KHR_MATERIALS_CLEARCOAT)) else {
+        let Some((v, ctx)) = material_extension(m, KHR_MATERIALS_CLEARCOAT, label)? else {
             return Ok(());
         };
-        let ctx = format!("{label}: {KHR_MATERIALS_CLEARCOAT}");
-        if !v.is_object() {
-            bail!("{ctx} must be an object");
-        }
         out.clearcoat = ext_f32(v, "clearcoatFactor", 0.0, &ctx)?.clamp(0.0, 1.0);
         out.clearcoat_roughness = ext_f32(v, "clearcoatRoughnessFactor", 0.0, &ctx)?.clamp(0.0, 1.0);
         if let Some(info) = v.get("clearcoatTexture") {
@@ -289,13 +286,9 @@ impl Importer<'_> {
     /// black: no sheen) and sheenRoughnessFactor (default 0), clamped to [0, 1] as glTF's
     /// factors, and their textures.
     fn set_sheen(&mut self, m: &gltf::Material, out: &mut Material, label: &str) -> Result<()> {
-        let Some(v) = m.extensions().and_then(|e| e.get(KHR_MATERIALS_SHEEN)) else {
+        let Some((v, ctx)) = material_extension(m, KHR_MATERIALS_SHEEN, label)? else {
             return Ok(());
         };
-        let ctx = format!("{label}: {KHR_MATERIALS_SHEEN}");
-        if !v.is_object() {
-            bail!("{ctx} must be an object");
-        }
         out.sheen_color = ext_vec3(v, "sheenColorFactor", Vec3::ZERO, &ctx)?.clamp(Vec3::ZERO, Vec3::ONE);
         out.sheen_roughness = ext_f32(v, "sheenRoughnessFactor", 0.0, &ctx)?.clamp(0.0, 1.0);
         if let Some(info) = v.get("sheenColorTexture") {
@@ -314,13 +307,9 @@ impl Importer<'_> {
     /// and their textures. A smooth metal, a mirror in vkvcm's model (no Fresnel term to
     /// replace), becomes the GGX lobe of the smallest width with the mirror's colour as F0.
     fn set_iridescence(&mut self, m: &gltf::Material, out: &mut Material, label: &str) -> Result<()> {
-        let Some(v) = m.extensions().and_then(|e| e.get(KHR_MATERIALS_IRIDESCENCE)) else {
+        let Some((v, ctx)) = material_extension(m, KHR_MATERIALS_IRIDESCENCE, label)? else {
             return Ok(());
         };
-        let ctx = format!("{label}: {KHR_MATERIALS_IRIDESCENCE}");
-        if !v.is_object() {
-            bail!("{ctx} must be an object");
-        }
         out.iridescence = ext_f32(v, "iridescenceFactor", 0.0, &ctx)?.clamp(0.0, 1.0);
         out.iridescence_ior = ext_f32(v, "iridescenceIor", 1.3, &ctx)?;
         if out.iridescence_ior < 1.0 {
@@ -349,13 +338,9 @@ impl Importer<'_> {
     /// the smallest width, which the anisotropy widens along its direction. The rough
     /// dielectric (transmission) and the clear coat stay isotropic (docs/scene-format.md).
     fn set_anisotropy(&mut self, m: &gltf::Material, out: &mut Material, label: &str) -> Result<()> {
-        let Some(v) = m.extensions().and_then(|e| e.get(KHR_MATERIALS_ANISOTROPY)) else {
+        let Some((v, ctx)) = material_extension(m, KHR_MATERIALS_ANISOTROPY, label)? else {
             return Ok(());
         };
-        let ctx = format!("{label}: {KHR_MATERIALS_ANISOTROPY}");
-        if !v.is_object() {
-            bail!("{ctx} must be an object");
-        }
         out.anisotropy_strength = ext_f32(v, "anisotropyStrength", 0.0, &ctx)?.clamp(0.0, 1.0);
         out.anisotropy_rotation = ext_f32(v, "anisotropyRotation", 0.0, &ctx)?;
         if let Some(info) = v.get("anisotropyTexture") {
@@ -386,13 +371,9 @@ impl Importer<'_> {
         metallic: f32,
         label: &str,
     ) -> Result<()> {
-        let Some(v) = m.extensions().and_then(|e| e.get(KHR_MATERIALS_DIFFUSE_TRANSMISSION)) else {
+        let Some((v, ctx)) = material_extension(m, KHR_MATERIALS_DIFFUSE_TRANSMISSION, label)? else {
             return Ok(());
         };
-        let ctx = format!("{label}: {KHR_MATERIALS_DIFFUSE_TRANSMISSION}");
-        if !v.is_object() {
-            bail!("{ctx} must be an object");
-        }
         let factor = ext_f32(v, "diffuseTransmissionFactor", 0.0, &ctx)?.clamp(0.0, 1.0);
         let color = ext_vec3(v, "diffuseTransmissionColorFactor", Vec3::ONE, &ctx)?.clamp(Vec3::ZERO, Vec3::ONE);
         let slot = |name: &str| format!("{KHR_MATERIALS_DIFFUSE_TRANSMISSION}.{name}");
@@ -427,13 +408,9 @@ impl Importer<'_> {
     /// not transmit it is ignored with a warning. It applies to `VKVCM_materials_phong`'s
     /// glass too.
     fn set_dispersion(&mut self, m: &gltf::Material, out: &mut Material, label: &str) -> Result<()> {
-        let Some(v) = m.extensions().and_then(|e| e.get(KHR_MATERIALS_DISPERSION)) else {
+        let Some((v, ctx)) = material_extension(m, KHR_MATERIALS_DISPERSION, label)? else {
             return Ok(());
         };
-        let ctx = format!("{label}: {KHR_MATERIALS_DISPERSION}");
-        if !v.is_object() {
-            bail!("{ctx} must be an object");
-        }
         let dispersion = ext_f32(v, "dispersion", 0.0, &ctx)?;
         if !(dispersion >= 0.0 && dispersion.is_finite()) {
             bail!("{ctx}.dispersion must be a finite number >= 0, is {dispersion}");
