@@ -4,10 +4,10 @@
 // estimation, combined by the balance heuristic (Veach 1997, 9.2; the power heuristic
 // lowers no error here: docs/performance.md, "Tried and not kept"). MIS pdfs
 // are the BSDF's and the light's only: Russian roulette is not in them.
-// Russian roulette as pbrt-v4 (PathIntegrator::Li), not bsdf.glsl's per-vertex albedo
-// rule (which lt/bpt/vcm keep): none at the first RR_MIN_LENGTH - 1 vertices, then the
-// path continues with probability min(1, maxcomp(throughput * eta_scale)), eta_scale
-// undoing the eta^2 radiance scaling of refraction.
+// Russian roulette as Cycles' (path_state_continuation_probability), not bsdf.glsl's
+// per-vertex albedo rule (which lt/bpt/vcm keep): none at the first RR_MIN_LENGTH - 1
+// vertices, then the path continues with probability min(1, sqrt(maxcomp(throughput *
+// eta_scale))), eta_scale undoing the eta^2 radiance scaling of refraction.
 // Absorbing media (glsl/medium.glsl) multiply the throughput of every traced segment and
 // the contribution of every light sample by their transmittance; no pdf has it.
 // Variants (PtKernel, src/render/passes/camera_subpaths.rs): NEE=1 the estimator, NEE=0 pure BSDF
@@ -22,9 +22,9 @@
 layout(local_size_x = WORKGROUP_SIZE) in;
 
 // Russian roulette applies at vertices whose path so far has at least this many segments
-// (the camera's first hit has 1): later starts lower the variance per sample by about as
-// much as they raise its cost (2, pbrt-v4's, and 4 and 5, Mitsuba 3's rr_depth, against
-// 3: docs/performance.md, "Defaults that matter for speed, and why").
+// (the camera's first hit has 1): a later start lowers the variance per sample but costs
+// more than it saves in closed rooms (docs/performance.md, "Defaults that matter for
+// speed, and why").
 const uint RR_MIN_LENGTH = 3u;
 
 #include "scene.glsl"
@@ -139,11 +139,12 @@ bool continue_path(inout PtPath path, Surface s, Bsdf b, inout PathSampler ps) {
     path.last_pdf = bs.pdf;
     path.last_specular = bs.specular;
     if (max3(path.thr) <= 0.0) return false;
-    // Russian roulette as pbrt-v4 (PathIntegrator::Li): from vertex RR_MIN_LENGTH on,
-    // end the path with probability q = max(0, 1 - maxcomp(throughput * eta_scale))
-    // and divide the throughput by 1 - q. Not part of the MIS pdfs (as pbrt-v4).
+    // Russian roulette as Cycles': from vertex RR_MIN_LENGTH on, continue with probability
+    // p = min(1, sqrt(maxcomp(throughput * eta_scale))) and divide the throughput by p.
+    // The square root ends fewer paths than pbrt-v4's p = maxcomp(...), which kills many
+    // whose next segment would still find the sky. Not part of the MIS pdfs (as pbrt-v4).
     if (path.len >= RR_MIN_LENGTH) {
-        float p = max3(path.thr) * path.eta_scale;
+        float p = sqrt(max3(path.thr) * path.eta_scale);
         if (p < 1.0) {
             if (sample_1d(ps, DIM1_ROULETTE(path.len)) >= p) return false;
             path.thr /= p;
