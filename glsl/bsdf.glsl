@@ -6,7 +6,7 @@
 // weighted by Fresnel at the fixed direction: fresnel_lobe_weights; SmallVCM's
 // materials have neither, so their rule is unchanged), continuation probability = clamp(max RGB of (diffuse + phong + glossy +
 // F mirror) + (1 - F), 0, 1) (glossy is zero for SmallVCM's materials, so their rule is
-// unchanged). pt.comp does not use this continuation probability (pbrt-v4's rule there).
+// unchanged). pt.comp does not use this continuation probability (Cycles' rule there).
 //
 // GGX lobe (`glossy`, used for glTF metallic/roughness): Trowbridge-Reitz distribution D
 // as in Walter, Marschner, Li, Torrance, "Microfacet Models for Refraction through Rough
