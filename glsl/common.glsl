@@ -57,7 +57,8 @@ vec2 rnd2(inout uint s) { float a = rnd(s); return vec2(a, rnd(s)); }
 // sample dimension `dim` of a sequence `key` (one per pixel) has its own shuffle of the
 // sample index and its own scrambles; a 2-D dimension takes Sobol's first two
 // dimensions, whose first 2^k points form a (0, k, 2)-net, so each pixel's first 2^k
-// samples stratify every such pair. Each point is uniform on [0, 1)^2 and different
+// samples stratify every such pair; a 3-D one Sobol's first three (a (1, k, 3)-net), for
+// a choice drawn together with the 2-D sample it selects for. Each point is uniform on [0, 1)^2 and different
 // dims are independent, so an estimator stays unbiased; the samples of one pixel are
 // not independent across iterations (they are stratified).
 
@@ -98,6 +99,29 @@ vec2 sobol2(uint key, uint index, uint dim) {
     // = bitfieldReverse(lk_permutation(y, s)).
     return vec2(fixed_to_unit(bitfieldReverse(lk_permutation(i, s0))),
                 fixed_to_unit(bitfieldReverse(lk_permutation(sobol1_reversed(i), s1))));
+}
+
+// Sobol's dimension 2 (primitive polynomial x^2 + x + 1, initial direction numbers 1, 3:
+// Joe and Kuo's table), one direction number per index bit, most significant bit = 1/2.
+const uint SOBOL_DIM2[32] = uint[32](
+    0x80000000u, 0xc0000000u, 0x60000000u, 0x90000000u, 0xe8000000u, 0x5c000000u, 0x8e000000u, 0xc5000000u,
+    0x68800000u, 0x9cc00000u, 0xee600000u, 0x55900000u, 0x80680000u, 0xc09c0000u, 0x60ee0000u, 0x90550000u,
+    0xe8808000u, 0x5cc0c000u, 0x8e606000u, 0xc5909000u, 0x6868e800u, 0x9c9c5c00u, 0xeeee8e00u, 0x5555c500u,
+    0x8000e880u, 0xc0005cc0u, 0x60008e60u, 0x9000c590u, 0xe8006868u, 0x5c009c9cu, 0x8e00eeeeu, 0xc5005555u);
+
+// Point `index` of 3-D dimension `dim` of sequence `key`: Sobol's first three dimensions
+// under one shuffle of the index, each with its own scramble (the seed's `dim ^ constant`
+// keeps them apart from the 2-D and 1-D dimensions of the same number).
+vec3 sobol3(uint key, uint index, uint dim) {
+    uint seed = pcg_hash(key ^ pcg_hash(dim ^ 0x5bd1e995u));
+    uint i = owen_scramble(index, seed);
+    uint z = 0u;
+    for (uint j = 0u, bits = i; bits != 0u; bits >>= 1, j++) {
+        if ((bits & 1u) != 0u) z ^= SOBOL_DIM2[j];
+    }
+    return vec3(fixed_to_unit(bitfieldReverse(lk_permutation(i, pcg_hash(seed + 1u)))),
+                fixed_to_unit(bitfieldReverse(lk_permutation(sobol1_reversed(i), pcg_hash(seed + 2u)))),
+                fixed_to_unit(owen_scramble(z, pcg_hash(seed + 3u))));
 }
 
 // Point `index` of 1-D dimension `dim` of sequence `key` (scrambled van der Corput). Its

@@ -33,16 +33,18 @@ PathSampler path_sampler(uint pixel) {
 
 // Sample dimensions. A path's vertex `len` is the one its len-th segment hits (the
 // camera's first hit has len 1). 2-D: the pixel jitter is 0; vertex len has its light
-// sample (next-event estimation) 2 len and its BSDF direction 2 len + 1. 1-D (other
-// scrambles than the 2-D dimensions of the same number: sobol1): vertex len has its light
-// pick 3 len, its BSDF lobe 3 len + 1 and its Russian roulette 3 len + 2. Each is drawn
-// only when used: an unused dimension costs nothing and leaves the others as they are.
+// sample (next-event estimation) len. 3-D: vertex len's BSDF sample len, the direction
+// (xy) stratified together with the lobe (z) that it is drawn for: a lobe's share of a
+// pixel's samples keeps their directions stratified (with a 1-D lobe of its own, the
+// spheres of the Cycles harness had 1.3x the variance per sample: docs/performance.md).
+// 1-D: vertex len has its light pick 2 len and its Russian roulette 2 len + 1. Each
+// kind scrambles its numbers apart from the others (common.glsl). Each is drawn only when
+// used: an unused dimension costs nothing and leaves the others as they are.
 #define DIM2_PIXEL 0u
-#define DIM2_LIGHT(len) (2u * (len))
-#define DIM2_BSDF(len) (2u * (len) + 1u)
-#define DIM1_PICK(len) (3u * (len))
-#define DIM1_LOBE(len) (3u * (len) + 1u)
-#define DIM1_ROULETTE(len) (3u * (len) + 2u)
+#define DIM2_LIGHT(len) (len)
+#define DIM3_BSDF(len) (len)
+#define DIM1_PICK(len) (2u * (len))
+#define DIM1_ROULETTE(len) (2u * (len) + 1u)
 // The colour channel a path chooses at its first dispersive vertex, whichever that is (once
 // per path; glsl/lobes/dispersion.glsl): a dimension of its own that no vertex's reaches.
 #define DIM1_CHANNEL 0xfffffff0u
@@ -65,8 +67,11 @@ float sample_1d(inout PathSampler ps, uint dim) {
 
 // The BSDF sample of vertex `len`: direction and lobe (bsdf_sample's argument).
 vec3 sample_bsdf_at(inout PathSampler ps, uint len) {
-    vec2 u = sample_2d(ps, DIM2_BSDF(len));
-    return vec3(u, sample_1d(ps, DIM1_LOBE(len)));
+#if SOBOL
+    return sobol3(ps.key, ps.index, DIM3_BSDF(len));
+#else
+    return vec3(rnd2(ps.rng), rnd(ps.rng));
+#endif
 }
 
 #endif

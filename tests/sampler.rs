@@ -1,9 +1,11 @@
-//! The camera paths' quasi-random numbers (glsl/common.glsl, `sobol2` / `sobol1`;
-//! glsl/path_sampler.glsl; `--sampler sobol`):
+//! The camera paths' quasi-random numbers (glsl/common.glsl, `sobol3` / `sobol2` /
+//! `sobol1`; glsl/path_sampler.glsl; `--sampler sobol`):
 //! each dimension of each pixel's sequence is an Owen-scrambled Sobol sequence, so its
 //! first 2^k points are a (0, k, 2)-net (2-D: every box [a 2^-i, (a+1) 2^-i) x
-//! [b 2^-(k-i), (b+1) 2^-(k-i)) holds exactly one point) and the 1-D points fall one in
-//! each interval of width 2^-k; different dimensions and pixels are scrambled
+//! [b 2^-(k-i), (b+1) 2^-(k-i)) holds exactly one point), the 1-D points fall one in
+//! each interval of width 2^-k, and the 3-D points (a BSDF sample's direction and lobe)
+//! are a (1, k, 3)-net whose first two coordinates are a (0, k, 2)-net; different
+//! dimensions and pixels are scrambled
 //! independently. Exact checks of the net properties, read back from the GPU; the
 //! independence checks are statistical with stated tolerances. Then pt, bpt and vcm with
 //! the sampler against the same estimator with independent numbers: the same image
@@ -19,8 +21,8 @@ use vkvcm::render::{Algorithm, Budget, RenderSettings, Sampler};
 use vkvcm::scene::{Material, Scene, Triangle};
 use vkvcm_tools::stats::{welch_test, PixelStats};
 
-/// (x, y, z) in 24-bit fixed point for each (key, dim, index): sobol2's point and
-/// sobol1's value.
+/// (x, y, z) in 24-bit fixed point for each (key, dim, index, kind): kind 0 sobol2's
+/// point and sobol1's value, kind 1 sobol3's point.
 fn points(requests: &[[u32; 4]]) -> Vec<[u32; 4]> {
     with_gpu(|gpu| run_test_kernel(gpu, "tests/sobol.comp", requests))
 }
@@ -30,6 +32,27 @@ const DIMS: [u32; 3] = [0, 3, 41];
 
 fn sequence(key: u32, dim: u32, indices: std::ops::Range<u32>) -> Vec<[u32; 4]> {
     points(&indices.map(|i| [key, dim, i, 0]).collect::<Vec<_>>())
+}
+
+fn sequence3(key: u32, dim: u32, indices: std::ops::Range<u32>) -> Vec<[u32; 4]> {
+    points(&indices.map(|i| [key, dim, i, 1]).collect::<Vec<_>>())
+}
+
+/// Whether `pts` (2^k points, 24-bit coordinates) put exactly 2^t points in every
+/// elementary box of volume 2^(t-k) in 3-D (a (t, k, 3)-net).
+fn is_net3(pts: &[[u32; 4]], k: u32, t: u32) -> bool {
+    let m = k - t;
+    (0..=m).all(|i| {
+        (0..=m - i).all(|j| {
+            let l = m - i - j;
+            let mut count = vec![0u32; 1 << m];
+            for q in pts {
+                let cell = ((q[0] >> (24 - i)) << (j + l)) | ((q[1] >> (24 - j)) << l) | (q[2] >> (24 - l));
+                count[cell as usize] += 1;
+            }
+            count.iter().all(|&c| c == 1 << t)
+        })
+    })
 }
 
 /// Whether `pts` (2^k points, 24-bit coordinates) put exactly one point in every
@@ -62,6 +85,30 @@ fn every_dimension_is_a_net_in_two_and_one_dimensions() {
             // 1024..2047 of a render draw).
             let xy: Vec<(u32, u32)> = p[1024..].iter().map(|q| (q[0], q[1])).collect();
             assert!(is_net(&xy, 10), "key {key:#x} dim {dim}: points 1024..2047 are not a net");
+        }
+    }
+}
+
+/// sobol3 (a BSDF sample: direction xy, lobe z): its first 2^k points are a (1, k, 3)-net
+/// (Sobol's first three dimensions have t = 1: every elementary box of volume 2^(1-k)
+/// holds two points), so the points of one lobe (z in an interval) keep their directions
+/// stratified; xy alone is a (0, k, 2)-net, as sobol2's. Scrambling the three coordinates
+/// independently (no shared index shuffle) fails the 3-D check from k = 2 on.
+#[test]
+fn three_dimensional_points_are_a_net() {
+    for key in KEYS {
+        for dim in DIMS {
+            let p = sequence3(key, dim, 0..2048);
+            for k in 1..=10 {
+                let n = 1usize << k;
+                let xy: Vec<(u32, u32)> = p[..n].iter().map(|q| (q[0], q[1])).collect();
+                assert!(is_net(&xy, k), "key {key:#x} dim {dim}: sobol3's first {n} xy are not a (0,{k},2)-net");
+                assert!(
+                    is_net3(&p[..n], k, 1),
+                    "key {key:#x} dim {dim}: sobol3's first {n} points are not a (1,{k},3)-net"
+                );
+            }
+            assert!(is_net3(&p[1024..], 10, 1), "key {key:#x} dim {dim}: sobol3's points 1024..2047 are not a net");
         }
     }
 }

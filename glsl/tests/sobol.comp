@@ -1,6 +1,7 @@
 #version 460
 // Test kernel: point `index` of sequence `key`, dimension `dim`, as 24-bit fixed point,
-// from sobol2 (x, y) and sobol1 (z) of common.glsl, for each request (key, dim, index).
+// for each request (key, dim, index, kind): kind 0 sobol2 (x, y) and sobol1 (z), kind 1
+// sobol3 (x, y, z) of common.glsl.
 #extension GL_GOOGLE_include_directive : require
 layout(local_size_x = 64) in;
 layout(std430) readonly buffer test_input { uvec4 req[]; };
@@ -11,7 +12,6 @@ void main() {
     uint i = invocation_index();
     if (i >= pc.n) return;
     uvec4 r = req[i];
-    vec2 p = sobol2(r.x, r.z, r.y);
-    float q = sobol1(r.x, r.z, r.y);
-    pts[i] = uvec4(uvec2(p * 16777216.0), uint(q * 16777216.0), 0u);
+    vec3 p = r.w == 1u ? sobol3(r.x, r.z, r.y) : vec3(sobol2(r.x, r.z, r.y), sobol1(r.x, r.z, r.y));
+    pts[i] = uvec4(uvec3(p * 16777216.0), 0u);
 }
