@@ -6,10 +6,13 @@
 //! differs. The instanced traversal intersects in object space and maps hit points and
 //! normals back, so hit points differ by a few ulps; almost every path is then the same
 //! sequence of vertices and its contribution agrees to ~1e-5, but a path that grazes an
-//! edge could hit in one render and miss in the other and continue differently. So the
-//! check is: the image means agree to 1e-5 relative, and at most 0.5% of pixels (5 of
-//! 1024) differ by more than 1e-3 relative. Measured on lavapipe (printed with
-//! --nocapture): no pixel differs by more than 3e-4, means by at most 5e-7. A render with
+//! edge, or draws a number within rounding of a lobe's probability, can continue
+//! differently in one render and change its pixel by any amount. So the check is: at most
+//! 0.5% of pixels (5 of 1024) differ by more than 1e-3 relative, and the means of the
+//! other pixels agree to 1e-5 relative (a diverged path is not a systematic difference).
+//! Measured on lavapipe (printed with --nocapture): one pixel of pt, bpt and vcm (the same
+//! camera path's numbers) diverged with fc31abd's samples, by up to 13%, which moved the
+//! whole image's mean by 5e-4; the other pixels' means by at most 5e-7. A render with
 //! another seed is the control: 67% of its pixels differ by more than 1e-3, its mean by
 //! 2e-2. A sabotage that fails it in every estimator: vertex normals interpolated before
 //! they are normalised in world space (the non-uniformly scaled instances).
@@ -45,7 +48,7 @@ fn render(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, iterations: u64, seed:
 }
 
 /// (fraction of pixel channels differing by more than PIXEL_TOL relative, relative
-/// difference of the image means, largest per-pixel relative difference).
+/// difference of the means of the other channels, largest per-pixel relative difference).
 fn compare(a: &RenderOutput, b: &RenderOutput) -> (f64, f64, f64) {
     let floor = 1e-3 * a.pixels.iter().flatten().map(|&v| v as f64).sum::<f64>() / (3 * a.pixels.len()) as f64;
     let rel: Vec<f64> = a
@@ -56,8 +59,10 @@ fn compare(a: &RenderOutput, b: &RenderOutput) -> (f64, f64, f64) {
         .map(|(&x, &y)| (x as f64 - y as f64).abs() / ((x as f64).abs().max(y as f64) + floor))
         .collect();
     let differing = rel.iter().filter(|&&r| r > PIXEL_TOL).count() as f64 / rel.len() as f64;
-    let mean = |o: &RenderOutput| o.pixels.iter().flatten().map(|&v| v as f64).sum::<f64>();
-    let (ma, mb) = (mean(a), mean(b));
+    let agreeing = |o: &RenderOutput| -> f64 {
+        o.pixels.iter().flatten().zip(&rel).filter(|&(_, &r)| r <= PIXEL_TOL).map(|(&v, _)| v as f64).sum()
+    };
+    let (ma, mb) = (agreeing(a), agreeing(b));
     (differing, (ma - mb).abs() / ma.max(mb), rel.iter().copied().fold(0.0, f64::max))
 }
 

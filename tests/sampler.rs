@@ -92,8 +92,8 @@ fn every_dimension_is_a_net_in_two_and_one_dimensions() {
 /// sobol3 (a BSDF sample: direction xy, lobe z): its first 2^k points are a (1, k, 3)-net
 /// (Sobol's first three dimensions have t = 1: every elementary box of volume 2^(1-k)
 /// holds two points), so the points of one lobe (z in an interval) keep their directions
-/// stratified; xy alone is a (0, k, 2)-net, as sobol2's. Scrambling the three coordinates
-/// independently (no shared index shuffle) fails the 3-D check from k = 2 on.
+/// stratified; xy alone is a (0, k, 2)-net, as sobol2's. A z with an index shuffle of its
+/// own fails the 3-D check (at 8 points for key 1, dim 0).
 #[test]
 fn three_dimensional_points_are_a_net() {
     for key in KEYS {
@@ -228,11 +228,12 @@ fn sobol_vcm_is_unbiased_with_less_error() {
 /// A grey room (diffuse albedo 0.5) lit only through glass: a lamp under the ceiling
 /// behind a slab of smooth glass (two panes), which next-event estimation cannot see
 /// through, so the room's light comes from camera paths that refract through both panes.
-/// pt's Russian roulette (from the third vertex, by throughput) meets such paths at the
-/// glass, where their BSDF lobe (reflect or refract) is chosen too. The floor, which the
-/// camera sees, is half diffuse (0.3) and half mirror (0.3): the camera kernel's roulette
-/// (SmallVCM's, continuation probability 0.6 there) meets the choice between its lobes at
-/// the first vertex, and only the mirror lobe sees the lamp's slab.
+/// pt's Russian roulette (from the third vertex, by the square root of the throughput)
+/// meets such paths at the glass, where their BSDF lobe (reflect or refract) is chosen
+/// too. The floor, which the camera sees, is half diffuse (0.3) and half mirror (0.3):
+/// the camera kernel's roulette (SmallVCM's, continuation probability 0.6 there) meets
+/// the choice between its lobes at the first vertex, and only the mirror lobe sees the
+/// lamp's slab.
 fn lamp_behind_glass() -> Scene {
     let v = Vec3::new;
     let quad = |y: f32, half: f32, down: bool, material: u32| {
@@ -274,19 +275,21 @@ fn grey_mean_and_error(s: &PixelStats) -> (f64, f64) {
     (image_mean(s), var.sqrt() / n)
 }
 
-/// Each random decision of a camera path has its own Sobol dimension. In
-/// `lamp_behind_glass` a Russian roulette that read the dimension which chose the lobe
-/// would let one lobe continue more often than the other: at pt's glass (reflect when
-/// u < F, continue when u < 0.5) too few refractions continue, at the camera kernel's
+/// Each random decision of a camera path has its own Sobol dimension (the lobe shares a
+/// 3-D one with the direction it draws). In `lamp_behind_glass` a Russian roulette that
+/// read the number which chose the lobe would let one lobe continue more often than the
+/// other: at pt's glass (reflect when u < F, continue when u < p) too few refractions
+/// continue, at the camera kernel's
 /// floor (diffuse when u < 0.5, continue when u < 0.6) too few mirror reflections, so the
 /// room comes out darker, while the independent sampler (a fresh number per draw) stays
 /// unbiased. So the two samplers' image means must agree: |z| < 4 with the standard
 /// errors above (a false failure about 1 in 16,000 per estimator). The Sobol side's error
 /// from its iterations' variance is an estimate only (they are stratified); over 8 seeds
 /// pt's Sobol image means spread by 0.00020, less than the 0.00027 it gives. Measured:
-/// pt z = -2.26, bpt 0.28. Sabotages, each failing its estimator: pt.comp's roulette
-/// drawing DIM1_LOBE (pt: z = -8.2, the image 4% darker), camera_subpath.comp's `scatter`
-/// given DIM1_LOBE (bpt: z = -24.7, 30% darker).
+/// pt z = -0.26, bpt 0.20. Sabotages, each failing its estimator: pt.comp's roulette
+/// drawing the BSDF sample's lobe coordinate (`sample_bsdf_at(..).z`: pt z = -5.9, the
+/// image 2% darker), camera_subpath.comp's `scatter` given it with the Sobol sampler
+/// (bpt: z = -24.6, 30% darker).
 #[test]
 fn sobol_draws_roulette_apart_from_the_lobe() {
     let scene = lamp_behind_glass();
