@@ -13,9 +13,9 @@
 //! Measured on lavapipe (printed with --nocapture): one pixel of pt, bpt and vcm (the same
 //! camera path's numbers) diverged with fc31abd's samples, by up to 13%, which moved the
 //! whole image's mean by 5e-4; the other pixels' means by at most 5e-7. A render with
-//! another seed is the control: 67% of its pixels differ by more than 1e-3, its mean by
-//! 2e-2. A sabotage that fails it in every estimator: vertex normals interpolated before
-//! they are normalised in world space (the non-uniformly scaled instances).
+//! another seed is the control: 67% of its pixels differ by more than 1e-3. A sabotage
+//! that fails it in every estimator: vertex normals interpolated before they are
+//! normalised in world space (the non-uniformly scaled instances).
 
 mod common;
 
@@ -102,9 +102,8 @@ fn instanced_scene_renders_the_flattened_image_in_every_estimator() {
         // Control: another seed.
         let (a, _) = render(gpu, &instanced, Algorithm::Pt, 16, 7);
         let (c, _) = render(gpu, &flattened, Algorithm::Pt, 16, 8);
-        let (differing, mean, _) = compare(&a, &c);
-        report +=
-            &format!("control (pt, another seed): {:.1}% of pixels differ, means by {mean:.2e}\n", 100.0 * differing);
+        let (differing, _, _) = compare(&a, &c);
+        report += &format!("control (pt, another seed): {:.1}% of pixels differ\n", 100.0 * differing);
         println!("{report}");
         assert!(differing > 0.5, "the control should differ in most pixels:\n{report}");
         assert!(failures.is_empty(), "{failures:?} differ:\n{report}");
