@@ -58,9 +58,9 @@ vec2 rnd2(inout uint s) { float a = rnd(s); return vec2(a, rnd(s)); }
 // sample index and its own scrambles; a 2-D dimension takes Sobol's first two
 // dimensions, whose first 2^k points form a (0, k, 2)-net, so each pixel's first 2^k
 // samples stratify every such pair; a 3-D one Sobol's first three (a (1, k, 3)-net), for
-// a choice drawn together with the 2-D sample it selects for. Each point is uniform on [0, 1)^2 and different
-// dims are independent, so an estimator stays unbiased; the samples of one pixel are
-// not independent across iterations (they are stratified).
+// a choice drawn together with the 2-D sample it selects for. Each point is uniform on
+// [0, 1)^d and different dims are independent, so an estimator stays unbiased; the
+// samples of one pixel are not independent across iterations (they are stratified).
 
 // Laine & Karras' hash-based nested uniform scramble of the reversed bits, with
 // Burley's constants: flips each bit of `x` by a hash of the bits below it.
@@ -89,16 +89,18 @@ uint sobol1_reversed(uint index) {
     return x;
 }
 
+// Sobol's dimensions 0 and 1 of the shuffled index `i`, scrambled by seeds drawn from
+// `seed`. Sobol dimension 0 of i is bitfieldReverse(i); owen_scramble(bitfieldReverse(y),
+// s) = bitfieldReverse(lk_permutation(y, s)).
+vec2 sobol_xy(uint i, uint seed) {
+    return vec2(fixed_to_unit(bitfieldReverse(lk_permutation(i, pcg_hash(seed + 1u)))),
+                fixed_to_unit(bitfieldReverse(lk_permutation(sobol1_reversed(i), pcg_hash(seed + 2u)))));
+}
+
 // Point `index` of dimension pair `dim` of sequence `key`.
 vec2 sobol2(uint key, uint index, uint dim) {
     uint seed = pcg_hash(key ^ pcg_hash(dim));
-    uint i = owen_scramble(index, seed);
-    uint s0 = pcg_hash(seed + 1u);
-    uint s1 = pcg_hash(seed + 2u);
-    // Sobol dimension 0 of i is bitfieldReverse(i); owen_scramble(bitfieldReverse(y), s)
-    // = bitfieldReverse(lk_permutation(y, s)).
-    return vec2(fixed_to_unit(bitfieldReverse(lk_permutation(i, s0))),
-                fixed_to_unit(bitfieldReverse(lk_permutation(sobol1_reversed(i), s1))));
+    return sobol_xy(owen_scramble(index, seed), seed);
 }
 
 // Sobol's dimension 2 (primitive polynomial x^2 + x + 1, initial direction numbers 1, 3:
@@ -119,9 +121,7 @@ vec3 sobol3(uint key, uint index, uint dim) {
     for (uint j = 0u, bits = i; bits != 0u; bits >>= 1, j++) {
         if ((bits & 1u) != 0u) z ^= SOBOL_DIM2[j];
     }
-    return vec3(fixed_to_unit(bitfieldReverse(lk_permutation(i, pcg_hash(seed + 1u)))),
-                fixed_to_unit(bitfieldReverse(lk_permutation(sobol1_reversed(i), pcg_hash(seed + 2u)))),
-                fixed_to_unit(owen_scramble(z, pcg_hash(seed + 3u))));
+    return vec3(sobol_xy(i, seed), fixed_to_unit(owen_scramble(z, pcg_hash(seed + 3u))));
 }
 
 // Point `index` of 1-D dimension `dim` of sequence `key` (scrambled van der Corput). Its

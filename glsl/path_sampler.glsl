@@ -34,10 +34,9 @@ PathSampler path_sampler(uint pixel) {
 // Sample dimensions. A path's vertex `len` is the one its len-th segment hits (the
 // camera's first hit has len 1). 2-D: the pixel jitter is 0; vertex len has its light
 // sample (next-event estimation) len. 3-D: vertex len's BSDF sample len, the direction
-// (xy) stratified together with the lobe (z) that it is drawn for: a lobe's share of a
-// pixel's samples keeps their directions stratified (with a 1-D lobe of its own, the
-// spheres of the Cycles harness had 1.3x the variance per sample: docs/performance.md).
-// 1-D: vertex len has its light pick 2 len and its Russian roulette 2 len + 1. Each
+// (xy) stratified together with the lobe (z) that it is drawn for, so that a lobe's share
+// of a pixel's samples keeps their directions stratified (docs/performance.md measures
+// it against a 1-D lobe). 1-D: vertex len has its light pick 2 len and its Russian roulette 2 len + 1. Each
 // kind scrambles its numbers apart from the others (common.glsl). Each is drawn only when
 // used: an unused dimension costs nothing and leaves the others as they are.
 #define DIM2_PIXEL 0u

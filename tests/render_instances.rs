@@ -11,8 +11,8 @@
 //! 0.5% of pixels (5 of 1024) differ by more than 1e-3 relative, and the means of the
 //! other pixels agree to 1e-5 relative (a diverged path is not a systematic difference).
 //! Measured on lavapipe (printed with --nocapture): one pixel of pt, bpt and vcm (the same
-//! camera path's numbers) diverged with fc31abd's samples, by up to 13%, which moved the
-//! whole image's mean by 5e-4; the other pixels' means by at most 5e-7. A render with
+//! camera path's numbers) diverges, by up to 13%, which alone moves the whole image's
+//! mean by 5e-4; the other pixels' means differ by at most 8e-7. A render with
 //! another seed is the control: 67% of its pixels differ by more than 1e-3. A sabotage
 //! that fails it in every estimator: vertex normals interpolated before they are
 //! normalised in world space (the non-uniformly scaled instances).
