@@ -46,16 +46,19 @@
 // NEE reaches it and photons are stored on it and merged. With eta = eta_o / eta_i (the
 // IORs on wo's and on wi's side), the half vector is h = wo + wi (reflection) or
 // eta wo + wi (transmission, Walter's generalised h_t), normalised and turned to wo's side:
-//   reflection:   f = F D G / (4 |n.wo| |n.wi|), pdf = F D (n.h) / (4 |wo.h|)
+//   reflection:   f = F D G / (4 |n.wo| |n.wi|), pdf = F G1(wo) D / (4 |n.wo|)
 //   transmission: f = (1 - F) D G |wo.h| |wi.h| s / (|n.wo| |n.wi| (eta wo.h + wi.h)^2),
-//                 pdf = (1 - F) D (n.h) |wi.h| / (eta wo.h + wi.h)^2
-// (Walter's eq. 21 and 17 divided through by eta_i^2), where s = eta^2 for radiance and 1
-// for importance (light subpaths: the adjoint BSDF, Veach 1997, 5.2; the same rule as the
-// smooth refraction's `scale`). The reverse pdfs swap wo and wi: for reflection |wi.h| in
-// place of |wo.h|, for transmission eta^2 |wo.h| in place of |wi.h| (the Fresnel term of a
-// refracted pair is the same both ways). Sampling: h from D(h) (n.h) about n (Walter
-// 2007, ggx_sample_h_d; not yet by the visible normals as the GGX lobe), then reflection
-// with probability F(wo.h), else refraction about h. The geometric
+//                 pdf = (1 - F) G1(wo) D |wo.h| |wi.h| / (|n.wo| (eta wo.h + wi.h)^2)
+// (Walter's eq. 21 and 17 divided through by eta_i^2, with h drawn from the normals
+// visible from wo as the GGX lobe), where s = eta^2 for radiance and 1 for importance
+// (light subpaths: the adjoint BSDF, Veach 1997, 5.2; the same rule as the smooth
+// refraction's `scale`). A sample's weight f |n.wi| / pdf is then G1(wi) (times s and the
+// tint): bounded, where Walter's D(h) (n.h) sampling divides by |n.wo| and |n.h| and gave
+// grazing views large weights. The reverse pdfs swap wo and wi: for reflection G1(wi) /
+// |n.wi| in place of G1(wo) / |n.wo|, for transmission G1(wi) |wi.h| / |n.wi| times
+// eta^2 |wo.h| (the Fresnel term of a refracted pair is the same both ways). Sampling: h
+// from the normals visible from wo (ggx_sample_h), then reflection with probability
+// F(wo.h), else refraction about h. The geometric
 // normal decides reflection or transmission (the shading-normal rules above: a direction
 // on wo's side is a reflection, on the other side a transmission, and the shading normal
 // must agree or the BSDF is 0); a sample whose side is not the event drawn is rejected, so
@@ -313,17 +316,6 @@ vec3 ggx_sample_h(vec3 n, vec3 wo, float a, vec2 u) {
     vec3 t, b;
     make_frame(n, t, b);
     return ggx_sample_h_stretched(t, b, n, vec2(a), wo, u);
-}
-
-// A half vector drawn from D(h) cos(theta_h) about n for width `a` and uniform `u`:
-// tan^2(theta_h) = a^2 u.x / (1 - u.x), phi = 2 pi u.y (Walter et al. 2007, eq. 35-36).
-// The rough dielectric's sampling (its pdfs in rough_dielectric_eval).
-vec3 ggx_sample_h_d(vec3 n, float a, vec2 u) {
-    float t2 = a * a * u.x / max(1.0 - u.x, 1e-7);
-    float ch = 1.0 / sqrt(1.0 + t2);
-    float sh = sqrt(max(0.0, 1.0 - ch * ch));
-    float phi = 2.0 * PI * u.y;
-    return to_world(vec3(sh * cos(phi), sh * sin(phi), ch), n);
 }
 
 // Smith's G1 = 1 / (1 + Lambda) for GGX at |cos(theta)| = `c` > 0.
@@ -606,8 +598,9 @@ vec3 rough_dielectric_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev
         if (ch < EPS_COSINE || oh < EPS_COSINE || ih < EPS_COSINE) return vec3(0.0);
         float fr = fresnel_dielectric(side * oh, ior);
         float d = ggx_d(ch, a);
-        pdf_fwd = fr * d * ch / (4.0 * oh);
-        pdf_rev = fr * d * ch / (4.0 * ih);
+        // Visible normals from wo (fwd) or from wi (rev).
+        pdf_fwd = fr * ggx_g1(cos_o, a) * d / (4.0 * cos_o);
+        pdf_rev = fr * ggx_g1(cos_i, a) * d / (4.0 * cos_i);
         return vec3(fr * d * g / (4.0 * cos_o * cos_i));
     }
     // Transmission: wi on the other side, below the shading surface too.
@@ -629,8 +622,11 @@ vec3 rough_dielectric_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev
     // without the cancellation of the sum of two terms of opposite signs.
     float den2 = hl * hl;
     float d = ggx_d(ch, a);
-    pdf_fwd = t * d * ch * -ih / den2;
-    pdf_rev = t * d * ch * eta * eta * oh / den2;
+    // h drawn from the normals visible from wo, D_wo(h) = G1(wo) D(h) wo.h / (n.wo), times
+    // the refraction's Jacobian |wi.h| / den2; the reverse draws -h from those visible from
+    // wi, G1(wi) D(h) |wi.h| / |n.wi|, times eta^2 |wo.h| / den2.
+    pdf_fwd = t * ggx_g1(cos_o, a) * d * oh / cos_o * -ih / den2;
+    pdf_rev = t * ggx_g1(-cos_i, a) * d * -ih / -cos_i * eta * eta * oh / den2;
     // Radiance is scaled by (eta_o / eta_i)^2 crossing the boundary; importance is not.
     float scale = b.from_light ? 1.0 : eta * eta;
     return transmission_colour(m, b.tint.rgb) * (t * d * g * oh * -ih * scale / (cos_o * -cos_i * den2));
@@ -868,13 +864,13 @@ BsdfSample base_bsdf_sample(Bsdf b, vec3 u) {
     // The rough dielectric is drawn for x in [p_nonspec, 1) (all of it without partial
     // transmission, where p_nonspec is 0), the lobes below.
     if (b.prob_rough > 0.0 && x >= p_nonspec) {
-        // The rough dielectric (the header): h from D(h) cos(theta_h) about the normal on
-        // wo's side, then reflection with probability F(wo.h) (x rescaled to [0, 1)), else
-        // refraction.
+        // The rough dielectric (the header): h from the normals visible from wo about the
+        // normal on wo's side, then reflection with probability F(wo.h) (x rescaled to
+        // [0, 1)), else refraction.
         float x_rough = (x - p_nonspec) / b.prob_rough;
         GpuMaterial mr = material_at(b.material);
         float side = dot(b.ng, b.wo) >= 0.0 ? 1.0 : -1.0;
-        vec3 h = ggx_sample_h_d(side * b.n, mr.emission.w, u.xy);
+        vec3 h = ggx_sample_h(side * b.n, b.wo, mr.emission.w, u.xy);
         float oh = dot(b.wo, h);
         if (oh < EPS_COSINE) return s;
 #if HAS_DISPERSION
