@@ -434,7 +434,8 @@ def main():
     s.add_argument("--python", default="python3.13")
     r = sub.add_parser("run")
     r.add_argument("--quick", action="store_true", help="64x64, 4 CPU-s x 3 seeds, glass and emitters")
-    r.add_argument("--assets", help=f"comma-separated, of {','.join(cycles_assets.ALL)} (default: all)")
+    r.add_argument("--assets", help=f"comma-separated, of {','.join(cycles_assets.ALL)} (default: all) "
+                   f"and by name {','.join(cycles_assets.BY_NAME)}")
     r.add_argument("--programs", default="vkvcm,cycles")
     r.add_argument("--size", type=int, default=256)
     r.add_argument("--cpu", type=float, default=20.0, help="CPU-s per timed run (default %(default)s)")

@@ -305,8 +305,9 @@ def floor(b, material, size=4.0, y=0.0):
     b.mesh(pos, nrm, idx, material, uv=uv)
 
 
-def gen_glass(path):
-    """Smooth and rough glass spheres and a tinted glass box on a grey floor, under the sky."""
+def gen_glass(path, parts="srb"):
+    """Smooth (s) and rough (r) glass spheres and a tinted glass box (b) on a grey floor, under
+    the sky; `parts` picks which (the glass_* assets: one each, to tell where noise comes from)."""
     b = Builder()
     b.doc["extensionsUsed"] = ["KHR_materials_transmission", "KHR_materials_ior"]
     grey = b.material(pbrMetallicRoughness={"baseColorFactor": [0.6, 0.6, 0.6, 1], "metallicFactor": 0,
@@ -316,12 +317,15 @@ def gen_glass(path):
         extensions={"KHR_materials_transmission": {"transmissionFactor": 1.0}, "KHR_materials_ior": {"ior": 1.5}})
     floor(b, grey)
     pos, nrm, idx = sphere(0.5)
-    b.mesh(pos, nrm, idx, glass([1, 1, 1], 0.0), translation=(-0.6, 0.5, 0))
-    b.mesh(pos, nrm, idx, glass([1, 1, 1], 0.3), translation=(0.6, 0.5, 0))
-    # The box stands 1 mm above the floor: a bottom face in the floor's top plane would
-    # make the scene ill-defined (each renderer resolves coincident surfaces its own way).
-    bpos, bnrm, _, bidx = box((-0.3, 0.001, -0.3), (0.3, 0.6, 0.3))
-    b.mesh(bpos, bnrm, bidx, glass([0.9, 0.6, 0.3], 0.0), translation=(0.0, 0.0, 0.9))
+    if "s" in parts:
+        b.mesh(pos, nrm, idx, glass([1, 1, 1], 0.0), translation=(-0.6, 0.5, 0))
+    if "r" in parts:
+        b.mesh(pos, nrm, idx, glass([1, 1, 1], 0.3), translation=(0.6, 0.5, 0))
+    if "b" in parts:
+        # The box stands 1 mm above the floor: a bottom face in the floor's top plane would
+        # make the scene ill-defined (each renderer resolves coincident surfaces its own way).
+        bpos, bnrm, _, bidx = box((-0.3, 0.001, -0.3), (0.3, 0.6, 0.3))
+        b.mesh(bpos, bnrm, bidx, glass([0.9, 0.6, 0.3], 0.0), translation=(0.0, 0.0, 0.9))
     b.write(path)
     return ((0.0, 1.6, 3.2), (0.0, 0.4, 0.2), 40.0)
 
@@ -474,6 +478,26 @@ def gen_panel(path):
 
 GENERATED = {"glass": gen_glass, "emitters": gen_emitters, "interior": gen_interior, "spheres": gen_spheres,
              "panel": gen_panel}
+
+def gen_tint_slab(path):
+    """A smooth glass slab of base colour (0.25, 0.5, 1), 0.2 thick, filling the view in front of
+    the sky: how many times a renderer applies the transmission tint on one pass through a
+    closed object (vkvcm: at each of the two crossings; docs/scene-format.md)."""
+    b = Builder()
+    b.doc["extensionsUsed"] = ["KHR_materials_transmission", "KHR_materials_ior"]
+    tinted = b.material(
+        pbrMetallicRoughness={"baseColorFactor": [0.25, 0.5, 1.0, 1], "metallicFactor": 0, "roughnessFactor": 0.0},
+        extensions={"KHR_materials_transmission": {"transmissionFactor": 1.0}, "KHR_materials_ior": {"ior": 1.5}})
+    pos, nrm, _, idx = box((-1, -1, -0.1), (1, 1, 0.1))
+    b.mesh(pos, nrm, idx, tinted)
+    b.write(path)
+    return ((0.0, 0.0, 3.0), (0.0, 0.0, 0.0), 10.0)
+
+
+# By name only, not in the default (all): the glass asset's parts, one each beside the floor,
+# and the tinted slab.
+BY_NAME = {"glass_smooth": lambda path: gen_glass(path, "s"), "glass_rough": lambda path: gen_glass(path, "r"),
+           "glass_box": lambda path: gen_glass(path, "b"), "tint_slab": gen_tint_slab}
 ALL = list(DOWNLOADED) + list(GENERATED)
 
 
@@ -481,14 +505,14 @@ def prepare(name, folder):
     """The asset `name` with its camera node, under folder; returns (path, view)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    if name in GENERATED:
+    if name in GENERATED or name in BY_NAME:
         src = folder / f"{name}.gltf"
-        override = GENERATED[name](src)
+        override = {**GENERATED, **BY_NAME}[name](src)
     elif name in DOWNLOADED:
         model, variant, override = DOWNLOADED[name]
         src = download(model, variant, folder / model)
     else:
-        raise AssetError(f"unknown asset {name!r} (known: {', '.join(ALL)})")
+        raise AssetError(f"unknown asset {name!r} (known: {', '.join(ALL + list(BY_NAME))})")
     dst = src.with_name(src.stem + ".cycles" + src.suffix)
     view = with_camera(src, dst, override)
     return dst, view
