@@ -27,7 +27,11 @@ render: build
 # every test binary even after a failure, so that one CI run names every failing test.
 # Without incremental compilation (here and in the SwiftShader set, which reuses the build):
 # a fresh clone builds once, and its incremental state (3.5 GB) would only fill the disk.
+# Test binaries run through scripts/test-runner.sh, which compiles the kernels of the few
+# that build many variants and render little with each without LLVM's optimisation passes
+# (docs/kernel-cache.md, "Tests").
 TEST_KERNEL_CACHE := $(CURDIR)/target/test-kernel-cache
+TEST_RUNNER := --config "target.'cfg(all())'.runner='$(CURDIR)/scripts/test-runner.sh'"
 test test-swiftshader: export CARGO_INCREMENTAL := 0
 
 #
@@ -40,7 +44,7 @@ test: setup
 	bash scripts/setup-oidn.sh
 	rm -rf $(TEST_KERNEL_CACHE)
 	VK_DRIVER_FILES=$(LVP_ICD) VK_ICD_FILENAMES=$(LVP_ICD) VKVCM_TEST_KERNEL_CACHE=$(TEST_KERNEL_CACHE) \
-		cargo test --workspace --features vkvcm/fault-injection --no-fail-fast -- --test-threads=2
+		cargo test $(TEST_RUNNER) --workspace --features vkvcm/fault-injection --no-fail-fast -- --test-threads=2
 	$(MAKE) --no-print-directory test-swiftshader
 	rm -rf target/gpu-check-quick
 	VK_DRIVER_FILES=$(LVP_ICD) VK_ICD_FILENAMES=$(LVP_ICD) VKVCM=target/debug/vkvcm VKVCM_CACHE_DIR=$(TEST_KERNEL_CACHE) \
