@@ -36,9 +36,10 @@ PathSampler path_sampler(uint pixel) {
 // sample (next-event estimation) len. 3-D: vertex len's BSDF sample len, the direction
 // (xy) stratified together with the lobe (z) that it is drawn for, so that a lobe's share
 // of a pixel's samples keeps their directions stratified (docs/performance.md measures
-// it against a 1-D lobe). 1-D: vertex len has its light pick 2 len and its Russian roulette 2 len + 1. Each
-// kind scrambles its numbers apart from the others (common.glsl). Each is drawn only when
-// used: an unused dimension costs nothing and leaves the others as they are.
+// it against a 1-D lobe). 1-D: vertex len has its light pick 2 len and its Russian
+// roulette 2 len + 1. Each kind scrambles its numbers apart from the others
+// (common.glsl). Each is drawn only when used: an unused dimension costs nothing and
+// leaves the others as they are.
 #define DIM2_PIXEL 0u
 #define DIM2_LIGHT(len) (len)
 #define DIM3_BSDF(len) (len)

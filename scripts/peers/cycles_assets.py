@@ -476,9 +476,6 @@ def gen_panel(path):
     return ((1.6, 1.4, 1.9), (-0.3, 1.0, -0.8), 60.0)
 
 
-GENERATED = {"glass": gen_glass, "emitters": gen_emitters, "interior": gen_interior, "spheres": gen_spheres,
-             "panel": gen_panel}
-
 def gen_tint_slab(path):
     """A smooth glass slab of base colour (0.25, 0.5, 1), 0.2 thick, filling the view in front of
     the sky: how many times a renderer applies the transmission tint on one pass through a
@@ -494,6 +491,8 @@ def gen_tint_slab(path):
     return ((0.0, 0.0, 3.0), (0.0, 0.0, 0.0), 10.0)
 
 
+GENERATED = {"glass": gen_glass, "emitters": gen_emitters, "interior": gen_interior, "spheres": gen_spheres,
+             "panel": gen_panel}
 # By name only, not in the default (all): the glass asset's parts, one each beside the floor,
 # and the tinted slab.
 BY_NAME = {"glass_smooth": lambda path: gen_glass(path, "s"), "glass_rough": lambda path: gen_glass(path, "r"),
@@ -505,9 +504,10 @@ def prepare(name, folder):
     """The asset `name` with its camera node, under folder; returns (path, view)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    if name in GENERATED or name in BY_NAME:
+    generate = GENERATED.get(name) or BY_NAME.get(name)
+    if generate:
         src = folder / f"{name}.gltf"
-        override = {**GENERATED, **BY_NAME}[name](src)
+        override = generate(src)
     elif name in DOWNLOADED:
         model, variant, override = DOWNLOADED[name]
         src = download(model, variant, folder / model)
