@@ -100,6 +100,8 @@ fn rough_glass_scene() -> Scene {
 #[test]
 fn specialised_equals_generic_on_every_reference_scene() {
     let mut scenes: Vec<Scene> = ["gbs_s", "glm_c", "gbs_p", "gbs_b"].iter().map(|n| load_named(n).unwrap()).collect();
+    // Flat triangles: the generic kernels run the shading-normal code on them
+    // (tests/render_shading_normals.rs leaves this check here).
     scenes.push(glossy_scene());
     scenes.push(rough_glass_scene());
     scenes.push(common::scenes::environment_scene(common::scenes::smooth_sky(16, 9), 60.0));
