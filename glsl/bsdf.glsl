@@ -818,6 +818,16 @@ float bsdf_cos(Bsdf b, vec3 wi) { return abs(dot(b.n, wi)) * shading_correction(
 // |ng.w|: the cosine of solid-angle <-> area conversions at this vertex (MIS).
 float bsdf_cos_geometric(Bsdf b, vec3 w) { return abs(dot(b.ng, w)); }
 
+// Whether f is zero for every wi on the other side of the geometric surface from wo (an
+// opaque material without diffuse transmission): its light comes from b.ng's side only,
+// which next-event estimation towards a constant background uses (lights.glsl).
+bool bsdf_reflects_only(Bsdf b) {
+#if HAS_DIFFUSE_TRANSMISSION
+    if (b.dt_reflect < 1.0) return false;
+#endif
+    return b.ior < 0.0;
+}
+
 struct BsdfSample {
     vec3 wi;
     vec3 weight;     // f bsdf_cos(wi) / pdf (the path-throughput factor, before roulette)

@@ -61,7 +61,7 @@ vec3 connect_to_lights(SubpathState st, Surface s, Bsdf b, inout PathSampler ps)
     float pick;
     uint li = nee_pick_light(sample_1d(ps, DIM1_PICK(st.len)), s.p, s.ng, pick);
     if (li == NO_LIGHT) return vec3(0.0);
-    LightSample ls = light_illuminate(li, s.p, s.ng, sample_2d(ps, DIM2_LIGHT(st.len)));
+    LightSample ls = light_illuminate(li, s.p, b.ng, bsdf_reflects_only(b), sample_2d(ps, DIM2_LIGHT(st.len)));
     if (!ls.ok) return vec3(0.0);
     vec3 f;
     float cos_x;
@@ -175,6 +175,7 @@ void start_path(uint pixel, out SubpathState st, out PathSampler ps) {
     st.finite_light = true;
     st.from_material = NO_MATERIAL;
     st.from_ng = vec3(0.0);
+    st.from_one_sided = false;
     st.from_p = params.cam_pos.xyz;
     st.light = NO_LIGHT;
 #if HAS_DISPERSION
@@ -192,7 +193,7 @@ void add_background(inout SubpathState st, inout vec3 L) {
     uint bg = background_light();
     if (bg != NO_LIGHT && st.len >= min_path_length()) {
         float dpdf, epdf;
-        vec3 le = background_radiance(bg, st.d, st.from_ng, dpdf, epdf);
+        vec3 le = background_radiance(bg, st.d, st.from_ng, st.from_one_sided, dpdf, epdf);
         L += st.thr * le * mis_weight_hit(st, dpdf, epdf, nee_light_prob(bg, st.from_p, st.from_ng), light_pick_prob(bg),
                                             VERTEX_CONNECTION != 0);
     }

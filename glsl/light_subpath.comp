@@ -78,6 +78,7 @@ bool start_path(uint path, out SubpathState st, out uint rng) {
     st.specular = true;
     st.from_material = NO_MATERIAL;
     st.from_ng = vec3(0.0);
+    st.from_one_sided = false;
     st.from_p = e.pos;
     st.light = li;
     mis_light_start(st, emission_pdf, direct_pdf, e.cos_light, e.delta, e.finite);
@@ -171,7 +172,7 @@ void main() {
 #endif
         Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, true, s.tint);
         if (!b.valid) continue;
-        if (st.len == 1u) mis_light_first_hit(st, s.p, s.ng);
+        if (st.len == 1u) mis_light_first_hit(st, s.p, s.ng, bsdf_reflects_only(b));
         mis_on_hit(st, h.t, abs(dot(s.ng, st.d)), st.len == 1u && !st.finite_light);
         if (!b.delta) {
 #if STORE_VERTICES
