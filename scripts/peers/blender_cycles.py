@@ -91,15 +91,15 @@ def run_charged(cmd, log_path, env=None):
 
 
 class Vkvcm:
-    def __init__(self, binary, size, name="vkvcm", glsl=None):
+    def __init__(self, binary, size, max_len, name="vkvcm", glsl=None):
         # `glsl`: render with the shaders of that folder (VKVCM_GLSL_DIR), e.g. a commit's
         # glsl/ for a before/after row; such a row is scored against vkvcm's reference.
-        self.binary, self.size, self.name, self.glsl = binary, size, name, glsl
+        self.binary, self.size, self.max_len, self.name, self.glsl = binary, size, max_len, name, glsl
         self.ref_of = "vkvcm" if glsl else None
 
     def render(self, scene, seed, spp, out):
         cmd = [self.binary, "render", scene, "--algo", "pt", "--camera", cycles_assets.CAMERA, "--env", "white",
-               "--max-path-length", "10", "--width", self.size, "--height", self.size, "--seed", seed,
+               "--max-path-length", self.max_len, "--width", self.size, "--height", self.size, "--seed", seed,
                "--iterations", spp, "-o", out, "--quiet"]
         return run_charged(cmd, str(out) + ".log", env=dict(os.environ, VKVCM_GLSL_DIR=self.glsl) if self.glsl else None)
 
@@ -108,21 +108,30 @@ class Cycles:
     name = "cycles"
     ref_of = None
 
-    def __init__(self, cache, size, threads):
-        self.python, self.size, self.threads = venv_python(cache), size, threads
+    def __init__(self, cache, size, threads, max_len, ggx):
+        self.python, self.size, self.threads, self.max_len, self.ggx = venv_python(cache), size, threads, max_len, ggx
 
     def render(self, scene, seed, spp, out):
-        return run_charged([self.python, __file__, "_cycles", scene, seed, spp, out, self.size, self.threads],
-                           str(out) + ".log")
+        return run_charged([self.python, __file__, "_cycles", scene, seed, spp, out, self.size, self.threads,
+                            self.max_len, self.ggx], str(out) + ".log")
 
 
-def cycles_child(scene, seed, spp, out, size, threads):
+def cycles_child(scene, seed, spp, out, size, threads, max_len, ggx):
     """Runs inside the venv: the harness's Cycles render of an asset (its added camera,
-    the white sky, size x size)."""
-    render_cycles(scene, cycles_assets.CAMERA, seed, spp, out, size, size, threads, (1.0, 1.0, 1.0))
+    the white sky, size x size); ggx `single`: the Principled BSDFs the importer made use
+    single-scattering GGX, glTF's model and vkvcm's, instead of Blender's default
+    multiple-scattering GGX (which keeps the energy that rough lobes lose)."""
+    def single_scatter(bpy):
+        for m in bpy.data.materials:
+            for n in (m.node_tree.nodes if m.use_nodes else []):
+                if n.type == "BSDF_PRINCIPLED":
+                    n.distribution = "GGX"
+    render_cycles(scene, cycles_assets.CAMERA, seed, spp, out, size, size, threads, (1.0, 1.0, 1.0),
+                  after_import=single_scatter if ggx == "single" else None, max_path_length=int(max_len))
 
 
-def render_cycles(scene, camera, seed, spp, out, width, height, threads, world_rgb, after_import=None):
+def render_cycles(scene, camera, seed, spp, out, width, height, threads, world_rgb, after_import=None,
+                  max_path_length=10):
     """Runs inside the venv: imports the glTF with Blender's importer and renders it with
     Cycles through the camera whose name starts with `camera` (None: the file's first) to a
     float EXR, settings matched to vkvcm's (below), a uniform world of colour world_rgb.
@@ -150,11 +159,12 @@ def render_cycles(scene, camera, seed, spp, out, width, height, threads, world_r
     c.blur_glossy = 0.0
     c.caustics_reflective = True
     c.caustics_refractive = True
-    # vkvcm's max path length 10 (segments) = camera segment + 8 bounces + the segment to
-    # the light (Cycles' 0 bounces is direct light only).
-    c.max_bounces = 8
-    c.diffuse_bounces = c.glossy_bounces = c.transmission_bounces = c.volume_bounces = 8
-    c.transparent_max_bounces = 8
+    # vkvcm's max path length (segments) = camera segment + Cycles' bounces + the segment
+    # to the light (Cycles' 0 bounces is direct light only): 10 = 8 bounces.
+    bounces = int(max_path_length) - 2
+    c.max_bounces = bounces
+    c.diffuse_bounces = c.glossy_bounces = c.transmission_bounces = c.volume_bounces = bounces
+    c.transparent_max_bounces = bounces
     c.pixel_filter_type = "BOX"
     c.filter_width = 1.0
     sc.render.threads_mode = "FIXED"
@@ -287,11 +297,12 @@ def run_asset(args, name, progs, out):
         res["programs"][prog.name] = {"startup": startup, "cpu_per_spp": per, "ref_spp": ref_spp,
                                       "ref_chunks": [str(p) for p in chunks], "runs": []}
     # Timed runs, alternating the programs' order by seed.
+    budget = {p: spp_for(args.cpu, r["startup"], r["cpu_per_spp"]) for p, r in res["programs"].items()}
     for seed in range(1, args.seeds + 1):
         order = progs if seed % 2 else progs[::-1]
         for prog in order:
             r = res["programs"][prog.name]
-            spp = spp_for(args.cpu, r["startup"], r["cpu_per_spp"])
+            spp = min(budget.values()) if args.equal_spp else budget[prog.name]
             p = adir / f"{prog.name}_s{seed}.exr"
             cpu, wall = prog.render(scene, seed, spp, p)
             r["runs"].append({"seed": seed, "spp": spp, "cpu": cpu, "wall": wall, "image": str(p)})
@@ -377,11 +388,12 @@ def cmd_run(args):
         raise HarnessError(f"no vkvcm binary at {binary} (cargo build --release, or --vkvcm PATH)")
     progs = []
     if "vkvcm" in args.programs:
-        progs.append(Vkvcm(binary, args.size))
+        progs.append(Vkvcm(binary, args.size, args.max_path_length))
         if args.before_glsl:
-            progs.append(Vkvcm(binary, args.size, "vkvcm-before", str(Path(args.before_glsl).resolve())))
+            progs.append(Vkvcm(binary, args.size, args.max_path_length, "vkvcm-before",
+                               str(Path(args.before_glsl).resolve())))
     if "cycles" in args.programs:
-        progs.append(Cycles(cache, args.size, args.threads))
+        progs.append(Cycles(cache, args.size, args.threads, args.max_path_length, args.cycles_ggx))
     stamp = datetime.now(timezone.utc).strftime("%Y%m%d-%H%M%S")
     out = Path(args.out) / stamp
     out.mkdir(parents=True, exist_ok=True)
@@ -391,6 +403,9 @@ def cmd_run(args):
               f"{os.uname().nodename}, {os.cpu_count()} CPUs, load {load[0]:.1f} at start; "
               f"{args.size}x{args.size}, {args.cpu:g} CPU-s x {args.seeds} seeds per renderer, "
               f"references {args.ref_chunks} x {args.ref_cpu / args.ref_chunks:g} CPU-s"
+              + (f"; max path length {args.max_path_length}" if args.max_path_length != 10 else "")
+              + (f"; Cycles' GGX {args.cycles_ggx}-scattering" if args.cycles_ggx != "multi" else "")
+              + ("; equal spp (what the slowest renderer does in the budget)" if args.equal_spp else "")
               + (f"; VKVCM_GLSL_DIR={os.environ['VKVCM_GLSL_DIR']}" if os.environ.get("VKVCM_GLSL_DIR") else "")
               + (f"; before: {args.before_glsl}" if args.before_glsl else ""))
     log(header)
@@ -425,7 +440,7 @@ def ensure_venv(args):
 
 def main():
     if len(sys.argv) > 1 and sys.argv[1] == "_cycles":
-        cycles_child(*sys.argv[2:8])
+        cycles_child(*sys.argv[2:10])
         return
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cache", default=str(CACHE), help="venv and assets (default %(default)s)")
@@ -443,6 +458,16 @@ def main():
     r.add_argument("--ref-cpu", type=float, default=240.0, help="CPU-s of each reference, all chunks")
     r.add_argument("--ref-chunks", type=int, default=4)
     r.add_argument("--probe-spp", type=int, default=8)
+    r.add_argument("--max-path-length", type=int, default=10,
+                   help="vkvcm's segments; Cycles' bounces are 2 fewer (default %(default)s; 2: direct light only)")
+    r.add_argument("--cycles-ggx", choices=["multi", "single"], default="multi",
+                   help="Cycles' GGX: Blender's default multiple-scattering one, or single-scattering as "
+                   "glTF's model and vkvcm (like for like where rough lobes lose energy)")
+    r.add_argument("--equal-spp", action="store_true",
+                   help="every renderer renders the samples the slowest one does in --cpu, so that the "
+                   "variance per sample compares equal sample counts (a stratified or QMC sampler's "
+                   "relMSE x spp falls as spp grows); relMSE x CPU-s is then that of fewer samples "
+                   "for the faster renderers")
     r.add_argument("--threads", type=int, default=os.cpu_count() or 2, help="Cycles' threads")
     r.add_argument("--before-glsl", help="also render vkvcm with the shaders of this folder (e.g. `git archive "
                    "COMMIT glsl | tar -x -C DIR`, then DIR/glsl), a 'before' row scored against the same reference")
