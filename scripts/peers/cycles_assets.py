@@ -491,12 +491,26 @@ def gen_tint_slab(path):
     return ((0.0, 0.0, 3.0), (0.0, 0.0, 0.0), 10.0)
 
 
+def gen_grazing_floor(path, roughness):
+    """The glass asset's grey floor alone (base 0.6, a dielectric of the given roughness),
+    seen from 0.4 above it out to grazing angles: how bright each renderer's
+    metallic/roughness dielectric is at grazing incidence (docs/scene-format.md)."""
+    b = Builder()
+    grey = b.material(pbrMetallicRoughness={"baseColorFactor": [0.6, 0.6, 0.6, 1], "metallicFactor": 0,
+                                            "roughnessFactor": roughness}, doubleSided=True)
+    floor(b, grey)
+    b.write(path)
+    return ((0.0, 0.4, 3.9), (0.0, 0.0, 0.0), 40.0)
+
+
 GENERATED = {"glass": gen_glass, "emitters": gen_emitters, "interior": gen_interior, "spheres": gen_spheres,
              "panel": gen_panel}
 # By name only, not in the default (all): the glass asset's parts, one each beside the floor,
-# and the tinted slab.
+# the tinted slab, and its floor alone, rough and nearly smooth.
 BY_NAME = {"glass_smooth": lambda path: gen_glass(path, "s"), "glass_rough": lambda path: gen_glass(path, "r"),
-           "glass_box": lambda path: gen_glass(path, "b"), "tint_slab": gen_tint_slab}
+           "glass_box": lambda path: gen_glass(path, "b"), "tint_slab": gen_tint_slab,
+           "floor_rough": lambda path: gen_grazing_floor(path, 0.6),
+           "floor_smooth": lambda path: gen_grazing_floor(path, 0.05)}
 ALL = list(DOWNLOADED) + list(GENERATED)
 
 
