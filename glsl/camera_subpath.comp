@@ -175,7 +175,7 @@ void start_path(uint pixel, out SubpathState st, out PathSampler ps) {
     st.finite_light = true;
     st.from_material = NO_MATERIAL;
     st.from_ng = vec3(0.0);
-    st.from_one_sided = false;
+    st.from_reflects_only = false;
     st.from_p = params.cam_pos.xyz;
     st.light = NO_LIGHT;
 #if HAS_DISPERSION
@@ -193,7 +193,7 @@ void add_background(inout SubpathState st, inout vec3 L) {
     uint bg = background_light();
     if (bg != NO_LIGHT && st.len >= min_path_length()) {
         float dpdf, epdf;
-        vec3 le = background_radiance(bg, st.d, st.from_ng, st.from_one_sided, dpdf, epdf);
+        vec3 le = background_radiance(bg, st.d, st.from_ng, st.from_reflects_only, dpdf, epdf);
         L += st.thr * le * mis_weight_hit(st, dpdf, epdf, nee_light_prob(bg, st.from_p, st.from_ng), light_pick_prob(bg),
                                             VERTEX_CONNECTION != 0);
     }

@@ -78,7 +78,7 @@ bool start_path(uint path, out SubpathState st, out uint rng) {
     st.specular = true;
     st.from_material = NO_MATERIAL;
     st.from_ng = vec3(0.0);
-    st.from_one_sided = false;
+    st.from_reflects_only = false;
     st.from_p = e.pos;
     st.light = li;
     mis_light_start(st, emission_pdf, direct_pdf, e.cos_light, e.delta, e.finite);

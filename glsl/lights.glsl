@@ -200,7 +200,7 @@ bool is_constant_background(GpuLight l) {
 }
 
 // Next-event estimation's directions towards a constant background from a point of
-// geometric normal n: |cos| / pi about n where the point only reflects (`one_sided`, n
+// geometric normal n: |cos| / pi about n where the point only reflects (`reflects_only`, n
 // on the side it reflects on: bsdf_reflects_only), else |cos| / (2 pi) about n on either
 // side with probability 1/2 (transmitted light too), so that a diffuse surface's light
 // samples follow its integrand as its BSDF samples do (uniform sphere sampling wastes
@@ -209,22 +209,22 @@ bool is_constant_background(GpuLight l) {
 // The pdf takes |cos| on both sides: a one-sided point's light from behind is zero, so
 // its weight there does not matter. Light subpaths emit uniformly; the direct pdf of one
 // that starts there is this one at its first hit (mis_light_first_hit).
-float background_direct_pdf_w(vec3 wi, vec3 n, bool one_sided) {
-    return n == vec3(0.0) ? INV_4PI : abs(dot(wi, n)) * (one_sided ? INV_PI : 0.5 * INV_PI);
+float background_direct_pdf_w(vec3 wi, vec3 n, bool reflects_only) {
+    return n == vec3(0.0) ? INV_4PI : abs(dot(wi, n)) * (reflects_only ? INV_PI : 0.5 * INV_PI);
 }
 
-vec3 sample_background_direction(vec2 u, vec3 n, bool one_sided) {
+vec3 sample_background_direction(vec2 u, vec3 n, bool reflects_only) {
     if (n == vec3(0.0)) return sample_uniform_sphere(u);
-    if (one_sided) return to_world(sample_cosine_hemisphere(u), n);
+    if (reflects_only) return to_world(sample_cosine_hemisphere(u), n);
     bool front = u.x < 0.5;
     u.x = min(front ? 2.0 * u.x : 2.0 * u.x - 1.0, ONE_MINUS_EPSILON);
     vec3 local = sample_cosine_hemisphere(u);
     return to_world(local, front ? n : -n);
 }
 
-// A light sample for the point x of geometric normal n (0: none), `one_sided` where x
+// A light sample for the point x of geometric normal n (0: none), `reflects_only` where x
 // only reflects (n then on the side it reflects on; background_direct_pdf_w).
-LightSample light_illuminate(uint index, vec3 x, vec3 n, bool one_sided, vec2 u) {
+LightSample light_illuminate(uint index, vec3 x, vec3 n, bool reflects_only, vec2 u) {
     GpuLight l = light_at(index);
     uint kind = light_kind(l);
     LightSample s;
@@ -300,8 +300,8 @@ LightSample light_illuminate(uint index, vec3 x, vec3 n, bool one_sided, vec2 u)
         } else
 #endif
         {
-            s.wi = sample_background_direction(u, n, one_sided);
-            s.pdf_w = background_direct_pdf_w(s.wi, n, one_sided);
+            s.wi = sample_background_direction(u, n, reflects_only);
+            s.pdf_w = background_direct_pdf_w(s.wi, n, reflects_only);
             if (!(s.pdf_w > 0.0)) return s;
             s.emission_pdf_w = INV_4PI / (PI * r_scene * r_scene);
         }
@@ -333,9 +333,9 @@ vec3 area_light_radiance(uint index, float u, float v, vec3 dir, vec3 x, vec3 y,
 }
 
 // The background seen along `dir` (a ray direction that left the scene from a point of
-// geometric normal n, 0: none; `one_sided` where that point only reflects), with its
+// geometric normal n, 0: none; `reflects_only` where that point only reflects), with its
 // direct (solid angle) and emission pdfs.
-vec3 background_radiance(uint index, vec3 dir, vec3 n, bool one_sided, out float direct_pdf_w,
+vec3 background_radiance(uint index, vec3 dir, vec3 n, bool reflects_only, out float direct_pdf_w,
                          out float emission_pdf_w) {
     float r = params.scene_sphere.w;
     GpuLight l = light_at(index);
@@ -346,7 +346,7 @@ vec3 background_radiance(uint index, vec3 dir, vec3 n, bool one_sided, out float
         return le;
     }
 #endif
-    direct_pdf_w = background_direct_pdf_w(dir, n, one_sided);
+    direct_pdf_w = background_direct_pdf_w(dir, n, reflects_only);
     emission_pdf_w = INV_4PI / (PI * r * r);
     return l.radiance.rgb;
 }

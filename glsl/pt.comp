@@ -42,7 +42,7 @@ struct PtPath {
     // camera: NO_MATERIAL), for the segment's transmittance (glsl/medium.glsl).
     uint from_material;
     vec3 from_ng;       // (and its NEE pick, with the light tree: nee_light_prob)
-    bool from_one_sided; // it only reflects (bsdf_reflects_only: the background's NEE pdf)
+    bool from_reflects_only; // it only reflects (bsdf_reflects_only: the background's NEE pdf)
     vec3 from_p;        // the vertex it leaves: an emitter hit's NEE pdf depends on it
     float last_pdf;     // solid-angle pdf of the last BSDF sample, for MIS at emitters
     bool last_specular;
@@ -64,7 +64,7 @@ void start_path(uint pixel, out PtPath path, out PathSampler ps) {
     path.len = 1u;
     path.from_material = NO_MATERIAL;
     path.from_ng = vec3(0.0);
-    path.from_one_sided = false;
+    path.from_reflects_only = false;
     path.from_p = params.cam_pos.xyz;
 #if HAS_DISPERSION
     path.channel = NO_CHANNEL;
@@ -80,7 +80,7 @@ void add_background(inout PtPath path, inout vec3 L) {
     uint bg = background_light();
     if (bg != NO_LIGHT && path.len >= min_path_length()) {
         float dpdf, epdf;
-        vec3 Le = background_radiance(bg, path.d, path.from_ng, path.from_one_sided, dpdf, epdf);
+        vec3 Le = background_radiance(bg, path.d, path.from_ng, path.from_reflects_only, dpdf, epdf);
         float wgt = (NEE == 0 || path.last_specular) ? 1.0 : balance(path.last_pdf, nee_light_prob(bg, path.from_p, path.from_ng) * dpdf);
         L += path.thr * Le * wgt;
     }
@@ -156,7 +156,7 @@ bool continue_path(inout PtPath path, Surface s, Bsdf b, inout PathSampler ps) {
     path.d = bs.wi;
     path.from_material = s.material;
     path.from_ng = s.ng;
-    path.from_one_sided = bsdf_reflects_only(b);
+    path.from_reflects_only = bsdf_reflects_only(b);
     path.from_p = s.p;
     path.len++;
     return true;

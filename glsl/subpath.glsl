@@ -27,7 +27,7 @@ struct SubpathState {
     // the camera and at a light), for the segment's transmittance (glsl/medium.glsl).
     uint from_material;
     vec3 from_ng;
-    bool from_one_sided; // it only reflects (bsdf_reflects_only: the background's NEE pdf)
+    bool from_reflects_only; // it only reflects (bsdf_reflects_only: the background's NEE pdf)
     // The vertex the current segment leaves (the camera, the light point, a surface point):
     // the direct pdf of an emitter hit depends on it (lights.glsl area_light_direct_pdf_a),
     // and with the light tree its pick too, on it and from_ng (nee_light_prob).
@@ -54,14 +54,14 @@ void mis_light_start(inout SubpathState st, float emission_pdf, float direct_pdf
 // 1 / (4 pi)) is replaced at the first hit y1, once it is known (with mis_on_hit, before
 // anything uses dvcm). Other lights: nothing to do. With the light tree (LIGHT_TREE) the
 // pick of the direct pdf is also y1's (nee_light_prob at y1 and its geometric normal n1),
-// not the selection table's that started the subpath. `one_sided`: y1 only reflects
+// not the selection table's that started the subpath. `reflects_only`: y1 only reflects
 // (bsdf_reflects_only).
-void mis_light_first_hit(inout SubpathState st, vec3 y1, vec3 n1, bool one_sided) {
+void mis_light_first_hit(inout SubpathState st, vec3 y1, vec3 n1, bool reflects_only) {
 #if LIGHT_TREE
     st.dvcm *= nee_light_prob(st.light, y1, n1) / light_pick_prob(st.light);
 #endif
     GpuLight l = light_at(st.light);
-    if (is_constant_background(l)) st.dvcm *= background_direct_pdf_w(-st.d, n1, one_sided) / INV_4PI;
+    if (is_constant_background(l)) st.dvcm *= background_direct_pdf_w(-st.d, n1, reflects_only) / INV_4PI;
     if (light_kind(l) != LIGHT_AREA) return;
     st.dvcm *= area_light_direct_pdf_a(st.light, y1, st.from_p) * l.d.w;
 }
@@ -131,7 +131,7 @@ bool scatter(inout SubpathState st, Bsdf b, vec3 p, vec3 ng, vec3 u_bsdf, float 
     st.d = bs.wi;
     st.from_material = b.material;
     st.from_ng = ng;
-    st.from_one_sided = bsdf_reflects_only(b);
+    st.from_reflects_only = bsdf_reflects_only(b);
     st.from_p = p;
     return max3(st.thr) > 0.0;
 }

@@ -63,10 +63,10 @@ vec3 dir_to(uint i, uint j) {
 // production light_illuminate, with its area branch repeated for a given point instead of
 // a sampled one (the pdf of the point by solid angle or by area, as light_illuminate
 // chooses at x) and the background's pdfs taken along the fixed direction (the pdfs of
-// the other lights do not depend on the sample). n: y_1's geometric normal; one_sided:
+// the other lights do not depend on the sample). n: y_1's geometric normal; reflects_only:
 // y_1 only reflects.
-LightSample light_sample_fixed(uint li, vec3 x, vec3 n, bool one_sided) {
-    LightSample s = light_illuminate(li, x, n, one_sided, vec2(0.5));
+LightSample light_sample_fixed(uint li, vec3 x, vec3 n, bool reflects_only) {
+    LightSample s = light_illuminate(li, x, n, reflects_only, vec2(0.5));
     uint kind = light_kind(light_at(li));
     if (kind == LIGHT_AREA) {
         GpuLight l = light_at(li);
@@ -84,7 +84,7 @@ LightSample light_sample_fixed(uint li, vec3 x, vec3 n, bool one_sided) {
         // direct pdf about y_1's normal).
         s.wi = -dir0;
         float dp, ep;
-        s.radiance = background_radiance(li, s.wi, n, one_sided, dp, ep);
+        s.radiance = background_radiance(li, s.wi, n, reflects_only, dp, ep);
         s.pdf_w = dp;
         s.emission_pdf_w = ep;
         s.ok = dp > 0.0 && max3(s.radiance) > 0.0;
@@ -178,12 +178,12 @@ void main() {
         }
     }
     // y_1 only reflects: a constant background's direct pdf there (lights.glsl).
-    bool one_sided1 = k >= 2u && bsdf_reflects_only(bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false, vtint[1]));
+    bool reflects_only1 = k >= 2u && bsdf_reflects_only(bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false, vtint[1]));
     // Join.
     if (s_gen == 1u) {
         if (vdelta[1]) return;
         Bsdf b = bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false, vtint[1]);
-        LightSample ls = light_illuminate(li, vp[1], b.ng, one_sided1, u_pos);
+        LightSample ls = light_illuminate(li, vp[1], b.ng, reflects_only1, u_pos);
         if (!ls.ok) return;
         if (ls.dist >= 1e29) {
             infinite0 = true;
@@ -251,7 +251,7 @@ void main() {
     for (uint i = 1u; i < k; ++i) {
         vec3 d = dir_to(i - 1u, i);
         st.len = i;
-        if (i == 1u) mis_light_first_hit(st, vp[1], vn[1], one_sided1);
+        if (i == 1u) mis_light_first_hit(st, vp[1], vn[1], reflects_only1);
         mis_on_hit(st, i == 1u && infinite0 ? 0.0 : distance(vp[i - 1u], vp[i]), abs(dot(vn[i], d)),
                    i == 1u && infinite0);
         L[i] = st;
@@ -279,7 +279,7 @@ void main() {
     if (kind == LIGHT_AREA || kind == LIGHT_BACKGROUND) {
         float dp, ep;
         // (Any point of the light: these scenes' lights are untextured, only the side matters.)
-        vec3 le = kind == LIGHT_AREA ? area_light_radiance(li, 0.0, 0.0, dir_to(1u, 0u), vp[1], vp[0], dp, ep) : background_radiance(li, dir_to(1u, 0u), vn[1], one_sided1, dp, ep);
+        vec3 le = kind == LIGHT_AREA ? area_light_radiance(li, 0.0, 0.0, dir_to(1u, 0u), vp[1], vp[0], dp, ep) : background_radiance(li, dir_to(1u, 0u), vn[1], reflects_only1, dp, ep);
         // Without connections only purely specular camera paths count an emitter hit.
         if (max3(le) > 0.0 && (use_vc || C[0].specular || k == 1u)) {
             w = mis_weight_hit(C[0], dp, ep, nee_pick, pick, use_vc);
@@ -290,7 +290,7 @@ void main() {
     if (use_vc && k >= 2u) {
         // s = 1: next-event estimation at y_1.
         if (!vdelta[1]) {
-            LightSample ls = light_sample_fixed(li, vp[1], vn[1], one_sided1);
+            LightSample ls = light_sample_fixed(li, vp[1], vn[1], reflects_only1);
             vec3 f;
             float cos_x;
             w = nee_eval(C[1], bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false, vtint[1]), ls, nee_pick, pick, f, cos_x);
