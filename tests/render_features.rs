@@ -97,6 +97,33 @@ fn rough_glass_scene() -> Scene {
     s
 }
 
+/// tests/env/textured_scene.gltf (a bilinear repeating checker on the ground, a nearest
+/// clamped cut-out quad, under a sky map) with the ground's checker also its
+/// metallic-roughness texture and the cut-out an emitter of its own texture: the texture
+/// features (HAS_METALLIC_ROUGHNESS_TEXTURES, alpha cut-outs, HAS_EMISSIVE_TEXTURES) and
+/// an environment map.
+fn textured_scene() -> Scene {
+    use glam::Vec3;
+    use vkvcm::scene::Material;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/env/textured_scene.gltf");
+    let mut s = vkvcm::scene::load_with(&path, &Default::default()).unwrap();
+    let checker = s.materials[0].base_color_texture.clone().expect("the ground's texture");
+    let f0 = Vec3::splat(vkvcm::scene::GLTF_DIELECTRIC_F0);
+    s.materials[0] = Material {
+        name: "ground".into(),
+        base_color_texture: Some(checker.clone()),
+        ..Material::metallic_roughness_textured(Vec3::ONE, 0.7, 0.9, f0, checker)
+    };
+    let cutout = &mut s.materials[1];
+    cutout.emission = Vec3::splat(2.0);
+    cutout.emissive_texture = cutout.base_color_texture.clone();
+    let lights = common::scenes::area_lights(&s.triangles, &s.materials);
+    assert!(!lights.is_empty(), "the cut-out emits");
+    s.lights.extend(lights);
+    s.name = "textured, cut-out emitter, environment map".into();
+    s
+}
+
 #[test]
 fn specialised_equals_generic_on_every_reference_scene() {
     let mut scenes: Vec<Scene> = ["gbs_s", "glm_c", "gbs_p", "gbs_b"].iter().map(|n| load_named(n).unwrap()).collect();
@@ -105,12 +132,20 @@ fn specialised_equals_generic_on_every_reference_scene() {
     scenes.push(glossy_scene());
     scenes.push(rough_glass_scene());
     scenes.push(common::scenes::environment_scene(common::scenes::smooth_sky(16, 9), 60.0));
+    scenes.push(textured_scene());
+    let textured = scenes.len() - 1;
     with_gpu(|gpu| {
         let mut report = String::new();
-        for scene in &scenes {
+        for (i, scene) in scenes.iter().enumerate() {
             // Not bpt: its kernels are vcm's with merging compiled out (CameraKernel's
             // VERTEX_MERGING), and its generic ones cost ~240 s of a cold lavapipe run.
-            for algo in [Algorithm::Pt, Algorithm::Lt, Algorithm::Vcm] {
+            // el (the eye light) reads the textures only.
+            let algos: &[Algorithm] = if i == textured {
+                &[Algorithm::Pt, Algorithm::Lt, Algorithm::Vcm, Algorithm::El]
+            } else {
+                &[Algorithm::Pt, Algorithm::Lt, Algorithm::Vcm]
+            };
+            for &algo in algos {
                 let t0 = std::time::Instant::now();
                 let (spec, bufs) = render(gpu, scene, &settings(algo, false));
                 let (gen, _) = render(gpu, scene, &settings(algo, true));
@@ -135,7 +170,8 @@ fn specialised_equals_generic_on_every_reference_scene() {
                     .assert_passed(&format!("features_{}_{}", scene.name, algo.name()));
                 // Only the buffers the estimator needs.
                 let has = |n: &str| bufs.iter().any(|b| b == n);
-                assert_eq!(has("light_vertices_a"), algo != Algorithm::Pt, "{}: light vertices", algo.name());
+                let light_vertices = matches!(algo, Algorithm::Lt | Algorithm::Vcm);
+                assert_eq!(has("light_vertices_a"), light_vertices, "{}: light vertices", algo.name());
                 assert_eq!(has("grid_start"), algo == Algorithm::Vcm, "{}: hash grid", algo.name());
             }
         }

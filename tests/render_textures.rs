@@ -210,11 +210,10 @@ fn t_uv(u: f32, v: f32) -> Vec2 {
     Vec2::new(2.0 * u - 0.5, 2.0 * v - 0.5)
 }
 
-fn render_with(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, iterations: u64, generic: bool) -> RenderOutput {
+fn render_with(gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, iterations: u64) -> RenderOutput {
     let mut s = RenderSettings::new(algo, W, H, Budget::Iterations(iterations));
     s.frame.max_path_length = 2;
     s.frame.seed = 9 + algo as u32;
-    s.generic = generic;
     let out = render::render(gpu, scene, &s, None, &mut |_| {}).unwrap();
     assert_eq!(out.rejected_samples, 0, "{algo:?}: rejected samples");
     out
@@ -244,7 +243,7 @@ fn textured_quad_matches_the_cpu_sampler() {
                 let sc = textured_scene(t.clone(), &t_uv, color_of);
                 let expected = expected_image(&sc, color_of);
                 for (algo, iterations) in [(Algorithm::Pt, 256), (Algorithm::Bpt, 128)] {
-                    let st = render_stats(&render_with(gpu, &sc, algo, iterations, false), None);
+                    let st = render_stats(&render_with(gpu, &sc, algo, iterations), None);
                     let name = format!("{label}{}, {algo:?}", if colours { ", vertex colours" } else { "" });
                     let r = one_sample_test(&st, &expected, ALPHA).unwrap();
                     assert!(r.passed(), "{name}: {r}");
@@ -269,7 +268,7 @@ fn second_texture_coordinate_set() {
         a.uv[0] = Some([Vec2::new(0.9, 0.1); 3]);
     }
     with_gpu(|gpu| {
-        let st = render_stats(&render_with(gpu, &sc, Algorithm::Pt, 128, false), None);
+        let st = render_stats(&render_with(gpu, &sc, Algorithm::Pt, 128), None);
         let r = one_sample_test(&st, &expected_image_for_uvs(&reference), ALPHA).unwrap();
         assert!(r.passed(), "TEXCOORD_1: {r}");
     });
@@ -288,8 +287,8 @@ fn texture_on_a_missing_coordinate_set_is_not_applied() {
     let mut plain = sc.clone();
     plain.materials[0].base_color_texture = None;
     with_gpu(|gpu| {
-        let a = render_with(gpu, &sc, Algorithm::Pt, 16, false);
-        let b = render_with(gpu, &plain, Algorithm::Pt, 16, false);
+        let a = render_with(gpu, &sc, Algorithm::Pt, 16);
+        let b = render_with(gpu, &plain, Algorithm::Pt, 16);
         let worst = a
             .pixels
             .iter()
@@ -346,7 +345,7 @@ fn alpha_cutouts_are_holes_for_every_ray() {
         })
         .collect();
     with_gpu(|gpu| {
-        let pt_out = render_with(gpu, &sc, Algorithm::Pt, 512, false);
+        let pt_out = render_with(gpu, &sc, Algorithm::Pt, 512);
         let pt = render_stats(&pt_out, None);
         // Opaque texels: the texture's colour (the whole upper hemisphere is sky).
         let mut expected = Image::filled(W, H, [0.0; 3]);
@@ -441,7 +440,7 @@ fn alpha_blend_is_stochastic_transparency() {
     with_gpu(|gpu| {
         let expected = Image::filled(W, H, [0.7; 3]);
         for (algo, iterations) in [(Algorithm::Pt, 512), (Algorithm::Bpt, 256), (Algorithm::Vcm, 256)] {
-            let out = render_stats(&render_with(gpu, &over_sky, algo, iterations, false), None);
+            let out = render_stats(&render_with(gpu, &over_sky, algo, iterations), None);
             let r = one_sample_test(&out, &expected, ALPHA).unwrap();
             assert!(r.passed(), "{algo:?}, black quad of alpha 0.3 over the sky: {r}");
         }
@@ -458,31 +457,6 @@ fn alpha_blend_is_stochastic_transparency() {
         let lt = run(Algorithm::Lt, 4096);
         let r = welch_test(&lt, &bpt, ALPHA).unwrap();
         assert!(r.passed(), "blended quad over a floor: LT vs BPT: {r}");
-    });
-}
-
-/// The generic kernels (every feature compiled in) render a textured scene as the
-/// specialised ones do (same random numbers: bit-identical), and a scene without
-/// attributes is untouched by the texture code (its generic render equals its
-/// specialised render). The scene's material has a base-colour texture, a cut-out and a
-/// metallic-roughness texture (the same image, read linearly).
-#[test]
-fn generic_kernels_render_textures_identically() {
-    let t = TextureRef { wrap_s: Wrap::MirroredRepeat, wrap_t: Wrap::ClampToEdge, ..repeat_texture(Filter::Linear) };
-    let mut sc = textured_scene(t.clone(), &t_uv, None);
-    let f0 = Vec3::splat(vkvcm::scene::GLTF_DIELECTRIC_F0);
-    sc.materials[0] = Material {
-        base_color_texture: Some(t.clone()),
-        alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
-        ..Material::metallic_roughness_textured(Vec3::ONE, 0.7, 0.9, f0, t)
-    };
-    assert!(vkvcm::render::features::FeatureSet::new(&sc, false).metallic_roughness_textures);
-    with_gpu(|gpu| {
-        for algo in [Algorithm::Pt, Algorithm::Vcm, Algorithm::El] {
-            let a = render_with(gpu, &sc, algo, 4, false);
-            let b = render_with(gpu, &sc, algo, 4, true);
-            assert!(a.pixels == b.pixels, "{algo:?}: generic and specialised kernels differ on the textured scene");
-        }
     });
 }
 
@@ -594,13 +568,13 @@ fn normal_map_bends_the_shading_normal_in_every_estimator() {
     let (mapped, explicit, flat) = (make(true, false), make(false, true), make(false, false));
     assert!(vkvcm::render::features::FeatureSet::new(&mapped, false).normal_maps);
     with_gpu(|gpu| {
-        let reference = render_stats(&render_with(gpu, &explicit, Algorithm::Pt, 256, false), None);
+        let reference = render_stats(&render_with(gpu, &explicit, Algorithm::Pt, 256), None);
         for (algo, iterations) in [(Algorithm::Pt, 256), (Algorithm::Bpt, 256)] {
-            let st = render_stats(&render_with(gpu, &mapped, algo, iterations, false), None);
+            let st = render_stats(&render_with(gpu, &mapped, algo, iterations), None);
             let r = welch_test(&st, &reference, ALPHA).unwrap();
             assert!(r.passed(), "{algo:?} with the normal map vs vertex normals: {r}");
         }
-        let st = render_stats(&render_with(gpu, &flat, Algorithm::Pt, 256, false), None);
+        let st = render_stats(&render_with(gpu, &flat, Algorithm::Pt, 256), None);
         assert!(!welch_test(&st, &reference, ALPHA).unwrap().passed(), "the flat quad renders as the bent one");
     });
 }
@@ -665,26 +639,21 @@ fn emissive_texture_modulates_area_lights_in_every_estimator() {
     let (with, without) = (textured(true), textured(false));
     assert!(vkvcm::render::features::FeatureSet::new(&with, false).emissive_textures);
     with_gpu(|gpu| {
-        let reference = render_stats(&render_with(gpu, &split, Algorithm::Pt, 512, false), None);
-        for (algo, iterations, generic) in [
-            (Algorithm::Pt, 256, false),
-            (Algorithm::Pt, 128, true),
+        let reference = render_stats(&render_with(gpu, &split, Algorithm::Pt, 512), None);
+        for (algo, iterations) in [
+            (Algorithm::Pt, 256),
             // Light tracing reaches the dim pixels at the floor's far edge rarely (a
             // pixel's few splats underestimate its variance at 256 iterations: the split
             // light fails there too), so it runs longer.
-            (Algorithm::Lt, 2048, false),
-            (Algorithm::Bpt, 256, false),
-            (Algorithm::Vcm, 256, false),
+            (Algorithm::Lt, 2048),
+            (Algorithm::Bpt, 256),
+            (Algorithm::Vcm, 256),
         ] {
-            let st = render_stats(&render_with(gpu, &with, algo, iterations, generic), None);
+            let st = render_stats(&render_with(gpu, &with, algo, iterations), None);
             let r = welch_test(&st, &reference, ALPHA).unwrap();
-            assert!(
-                r.passed(),
-                "{algo:?}{}: textured light vs its texels: {r}",
-                if generic { " (generic)" } else { "" }
-            );
+            assert!(r.passed(), "{algo:?}: textured light vs its texels: {r}");
         }
-        let st = render_stats(&render_with(gpu, &without, Algorithm::Pt, 256, false), None);
+        let st = render_stats(&render_with(gpu, &without, Algorithm::Pt, 256), None);
         assert!(
             !welch_test(&st, &reference, ALPHA).unwrap().passed(),
             "the untextured light renders as the textured one"
@@ -718,8 +687,9 @@ fn metallic_roughness_image() -> TextureImage {
 /// camera, bpt and vcm also at the floor's stored light vertices they connect to the
 /// wall's camera vertices (the spot is a point: the wall's light comes through next-event
 /// estimation at the floor, these connections, or light tracing). Each estimator of the
-/// textured floor agrees per pixel with bpt of the split floor (pt also with the generic
-/// kernels); the floor with the constant factors alone (the texture dropped) does not.
+/// textured floor agrees per pixel with bpt of the split floor (the generic kernels equal
+/// the specialised ones on a metallic-roughness-textured scene: tests/render_features.rs);
+/// the floor with the constant factors alone (the texture dropped) does not.
 /// The texels make the floor far less metallic than its factors, so that the factors
 /// alone reflect much less light onto the wall. The wall stands 0.3 off the floor: in a
 /// corner light tracing's camera connections are heavy-tailed and its per-pixel variance
@@ -811,33 +781,24 @@ fn metallic_roughness_texture_varies_the_lobes_in_every_estimator() {
     // Pixels wholly on the floor or the wall: where a surface's edge crosses a pixel, few
     // of its samples see the dim wall, and their mean is too skewed for the z-test.
     let covered = common::primary_hit_mask(&split, W, H, |_| true);
-    let run = |gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, iterations: u64, generic: bool| {
+    let run = |gpu: &Arc<Gpu>, scene: &Scene, algo: Algorithm, iterations: u64| {
         let mut s = RenderSettings::new(algo, W, H, Budget::Iterations(iterations));
         s.frame.max_path_length = 3;
-        s.frame.seed = 31 + algo as u32 + 100 * generic as u32;
-        s.generic = generic;
+        s.frame.seed = 31 + algo as u32;
         let out = render::render(gpu, scene, &s, None, &mut |_| {}).unwrap();
         assert_eq!(out.rejected_samples, 0, "{algo:?}: rejected samples");
         render_stats(&out, Some(&covered))
     };
     with_gpu(|gpu| {
-        let reference = run(gpu, &split, Algorithm::Bpt, 4096, false);
-        for (algo, iterations, generic) in [
-            (Algorithm::Pt, 2048, false),
-            (Algorithm::Pt, 1024, true),
-            (Algorithm::Lt, 4096, false),
-            (Algorithm::Bpt, 1024, false),
-            (Algorithm::Vcm, 1024, false),
-        ] {
-            let st = run(gpu, &with, algo, iterations, generic);
+        let reference = run(gpu, &split, Algorithm::Bpt, 4096);
+        for (algo, iterations) in
+            [(Algorithm::Pt, 2048), (Algorithm::Lt, 4096), (Algorithm::Bpt, 1024), (Algorithm::Vcm, 1024)]
+        {
+            let st = run(gpu, &with, algo, iterations);
             let r = welch_test(&st, &reference, ALPHA).unwrap();
-            assert!(
-                r.passed(),
-                "{algo:?}{}: metallic-roughness texture vs its texels: {r}",
-                if generic { " (generic)" } else { "" }
-            );
+            assert!(r.passed(), "{algo:?}: metallic-roughness texture vs its texels: {r}");
         }
-        let st = run(gpu, &without, Algorithm::Pt, 512, false);
+        let st = run(gpu, &without, Algorithm::Pt, 512);
         assert!(
             !welch_test(&st, &reference, ALPHA).unwrap().passed(),
             "the floor without its metallic-roughness texture renders as the textured one"
