@@ -358,28 +358,59 @@ vec3 ggx_eval(vec3 n, vec3 wo, vec3 wi, float cos_o, float cos_i, vec3 f0, float
 // The GGX lobe made anisotropic by KHR_materials_anisotropy (Tint.anisotropy).
 #include "lobes/anisotropy.glsl"
 
-// The weight of a diffuse lobe under a dielectric interface of Schlick F0 `f0` (glTF's
-// metallic/roughness dielectric): (1 - F(cos_o)) (1 - F(cos_i)) / (1 - E_avg), with
-// E_avg = 2 int_0^1 F(mu) mu dmu = f0 + (1 - f0) / 21 the cosine-weighted average of F.
-// The coupled matte-specular weighting of Kelemen and Szirmay-Kalos, "A Microfacet Based
-// Coupled Specular-Matte BRDF Model with Importance Sampling" (Eurographics 2001), with
-// Schlick's F standing in for the specular lobe's albedo: symmetric in wo and wi (so
-// reciprocal, no adjoint), and for a white base the diffuse albedo at wo is exactly
-// 1 - F(cos_o), so diffuse + specular never exceed 1. glTF's reference `fresnel_mix`
-// weights the diffuse lobe by 1 - F(wo.h) instead, which reflects up to 1.7 times what a
-// white smooth surface receives at grazing angles (docs/scene-format.md).
-float diffuse_fresnel_weight(float f0, float cos_o, float cos_i) {
-    return (1.0 - schlick(f0, cos_o)) * (1.0 - schlick(f0, cos_i)) / (1.0 - (f0 + (1.0 - f0) / 21.0));
+// The directional albedo E(c) = f0 A + B of the GGX lobe with Schlick's F of F0 f0
+// (F = f0 (1 - s) + s, s = (1 - wo.h)^5, so E is linear in f0) and width `a` at
+// cos(theta) = `c`: (A, B) by the bilinear interpolation of glsl/ggx_albedo.glsl's
+// quadrature, cosines at (i / (MU - 1))^2, roughnesses sqrt(a) at j / (R - 1).
+#include "ggx_albedo.glsl"
+vec2 ggx_albedo_terms(float c, float a) {
+    float x = sqrt(clamp(c, 0.0, 1.0)) * float(GGX_ALBEDO_MU - 1);
+    float y = sqrt(clamp(a, 0.0, 1.0)) * float(GGX_ALBEDO_R - 1);
+    int i = min(int(x), GGX_ALBEDO_MU - 2), j = min(int(y), GGX_ALBEDO_R - 2);
+    float fx = x - float(i), fy = y - float(j);
+    int k = 2 * (j * GGX_ALBEDO_MU + i), up = 2 * GGX_ALBEDO_MU;
+    vec2 lo = mix(vec2(GGX_ALBEDO[k], GGX_ALBEDO[k + 1]), vec2(GGX_ALBEDO[k + 2], GGX_ALBEDO[k + 3]), fx);
+    vec2 hi = mix(vec2(GGX_ALBEDO[k + up], GGX_ALBEDO[k + up + 1]),
+                  vec2(GGX_ALBEDO[k + up + 2], GGX_ALBEDO[k + up + 3]), fx);
+    return mix(lo, hi, fy);
+}
+vec3 ggx_albedo(vec3 f0, float c, float a) {
+    vec2 e = ggx_albedo_terms(c, a);
+    return f0 * e.x + e.y;
+}
+float ggx_albedo(float f0, float c, float a) { return ggx_albedo(vec3(f0), c, a).x; }
+
+// E_avg = 2 int_0^1 E(mu) mu dmu of ggx_albedo, exact for its interpolation.
+float ggx_albedo_average(float f0, float a) {
+    float y = sqrt(clamp(a, 0.0, 1.0)) * float(GGX_ALBEDO_R - 1);
+    int j = min(int(y), GGX_ALBEDO_R - 2);
+    vec2 e = mix(vec2(GGX_ALBEDO_AVERAGE[2 * j], GGX_ALBEDO_AVERAGE[2 * j + 1]),
+                 vec2(GGX_ALBEDO_AVERAGE[2 * j + 2], GGX_ALBEDO_AVERAGE[2 * j + 3]), y - float(j));
+    return f0 * e.x + e.y;
+}
+
+// The weight of a diffuse lobe under a dielectric interface of Schlick F0 `f0` and GGX
+// width `a` (glTF's metallic/roughness dielectric): (1 - E(cos_o)) (1 - E(cos_i)) /
+// (1 - E_avg), E the interface's directional albedo (ggx_albedo). The coupled
+// matte-specular weighting of Kelemen and Szirmay-Kalos, "A Microfacet Based Coupled
+// Specular-Matte BRDF Model with Importance Sampling" (Eurographics 2001): symmetric in wo
+// and wi (so reciprocal, no adjoint), and for a white base the diffuse albedo at wo is
+// exactly 1 - E(cos_o), what the GGX lobe does not reflect, so a white dielectric of any
+// roughness reflects everything. glTF's reference `fresnel_mix` weights the diffuse lobe
+// by 1 - F(wo.h) instead, which reflects up to 1.7 times what a white smooth surface
+// receives at grazing angles; Schlick's F(cos) in place of E, exact when smooth, leaves a
+// rough one too dark there (docs/scene-format.md).
+float diffuse_fresnel_weight(float f0, float a, float cos_o, float cos_i) {
+    return (1.0 - ggx_albedo(f0, cos_o, a)) * (1.0 - ggx_albedo(f0, cos_i, a)) / (1.0 - ggx_albedo_average(f0, a));
 }
 
 #if HAS_GGX
 // The selection weights of an opaque material's diffuse and GGX lobes when the fixed
-// direction has cos(theta) = `c` (> 0, shading normal): estimates of their directional
-// albedos, Schlick's F(c) for the GGX lobe (Fresnel at the half vector averages near it)
-// and (1 - F_d(c)) base for the diffuse lobe under the dielectric interface (exact:
-// diffuse_fresnel_weight's cosine-weighted integral over wi is 1 - F_d(c)), instead of
-// SmallVCM's luminance albedos, which pick the 4% coat as seldom at grazing angles as at
-// normal incidence, where it reflects most. A lobe that is absent stays at 0.
+// direction has cos(theta) = `c` (> 0, shading normal): their directional albedos, E(c)
+// for the GGX lobe (ggx_albedo) and (1 - E_d(c)) base for the diffuse lobe under the
+// dielectric interface (diffuse_fresnel_weight's cosine-weighted integral over wi),
+// instead of SmallVCM's luminance albedos, which pick the 4% coat as seldom at grazing
+// angles as at normal incidence, where it reflects most. A lobe that is absent stays at 0.
 void fresnel_lobe_weights(GpuMaterial m, Tint tint, float c, inout float a_d, inout float a_g) {
 #if HAS_IRIDESCENCE
     // The same estimates with the film's Fresnel term (glsl/lobes/iridescence.glsl).
@@ -389,9 +420,9 @@ void fresnel_lobe_weights(GpuMaterial m, Tint tint, float c, inout float a_d, in
         return;
     }
 #endif
-    if (a_g > 0.0) a_g = luminance(schlick(glossy_colour(m, tint.rgb), c));
+    if (a_g > 0.0) a_g = luminance(ggx_albedo(glossy_colour(m, tint.rgb), c, m.glossy.w));
     float f0 = m.mirror.w;
-    if (f0 > 0.0) a_d *= 1.0 - schlick(f0, c);
+    if (f0 > 0.0) a_d *= 1.0 - ggx_albedo(f0, c, m.glossy.w);
 }
 #endif
 
@@ -727,7 +758,7 @@ vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
                 f += colour * w * INV_PI;
             } else
 #endif
-            f += colour * (INV_PI * diffuse_fresnel_weight(f0, cos_o, cos_i));
+            f += colour * (INV_PI * diffuse_fresnel_weight(f0, m.glossy.w, cos_o, cos_i));
         } else {
             f += colour * INV_PI;
         }

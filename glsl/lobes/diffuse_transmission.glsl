@@ -8,7 +8,7 @@
 // transmission reciprocal: no adjoint). t = diffuseTransmissionFactor x the A of its
 // texture, c = diffuseTransmissionColorFactor x the RGB of its texture (sRGB) x
 // (1 - metallic): the metal part transmits nothing. For a white base and colour the
-// diffuse component's albedo at wo is 1 - F(cos_o) whatever t is: reflected plus
+// diffuse component's albedo at wo is 1 - E(cos_o) whatever t is: reflected plus
 // transmitted never exceed what the interface lets in.
 //
 // Thin-walled: the transmitted ray leaves the surface on the far side; no volume is
@@ -19,7 +19,7 @@
 // the side it is seen from.
 //
 // Sampling: within the diffuse component (probability proportional to the luminance of
-// (1 - t) base + t c, times 1 - F at the fixed direction, fresnel_lobe_weights), the
+// (1 - t) base + t c, times 1 - E at the fixed direction, fresnel_lobe_weights), the
 // transmission with probability prob_dt = lum(t c) / lum((1 - t) base + t c), which
 // depends on the point alone, then a cosine-weighted direction in the other hemisphere
 // (glsl/bsdf.glsl, base_bsdf_sample). So pdf(wi | wo) = P_d(wo) prob_dt |n.wi| / pi and
@@ -64,7 +64,7 @@ vec3 diffuse_transmission_eval(Bsdf b, GpuMaterial m, float cos_o, float cos_i, 
     pdf_fwd = b.prob_diffuse * b.prob_dt * cos_i * INV_PI;
     pdf_rev = rev_d * b.prob_dt * cos_o * INV_PI;
     float f0 = m.mirror.w;
-    float w = f0 > 0.0 ? diffuse_fresnel_weight(f0, cos_o, cos_i) : 1.0;
+    float w = f0 > 0.0 ? diffuse_fresnel_weight(f0, m.glossy.w, cos_o, cos_i) : 1.0;
     return b.dt_colour * (INV_PI * w);
 }
 

@@ -25,31 +25,216 @@ pub fn ggx_albedo(mu: f64, a: f64, nt: usize, np: usize) -> f64 {
 }
 
 /// [`ggx_albedo`] per channel of the lobe whose Fresnel term is `fr(wo.h)`:
-/// f cos_i dw_i = F D G2 / (4 cos_o cos_i) cos_i 4 (wo.h) dw_h.
+/// f cos_i dw_i = F D G2 / (4 cos_o cos_i) cos_i 4 (wo.h) dw_h, over the half vectors whose
+/// wi lies above the horizon: on the ring theta_h the azimuths with cos(phi) > b(theta_h) =
+/// mu (1 - 2 cos^2 theta_h) / (2 cos theta_h sin theta_o sin theta_h) (b increases with
+/// theta_h), the whole ring up to theta_full (b = -1), none past theta_max (b = 1). The
+/// midpoint rule runs over smooth pieces only: per ring over the valid azimuths, and in
+/// theta_h over [0, theta_full] and [theta_full, theta_max], each through a smoothstep
+/// substitution that removes the square-root kinks at their ends, after theta_h =
+/// atan(a tan(s)), which resolves narrow lobes. (Cutting at the horizon inside the cells
+/// would leave an error of order 1 / n.)
 pub fn ggx_albedo_with(mu: f64, a: f64, nt: usize, np: usize, fr: &dyn Fn(f64) -> [f64; 3]) -> [f64; 3] {
-    let wo = [(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu];
-    let mut sum = [0.0; 3];
-    for i in 0..nt {
-        // theta_h in [0, pi/2); substitute theta_h = atan(a tan(s)) to resolve narrow lobes.
-        let s = (i as f64 + 0.5) / nt as f64 * FRAC_PI_2;
-        let th = (a * s.tan()).atan();
-        let dth_ds = a / (s.cos().powi(2) + a * a * s.sin().powi(2));
-        let (st, ct) = (th.sin(), th.cos());
-        for j in 0..np {
-            let phi = (j as f64 + 0.5) / np as f64 * 2.0 * PI;
-            let h = [st * phi.cos(), st * phi.sin(), ct];
-            let oh = wo[0] * h[0] + wo[2] * h[2];
-            let ci = 2.0 * oh * h[2] - wo[2];
-            if oh <= 0.0 || ci <= 0.0 {
-                continue;
+    let so = (1.0 - mu * mu).max(1e-24).sqrt();
+    let lambda_o = ggx_lambda(mu, a);
+    let bound = |th: f64| mu * (1.0 - 2.0 * th.cos().powi(2)) / (2.0 * th.cos() * so * th.sin());
+    // b(theta) = target by bisection, in s = atan(tan(theta) / a).
+    let s_where = |target: f64| {
+        let (mut lo, mut hi) = (0.0f64, FRAC_PI_2);
+        for _ in 0..100 {
+            let mid = 0.5 * (lo + hi);
+            if bound((a * mid.tan()).atan()) < target {
+                lo = mid;
+            } else {
+                hi = mid;
             }
-            let g2 = 1.0 / (1.0 + ggx_lambda(mu, a) + ggx_lambda(ci, a));
-            let w = ggx_d(ct, a) * g2 / mu * oh * st * dth_ds * (FRAC_PI_2 / nt as f64) * (2.0 * PI / np as f64);
-            let f = fr(oh);
-            for k in 0..3 {
-                sum[k] += w * f[k];
+        }
+        0.5 * (lo + hi)
+    };
+    let (s_full, s_max) = (s_where(-1.0), s_where(1.0));
+    let mut sum = [0.0; 3];
+    for (s0, s1) in [(0.0, s_full), (s_full, s_max)] {
+        for i in 0..nt {
+            let u = (i as f64 + 0.5) / nt as f64;
+            let s = s0 + (s1 - s0) * u * u * (3.0 - 2.0 * u);
+            let ds_du = (s1 - s0) * 6.0 * u * (1.0 - u);
+            let th = (a * s.tan()).atan();
+            let dth_ds = a / (s.cos().powi(2) + a * a * s.sin().powi(2));
+            let (st, ct) = (th.sin(), th.cos());
+            let phi_max = bound(th).clamp(-1.0, 1.0).acos();
+            let ring = ggx_d(ct, a) / mu * st * dth_ds * ds_du / nt as f64 * (2.0 * phi_max / np as f64);
+            for j in 0..np {
+                let phi = (j as f64 + 0.5) / np as f64 * phi_max;
+                let oh = so * st * phi.cos() + mu * ct;
+                let ci = 2.0 * oh * ct - mu;
+                if oh <= 0.0 || ci <= 0.0 {
+                    continue;
+                }
+                let w = ring * oh / (1.0 + lambda_o + ggx_lambda(ci, a));
+                let f = fr(oh);
+                for k in 0..3 {
+                    sum[k] += w * f[k];
+                }
             }
         }
     }
     sum
+}
+
+/// The kernels' smallest GGX width (glsl/types.glsl MIN_GGX_ALPHA).
+pub const MIN_GGX_ALPHA: f64 = vkvcm::render::gpu_types::MIN_GGX_ALPHA as f64;
+/// The albedo table's size (glsl/ggx_albedo.glsl): cosines (i / (N_MU - 1))^2 (crowded at
+/// grazing angles, where Schlick's F and the masking change fastest) by roughnesses
+/// r = j / (N_R - 1), width max(r^2, MIN_GGX_ALPHA).
+pub const N_MU: usize = 32;
+pub const N_R: usize = 32;
+
+/// The table's cosine at row `i` (at 0 the albedo's limit, taken at 1e-6).
+pub fn table_cosine(i: usize) -> f64 {
+    ((i as f64 / (N_MU - 1) as f64).powi(2)).max(1e-6)
+}
+
+/// The table's GGX width at column `j`.
+pub fn table_alpha(j: usize) -> f64 {
+    (j as f64 / (N_R - 1) as f64).powi(2).max(MIN_GGX_ALPHA)
+}
+
+/// The directional albedo of the GGX lobe with Schlick's F of F0 `f0` is f0 A + B, linear in
+/// f0 (F = f0 (1 - s) + s, s = (1 - wo.h)^5): (A, B) at cos(theta_o) = `mu`, width `a`, by
+/// [`ggx_albedo_with`]'s quadrature with `n` x `n` cells.
+pub fn ggx_albedo_terms(mu: f64, a: f64, n: usize) -> [f64; 2] {
+    let e = ggx_albedo_with(mu, a, n, n, &|oh| {
+        let s = (1.0 - oh).powi(5);
+        [1.0 - s, s, 0.0]
+    });
+    [e[0], e[1]]
+}
+
+/// The table by quadrature, rounded to 5 decimals as glsl/ggx_albedo.glsl stores it: (A, B)
+/// pairs row-major by roughness, N_MU cosines each.
+pub fn ggx_albedo_table(n: usize) -> Vec<[f64; 2]> {
+    let round = |x: f64| (x * 1e5).round() / 1e5;
+    let mut t = Vec::with_capacity(N_MU * N_R);
+    for j in 0..N_R {
+        for i in 0..N_MU {
+            let [a, b] = ggx_albedo_terms(table_cosine(i), table_alpha(j), n);
+            t.push([round(a), round(b)]);
+        }
+    }
+    t
+}
+
+/// The cosine-weighted averages 2 int_0^1 E(mu) mu dmu of `table`'s A and B per roughness,
+/// exact for the interpolation the kernels do (linear in x = sqrt(mu) between rows:
+/// 2 mu dmu = 4 x^3 dx), so that the diffuse lobe's normalisation 1 - E_avg is exactly
+/// the integral of the 1 - E it is weighted by.
+pub fn ggx_albedo_averages(table: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let h = 1.0 / (N_MU - 1) as f64;
+    // int x^3 (x1 - x) / h dx and int x^3 (x - x0) / h dx over [x0, x1].
+    let weights = |x0: f64, x1: f64| {
+        let p = |x: f64| x1 * x.powi(4) / 4.0 - x.powi(5) / 5.0;
+        let q = |x: f64| x.powi(5) / 5.0 - x0 * x.powi(4) / 4.0;
+        ((p(x1) - p(x0)) / h, (q(x1) - q(x0)) / h)
+    };
+    table
+        .chunks(N_MU)
+        .map(|row| {
+            let mut avg = [0.0; 2];
+            for i in 0..N_MU - 1 {
+                let (w0, w1) = weights(i as f64 * h, (i + 1) as f64 * h);
+                for k in 0..2 {
+                    avg[k] += 4.0 * (row[i][k] * w0 + row[i + 1][k] * w1);
+                }
+            }
+            avg
+        })
+        .collect()
+}
+
+/// glsl/ggx_albedo.glsl for `table` (its averages computed from it).
+pub fn ggx_albedo_table_source(table: &[[f64; 2]]) -> String {
+    let mut s = String::from(
+        "// GENERATED by tests/render_ggx.rs (albedo_table_is_the_quadrature; VKVCM_WRITE_GGX_TABLE=1 rewrites it)\n\
+         // from tests/common/ggx.rs: the directional albedo E = f0 A + B of the GGX lobe with\n\
+         // Schlick's F of F0 f0, as (A, B) pairs by cosine (i / (MU - 1))^2 and roughness\n\
+         // j / (R - 1) (width max(r^2, MIN_GGX_ALPHA)), and their cosine-weighted averages per\n\
+         // roughness, exact for the interpolation; glsl/bsdf.glsl's ggx_albedo.\n\
+         // Not `const`: glslang copies a const array into a local one at each dynamic index.\n",
+    );
+    s += &format!("#define GGX_ALBEDO_MU {N_MU}\n#define GGX_ALBEDO_R {N_R}\n");
+    let array = |s: &mut String, name: &str, values: Vec<f64>| {
+        *s += &format!("float {name}[{}] = float[](\n", values.len());
+        let v: Vec<String> = values.iter().map(|x| format!("{x:.5}")).collect();
+        let lines: Vec<String> = v.chunks(8).map(|c| format!("    {}", c.join(", "))).collect();
+        *s += &lines.join(",\n");
+        *s += ");\n";
+    };
+    array(&mut s, "GGX_ALBEDO", table.iter().flatten().copied().collect());
+    array(&mut s, "GGX_ALBEDO_AVERAGE", ggx_albedo_averages(table).iter().flatten().copied().collect());
+    s
+}
+
+/// The tables glsl/ggx_albedo.glsl stores: (A, B) pairs, and their averages.
+pub fn committed_ggx_albedo_table() -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
+    let src = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/glsl/ggx_albedo.glsl")).unwrap();
+    let mut arrays = src.split("float[](").skip(1).map(|a| {
+        let body = a.split(')').next().unwrap();
+        let v: Vec<f64> = body.split(',').map(|x| x.trim().parse().unwrap()).collect();
+        v.chunks(2).map(|p| [p[0], p[1]]).collect::<Vec<_>>()
+    });
+    (arrays.next().unwrap(), arrays.next().unwrap())
+}
+
+/// (A, B) at (mu, alpha) by the table's bilinear interpolation, as glsl/bsdf.glsl's
+/// ggx_albedo_terms.
+pub fn table_lookup(table: &[[f64; 2]], mu: f64, alpha: f64) -> [f64; 2] {
+    let x = mu.clamp(0.0, 1.0).sqrt() * (N_MU - 1) as f64;
+    let y = alpha.clamp(0.0, 1.0).sqrt() * (N_R - 1) as f64;
+    let (i, j) = ((x as usize).min(N_MU - 2), (y as usize).min(N_R - 2));
+    let (fx, fy) = (x - i as f64, y - j as f64);
+    let at = |i: usize, j: usize, k: usize| table[j * N_MU + i][k];
+    std::array::from_fn(|k| {
+        let lo = at(i, j, k) + (at(i + 1, j, k) - at(i, j, k)) * fx;
+        let hi = at(i, j + 1, k) + (at(i + 1, j + 1, k) - at(i, j + 1, k)) * fx;
+        lo + (hi - lo) * fy
+    })
+}
+
+/// The averages' linear interpolation at `alpha`, as glsl/bsdf.glsl's ggx_albedo_average.
+pub fn average_lookup(averages: &[[f64; 2]], alpha: f64) -> [f64; 2] {
+    let y = alpha.clamp(0.0, 1.0).sqrt() * (N_R - 1) as f64;
+    let j = (y as usize).min(N_R - 2);
+    let fy = y - j as f64;
+    std::array::from_fn(|k| averages[j][k] + (averages[j + 1][k] - averages[j][k]) * fy)
+}
+
+/// The committed tables as the kernels use them.
+pub struct GgxAlbedo {
+    table: Vec<[f64; 2]>,
+    averages: Vec<[f64; 2]>,
+}
+
+impl GgxAlbedo {
+    pub fn committed() -> Self {
+        let (table, averages) = committed_ggx_albedo_table();
+        GgxAlbedo { table, averages }
+    }
+
+    /// E(mu) of the lobe with Schlick's F of F0 `f0`, width `alpha`.
+    pub fn albedo(&self, f0: f64, mu: f64, alpha: f64) -> f64 {
+        let [a, b] = table_lookup(&self.table, mu, alpha);
+        f0 * a + b
+    }
+
+    /// E_avg = 2 int_0^1 E(mu) mu dmu.
+    pub fn average(&self, f0: f64, alpha: f64) -> f64 {
+        let [a, b] = average_lookup(&self.averages, alpha);
+        f0 * a + b
+    }
+
+    /// The diffuse lobe's weight under the dielectric interface of F0 `f0` and width `alpha`
+    /// (glsl/bsdf.glsl, diffuse_fresnel_weight): (1 - E(mu_o)) (1 - E(mu_i)) / (1 - E_avg).
+    pub fn diffuse_fresnel_weight(&self, f0: f64, alpha: f64, mu_o: f64, mu_i: f64) -> f64 {
+        (1.0 - self.albedo(f0, mu_o, alpha)) * (1.0 - self.albedo(f0, mu_i, alpha)) / (1.0 - self.average(f0, alpha))
+    }
 }
