@@ -180,7 +180,7 @@ fn sky_integral(w: &dyn Fn(f64) -> f64) -> f64 {
 ///   t = 153/255 (A, linear), c the RGB decoded from sRGB; f_t = t c (1 - m) (1 - E(mu_o))
 ///   (1 - E(mu_i)) / (pi (1 - E_avg)), the pixel t c (1 - m) (1 - E(mu_o)) int (1 - E(mu))
 ///   L(mu) 2 mu dmu / (1 - E_avg), E the interface's GGX albedo (F0 0.04, width 0.25) and
-///   E_avg its cosine-weighted average, both from glsl/ggx_albedo.glsl's table
+///   E_avg its cosine-weighted average, both from src/render/ggx_albedo.rs's table
 ///   (tests/common/ggx.rs, GgxAlbedo).
 ///
 /// Path tracing (with NEE) and light tracing, each per pixel against these values. Light

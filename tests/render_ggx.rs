@@ -74,8 +74,9 @@ fn ggx_bpt_matches_pt() {
     });
 }
 
-/// glsl/ggx_albedo.glsl is the quadrature of tests/common/ggx.rs (committed within its
-/// 5-decimal rounding; VKVCM_WRITE_GGX_TABLE=1 rewrites it), converged (128 against 256
+/// src/render/ggx_albedo.rs is the quadrature of tests/common/ggx.rs (committed within its
+/// 5-decimal rounding; VKVCM_WRITE_GGX_TABLE=1 rewrites it, checked from the next build),
+/// converged (128 against 256
 /// cells: 3e-5), its averages are the exact integrals of the interpolated table, and its
 /// smooth limit is Schlick's F with E_avg = F0 + (1 - F0) / 21 (analytic). Between rows
 /// and columns the bilinear interpolation stays within 2e-3 of the quadrature at cosines
@@ -87,19 +88,19 @@ fn ggx_bpt_matches_pt() {
 fn albedo_table_is_the_quadrature() {
     let table = ggx_albedo_table(256);
     if std::env::var_os("VKVCM_WRITE_GGX_TABLE").is_some() {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/glsl/ggx_albedo.glsl");
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/src/render/ggx_albedo.rs");
         std::fs::write(path, ggx_albedo_table_source(&table)).unwrap();
     }
     let (committed, averages) = committed_ggx_albedo_table();
     assert_eq!(committed.len(), table.len());
     for (k, (c, t)) in committed.iter().zip(&table).enumerate() {
         for i in 0..2 {
-            assert!((c[i] - t[i]).abs() <= 1e-5 + 1e-9, "entry {k}.{i}: committed {}, quadrature {}", c[i], t[i]);
+            assert!((c[i] - t[i]).abs() <= 1e-5 + 1e-7, "entry {k}.{i}: committed {}, quadrature {}", c[i], t[i]);
         }
     }
     for (j, (c, t)) in averages.iter().zip(&ggx_albedo_averages(&committed)).enumerate() {
         for i in 0..2 {
-            assert!((c[i] - t[i]).abs() <= 1e-5 + 1e-9, "average {j}.{i}: committed {}, integral {}", c[i], t[i]);
+            assert!((c[i] - t[i]).abs() <= 1e-5 + 1e-7, "average {j}.{i}: committed {}, integral {}", c[i], t[i]);
         }
     }
     let coarse = ggx_albedo_table(128);

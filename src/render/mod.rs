@@ -16,6 +16,8 @@ pub mod environment;
 pub mod estimators;
 pub mod features;
 pub mod film;
+pub mod ggx_albedo;
+pub mod ggx_albedo_table;
 pub mod gpu_types;
 pub mod light_selection;
 pub mod light_tree;

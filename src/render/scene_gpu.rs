@@ -11,6 +11,7 @@ use glam::Vec3;
 use super::atomics::SplatAtomics;
 use super::environment::EnvironmentTables;
 use super::features::FeatureSet;
+use super::ggx_albedo_table;
 use super::gpu_types::*;
 use super::light_selection::LightDistribution;
 use super::light_tree::LightTree;
@@ -26,7 +27,7 @@ use crate::scene::{AlphaMode, EnvironmentMap, Filter, Light, Scene, VertexAttrib
 /// Upper bounds of the scene's buffers, known before the BVH is built.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ScenePlan {
-    pub buffers: [BufferSize; 15],
+    pub buffers: [BufferSize; 16],
     /// The chunk size in bytes when the kernels read [`CHUNKED`] in chunks.
     pub chunk_bytes: Option<u64>,
     /// The light tree is uploaded (`--light-selection tree`; else its buffer has 0 bytes).
@@ -114,6 +115,7 @@ impl ScenePlan {
                 BufferSize::new("env_texels", size::<[f32; 4]>(env_w * env_h)),
                 BufferSize::new("env_distribution", size::<f32>(env_h + env_h.saturating_sub(1) * (env_w + 1))),
                 BufferSize::new("scene_addresses", size::<GpuSceneAddresses>(1)),
+                BufferSize::new("ggx_albedo_table", size::<[f32; 4]>(ggx_albedo_table::CELLS as u64)),
             ]
             .map(|b| {
                 if device_addresses && ADDRESSED.contains(&b.name) {
@@ -702,6 +704,7 @@ impl SceneGpu {
             gpu.buffer_from_slice("texture_texels", &texels)?,
             gpu.buffer_from_slice("env_texels", &env.texels)?,
             gpu.buffer_from_slice("env_distribution", &env.distribution)?,
+            gpu.buffer_from_slice("ggx_albedo_table", &ggx_albedo_table::cells())?,
         ]);
         // --light-selection tree on a scene with area lights: LIGHT_TREE kernels.
         let light_tree = match frame.light_selection {

@@ -95,6 +95,8 @@ impl SceneVariant {
             .flag("TEXEL_READS", self.reads == Reads::Texel)
             .flag("BVH_INT64", self.int64_loads)
             .flag("LIGHT_TREE", self.light_tree)
+            .value("GGX_ALBEDO_MU", crate::render::ggx_albedo::GGX_ALBEDO_MU)
+            .value("GGX_ALBEDO_R", crate::render::ggx_albedo::GGX_ALBEDO_R)
             .with(&self.film_defines())
             .with(&workgroup_defines());
         match self.chunk_shift {
