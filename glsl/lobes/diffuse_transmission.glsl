@@ -19,7 +19,7 @@
 // the side it is seen from.
 //
 // Sampling: within the diffuse component (probability proportional to the luminance of
-// (1 - t) base + t c, times 1 - E at the fixed direction, fresnel_lobe_weights), the
+// (1 - t) base + t c, times 1 - F at the fixed direction, fresnel_lobe_weights), the
 // transmission with probability prob_dt = lum(t c) / lum((1 - t) base + t c), which
 // depends on the point alone, then a cosine-weighted direction in the other hemisphere
 // (glsl/bsdf.glsl, base_bsdf_sample). So pdf(wi | wo) = P_d(wo) prob_dt |n.wi| / pi and
