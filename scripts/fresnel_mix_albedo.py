@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
 """Directional albedo of a white smooth dielectric in glTF's metallic/roughness model, with
 the specification's `fresnel_mix` (diffuse weighted by 1 - F(wo.h), Appendix B) and with
-vkvcm's coupled weighting (1 - F(cos_o)) (1 - F(cos_i)) / (1 - E_avg) (glsl/bsdf.glsl,
-diffuse_fresnel_weight), both with Schlick's F of F0 = 0.04. In the smooth limit the
-specular lobe reflects F(cos_o); the diffuse lobe's albedo is integrated by the midpoint
-rule over the hemisphere. The figures quoted in docs/scene-format.md.
+vkvcm's coupled weighting (1 - E(cos_o)) (1 - E(cos_i)) / (1 - E_avg) (glsl/bsdf.glsl,
+diffuse_fresnel_weight) in its smooth limit, where the coat's albedo E is Schlick's F,
+both with F0 = 0.04. In the smooth limit the specular lobe reflects F(cos_o); the diffuse
+lobe's albedo is integrated by the midpoint rule over the hemisphere. The figures quoted in docs/scene-format.md.
 
     python3 scripts/fresnel_mix_albedo.py
 """

@@ -115,7 +115,9 @@ impl ScenePlan {
                 BufferSize::new("env_texels", size::<[f32; 4]>(env_w * env_h)),
                 BufferSize::new("env_distribution", size::<f32>(env_h + env_h.saturating_sub(1) * (env_w + 1))),
                 BufferSize::new("scene_addresses", size::<GpuSceneAddresses>(1)),
-                BufferSize::new("ggx_albedo_table", size::<[f32; 4]>(ggx_albedo_table::CELLS as u64)),
+                // Read as texels by every kernel that has the GGX lobe (glsl/bsdf.glsl).
+                BufferSize::new("ggx_albedo_table", size::<[f32; 4]>(ggx_albedo_table::CELLS as u64))
+                    .reached(Access::Texel),
             ]
             .map(|b| {
                 if device_addresses && ADDRESSED.contains(&b.name) {
