@@ -24,10 +24,12 @@ use crate::bvh::layout::{max_wide_nodes, GpuNode4, GpuPrim};
 use crate::gpu::{Bind, Buffer, Gpu, BUFFER_DEVICE_ADDRESS, SHADER_INT64};
 use crate::scene::{AlphaMode, EnvironmentMap, Filter, Light, Scene, VertexAttributes, Wrap};
 
-/// Upper bounds of the scene's buffers, known before the BVH is built.
+/// Upper bounds of the scene's buffers, known before the BVH is built. Not the GGX albedo
+/// table (src/render/ggx_albedo_table.rs): 16 KiB of texels, within every device's limits
+/// (maxTexelBufferElements is at least 65,536).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ScenePlan {
-    pub buffers: [BufferSize; 16],
+    pub buffers: [BufferSize; 15],
     /// The chunk size in bytes when the kernels read [`CHUNKED`] in chunks.
     pub chunk_bytes: Option<u64>,
     /// The light tree is uploaded (`--light-selection tree`; else its buffer has 0 bytes).
@@ -115,9 +117,6 @@ impl ScenePlan {
                 BufferSize::new("env_texels", size::<[f32; 4]>(env_w * env_h)),
                 BufferSize::new("env_distribution", size::<f32>(env_h + env_h.saturating_sub(1) * (env_w + 1))),
                 BufferSize::new("scene_addresses", size::<GpuSceneAddresses>(1)),
-                // Read as texels by every kernel that has the GGX lobe (glsl/bsdf.glsl).
-                BufferSize::new("ggx_albedo_table", size::<[f32; 4]>(ggx_albedo_table::CELLS as u64))
-                    .reached(Access::Texel),
             ]
             .map(|b| {
                 if device_addresses && ADDRESSED.contains(&b.name) {
