@@ -21,7 +21,12 @@ pub struct Buffer {
     /// Size in bytes as requested (the Vulkan buffer is at least 16 bytes).
     size: u64,
     name: String,
+    /// A constant table within every device's binding limits ([`Gpu::fixed_table`]).
+    fixed_table: bool,
 }
+
+/// Vulkan's least maxTexelBufferElements (the specification's required limits).
+const MIN_TEXEL_BUFFER_ELEMENTS: u64 = 65536;
 
 impl Gpu {
     fn raw_buffer(self: &Arc<Self>, name: &str, size: u64, location: MemoryLocation) -> Result<Buffer> {
@@ -63,7 +68,14 @@ impl Gpu {
             bail!("cannot bind memory to buffer {name:?} ({size} bytes): {}", vk_error_text(e));
         }
         self.debug.name(raw, name);
-        Ok(Buffer { gpu: self.clone(), raw, allocation: Some(allocation), size, name: name.to_string() })
+        Ok(Buffer {
+            gpu: self.clone(),
+            raw,
+            allocation: Some(allocation),
+            size,
+            name: name.to_string(),
+            fixed_table: false,
+        })
     }
 
     /// A zero-filled storage buffer of `count` elements of `T`.
@@ -82,6 +94,20 @@ impl Gpu {
     pub fn buffer_from_slice<T: Pod>(self: &Arc<Self>, name: &str, data: &[T]) -> Result<Buffer> {
         let b = self.raw_buffer(name, std::mem::size_of_val(data) as u64, MemoryLocation::GpuOnly)?;
         b.write(data)?;
+        Ok(b)
+    }
+
+    /// A buffer holding the constant table `data`, read as 16-byte texels, no larger than
+    /// Vulkan's least maxTexelBufferElements (65,536): every device binds it, so the
+    /// kernels' binding-limit check skips it (and with it the limits that
+    /// src/gpu/fault_injection.rs caps for tests, which are the frame's and scene's).
+    pub fn fixed_table<T: Pod>(self: &Arc<Self>, name: &str, data: &[T]) -> Result<Buffer> {
+        let bytes = std::mem::size_of_val(data) as u64;
+        if bytes > MIN_TEXEL_BUFFER_ELEMENTS * 16 {
+            bail!("table {name:?} ({bytes} bytes) is larger than every device binds as texels");
+        }
+        let mut b = self.buffer_from_slice(name, data)?;
+        b.fixed_table = true;
         Ok(b)
     }
 
@@ -121,6 +147,11 @@ impl Gpu {
 impl Buffer {
     pub fn size(&self) -> u64 {
         self.size
+    }
+
+    /// Made by [`Gpu::fixed_table`].
+    pub fn is_fixed_table(&self) -> bool {
+        self.fixed_table
     }
 
     pub fn name(&self) -> &str {

@@ -308,6 +308,9 @@ fn check_bindings(limits: &vk::PhysicalDeviceLimits, chosen: &[(&ReflectedBindin
     }
     for (r, b) in chosen {
         let buf = b.buffer;
+        if buf.is_fixed_table() {
+            continue;
+        }
         let (max, what) = if r.descriptor_type == vk::DescriptorType::STORAGE_BUFFER {
             (limits.max_storage_buffer_range as u64, "bytes (maxStorageBufferRange); use a smaller image or scene")
         } else {

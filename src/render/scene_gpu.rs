@@ -705,7 +705,7 @@ impl SceneGpu {
             gpu.buffer_from_slice("texture_texels", &texels)?,
             gpu.buffer_from_slice("env_texels", &env.texels)?,
             gpu.buffer_from_slice("env_distribution", &env.distribution)?,
-            gpu.buffer_from_slice("ggx_albedo_table", &ggx_albedo_table::cells())?,
+            gpu.fixed_table("ggx_albedo_table", &ggx_albedo_table::cells())?,
         ]);
         // --light-selection tree on a scene with area lights: LIGHT_TREE kernels.
         let light_tree = match frame.light_selection {
