@@ -364,8 +364,8 @@ vec3 ggx_eval(vec3 n, vec3 wo, vec3 wi, float cos_o, float cos_i, vec3 f0, float
 // (src/render/ggx_albedo.rs), cosines at (i / (MU - 1))^2, roughnesses sqrt(a) at
 // j / (R - 1). The scene's texel buffer ggx_albedo_table (src/render/ggx_albedo_table.rs)
 // holds per cell (i, j) the pairs at rows i and i + 1, then per j < R - 1 the averages at
-// j and j + 1 (ggx_albedo_average). A texel buffer, not a storage buffer (lavapipe: +15%
-// CPU per sample on a dielectric floor against +6%) nor a private array (+45%).
+// j and j + 1 (ggx_albedo_average). A texel buffer: on lavapipe it costs less than a
+// storage buffer or a private array (docs/performance.md, "Tried and not kept").
 #extension GL_EXT_samplerless_texture_functions : require
 uniform utextureBuffer ggx_albedo_table;
 #define GGX_ALBEDO_CELL(k) uintBitsToFloat(texelFetch(ggx_albedo_table, k))

@@ -231,10 +231,4 @@ impl GgxAlbedo {
         let [a, b] = average_lookup(&self.averages, alpha);
         f0 * a + b
     }
-
-    /// The diffuse lobe's weight under the dielectric interface of F0 `f0` and width `alpha`
-    /// (glsl/bsdf.glsl, diffuse_fresnel_weight): (1 - E(mu_o)) (1 - E(mu_i)) / (1 - E_avg).
-    pub fn diffuse_fresnel_weight(&self, f0: f64, alpha: f64, mu_o: f64, mu_i: f64) -> f64 {
-        (1.0 - self.albedo(f0, mu_o, alpha)) * (1.0 - self.albedo(f0, mu_i, alpha)) / (1.0 - self.average(f0, alpha))
-    }
 }
