@@ -265,7 +265,7 @@ void add_merges(SubpathState st, Surface s, Bsdf b, inout vec3 L) {
 // Samples the next direction (Russian roulette, throughput and MIS update); false when
 // the subpath ends.
 bool continue_path(inout SubpathState st, Bsdf b, Surface s, inout PathSampler ps) {
-    vec3 u_bsdf = sample_bsdf_at(ps, st.len);
+    vec3 u_bsdf = sample_3d(ps, DIM3_BSDF(st.len));
     if (!scatter(st, b, s.p, s.ng, u_bsdf, sample_1d(ps, DIM1_ROULETTE(st.len)))) return false;
     st.len++;
     return true;

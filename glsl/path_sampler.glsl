@@ -36,13 +36,15 @@ PathSampler path_sampler(uint pixel) {
 // sample (next-event estimation) len. 3-D: vertex len's BSDF sample len, the direction
 // (xy) stratified together with the lobe (z) that it is drawn for, so that a lobe's share
 // of a pixel's samples keeps their directions stratified (docs/performance.md measures
-// it against a 1-D lobe). 1-D: vertex len has its light pick 2 len and its Russian
-// roulette 2 len + 1. Each kind scrambles its numbers apart from the others
+// it against a 1-D lobe); pt's vertex len draws its next-event sample of a constant sky
+// from the BSDF too, as 3-D dimension DIM3_SKY(len). 1-D: vertex len has its light pick
+// 2 len and its Russian roulette 2 len + 1. Each kind scrambles its numbers apart from the others
 // (common.glsl). Each is drawn only when used: an unused dimension costs nothing and
 // leaves the others as they are.
 #define DIM2_PIXEL 0u
 #define DIM2_LIGHT(len) (len)
 #define DIM3_BSDF(len) (len)
+#define DIM3_SKY(len) (0x40000000u | (len))
 #define DIM1_PICK(len) (2u * (len))
 #define DIM1_ROULETTE(len) (2u * (len) + 1u)
 // The colour channel a path chooses at its first dispersive vertex, whichever that is (once
@@ -65,10 +67,10 @@ float sample_1d(inout PathSampler ps, uint dim) {
 #endif
 }
 
-// The BSDF sample of vertex `len`: direction and lobe (bsdf_sample's argument).
-vec3 sample_bsdf_at(inout PathSampler ps, uint len) {
+// A BSDF sample's direction and lobe (bsdf_sample's argument): DIM3_BSDF(len) or DIM3_SKY(len).
+vec3 sample_3d(inout PathSampler ps, uint dim) {
 #if SOBOL
-    return sobol3(ps.key, ps.index, DIM3_BSDF(len));
+    return sobol3(ps.key, ps.index, dim);
 #else
     return vec3(rnd2(ps.rng), rnd(ps.rng));
 #endif

@@ -10,10 +10,16 @@
 // eta_scale))), eta_scale undoing the eta^2 radiance scaling of refraction.
 // Absorbing media (glsl/medium.glsl) multiply the throughput of every traced segment and
 // the contribution of every light sample by their transmittance; no pdf has it.
+// A constant sky's next-event directions come from the BSDF (connect_to_sky), not from
+// lights.glsl's cosine about the normal that bpt and vcm draw (SKY_NEE_BY_BSDF below).
 // Variants (PtKernel, src/render/passes/camera_subpaths.rs): NEE=1 the estimator, NEE=0 pure BSDF
 // sampling (emitter hits only, weight 1), for tests; SOBOL: where the random numbers come
 // from (glsl/path_sampler.glsl; `--sampler`); AOV: the AOVs are summed too (glsl/aov.glsl).
 #extension GL_GOOGLE_include_directive : require
+
+// A constant sky's next-event samples come from the BSDF (connect_to_sky); the lobe
+// choice suited to them (glsl/bsdf.glsl fresnel_lobe_weights).
+#define SKY_NEE_BY_BSDF 1
 
 #if !defined(NEE) || !defined(SOBOL)
 #error "NEE and SOBOL must be defined (PtKernel, src/render/passes/camera_subpaths.rs)"
@@ -42,7 +48,6 @@ struct PtPath {
     // camera: NO_MATERIAL), for the segment's transmittance (glsl/medium.glsl).
     uint from_material;
     vec3 from_ng;       // (and its NEE pick, with the light tree: nee_light_prob)
-    bool from_reflects_only; // it only reflects (bsdf_reflects_only: the background's NEE pdf)
     vec3 from_p;        // the vertex it leaves: an emitter hit's NEE pdf depends on it
     float last_pdf;     // solid-angle pdf of the last BSDF sample, for MIS at emitters
     bool last_specular;
@@ -64,7 +69,6 @@ void start_path(uint pixel, out PtPath path, out PathSampler ps) {
     path.len = 1u;
     path.from_material = NO_MATERIAL;
     path.from_ng = vec3(0.0);
-    path.from_reflects_only = false;
     path.from_p = params.cam_pos.xyz;
 #if HAS_DISPERSION
     path.channel = NO_CHANNEL;
@@ -80,7 +84,10 @@ void add_background(inout PtPath path, inout vec3 L) {
     uint bg = background_light();
     if (bg != NO_LIGHT && path.len >= min_path_length()) {
         float dpdf, epdf;
-        vec3 Le = background_radiance(bg, path.d, path.from_ng, path.from_reflects_only, dpdf, epdf);
+        // (An environment map's pdf has no normal.)
+        vec3 Le = background_radiance(bg, path.d, vec3(0.0), false, dpdf, epdf);
+        // A constant sky's light samples are distributed as the BSDF samples (connect_to_sky).
+        if (is_constant_background(light_at(bg))) dpdf = path.last_pdf;
         float wgt = (NEE == 0 || path.last_specular) ? 1.0 : balance(path.last_pdf, nee_light_prob(bg, path.from_p, path.from_ng) * dpdf);
         L += path.thr * Le * wgt;
     }
@@ -112,12 +119,38 @@ void take_channel(inout PtPath path, inout Surface s, inout PathSampler ps) {
 #endif
 
 #if NEE
+#if HAS_BACKGROUND
+// Next-event estimation of a constant sky, picked with probability `pick`: a direction
+// drawn from the BSDF, the sky's integrand but for visibility, so that the light sample
+// is distributed as the BSDF sample is (which finds the sky too: add_background) and the
+// balance heuristic weighs them 1 / (1 + pick) each per unit of pick. A cosine about the
+// normal weighs a glossy lobe's samples against diffuse ones instead (docs/performance.md,
+// "A constant sky"). A specular direction is left to the BSDF sample (weight 1 there).
+void connect_to_sky(PtPath path, Surface s, Bsdf b, uint sky, float pick, inout PathSampler ps, inout vec3 L) {
+    BsdfSample bs = bsdf_sample(b, sample_3d(ps, DIM3_SKY(path.len)));
+    if (!bs.ok || bs.specular) return;
+    LightSample ls;
+    ls.wi = bs.wi;
+    ls.dist = 1e30;
+    if (!light_sample_visible(s.p, s.ng, ls)) return;
+    vec3 tr = segment_transmittance(s.material, s.ng, NO_MATERIAL, vec3(0.0), bs.wi, ls.dist);
+    // f cos / (pick pdf) x balance(pick pdf, pdf), pdf the BSDF's: bs.weight / (1 + pick).
+    L += path.thr * tr * bs.weight * light_at(sky).radiance.rgb / (1.0 + pick);
+}
+#endif
+
 // Next-event estimation at a non-delta vertex: one light sample, weighted against BSDF
 // sampling.
 void connect_to_lights(PtPath path, Surface s, Bsdf b, inout PathSampler ps, inout vec3 L) {
     float pick;
     uint li = nee_pick_light(sample_1d(ps, DIM1_PICK(path.len)), s.p, s.ng, pick);
     if (li == NO_LIGHT) return;
+#if HAS_BACKGROUND
+    if (is_constant_background(light_at(li))) {
+        connect_to_sky(path, s, b, li, pick, ps, L);
+        return;
+    }
+#endif
     LightSample ls = light_illuminate(li, s.p, b.ng, bsdf_reflects_only(b), sample_2d(ps, DIM2_LIGHT(path.len)));
     if (!ls.ok) return;
     float pf, pr;
@@ -133,7 +166,7 @@ void connect_to_lights(PtPath path, Surface s, Bsdf b, inout PathSampler ps, ino
 
 // Samples the next direction and plays Russian roulette; false when the path ends.
 bool continue_path(inout PtPath path, Surface s, Bsdf b, inout PathSampler ps) {
-    BsdfSample bs = bsdf_sample(b, sample_bsdf_at(ps, path.len));
+    BsdfSample bs = bsdf_sample(b, sample_3d(ps, DIM3_BSDF(path.len)));
     if (!bs.ok) return false;
     path.thr *= bs.weight;
     // Refraction scales radiance by eta_ratio^2 (bsdf.glsl); the roulette undoes it.
@@ -156,7 +189,6 @@ bool continue_path(inout PtPath path, Surface s, Bsdf b, inout PathSampler ps) {
     path.d = bs.wi;
     path.from_material = s.material;
     path.from_ng = s.ng;
-    path.from_reflects_only = bsdf_reflects_only(b);
     path.from_p = s.p;
     path.len++;
     return true;

@@ -135,7 +135,10 @@ fn anisotropic_furnace() {
             }
         }
         eprintln!("furnace: anisotropic half's mean albedo {:.5}", left_sum / left_n as f64);
-        let t = one_sample_test(&masked, &expected, ALPHA).unwrap();
+        // Pooled variances: about 1 in 400 of the lobe's samples is lost below the horizon,
+        // and a pixel none of whose samples was has a sample variance near 0.
+        let keep: Vec<bool> = expected.data.iter().map(|e| *e != [0.0; 3]).collect();
+        let t = one_sample_test(&masked.with_pooled_variance(&keep), &expected, ALPHA).unwrap();
         assert!(t.passed(), "strength 0 vs the isotropic lobe's albedo: {t}");
         // Both floors of strength 0: the kernels lack HAS_ANISOTROPY, and the isotropic
         // half's pixels are the same bit for bit (same seed, same isotropic code).

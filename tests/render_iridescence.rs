@@ -100,12 +100,12 @@ fn expected_image(sc: &Scene, albedo: &[&dyn Fn(f64) -> [f64; 3]]) -> Vec<Option
     (0..W * H).map(pixel).collect()
 }
 
-/// `f(mu)` at 65 cosines, interpolated linearly (the quadratures are slow per pixel).
+/// `f(mu)` at 257 cosines, interpolated linearly (the quadratures are slow per pixel).
 fn tabulated(f: &dyn Fn(f64) -> [f64; 3]) -> impl Fn(f64) -> [f64; 3] {
-    let table: Vec<[f64; 3]> = (0..=64).map(|i| f((i as f64 / 64.0).max(1e-3))).collect();
+    let table: Vec<[f64; 3]> = (0..=256).map(|i| f((i as f64 / 256.0).max(1e-3))).collect();
     move |mu: f64| {
-        let t = mu.clamp(0.0, 1.0) * 64.0;
-        let i = (t.floor() as usize).min(63);
+        let t = mu.clamp(0.0, 1.0) * 256.0;
+        let i = (t.floor() as usize).min(255);
         let w = t - i as f64;
         [0, 1, 2].map(|c| table[i][c] + (table[i + 1][c] - table[i][c]) * w)
     }

@@ -46,6 +46,7 @@ def main():
     ap.add_argument("--b", default=str(REPO / "glsl"), help="GLSL folder of side B")
     ap.add_argument("--a-args", default="", help="render arguments of side A only")
     ap.add_argument("--b-args", default="", help="render arguments of side B only")
+    ap.add_argument("--algo", default="pt", help="the estimator (bpt, vcm: their camera subpaths' samples)")
     ap.add_argument("--iterations", type=int, default=64)
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--size", type=int, default=128)
@@ -60,7 +61,7 @@ def main():
         for side in ("ab" if seed % 2 else "ba"):
             exr = out / f"{side}_{seed}.exr"
             env = dict(os.environ, VKVCM_GLSL_DIR=str(Path(getattr(args, side)).resolve()))
-            cmd = [args.vkvcm, "render", args.scene, "--algo", "pt", "--sampler", "independent",
+            cmd = [args.vkvcm, "render", args.scene, "--algo", args.algo, "--sampler", "independent",
                    "--width", str(args.size), "--height", str(args.size), "--seed", str(seed),
                    "--iterations", str(args.iterations), "-o", str(exr), "--quiet", *args.extra,
                    *getattr(args, f"{side}_args").split()]

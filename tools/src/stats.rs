@@ -145,6 +145,35 @@ impl PixelStats {
         Image { width: self.width, height: self.height, data }
     }
 
+    /// Each pixel of `keep` with, per channel, the mean of the variances of the pixels of
+    /// `keep` in its 3 x 3 neighbourhood (itself included); the others unchanged. For an
+    /// estimator whose variance comes from rare events (a sharp metal's samples lost below
+    /// the horizon, about 1 in 400), a pixel's own sample variance is near 0 whenever none
+    /// of its samples had one, though its mean is right; where neighbouring pixels draw
+    /// from nearly the same distribution, their pooled variance is the better estimate.
+    pub fn with_pooled_variance(&self, keep: &[bool]) -> Self {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let mut out = self.clone();
+        for i in 0..self.variance.len() {
+            if !keep[i] {
+                continue;
+            }
+            let (x, y) = (i as i64 % w, i as i64 / w);
+            let (mut sum, mut n) = ([0.0f64; 3], 0usize);
+            for (nx, ny) in (-1..=1).flat_map(|dy| (-1..=1).map(move |dx| (x + dx, y + dy))) {
+                let j = (ny * w + nx) as usize;
+                if nx >= 0 && ny >= 0 && nx < w && ny < h && keep[j] {
+                    for (s, v) in sum.iter_mut().zip(self.variance[j]) {
+                        *s += v;
+                    }
+                    n += 1;
+                }
+            }
+            out.variance[i] = sum.map(|s| s / n as f64);
+        }
+        out
+    }
+
     fn check(&self, what: &str) -> Result<()> {
         if self.count < 2 {
             bail!("{what}: need at least 2 observations per pixel, got {}", self.count);
@@ -822,6 +851,23 @@ pub fn dump_on_failure(dir: &Path, name: &str, images: &[(&str, &Image)]) -> Res
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn pooled_variance_averages_kept_neighbours() {
+        let st = PixelStats {
+            width: 3,
+            height: 2,
+            count: 4,
+            mean: vec![[0.0; 3]; 6],
+            variance: [0.0, 9.0, 3.0, 6.0, 100.0, 0.0].map(|v| [v; 3]).to_vec(),
+        };
+        let keep = [true, true, true, true, false, true];
+        let p = st.with_pooled_variance(&keep);
+        // Pixel 0: itself, 1, 3 (4 is left out); pixel 5: 1, 2, 5; pixel 4 unchanged.
+        assert_eq!(p.variance[0][0], 5.0);
+        assert_eq!(p.variance[5][1], 4.0);
+        assert_eq!(p.variance[4][2], 100.0);
+    }
 
     #[test]
     fn ln_gamma_known_values() {
