@@ -16,6 +16,7 @@
 // sampling (emitter hits only, weight 1), for tests; SOBOL: where the random numbers come
 // from (glsl/path_sampler.glsl; `--sampler`); AOV: the AOVs are summed too (glsl/aov.glsl).
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 
 // A constant sky's next-event samples come from the BSDF (connect_to_sky); the lobe
 // choice suited to them (glsl/bsdf.glsl fresnel_lobe_weights).
@@ -126,8 +127,7 @@ void take_channel(inout PtPath path, inout Surface s, inout PathSampler ps) {
 // balance heuristic weighs them 1 / (1 + pick) each per unit of pick. A cosine about the
 // normal weighs a glossy lobe's samples against diffuse ones instead (docs/performance.md,
 // "A constant sky"). A specular direction is left to the BSDF sample (weight 1 there).
-void connect_to_sky(PtPath path, Surface s, Bsdf b, uint sky, float pick, inout PathSampler ps, inout vec3 L) {
-    BsdfSample bs = bsdf_sample(b, sample_3d(ps, DIM3_SKY(path.len)));
+void connect_to_sky(PtPath path, Surface s, BsdfSample bs, uint sky, float pick, inout vec3 L) {
     if (!bs.ok || bs.specular) return;
     LightSample ls;
     ls.wi = bs.wi;
@@ -140,33 +140,47 @@ void connect_to_sky(PtPath path, Surface s, Bsdf b, uint sky, float pick, inout 
 #endif
 
 // Next-event estimation at a non-delta vertex: one light sample, weighted against BSDF
-// sampling.
-void connect_to_lights(PtPath path, Surface s, Bsdf b, inout PathSampler ps, inout vec3 L) {
-    float pick;
+// sampling. Returns a constant sky where it picks one, with its probability in `pick`,
+// for draw_bsdf_samples; else NO_LIGHT.
+uint connect_to_lights(PtPath path, Surface s, Bsdf b, inout PathSampler ps, inout vec3 L, out float pick) {
     uint li = nee_pick_light(sample_1d(ps, DIM1_PICK(path.len)), s.p, s.ng, pick);
-    if (li == NO_LIGHT) return;
+    if (li == NO_LIGHT) return NO_LIGHT;
 #if HAS_BACKGROUND
-    if (is_constant_background(light_at(li))) {
-        connect_to_sky(path, s, b, li, pick, ps, L);
-        return;
-    }
+    if (is_constant_background(light_at(li))) return li;
 #endif
     LightSample ls = light_illuminate(li, s.p, b.ng, bsdf_reflects_only(b), sample_2d(ps, DIM2_LIGHT(path.len)));
-    if (!ls.ok) return;
+    if (!ls.ok) return NO_LIGHT;
     float pf, pr;
     vec3 f = bsdf_eval(b, ls.wi, pf, pr);
-    if (max3(f) <= 0.0) return;
-    if (!light_sample_visible(s.p, s.ng, ls)) return;
+    if (max3(f) <= 0.0) return NO_LIGHT;
+    if (!light_sample_visible(s.p, s.ng, ls)) return NO_LIGHT;
     float wgt = ls.delta ? 1.0 : balance(pick * ls.pdf_w, pf);
     float cos_x = bsdf_cos(b, ls.wi);
     vec3 tr = segment_transmittance(s.material, s.ng, NO_MATERIAL, vec3(0.0), ls.wi, ls.dist);
     L += path.thr * tr * f * ls.radiance * (wgt * cos_x / (pick * ls.pdf_w));
+    return NO_LIGHT;
 }
 #endif
 
-// Samples the next direction and plays Russian roulette; false when the path ends.
-bool continue_path(inout PtPath path, Surface s, Bsdf b, inout PathSampler ps) {
-    BsdfSample bs = bsdf_sample(b, sample_3d(ps, DIM3_BSDF(path.len)));
+// The vertex's BSDF samples, at one call site (with bsdf_sample inlined twice SwiftShader
+// crashed on the generic kernel, which has every lobe): where next-event estimation picked a constant sky
+// (`sky`, with probability `pick`), first the sky's light sample (connect_to_sky); then the
+// continuation, returned.
+BsdfSample draw_bsdf_samples(PtPath path, Surface s, Bsdf b, uint sky, float pick, inout PathSampler ps,
+                             inout vec3 L) {
+    BsdfSample bs;
+    [[dont_unroll]] for (uint k = sky != NO_LIGHT ? 0u : 1u; k < 2u; k++) {
+        bs = bsdf_sample(b, sample_3d(ps, k == 0u ? DIM3_SKY(path.len) : DIM3_BSDF(path.len)));
+#if NEE && HAS_BACKGROUND
+        if (k == 0u) connect_to_sky(path, s, bs, sky, pick, L);
+#endif
+    }
+    return bs;
+}
+
+// Takes the BSDF sample `bs` as the next direction and plays Russian roulette; false when
+// the path ends.
+bool continue_path(inout PtPath path, Surface s, Bsdf b, BsdfSample bs, inout PathSampler ps) {
     if (!bs.ok) return false;
     path.thr *= bs.weight;
     // Refraction scales radiance by eta_ratio^2 (bsdf.glsl); the roulette undoes it.
@@ -244,10 +258,13 @@ void main() {
         aov_surface(aov, b, path.thr);
 #endif
         if (!b.valid) continue;
+        uint sky = NO_LIGHT;
+        float sky_pick = 0.0;
 #if NEE
-        if (!b.delta && path.len + 1u >= min_path_length()) connect_to_lights(path, s, b, ps, L);
+        if (!b.delta && path.len + 1u >= min_path_length()) sky = connect_to_lights(path, s, b, ps, L, sky_pick);
 #endif
-        alive = continue_path(path, s, b, ps);
+        BsdfSample bs = draw_bsdf_samples(path, s, b, sky, sky_pick, ps, L);
+        alive = continue_path(path, s, b, bs, ps);
     }
     COUNT_RAYS_FLUSH();
 }
