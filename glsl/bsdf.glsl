@@ -362,7 +362,7 @@ vec3 ggx_eval(vec3 n, vec3 wo, vec3 wi, float cos_o, float cos_i, vec3 f0, float
 // (F = f0 (1 - s) + s, s = (1 - wo.h)^5, so E is linear in f0) and width `a` at
 // cos(theta) = `c`: (A, B) by the bilinear interpolation of a table by quadrature
 // (src/render/ggx_albedo.rs), cosines at (i / (MU - 1))^2, roughnesses sqrt(a) at
-// j / (R - 1). The scene's texel buffer ggx_albedo_table (src/render/ggx_albedo_table.rs)
+// j / (R - 1). The scene's texel buffer ggx_albedo_table (src/render/albedo_tables.rs)
 // holds per cell (i, j) the pairs at rows i and i + 1, then per j < R - 1 the averages at
 // j and j + 1 (ggx_albedo_average). A texel buffer: on lavapipe it costs less than a
 // storage buffer or a private array (docs/performance.md, "Tried and not kept").

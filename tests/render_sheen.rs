@@ -79,7 +79,7 @@ fn tabulated(f: &dyn Fn(f64) -> f64) -> impl Fn(f64) -> f64 {
     }
 }
 
-/// The committed glsl/lobes/sheen_albedo.glsl is the quadrature's table to its 5 printed
+/// The committed src/render/sheen_albedo.rs is the quadrature's table to its 5 printed
 /// decimals (1e-5, plus the quadrature's own change between 128 and 256 cells a side,
 /// measured below 2e-4); VKVCM_WRITE_SHEEN_TABLE=1 rewrites it. The lobe as the kernels
 /// cap it (f / max(1, E(cos_o), E(cos_i))) never reflects more than it receives (its
@@ -89,7 +89,7 @@ fn tabulated(f: &dyn Fn(f64) -> f64) -> impl Fn(f64) -> f64 {
 fn albedo_table_is_the_quadrature() {
     let table = sheen_albedo_table(256);
     if std::env::var_os("VKVCM_WRITE_SHEEN_TABLE").is_some() {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/glsl/lobes/sheen_albedo.glsl");
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/src/render/sheen_albedo.rs");
         std::fs::write(path, sheen_albedo_table_source(&table)).unwrap();
     }
     let committed = committed_table();

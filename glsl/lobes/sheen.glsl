@@ -5,8 +5,7 @@
 // glsl/bsdf.glsl), layered as the extension writes it:
 //   f = sheenColor D V + f_base (1 - max(sheenColor) max(E(n.wo), E(n.wi))),
 // E the lobe's directional albedo (sheenColor 1), interpolated in a table computed by
-// quadrature (glsl/lobes/sheen_albedo.glsl, written and checked by
-// tests/render_sheen.rs). The paper's Lambda fit lets E exceed 1 at grazing angles for
+// quadrature (src/render/sheen_albedo.rs, written and checked by tests/render_sheen.rs). The paper's Lambda fit lets E exceed 1 at grazing angles for
 // roughness below about 0.27 (up to 2.9 at cos 0.001, roughness 0.07): there the lobe is
 // divided by max(1, E(n.wo), E(n.wi)), and E taken at most 1, so that the sum never adds
 // energy. Both terms are symmetric in wo and wi: the adjoint BSDF is the same.
@@ -23,8 +22,6 @@
 
 #if HAS_SHEEN
 
-#include "sheen_albedo.glsl"
-
 // The paper's Lambda: its fit L(x) with coefficients interpolated between r = 1 and r = 0
 // by (1 - a)^2, mirrored about cos 0.5.
 float sheen_lambda_fit(float x, float a) {
@@ -37,16 +34,17 @@ float sheen_lambda(float c, float a) {
     return c < 0.5 ? exp(sheen_lambda_fit(c, a)) : exp(2.0 * sheen_lambda_fit(0.5, a) - sheen_lambda_fit(1.0 - c, a));
 }
 
-// E(c, r): the table's bilinear interpolation, cosines at (i / (MU - 1))^2.
+// E(c, r): the table's bilinear interpolation, cosines at (i / (MU - 1))^2. The scene's
+// texel buffer sheen_albedo_table (src/render/albedo_tables.rs) holds per cell (i, j) E at
+// cosines i and i + 1 of roughness j, then of roughness j + 1: one texel per lookup.
+uniform utextureBuffer sheen_albedo_table;
 float sheen_albedo(float c, float r) {
     float x = sqrt(clamp(c, 0.0, 1.0)) * float(SHEEN_ALBEDO_MU - 1);
     float y = clamp((r - MIN_SHEEN_ROUGHNESS) / (1.0 - MIN_SHEEN_ROUGHNESS), 0.0, 1.0) * float(SHEEN_ALBEDO_R - 1);
     int i = min(int(x), SHEEN_ALBEDO_MU - 2), j = min(int(y), SHEEN_ALBEDO_R - 2);
     float fx = x - float(i), fy = y - float(j);
-    int k = j * SHEEN_ALBEDO_MU + i;
-    float lo = mix(SHEEN_ALBEDO[k], SHEEN_ALBEDO[k + 1], fx);
-    float hi = mix(SHEEN_ALBEDO[k + SHEEN_ALBEDO_MU], SHEEN_ALBEDO[k + SHEEN_ALBEDO_MU + 1], fx);
-    return mix(lo, hi, fy);
+    vec4 e = uintBitsToFloat(texelFetch(sheen_albedo_table, j * (SHEEN_ALBEDO_MU - 1) + i));
+    return mix(mix(e.x, e.y, fx), mix(e.z, e.w, fx), fy);
 }
 
 // E seen from unit direction d, 0 where the sheen does not face d (on a surface that

@@ -4,7 +4,7 @@
 //! (i / (MU - 1))^2 and roughness j / (R - 1) (width max(r^2, MIN_GGX_ALPHA)), and
 //! their cosine-weighted averages per roughness, exact for the kernels' bilinear
 //! interpolation. The kernels read them from the scene's texel buffer
-//! `ggx_albedo_table` (src/render/ggx_albedo_table.rs).
+//! `ggx_albedo_table` (src/render/albedo_tables.rs).
 
 pub const GGX_ALBEDO_MU: usize = 32;
 pub const GGX_ALBEDO_R: usize = 32;

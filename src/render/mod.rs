@@ -8,6 +8,7 @@
 //! * [`Renderer`] runs a render in batches of iterations and reads the film back.
 
 pub mod addresses;
+pub mod albedo_tables;
 pub mod aov;
 pub mod atomics;
 pub mod converge;
@@ -17,7 +18,6 @@ pub mod estimators;
 pub mod features;
 pub mod film;
 pub mod ggx_albedo;
-pub mod ggx_albedo_table;
 pub mod gpu_types;
 pub mod light_selection;
 pub mod light_tree;
@@ -34,6 +34,7 @@ pub mod saved;
 pub mod scene_gpu;
 pub mod settings;
 pub mod shard;
+pub mod sheen_albedo;
 pub mod sizes;
 pub mod techniques;
 pub mod variants;

@@ -8,10 +8,10 @@ use std::sync::Arc;
 use anyhow::{bail, Result};
 use glam::Vec3;
 
+use super::albedo_tables;
 use super::atomics::SplatAtomics;
 use super::environment::EnvironmentTables;
 use super::features::FeatureSet;
-use super::ggx_albedo_table;
 use super::gpu_types::*;
 use super::light_selection::LightDistribution;
 use super::light_tree::LightTree;
@@ -24,9 +24,9 @@ use crate::bvh::layout::{max_wide_nodes, GpuNode4, GpuPrim};
 use crate::gpu::{Bind, Buffer, Gpu, BUFFER_DEVICE_ADDRESS, SHADER_INT64};
 use crate::scene::{AlphaMode, EnvironmentMap, Filter, Light, Scene, VertexAttributes, Wrap};
 
-/// Upper bounds of the scene's buffers, known before the BVH is built. Not the GGX albedo
-/// table (src/render/ggx_albedo_table.rs): 16 KiB of texels, within every device's limits
-/// (maxTexelBufferElements is at least 65,536).
+/// Upper bounds of the scene's buffers, known before the BVH is built. Not the albedo
+/// tables (src/render/albedo_tables.rs): 16 and 7.3 KiB of texels, within every device's
+/// limits (maxTexelBufferElements is at least 65,536).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ScenePlan {
     pub buffers: [BufferSize; 15],
@@ -705,7 +705,8 @@ impl SceneGpu {
             gpu.buffer_from_slice("texture_texels", &texels)?,
             gpu.buffer_from_slice("env_texels", &env.texels)?,
             gpu.buffer_from_slice("env_distribution", &env.distribution)?,
-            gpu.fixed_table("ggx_albedo_table", &ggx_albedo_table::cells())?,
+            gpu.fixed_table("ggx_albedo_table", &albedo_tables::ggx_cells())?,
+            gpu.fixed_table("sheen_albedo_table", &albedo_tables::sheen_cells())?,
         ]);
         // --light-selection tree on a scene with area lights: LIGHT_TREE kernels.
         let light_tree = match frame.light_selection {

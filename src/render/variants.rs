@@ -97,6 +97,8 @@ impl SceneVariant {
             .flag("LIGHT_TREE", self.light_tree)
             .value("GGX_ALBEDO_MU", crate::render::ggx_albedo::GGX_ALBEDO_MU)
             .value("GGX_ALBEDO_R", crate::render::ggx_albedo::GGX_ALBEDO_R)
+            .value("SHEEN_ALBEDO_MU", crate::render::sheen_albedo::SHEEN_ALBEDO_MU)
+            .value("SHEEN_ALBEDO_R", crate::render::sheen_albedo::SHEEN_ALBEDO_R)
             .with(&self.film_defines())
             .with(&workgroup_defines());
         match self.chunk_shift {

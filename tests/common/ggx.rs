@@ -160,7 +160,7 @@ pub fn ggx_albedo_table_source(table: &[[f64; 2]]) -> String {
          //! (i / (MU - 1))^2 and roughness j / (R - 1) (width max(r^2, MIN_GGX_ALPHA)), and\n\
          //! their cosine-weighted averages per roughness, exact for the kernels' bilinear\n\
          //! interpolation. The kernels read them from the scene's texel buffer\n\
-         //! `ggx_albedo_table` (src/render/ggx_albedo_table.rs).\n\n",
+         //! `ggx_albedo_table` (src/render/albedo_tables.rs).\n\n",
     );
     s += &format!("pub const GGX_ALBEDO_MU: usize = {N_MU};\npub const GGX_ALBEDO_R: usize = {N_R};\n\n");
     let array = |s: &mut String, name: &str, len: &str, values: &[[f64; 2]]| {
