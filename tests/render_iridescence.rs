@@ -100,7 +100,8 @@ fn expected_image(sc: &Scene, albedo: &[&dyn Fn(f64) -> [f64; 3]]) -> Vec<Option
     (0..W * H).map(pixel).collect()
 }
 
-/// `f(mu)` at 257 cosines, interpolated linearly (the quadratures are slow per pixel).
+/// `f(mu)` at 257 cosines, interpolated linearly (the quadratures are slow per pixel; 65
+/// cosines left an error near 1e-4 on the mirror, whose pixels pt resolves to 2e-5).
 fn tabulated(f: &dyn Fn(f64) -> [f64; 3]) -> impl Fn(f64) -> [f64; 3] {
     let table: Vec<[f64; 3]> = (0..=256).map(|i| f((i as f64 / 256.0).max(1e-3))).collect();
     move |mu: f64| {
