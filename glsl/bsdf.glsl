@@ -417,9 +417,10 @@ float diffuse_fresnel_weight(float f0, float a, float cos_o, float cos_i) {
 // its albedo E (ggx_albedo) and Schlick's F. The albedo alone draws too few GGX samples
 // at grazing angles, where a rough lobe's spread and lose some below the horizon, F too
 // many; between them the variance is within 3% of the best split's but near normal
-// incidence on rough lobes (scripts/lobe_choice_variance.py). Else (bpt's and vcm's cosine-distributed sky
-// samples) Schlick's F(c) for the GGX lobe and (1 - F_d(c)) base, which measured best
-// beside them (docs/performance.md, "A constant sky"). A lobe that is absent stays at 0.
+// incidence on rough lobes (scripts/lobe_choice_variance.py). Else (bpt's and vcm's
+// cosine-distributed sky samples) Schlick's F(c) for the GGX lobe and (1 - F_d(c)) base,
+// which measured best beside them (docs/performance.md, "A constant sky"). A lobe that
+// is absent stays at 0.
 #ifndef SKY_NEE_BY_BSDF
 #define SKY_NEE_BY_BSDF 0
 #endif

@@ -38,8 +38,8 @@ PathSampler path_sampler(uint pixel) {
 // of a pixel's samples keeps their directions stratified (docs/performance.md measures
 // it against a 1-D lobe); pt's vertex len draws its next-event sample of a constant sky
 // from the BSDF too, as 3-D dimension DIM3_SKY(len). 1-D: vertex len has its light pick
-// 2 len and its Russian roulette 2 len + 1. Each kind scrambles its numbers apart from the others
-// (common.glsl). Each is drawn only when used: an unused dimension costs nothing and
+// 2 len and its Russian roulette 2 len + 1. Each kind scrambles its numbers apart from
+// the others (common.glsl). Each is drawn only when used: an unused dimension costs nothing and
 // leaves the others as they are.
 #define DIM2_PIXEL 0u
 #define DIM2_LIGHT(len) (len)

@@ -163,9 +163,9 @@ uint connect_to_lights(PtPath path, Surface s, Bsdf b, inout PathSampler ps, ino
 #endif
 
 // The vertex's BSDF samples, at one call site (with bsdf_sample inlined twice SwiftShader
-// crashed on the generic kernel, which has every lobe): where next-event estimation picked a constant sky
-// (`sky`, with probability `pick`), first the sky's light sample (connect_to_sky); then the
-// continuation, returned.
+// crashed on the generic kernel, which has every lobe): where next-event estimation
+// picked a constant sky (`sky`, with probability `pick`), first the sky's light sample
+// (connect_to_sky); then the continuation, returned.
 BsdfSample draw_bsdf_samples(PtPath path, Surface s, Bsdf b, uint sky, float pick, inout PathSampler ps,
                              inout vec3 L) {
     BsdfSample bs;
