@@ -363,8 +363,8 @@ vec3 ggx_eval(vec3 n, vec3 wo, vec3 wi, float cos_o, float cos_i, vec3 f0, float
 // cos(theta) = `c`: (A, B) by the bilinear interpolation of a table by quadrature
 // (src/render/ggx_albedo.rs), cosines at (i / (MU - 1))^2, roughnesses sqrt(a) at
 // j / (R - 1). The scene's texel buffer ggx_albedo_table (src/render/albedo_tables.rs)
-// holds per cell (i, j) the pairs at rows i and i + 1, then per j < R - 1 the averages at
-// j and j + 1 (ggx_albedo_average). A texel buffer: on lavapipe it costs less than a
+// holds per cell (i, j) the pairs at rows i and i + 1, then per j < R - 1 and row i the
+// pairs' cosine-weighted integrals up to row i at j and j + 1 (ggx_albedo_cumulative). A texel buffer: on lavapipe it costs less than a
 // storage buffer or a private array (docs/performance.md, "Tried and not kept").
 #extension GL_EXT_samplerless_texture_functions : require
 uniform utextureBuffer ggx_albedo_table;
@@ -383,14 +383,24 @@ float ggx_albedo(float f0, float c, float a) {
     return f0 * e.x + e.y;
 }
 
+// The cosine-weighted integrals 2 int_0^mu_i (A, B)(mu) mu dmu up to row i (mu_i =
+// (i / (MU - 1))^2) at roughness cell j, `fy` of the way to j + 1: exact for
+// ggx_albedo_terms' interpolation.
+vec2 ggx_albedo_cumulative(int i, int j, float fy) {
+    vec4 k = GGX_ALBEDO_CELL((GGX_ALBEDO_MU - 1) * GGX_ALBEDO_R + j * GGX_ALBEDO_MU + i);
+    return mix(k.xy, k.zw, fy);
+}
+
 // E_avg = 2 int_0^1 E(mu) mu dmu of ggx_albedo, exact for its interpolation.
 float ggx_albedo_average(float f0, float a) {
     float y = sqrt(clamp(a, 0.0, 1.0)) * float(GGX_ALBEDO_R - 1);
     int j = min(int(y), GGX_ALBEDO_R - 2);
-    vec4 e = GGX_ALBEDO_CELL((GGX_ALBEDO_MU - 1) * GGX_ALBEDO_R + j);
-    vec2 avg = mix(e.xy, e.zw, y - float(j));
+    vec2 avg = ggx_albedo_cumulative(GGX_ALBEDO_MU - 1, j, y - float(j));
     return f0 * avg.x + avg.y;
 }
+
+// 1 - E_avg: the diffuse lobe's normalisation under the interface (diffuse_fresnel_weight).
+float coupled_diffuse_norm(float f0, float a) { return max(1.0 - ggx_albedo_average(f0, a), 1e-6); }
 
 // The weight of a diffuse lobe under a dielectric interface of Schlick F0 `f0` and GGX
 // width `a` (glTF's metallic/roughness dielectric): (1 - E(cos_o)) (1 - E(cos_i)) /
@@ -404,7 +414,71 @@ float ggx_albedo_average(float f0, float a) {
 // receives at grazing angles; Schlick's F(cos) in place of E, exact when smooth, leaves a
 // rough one too dark there (docs/scene-format.md).
 float diffuse_fresnel_weight(float f0, float a, float cos_o, float cos_i) {
-    return (1.0 - ggx_albedo(f0, cos_o, a)) * (1.0 - ggx_albedo(f0, cos_i, a)) / (1.0 - ggx_albedo_average(f0, a));
+    return (1.0 - ggx_albedo(f0, cos_o, a)) * (1.0 - ggx_albedo(f0, cos_i, a)) / coupled_diffuse_norm(f0, a);
+}
+
+// That diffuse lobe is sampled by its weight's factor in wi: the pdf cos_i (1 - E(cos_i)) /
+// (pi (1 - E_avg)), so that f cos_i / pdf is (1 - E(cos_o)) base whatever wi (with the
+// cosine's pdf, 1 - E(cos_i) varied from 0 at grazing angles to 0.96, and on a nearly
+// smooth dielectric under a white sky that was 96% of pt's variance: docs/performance.md).
+float coupled_diffuse_pdf(float f0, float a, float c) {
+    return c * (1.0 - ggx_albedo(f0, c, a)) * INV_PI / coupled_diffuse_norm(f0, a);
+}
+
+// A direction (local, z up) with coupled_diffuse_pdf: u.x picks cos^2 by inverting the
+// cumulative integral of 1 - E, exactly for its interpolation (linear in x = sqrt(cos)
+// between rows: in q = x^4 = cos^2, d(CDF)/dq = 1 - E), found by bisection over the rows
+// and then within the row by Newton's method in q, kept in the row (two steps leave a
+// residual below 1e-11 of the total in double precision); u.y the azimuth.
+vec3 sample_coupled_diffuse(float f0, float a, vec2 u) {
+    float y = sqrt(clamp(a, 0.0, 1.0)) * float(GGX_ALBEDO_R - 1);
+    int j = min(int(y), GGX_ALBEDO_R - 2);
+    float fy = y - float(j);
+    const float h = 1.0 / float(GGX_ALBEDO_MU - 1);
+    // The CDF (unnormalised) at row i: int_0^{q_i} (1 - E) dq = q_i - f0 K_A - K_B.
+#define COUPLED_CDF(i) (pow(float(i) * h, 4.0) - dot(vec2(f0, 1.0), ggx_albedo_cumulative(i, j, fy)))
+    float target = u.x * coupled_diffuse_norm(f0, a);
+    int lo = 0, hi = GGX_ALBEDO_MU - 1;
+    while (hi - lo > 1) {
+        int mid = (lo + hi) / 2;
+        if (COUPLED_CDF(mid) <= target) lo = mid;
+        else hi = mid;
+    }
+    float r = target - COUPLED_CDF(lo);
+#undef COUPLED_CDF
+    // Within row lo, 1 - E = alpha + beta x.
+    int k = j * (GGX_ALBEDO_MU - 1) + lo;
+    vec4 e = mix(GGX_ALBEDO_CELL(k), GGX_ALBEDO_CELL(k + GGX_ALBEDO_MU - 1), fy);
+    float w0 = 1.0 - f0 * e.x - e.y, w1 = 1.0 - f0 * e.z - e.w;
+    float x0 = float(lo) * h, q0 = pow(x0, 4.0), q1 = pow(x0 + h, 4.0);
+    float beta = (w1 - w0) / h, alpha = w0 - beta * x0;
+    float q = clamp(q0 + r / max(0.5 * (w0 + w1), 1e-6), q0, q1);
+    for (int n = 0; n < 2; n++) {
+        float x = sqrt(sqrt(q));
+        float g = alpha * (q - q0) + 0.8 * beta * (x * q - x0 * q0) - r;
+        q = clamp(q - g / max(alpha + beta * x, 1e-6), q0, q1);
+    }
+    float c = sqrt(q);
+    float phi = 2.0 * PI * u.y;
+    float st = sqrt(max(0.0, 1.0 - c * c));
+    return vec3(st * cos(phi), st * sin(phi), c);
+}
+
+// The diffuse lobe's sampling pdf at cos(theta) = `c` on its side, and its sample (local, z
+// up): coupled_diffuse_pdf's under a dielectric interface (diffuse_fresnel_weight), else
+// the cosine's (also under an iridescent film, whose coupling takes the film's F per
+// channel). A diffuse transmission takes the same pdf at |cos|.
+bool diffuse_is_coupled(Bsdf b, GpuMaterial m) {
+#if HAS_IRIDESCENCE
+    if (b.interface_e_avg != vec3(0.0)) return false;
+#endif
+    return m.mirror.w > 0.0;
+}
+float diffuse_pdf(Bsdf b, GpuMaterial m, float c) {
+    return diffuse_is_coupled(b, m) ? coupled_diffuse_pdf(m.mirror.w, m.glossy.w, c) : c * INV_PI;
+}
+vec3 sample_diffuse(Bsdf b, GpuMaterial m, vec2 u) {
+    return diffuse_is_coupled(b, m) ? sample_coupled_diffuse(m.mirror.w, m.glossy.w, u) : sample_cosine_hemisphere(u);
 }
 
 #if HAS_GGX
@@ -782,8 +856,8 @@ vec3 lobes_eval(Bsdf b, vec3 wi, out float pdf_fwd, out float pdf_rev) {
         } else {
             f += colour * INV_PI;
         }
-        pdf_fwd += p_d * cos_i * INV_PI;
-        pdf_rev += rev_d * cos_o * INV_PI;
+        pdf_fwd += p_d * diffuse_pdf(b, m, cos_i);
+        pdf_rev += rev_d * diffuse_pdf(b, m, cos_o);
     }
 #endif
 #if HAS_PHONG
@@ -961,7 +1035,7 @@ BsdfSample base_bsdf_sample(Bsdf b, vec3 u) {
         // An absent component has probability 0, so its branch is never taken.
 #if HAS_DIFFUSE
         if (x < b.prob_diffuse) {
-            s.wi = to_world(sample_cosine_hemisphere(u.xy), n);
+            s.wi = to_world(sample_diffuse(b, m, u.xy), n);
 #if HAS_DIFFUSE_TRANSMISSION
             // x / prob_diffuse is uniform on [0, 1): the transmission with probability prob_dt.
             through = x < b.prob_diffuse * b.prob_dt;

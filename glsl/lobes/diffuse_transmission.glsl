@@ -21,11 +21,12 @@
 // Sampling: within the diffuse component (probability proportional to the luminance of
 // (1 - t) base + t c, times 1 - F at the fixed direction, fresnel_lobe_weights), the
 // transmission with probability prob_dt = lum(t c) / lum((1 - t) base + t c), which
-// depends on the point alone, then a cosine-weighted direction in the other hemisphere
-// (glsl/bsdf.glsl, base_bsdf_sample). So pdf(wi | wo) = P_d(wo) prob_dt |n.wi| / pi and
-// the reverse pdf is P_d(wi) prob_dt |n.wo| / pi.
+// depends on the point alone, then the diffuse lobe's direction (glsl/bsdf.glsl,
+// sample_diffuse) in the other hemisphere. So pdf(wi | wo) = P_d(wo) prob_dt
+// diffuse_pdf(|n.wi|) and the reverse pdf is P_d(wi) prob_dt diffuse_pdf(|n.wo|).
 //
-// Requires: glsl/bsdf.glsl up to base_bsdf_init (Bsdf, diffuse_fresnel_weight, luminance).
+// Requires: glsl/bsdf.glsl up to base_bsdf_init (Bsdf, diffuse_fresnel_weight, diffuse_pdf,
+// luminance).
 #ifndef DIFFUSE_TRANSMISSION_GLSL
 #define DIFFUSE_TRANSMISSION_GLSL
 
@@ -61,8 +62,8 @@ vec3 diffuse_transmission_init(inout Bsdf b, GpuMaterial m, vec3 diffuse) {
 // both pdfs.
 vec3 diffuse_transmission_eval(Bsdf b, GpuMaterial m, float cos_o, float cos_i, float rev_d, out float pdf_fwd,
                                out float pdf_rev) {
-    pdf_fwd = b.prob_diffuse * b.prob_dt * cos_i * INV_PI;
-    pdf_rev = rev_d * b.prob_dt * cos_o * INV_PI;
+    pdf_fwd = b.prob_diffuse * b.prob_dt * diffuse_pdf(b, m, cos_i);
+    pdf_rev = rev_d * b.prob_dt * diffuse_pdf(b, m, cos_o);
     float f0 = m.mirror.w;
     float w = f0 > 0.0 ? diffuse_fresnel_weight(f0, m.glossy.w, cos_o, cos_i) : 1.0;
     return b.dt_colour * (INV_PI * w);
