@@ -35,16 +35,19 @@ PathSampler path_sampler(uint pixel) {
 // camera's first hit has len 1). 2-D: the pixel jitter is 0; vertex len has its light
 // sample (next-event estimation) len. 3-D: vertex len's BSDF sample len, the direction
 // (xy) stratified together with the lobe (z) that it is drawn for, so that a lobe's share
-// of a pixel's samples keeps their directions stratified (docs/performance.md measures
-// it against a 1-D lobe); pt's vertex len draws its next-event sample of a constant sky
-// from the BSDF too, as 3-D dimension DIM3_SKY(len). 1-D: vertex len has its light pick
-// 2 len and its Russian roulette 2 len + 1. Each kind scrambles its numbers apart from
-// the others (common.glsl). Each is drawn only when used: an unused dimension costs nothing and
-// leaves the others as they are.
+// of a pixel's samples keeps their directions stratified (docs/performance.md measures it
+// against a 1-D lobe); pt's vertex len draws its next-event sample of a constant sky from
+// the BSDF too, as 3-D dimension DIM3_SKY(len), and where that sample passes a delta
+// vertex len (a sky branch, pt.comp) its BSDF sample is DIM3_SKY_BRANCH(len); two branches
+// of one path that pass vertices of the same len share it (each is unbiased alone). 1-D:
+// vertex len has its light pick 2 len and its Russian roulette 2 len + 1. Each kind
+// scrambles its numbers apart from the others (common.glsl). Each is drawn only when used:
+// an unused dimension costs nothing and leaves the others as they are.
 #define DIM2_PIXEL 0u
 #define DIM2_LIGHT(len) (len)
 #define DIM3_BSDF(len) (len)
 #define DIM3_SKY(len) (0x40000000u | (len))
+#define DIM3_SKY_BRANCH(len) (0x20000000u | (len))
 #define DIM1_PICK(len) (2u * (len))
 #define DIM1_ROULETTE(len) (2u * (len) + 1u)
 // The colour channel a path chooses at its first dispersive vertex, whichever that is (once

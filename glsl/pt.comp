@@ -26,6 +26,13 @@
 #error "NEE and SOBOL must be defined (PtKernel, src/render/passes/camera_subpaths.rs)"
 #endif
 
+// Where the scene has specular (delta) surfaces, a constant sky's next-event sample is a
+// path of its own through them (a sky branch: connect_to_sky, main), not a shadow ray
+// that they block: else the sky seen through glass would be the continuation's alone and
+// the visible sky half each, a split that costs more variance than the light sample
+// saves (docs/performance.md, "A constant sky").
+#define SKY_THROUGH_SPECULAR (NEE == 1 && HAS_BACKGROUND && (HAS_DIELECTRIC || HAS_MIRROR))
+
 layout(local_size_x = WORKGROUP_SIZE) in;
 
 // Russian roulette applies at vertices whose path so far has at least this many segments
@@ -53,6 +60,11 @@ struct PtPath {
     float last_pdf;     // solid-angle pdf of the last BSDF sample, for MIS at emitters
     bool last_specular;
     float eta_scale;    // refraction's radiance scaling, undone for the roulette
+    // Whether next-event estimation ran at the last non-delta vertex, and where: a
+    // constant sky that the path finds after it (through delta vertices only) is weighed
+    // against that vertex's light sample (add_background).
+    bool sky_nee;
+    vec3 sky_nee_p, sky_nee_ng;
 #if HAS_DISPERSION
     uint channel;       // the colour channel the path carries, or NO_CHANNEL (glsl/lobes/dispersion.glsl)
 #endif
@@ -71,6 +83,7 @@ void start_path(uint pixel, out PtPath path, out PathSampler ps) {
     path.from_material = NO_MATERIAL;
     path.from_ng = vec3(0.0);
     path.from_p = params.cam_pos.xyz;
+    path.sky_nee = false;
 #if HAS_DISPERSION
     path.channel = NO_CHANNEL;
 #endif
@@ -87,9 +100,13 @@ void add_background(inout PtPath path, inout vec3 L) {
         float dpdf, epdf;
         // (An environment map's pdf has no normal.)
         vec3 Le = background_radiance(bg, path.d, vec3(0.0), false, dpdf, epdf);
-        // A constant sky's light samples are distributed as the BSDF samples (connect_to_sky).
-        if (is_constant_background(light_at(bg))) dpdf = path.last_pdf;
         float wgt = (NEE == 0 || path.last_specular) ? 1.0 : balance(path.last_pdf, nee_light_prob(bg, path.from_p, path.from_ng) * dpdf);
+        // A constant sky's light samples are distributed as the BSDF samples and, with
+        // SKY_THROUGH_SPECULAR, pass the delta vertices as they do (connect_to_sky): the
+        // balance heuristic weighs each 1 / (1 + pick), pick the sky's at the last
+        // non-delta vertex.
+        if (is_constant_background(light_at(bg)))
+            wgt = path.sky_nee ? 1.0 / (1.0 + nee_light_prob(bg, path.sky_nee_p, path.sky_nee_ng)) : 1.0;
         L += path.thr * Le * wgt;
     }
 }
@@ -127,15 +144,35 @@ void take_channel(inout PtPath path, inout Surface s, inout PathSampler ps) {
 // balance heuristic weighs them 1 / (1 + pick) each per unit of pick. A cosine about the
 // normal weighs a glossy lobe's samples against diffuse ones instead (docs/performance.md,
 // "A constant sky"). A specular direction is left to the BSDF sample (weight 1 there).
-void connect_to_sky(PtPath path, Surface s, BsdfSample bs, uint sky, float pick, inout vec3 L) {
-    if (!bs.ok || bs.specular) return;
+// With SKY_THROUGH_SPECULAR the sample becomes `branch`, a path that main traces through
+// delta vertices to the sky (add_background weighs it); returns whether it did.
+bool connect_to_sky(PtPath path, Surface s, BsdfSample bs, uint sky, float pick, inout vec3 L, out PtPath branch) {
+    branch = path;
+    if (!bs.ok || bs.specular) return false;
+#if SKY_THROUGH_SPECULAR
+    branch.thr *= bs.weight;
+    branch.last_pdf = bs.pdf;
+    branch.last_specular = false;
+    branch.o = offset_ray(s.p, s.ng, bs.wi, scene_radius());
+    branch.d = bs.wi;
+    branch.from_material = s.material;
+    branch.from_ng = s.ng;
+    branch.from_p = s.p;
+    branch.sky_nee = true;
+    branch.sky_nee_p = s.p;
+    branch.sky_nee_ng = s.ng;
+    branch.len++;
+    return true;
+#else
     LightSample ls;
     ls.wi = bs.wi;
     ls.dist = 1e30;
-    if (!light_sample_visible(s.p, s.ng, ls)) return;
+    if (!light_sample_visible(s.p, s.ng, ls)) return false;
     vec3 tr = segment_transmittance(s.material, s.ng, NO_MATERIAL, vec3(0.0), bs.wi, ls.dist);
     // f cos / (pick pdf) x balance(pick pdf, pdf), pdf the BSDF's: bs.weight / (1 + pick).
     L += path.thr * tr * bs.weight * light_at(sky).radiance.rgb / (1.0 + pick);
+    return false;
+#endif
 }
 #endif
 
@@ -165,22 +202,24 @@ uint connect_to_lights(PtPath path, Surface s, Bsdf b, inout PathSampler ps, ino
 // The vertex's BSDF samples, at one call site (with bsdf_sample inlined twice SwiftShader
 // crashed on the generic kernel, which has every lobe): where next-event estimation
 // picked a constant sky (`sky`, with probability `pick`), first the sky's light sample
-// (connect_to_sky); then the continuation, returned.
-BsdfSample draw_bsdf_samples(PtPath path, Surface s, Bsdf b, uint sky, float pick, inout PathSampler ps,
-                             inout vec3 L) {
-    BsdfSample bs;
+// (connect_to_sky, which may make it `branch`: returns whether it did); then the
+// continuation `bs`, from dimension `dim` (DIM3_BSDF, or DIM3_SKY_BRANCH on a branch).
+bool draw_bsdf_samples(PtPath path, Surface s, Bsdf b, uint sky, float pick, uint dim, inout PathSampler ps,
+                       inout vec3 L, out BsdfSample bs, out PtPath branch) {
+    bool branched = false;
+    branch = path;
     [[dont_unroll]] for (uint k = sky != NO_LIGHT ? 0u : 1u; k < 2u; k++) {
-        bs = bsdf_sample(b, sample_3d(ps, k == 0u ? DIM3_SKY(path.len) : DIM3_BSDF(path.len)));
+        bs = bsdf_sample(b, sample_3d(ps, k == 0u ? DIM3_SKY(path.len) : dim));
 #if NEE && HAS_BACKGROUND
-        if (k == 0u) connect_to_sky(path, s, bs, sky, pick, L);
+        if (k == 0u) branched = connect_to_sky(path, s, bs, sky, pick, L, branch);
 #endif
     }
-    return bs;
+    return branched;
 }
 
-// Takes the BSDF sample `bs` as the next direction and plays Russian roulette; false when
-// the path ends.
-bool continue_path(inout PtPath path, Surface s, Bsdf b, BsdfSample bs, inout PathSampler ps) {
+// Takes the BSDF sample `bs` as the next direction and plays Russian roulette (not on a
+// sky branch: `roulette` false); false when the path ends.
+bool continue_path(inout PtPath path, Surface s, Bsdf b, BsdfSample bs, bool roulette, inout PathSampler ps) {
     if (!bs.ok) return false;
     path.thr *= bs.weight;
     // Refraction scales radiance by eta_ratio^2 (bsdf.glsl); the roulette undoes it.
@@ -192,7 +231,7 @@ bool continue_path(inout PtPath path, Surface s, Bsdf b, BsdfSample bs, inout Pa
     // p = min(1, sqrt(maxcomp(throughput * eta_scale))) and divide the throughput by p.
     // The square root ends fewer paths than pbrt-v4's p = maxcomp(...), which kills many
     // whose next segment would still find the sky. Not part of the MIS pdfs (as pbrt-v4).
-    if (path.len >= RR_MIN_LENGTH) {
+    if (roulette && path.len >= RR_MIN_LENGTH) {
         float p = sqrt(max3(path.thr) * path.eta_scale);
         if (p < 1.0) {
             if (sample_1d(ps, DIM1_ROULETTE(path.len)) >= p) return false;
@@ -225,9 +264,24 @@ void main() {
     AovSample aov = aov_start();
 #endif
     bool alive = true;
+#if SKY_THROUGH_SPECULAR
+    // `path` is a sky branch (connect_to_sky) while `held`, the path it left, waits.
+    bool on_branch = false, held_alive = false;
+    PtPath held;
+#else
+    const bool on_branch = false;
+#endif
     // One loop iteration = one vertex of the current path; a path that ends adds its
     // pixel's value to the film, and the next one starts in the same iteration.
     while (true) {
+#if SKY_THROUGH_SPECULAR
+        if (!alive && on_branch) {
+            // The branch ended: back to the path it left.
+            path = held;
+            alive = held_alive;
+            on_branch = false;
+        }
+#endif
         if (!alive) {
             film_add(pixel, L);
 #if AOV
@@ -247,24 +301,51 @@ void main() {
         }
         Surface s = surface_at(h, path.o, path.d);
         path.thr *= segment_transmittance(path.from_material, path.from_ng, s.material, s.ng, path.d, h.t);
-        add_emission(path, h, s, L);
+        // A branch is the sky's light sample: emitters are the continuation's.
+        if (!on_branch) add_emission(path, h, s, L);
         if (path.len >= max_len) continue;
 #if HAS_DISPERSION
         take_channel(path, s, ps);
 #endif
         Bsdf b = bsdf_init(s.material, s.ng, s.ns, -path.d, false, s.tint);
 #if AOV
-        if (path.len == 1u) aov_first_hit(aov, h.t, s.p);
-        aov_surface(aov, b, path.thr);
+        if (!on_branch) {
+            if (path.len == 1u) aov_first_hit(aov, h.t, s.p);
+            aov_surface(aov, b, path.thr);
+        }
 #endif
-        if (!b.valid) continue;
+        // A branch passes delta vertices only.
+        if (!b.valid || (on_branch && !b.delta)) continue;
         uint sky = NO_LIGHT;
         float sky_pick = 0.0;
+        if (!b.delta) {
+            path.sky_nee = NEE == 1 && path.len + 1u >= min_path_length();
+            path.sky_nee_p = s.p;
+            path.sky_nee_ng = s.ng;
+        }
+#if !SKY_THROUGH_SPECULAR
+        else path.sky_nee = false;
+#endif
 #if NEE
         if (!b.delta && path.len + 1u >= min_path_length()) sky = connect_to_lights(path, s, b, ps, L, sky_pick);
 #endif
-        BsdfSample bs = draw_bsdf_samples(path, s, b, sky, sky_pick, ps, L);
-        alive = continue_path(path, s, b, bs, ps);
+        BsdfSample bs;
+        PtPath branch;
+        bool branched = draw_bsdf_samples(path, s, b, sky, sky_pick,
+                                          on_branch ? DIM3_SKY_BRANCH(path.len) : DIM3_BSDF(path.len), ps, L, bs,
+                                          branch);
+        // A specular component's direction is not the sky sample's (connect_to_sky): the
+        // sky it finds, also through delta vertices, is the continuation's alone.
+        if (bs.specular && !b.delta) path.sky_nee = false;
+        alive = continue_path(path, s, b, bs, !on_branch, ps);
+#if SKY_THROUGH_SPECULAR
+        if (branched) {
+            held = path;
+            held_alive = alive;
+            path = branch;
+            alive = on_branch = true;
+        }
+#endif
     }
     COUNT_RAYS_FLUSH();
 }
