@@ -425,6 +425,12 @@ float coupled_diffuse_pdf(float f0, float a, float c) {
     return c * (1.0 - ggx_albedo(f0, c, a)) * INV_PI / coupled_diffuse_norm(f0, a);
 }
 
+// The unnormalised CDF of coupled_diffuse_pdf at cosine row i (roughness cell j, fy):
+// int_0^{q_i} (1 - E) dq = q_i - f0 K_A - K_B, q_i = (i / (MU - 1))^4.
+float coupled_diffuse_cdf(int i, int j, float fy, float f0) {
+    return pow(float(i) / float(GGX_ALBEDO_MU - 1), 4.0) - dot(vec2(f0, 1.0), ggx_albedo_cumulative(i, j, fy));
+}
+
 // A direction (local, z up) with coupled_diffuse_pdf: u.x picks cos^2 by inverting the
 // cumulative integral of 1 - E, exactly for its interpolation (linear in x = sqrt(cos)
 // between rows: in q = x^4 = cos^2, d(CDF)/dq = 1 - E), found by bisection over the rows
@@ -435,17 +441,14 @@ vec3 sample_coupled_diffuse(float f0, float a, vec2 u) {
     int j = min(int(y), GGX_ALBEDO_R - 2);
     float fy = y - float(j);
     const float h = 1.0 / float(GGX_ALBEDO_MU - 1);
-    // The CDF (unnormalised) at row i: int_0^{q_i} (1 - E) dq = q_i - f0 K_A - K_B.
-#define COUPLED_CDF(i) (pow(float(i) * h, 4.0) - dot(vec2(f0, 1.0), ggx_albedo_cumulative(i, j, fy)))
     float target = u.x * coupled_diffuse_norm(f0, a);
     int lo = 0, hi = GGX_ALBEDO_MU - 1;
     while (hi - lo > 1) {
         int mid = (lo + hi) / 2;
-        if (COUPLED_CDF(mid) <= target) lo = mid;
+        if (coupled_diffuse_cdf(mid, j, fy, f0) <= target) lo = mid;
         else hi = mid;
     }
-    float r = target - COUPLED_CDF(lo);
-#undef COUPLED_CDF
+    float r = target - coupled_diffuse_cdf(lo, j, fy, f0);
     // Within row lo, 1 - E = alpha + beta x.
     int k = j * (GGX_ALBEDO_MU - 1) + lo;
     vec4 e = mix(GGX_ALBEDO_CELL(k), GGX_ALBEDO_CELL(k + GGX_ALBEDO_MU - 1), fy);

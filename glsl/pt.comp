@@ -11,7 +11,8 @@
 // Absorbing media (glsl/medium.glsl) multiply the throughput of every traced segment and
 // the contribution of every light sample by their transmittance; no pdf has it.
 // A constant sky's next-event directions come from the BSDF (connect_to_sky), not from
-// lights.glsl's cosine about the normal that bpt and vcm draw (SKY_NEE_BY_BSDF below).
+// lights.glsl's cosine about the normal that bpt and vcm draw (SKY_NEE_BY_BSDF below),
+// and pass specular surfaces as paths of their own (SKY_THROUGH_SPECULAR below).
 // Variants (PtKernel, src/render/passes/camera_subpaths.rs): NEE=1 the estimator, NEE=0 pure BSDF
 // sampling (emitter hits only, weight 1), for tests; SOBOL: where the random numbers come
 // from (glsl/path_sampler.glsl; `--sampler`); AOV: the AOVs are summed too (glsl/aov.glsl).

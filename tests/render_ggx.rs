@@ -223,12 +223,15 @@ fn ggx_furnace_conserves_energy() {
 /// the sphere (convex, so no interreflection) sees the material's directional albedo at
 /// its view direction, the environment's pixels see 1. For every roughness and metallic
 /// value no pixel may exceed 1 (one-sided per-pixel test: mean <= 1 + z se with the
-/// Šidák-corrected z), and a white dielectric (metallic 0, glTF's F0) of any roughness
+/// Šidák-corrected z, plus the table's error bound below where a diffuse lobe is), and a
+/// white dielectric (metallic 0, glTF's F0) of any roughness
 /// reflects exactly what it receives: its GGX lobe reflects E(cos_o) and the diffuse lobe
 /// under the interface 1 - E(cos_o) (glsl/bsdf.glsl, diffuse_fresnel_weight), so every
-/// pixel is 1 (two-sided per-pixel test; the table's E is within 2e-3 of the lobe's
-/// above cosine 0.2, albedo_table_is_the_quadrature, so pixels that see the sphere at
-/// grazing angles are left out). BPT must agree with PT per pixel (the layered lobe's
+/// pixel is 1 (two-sided per-pixel test, within z se plus the table's E's difference from
+/// the lobe's albedo, `table_error_bound`, 3e-5 to 7e-4: since the diffuse lobe is sampled by
+/// its weight, its samples all weigh the same and the pixels' standard errors are that
+/// small; pixels that see the sphere at grazing angles, below cosine 0.2, are left out,
+/// where the table is coarser). BPT must agree with PT per pixel (the layered lobe's
 /// pdfs in both directions). Sabotage: with glTF's `fresnel_mix` weighting (1 - F(wo.h))
 /// a roughness-0.3 dielectric pixel reflects 1.126 +- 0.026, without any weighting (a
 /// plain sum of the lobes) a smooth one 1.102 +- 0.021: both fail the bound; with
@@ -269,33 +272,63 @@ fn gltf_material_never_reflects_more_than_it_receives() {
             let pt = render_stats(&pt_out, None);
             let label = format!("metallic {metallic}, roughness {roughness}, F0 {f0}");
             let z = vkvcm_tools::stats::inverse_normal_cdf(1.0 - vkvcm_tools::stats::sidak(ALPHA, 3 * pt.mean.len()));
+            // Where a diffuse lobe is, the table's E(cos_o) weighs it and the GGX lobe's
+            // samples find its own albedo: a pixel may exceed 1 by their difference.
+            let delta = if metallic < 1.0 { table_error_bound(f0.max_element() as f64, roughness as f64) } else { 0.0 };
             let mut worst = 0.0f64;
             for (m, v) in pt.mean.iter().zip(&pt.variance) {
                 for c in 0..3 {
                     let se = (v[c] / pt.count as f64).sqrt();
                     worst = worst.max(m[c]);
-                    assert!(m[c] <= 1.0 + z * se + 1e-6, "{label}: a pixel reflects {} +- {se} > 1", m[c]);
+                    assert!(
+                        m[c] <= 1.0 + z * se + delta + 1e-6,
+                        "{label}: a pixel reflects {} +- {se} > 1 (table's error bound {delta:.1e})",
+                        m[c]
+                    );
                 }
             }
-            eprintln!("{label}: brightest pixel {worst:.4}, image mean {:.4}", image_mean(&pt));
+            eprintln!(
+                "{label}: brightest pixel {worst:.4}, image mean {:.4}, table's error bound {delta:.1e}",
+                image_mean(&pt)
+            );
             if metallic == 0.0 && f0 == gltf_f0 {
                 let mask = not_grazing_mask(&sc.camera, w, h, 0.2);
                 let kept = mask.iter().filter(|&&m| m).count();
                 assert!(kept > (w * h / 2) as usize, "mask keeps {kept} pixels");
-                let mut expected = vkvcm::image::Image::filled(w, h, [1.0; 3]);
-                for (e, &m) in expected.data.iter_mut().zip(&mask) {
-                    if !m {
-                        *e = [0.0; 3];
+                // And no less than 1 by more than that difference.
+                for ((m, v), _) in pt.mean.iter().zip(&pt.variance).zip(&mask).filter(|(_, &keep)| keep) {
+                    for c in 0..3 {
+                        let se = (v[c] / pt.count as f64).sqrt();
+                        assert!(
+                            (m[c] - 1.0).abs() <= z * se + delta,
+                            "{label}: a white dielectric must reflect everything: a pixel reflects {} +- {se} \
+                             (table's error bound {delta:.1e})",
+                            m[c]
+                        );
                     }
                 }
-                let masked = render_stats(&pt_out, Some(&mask));
-                let t = vkvcm_tools::stats::one_sample_test(&masked, &expected, ALPHA).unwrap();
-                assert!(t.passed(), "{label}: a white dielectric must reflect everything: {t}");
             }
             let t = welch_test(&run(Algorithm::Bpt, 256), &pt, ALPHA).unwrap();
             assert!(t.passed(), "{label}: BPT vs PT: {t}");
         }
     });
+}
+
+/// The largest difference between the albedo table's E (glsl/bsdf.glsl ggx_albedo, F0 `f0`)
+/// and the GGX lobe's own at cosines 0.2-1 of roughness `roughness`: the quadrature with
+/// 256 x 256 cells against the table, plus the quadrature's own error (256 against 128
+/// cells), on 161 cosines (0.005 apart; the table's rows are 0.03-0.06 apart there).
+fn table_error_bound(f0: f64, roughness: f64) -> f64 {
+    let (table, _) = committed_ggx_albedo_table();
+    let alpha = (roughness * roughness).max(MIN_GGX_ALPHA);
+    let e = |t: [f64; 2]| f0 * t[0] + t[1];
+    (0..=160)
+        .map(|i| {
+            let mu = 0.2 + 0.005 * i as f64;
+            let fine = e(ggx_albedo_terms(mu, alpha, 256));
+            (fine - e(table_lookup(&table, mu, alpha))).abs() + (fine - e(ggx_albedo_terms(mu, alpha, 128))).abs()
+        })
+        .fold(0.0, f64::max)
 }
 
 /// Pixels of a `w` x `h` frame of `cam` whose four corners either all miss the unit sphere
