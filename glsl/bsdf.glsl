@@ -364,8 +364,9 @@ vec3 ggx_eval(vec3 n, vec3 wo, vec3 wi, float cos_o, float cos_i, vec3 f0, float
 // (src/render/ggx_albedo.rs), cosines at (i / (MU - 1))^2, roughnesses sqrt(a) at
 // j / (R - 1). The scene's texel buffer ggx_albedo_table (src/render/albedo_tables.rs)
 // holds per cell (i, j) the pairs at rows i and i + 1, then per j < R - 1 and row i the
-// pairs' cosine-weighted integrals up to row i at j and j + 1 (ggx_albedo_cumulative). A texel buffer: on lavapipe it costs less than a
-// storage buffer or a private array (docs/performance.md, "Tried and not kept").
+// pairs' cosine-weighted integrals up to row i at j and j + 1 (ggx_albedo_cumulative).
+// A texel buffer: on lavapipe it costs less than a storage buffer or a private array
+// (docs/performance.md, "Tried and not kept").
 #extension GL_EXT_samplerless_texture_functions : require
 uniform utextureBuffer ggx_albedo_table;
 #define GGX_ALBEDO_CELL(k) uintBitsToFloat(texelFetch(ggx_albedo_table, k))
@@ -418,9 +419,9 @@ float diffuse_fresnel_weight(float f0, float a, float cos_o, float cos_i) {
 }
 
 // That diffuse lobe is sampled by its weight's factor in wi: the pdf cos_i (1 - E(cos_i)) /
-// (pi (1 - E_avg)), so that f cos_i / pdf is (1 - E(cos_o)) base whatever wi (with the
-// cosine's pdf, 1 - E(cos_i) varied from 0 at grazing angles to 0.96, and on a nearly
-// smooth dielectric under a white sky that was 96% of pt's variance: docs/performance.md).
+// (pi (1 - E_avg)), so that f cos_i / pdf is (1 - E(cos_o)) base whatever wi. A cosine's
+// pdf leaves 1 - E(cos_i), from 0 at grazing angles to 0.96, in the weight
+// (docs/performance.md, "A constant sky").
 float coupled_diffuse_pdf(float f0, float a, float c) {
     return c * (1.0 - ggx_albedo(f0, c, a)) * INV_PI / coupled_diffuse_norm(f0, a);
 }
@@ -434,8 +435,8 @@ float coupled_diffuse_cdf(int i, int j, float fy, float f0) {
 // A direction (local, z up) with coupled_diffuse_pdf: u.x picks cos^2 by inverting the
 // cumulative integral of 1 - E, exactly for its interpolation (linear in x = sqrt(cos)
 // between rows: in q = x^4 = cos^2, d(CDF)/dq = 1 - E), found by bisection over the rows
-// and then within the row by Newton's method in q, kept in the row (two steps leave a
-// residual below 1e-11 of the total in double precision); u.y the azimuth.
+// and then within the row by Newton's method in q, kept in the row (two steps: within a
+// row the CDF is nearly linear in q); u.y the azimuth.
 vec3 sample_coupled_diffuse(float f0, float a, vec2 u) {
     float y = sqrt(clamp(a, 0.0, 1.0)) * float(GGX_ALBEDO_R - 1);
     int j = min(int(y), GGX_ALBEDO_R - 2);

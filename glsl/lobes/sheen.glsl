@@ -6,9 +6,10 @@
 //   f = sheenColor D V + f_base (1 - max(sheenColor) max(E(n.wo), E(n.wi))),
 // E the lobe's directional albedo (sheenColor 1), interpolated in a table computed by
 // quadrature (src/render/sheen_albedo.rs, written and checked by tests/render_sheen.rs).
-// The paper's Lambda fit lets E exceed 1 at grazing angles for roughness below about 0.27 (up to 2.9 at cos 0.001, roughness 0.07): there the lobe is
-// divided by max(1, E(n.wo), E(n.wi)), and E taken at most 1, so that the sum never adds
-// energy. Both terms are symmetric in wo and wi: the adjoint BSDF is the same.
+// The paper's Lambda fit lets E exceed 1 at grazing angles for roughness below about 0.27
+// (up to 2.9 at cos 0.001, roughness 0.07): there the lobe is divided by max(1, E(n.wo),
+// E(n.wi)), and E taken at most 1, so that the sum never adds energy. Both terms are
+// symmetric in wo and wi: the adjoint BSDF is the same.
 // The sheen faces the side of b.ng (as the clear coat) and uses the base's shading normal.
 //
 // Sampling: the cosine-weighted hemisphere about n with probability p(d) = s(d) / (s(d) +
