@@ -6,6 +6,8 @@
 #                  matrix at 1920x1080 (scripts/gpu-check.sh; about ten minutes)
 # Tests run on lavapipe unless VKVCM_TEST_DEVICE names another device.
 
+SHELL := /bin/bash
+
 LVP_ICD := $(firstword $(wildcard /usr/share/vulkan/icd.d/lvp_icd.x86_64.json /usr/share/vulkan/icd.d/lvp_icd.json))
 
 .PHONY: setup build render test test-swiftshader gpu-check clippy fmt
@@ -29,7 +31,9 @@ render: build
 # a fresh clone builds once, and its incremental state (3.5 GB) would only fill the disk.
 # Test binaries run through scripts/test-runner.sh, which compiles the kernels of the few
 # that build many variants and render little with each without LLVM's optimisation passes
-# (docs/kernel-cache.md, "Tests").
+# (docs/kernel-cache.md, "Tests"). When a test fails, scripts/test-failures.sh prints each
+# failed test and its panic last (from target/test-lavapipe.log, the whole output), so that
+# the end of a CI log names them.
 TEST_KERNEL_CACHE := $(CURDIR)/target/test-kernel-cache
 TEST_RUNNER := --config "target.'cfg(all())'.runner='$(CURDIR)/scripts/test-runner.sh'"
 test test-swiftshader: export CARGO_INCREMENTAL := 0
@@ -43,8 +47,10 @@ test test-swiftshader: export CARGO_INCREMENTAL := 0
 test: setup
 	bash scripts/setup-oidn.sh
 	rm -rf $(TEST_KERNEL_CACHE)
-	VK_DRIVER_FILES=$(LVP_ICD) VK_ICD_FILENAMES=$(LVP_ICD) VKVCM_TEST_KERNEL_CACHE=$(TEST_KERNEL_CACHE) \
-		cargo test $(TEST_RUNNER) --workspace --features vkvcm/fault-injection --no-fail-fast -- --test-threads=2
+	mkdir -p target
+	set -o pipefail; VK_DRIVER_FILES=$(LVP_ICD) VK_ICD_FILENAMES=$(LVP_ICD) VKVCM_TEST_KERNEL_CACHE=$(TEST_KERNEL_CACHE) \
+		cargo test $(TEST_RUNNER) --workspace --features vkvcm/fault-injection --no-fail-fast -- --test-threads=2 \
+		2>&1 | tee target/test-lavapipe.log || { bash scripts/test-failures.sh target/test-lavapipe.log; exit 1; }
 	$(MAKE) --no-print-directory test-swiftshader
 	rm -rf target/gpu-check-quick
 	VK_DRIVER_FILES=$(LVP_ICD) VK_ICD_FILENAMES=$(LVP_ICD) VKVCM=target/debug/vkvcm VKVCM_CACHE_DIR=$(TEST_KERNEL_CACHE) \

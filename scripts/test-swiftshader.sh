@@ -35,10 +35,14 @@ skips=$(mktemp)
 trap 'rm -f "$skips"' EXIT
 export VKVCM_TEST_DEVICE=SwiftShader VKVCM_TEST_SKIP_LOG=$skips
 
-run() { # ICD files, then cargo test's arguments
+mkdir -p target
+log=target/test-swiftshader.log
+: > "$log"
+run() { # ICD files, then cargo test's arguments; a failure ends with its tests' panics
   local icds=$1
   shift
-  VK_DRIVER_FILES=$icds VK_ICD_FILENAMES=$icds cargo test -q --workspace --features vkvcm/fault-injection "$@"
+  VK_DRIVER_FILES=$icds VK_ICD_FILENAMES=$icds cargo test -q --workspace --features vkvcm/fault-injection "$@" \
+    2>&1 | tee -a "$log" || { bash scripts/test-failures.sh "$log"; exit 1; }
 }
 start=$(date +%s)
 run "$ss" --test render_reads --test render_atomics --test device_features --test render_texel_limit \
