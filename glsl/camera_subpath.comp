@@ -31,6 +31,7 @@ layout(local_size_x = WORKGROUP_SIZE) in;
 #include "mis_weights.glsl"
 #include "path_sampler.glsl"
 #include "aov.glsl"
+#include "roulette.glsl"
 
 // Set by light_vertex_compact.comp (layout there): the earliest iteration of the batch
 // whose light vertices did not fit the store.
@@ -170,6 +171,7 @@ void start_path(uint pixel, out SubpathState st, out PathSampler ps) {
     st.o = params.cam_pos.xyz;
     st.d = camera_sample_at(pixel, sample_2d(ps, DIM2_PIXEL));
     st.thr = vec3(1.0);
+    st.eta_scale = 1.0;
     st.len = 1u;
     st.specular = true;
     st.finite_light = true;
@@ -262,11 +264,14 @@ void add_merges(SubpathState st, Surface s, Bsdf b, inout vec3 L) {
 }
 #endif
 
-// Samples the next direction (Russian roulette, throughput and MIS update); false when
-// the subpath ends.
+// Samples the next direction (Russian roulette as pt's, glsl/roulette.glsl; throughput
+// and MIS update); false when the subpath ends.
 bool continue_path(inout SubpathState st, Bsdf b, Surface s, inout PathSampler ps) {
-    vec3 u_bsdf = sample_3d(ps, DIM3_BSDF(st.len));
-    if (!scatter(st, b, s.p, s.ng, u_bsdf, sample_1d(ps, DIM1_ROULETTE(st.len)))) return false;
+    BsdfSample bs = bsdf_sample(b, sample_3d(ps, DIM3_BSDF(st.len)));
+    if (!bs.ok) return false;
+    st.eta_scale = roulette_eta_scale(st.eta_scale, b, bs.wi);
+    float q = roulette_continuation(st.thr * bs.weight, st.eta_scale, st.len);
+    if (!take_sample(st, b, s.p, s.ng, bs, q, sample_1d(ps, DIM1_ROULETTE(st.len)))) return false;
     st.len++;
     return true;
 }

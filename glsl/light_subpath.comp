@@ -81,6 +81,7 @@ bool start_path(uint path, out SubpathState st, out uint rng) {
     st.from_reflects_only = false;
     st.from_p = e.pos;
     st.light = li;
+    st.eta_scale = 1.0;
     mis_light_start(st, emission_pdf, direct_pdf, e.cos_light, e.delta, e.finite);
     return true;
 }

@@ -4,10 +4,8 @@
 // estimation, combined by the balance heuristic (Veach 1997, 9.2; the power heuristic
 // lowers no error here: docs/performance.md, "Tried and not kept"). MIS pdfs
 // are the BSDF's and the light's only: Russian roulette is not in them.
-// Russian roulette as Cycles' (path_state_continuation_probability), not bsdf.glsl's
-// per-vertex albedo rule (which lt/bpt/vcm keep): none at the first RR_MIN_LENGTH - 1
-// vertices, then the path continues with probability min(1, sqrt(maxcomp(throughput *
-// eta_scale))), eta_scale undoing the eta^2 radiance scaling of refraction.
+// Russian roulette as Cycles' (glsl/roulette.glsl), not bsdf.glsl's per-vertex albedo
+// rule (which the light subpaths of lt/bpt/vcm keep).
 // Absorbing media (glsl/medium.glsl) multiply the throughput of every traced segment and
 // the contribution of every light sample by their transmittance; no pdf has it.
 // A constant sky's next-event directions come from the BSDF (connect_to_sky), not from
@@ -36,17 +34,12 @@
 
 layout(local_size_x = WORKGROUP_SIZE) in;
 
-// Russian roulette applies at vertices whose path so far has at least this many segments
-// (the camera's first hit has 1): a later start lowers the variance per sample but costs
-// more than it saves in closed rooms (docs/performance.md, "Defaults that matter for
-// speed, and why").
-const uint RR_MIN_LENGTH = 3u;
-
 #include "scene.glsl"
 #include "push.glsl"
 #include "film.glsl"
 #include "path_sampler.glsl"
 #include "aov.glsl"
+#include "roulette.glsl"
 
 // The state of the path being traced.
 struct PtPath {
@@ -223,21 +216,15 @@ bool draw_bsdf_samples(PtPath path, Surface s, Bsdf b, uint sky, float pick, uin
 bool continue_path(inout PtPath path, Surface s, Bsdf b, BsdfSample bs, bool roulette, inout PathSampler ps) {
     if (!bs.ok) return false;
     path.thr *= bs.weight;
-    // Refraction scales radiance by eta_ratio^2 (bsdf.glsl); the roulette undoes it.
-    if (dot(bs.wi, b.ng) * dot(b.wo, b.ng) < 0.0) path.eta_scale /= b.eta_ratio * b.eta_ratio;
+    path.eta_scale = roulette_eta_scale(path.eta_scale, b, bs.wi);
     path.last_pdf = bs.pdf;
     path.last_specular = bs.specular;
     if (max3(path.thr) <= 0.0) return false;
-    // Russian roulette as Cycles': from vertex RR_MIN_LENGTH on, continue with probability
-    // p = min(1, sqrt(maxcomp(throughput * eta_scale))) and divide the throughput by p.
-    // The square root ends fewer paths than pbrt-v4's p = maxcomp(...), which kills many
-    // whose next segment would still find the sky. Not part of the MIS pdfs (as pbrt-v4).
-    if (roulette && path.len >= RR_MIN_LENGTH) {
-        float p = sqrt(max3(path.thr) * path.eta_scale);
-        if (p < 1.0) {
-            if (sample_1d(ps, DIM1_ROULETTE(path.len)) >= p) return false;
-            path.thr /= p;
-        }
+    // Russian roulette (glsl/roulette.glsl); not part of the MIS pdfs (as pbrt-v4).
+    float p = roulette ? roulette_continuation(path.thr, path.eta_scale, path.len) : 1.0;
+    if (p < 1.0) {
+        if (sample_1d(ps, DIM1_ROULETTE(path.len)) >= p) return false;
+        path.thr /= p;
     }
     path.o = offset_ray(s.p, s.ng, bs.wi, scene_radius());
     path.d = bs.wi;

@@ -33,6 +33,7 @@ struct SubpathState {
     // and with the light tree its pick too, on it and from_ng (nee_light_prob).
     vec3 from_p;
     uint light;        // light subpaths: the light they start on
+    float eta_scale;   // camera subpaths: undoes refraction's radiance scaling for the roulette
 #if HAS_DISPERSION
     uint channel;      // the colour channel the subpath carries, or NO_CHANNEL (glsl/lobes/dispersion.glsl)
 #endif
@@ -116,17 +117,19 @@ void mis_on_scatter_to(inout SubpathState st, Bsdf b, vec3 wi) {
     mis_on_scatter(st, pf * b.cont_prob, pr * cont_prob_from(b, wi), cos_wi, false);
 }
 
-// Samples the continuation at a vertex from `u_bsdf` (bsdf_sample's direction and lobe)
-// and `u_roulette`: Russian roulette, throughput and MIS update. `ng` is the vertex's
-// geometric normal as the surface gives it (not turned to wo). Returns false when the
-// subpath ends.
-bool scatter(inout SubpathState st, Bsdf b, vec3 p, vec3 ng, vec3 u_bsdf, float u_roulette) {
-    BsdfSample bs = bsdf_sample(b, u_bsdf);
-    if (!bs.ok) return false;
-    if (u_roulette >= b.cont_prob) return false;
+// Takes the BSDF sample `bs` (ok) at a vertex as the subpath's next direction, after
+// Russian roulette that continues with probability `q` (from `u_roulette`): throughput
+// and MIS update. `ng` is the vertex's geometric normal as the surface gives it (not
+// turned to wo). Returns false when the subpath ends. The MIS quantities take SmallVCM's
+// per-vertex probabilities (b.cont_prob, cont_prob_from) whatever `q` is: evaluated alike
+// from either side, they keep every path's weights summing to one, and the light
+// subpaths' roulette is that rule (scatter); the camera subpaths' is the throughput's
+// (camera_subpath.comp, glsl/roulette.glsl).
+bool take_sample(inout SubpathState st, Bsdf b, vec3 p, vec3 ng, BsdfSample bs, float q, float u_roulette) {
+    if (u_roulette >= q) return false;
     float cont_rev = bs.specular ? 0.0 : cont_prob_from(b, bs.wi);  // specular: no pdfs
     mis_on_scatter(st, bs.pdf * b.cont_prob, bs.pdf_rev * cont_rev, bs.cos_wi, bs.specular);
-    st.thr *= bs.weight / b.cont_prob;
+    st.thr *= bs.weight / q;
     st.o = offset_ray(p, ng, bs.wi, scene_radius());
     st.d = bs.wi;
     st.from_material = b.material;
@@ -134,6 +137,13 @@ bool scatter(inout SubpathState st, Bsdf b, vec3 p, vec3 ng, vec3 u_bsdf, float 
     st.from_reflects_only = bsdf_reflects_only(b);
     st.from_p = p;
     return max3(st.thr) > 0.0;
+}
+
+// Samples the continuation at a vertex from `u_bsdf` (bsdf_sample's direction and lobe)
+// and `u_roulette`, with SmallVCM's roulette (b.cont_prob): take_sample.
+bool scatter(inout SubpathState st, Bsdf b, vec3 p, vec3 ng, vec3 u_bsdf, float u_roulette) {
+    BsdfSample bs = bsdf_sample(b, u_bsdf);
+    return bs.ok && take_sample(st, b, p, ng, bs, b.cont_prob, u_roulette);
 }
 
 #endif
