@@ -2,10 +2,10 @@
 // rule (path_state_continuation_probability): none at the first vertices (RR_MIN_LENGTH,
 // SUBPATH_RR_MIN_LENGTH), then the path continues with probability min(1,
 // sqrt(maxcomp(throughput * eta_scale))), eta_scale undoing the eta^2 radiance scaling
-// of refraction. The square
-// root ends fewer paths than pbrt-v4's p = maxcomp(...), which kills many whose next
-// segment would still find the sky. Light subpaths keep SmallVCM's per-vertex albedo rule
-// (bsdf.glsl's cont_prob): their throughput is in units of power, not a fraction.
+// of refraction. The square root ends fewer paths than pbrt-v4's p = maxcomp(...), which
+// kills many whose next segment would still find the sky. Light subpaths keep SmallVCM's
+// per-vertex albedo rule (bsdf.glsl's cont_prob): their throughput is in units of power,
+// not a fraction.
 #ifndef ROULETTE_GLSL
 #define ROULETTE_GLSL
 
