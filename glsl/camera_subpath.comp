@@ -264,13 +264,13 @@ void add_merges(SubpathState st, Surface s, Bsdf b, inout vec3 L) {
 }
 #endif
 
-// Samples the next direction (Russian roulette by pt's rule, glsl/roulette.glsl; throughput
+// Samples the next direction (Russian roulette as pt's, glsl/roulette.glsl; throughput
 // and MIS update); false when the subpath ends.
 bool continue_path(inout SubpathState st, Bsdf b, Surface s, inout PathSampler ps) {
     BsdfSample bs = bsdf_sample(b, sample_3d(ps, DIM3_BSDF(st.len)));
     if (!bs.ok) return false;
     st.eta_scale = roulette_eta_scale(st.eta_scale, b, bs.wi);
-    float q = roulette_continuation(st.thr * bs.weight, st.eta_scale, st.len, SUBPATH_RR_MIN_LENGTH);
+    float q = roulette_continuation(st.thr * bs.weight, st.eta_scale, st.len);
     if (!take_sample(st, b, s.p, s.ng, bs, q, sample_1d(ps, DIM1_ROULETTE(st.len)))) return false;
     st.len++;
     return true;

@@ -221,7 +221,7 @@ bool continue_path(inout PtPath path, Surface s, Bsdf b, BsdfSample bs, bool rou
     path.last_specular = bs.specular;
     if (max3(path.thr) <= 0.0) return false;
     // Russian roulette (glsl/roulette.glsl); not part of the MIS pdfs (as pbrt-v4).
-    float p = roulette ? roulette_continuation(path.thr, path.eta_scale, path.len, RR_MIN_LENGTH) : 1.0;
+    float p = roulette ? roulette_continuation(path.thr, path.eta_scale, path.len) : 1.0;
     if (p < 1.0) {
         if (sample_1d(ps, DIM1_ROULETTE(path.len)) >= p) return false;
         path.thr /= p;
