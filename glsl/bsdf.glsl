@@ -489,19 +489,15 @@ vec3 sample_diffuse(Bsdf b, GpuMaterial m, vec2 u) {
 // The selection weights of an opaque material's diffuse and GGX lobes when the fixed
 // direction has cos(theta) = `c` (> 0, shading normal), instead of SmallVCM's luminance
 // albedos, which pick the 4% coat as seldom at grazing angles as at normal incidence,
-// where it reflects most. Where a constant sky's next-event samples come from the BSDF
-// too (SKY_NEE_BY_BSDF, pt.comp): the diffuse lobe's directional albedo (1 - E_d(c)) base
-// (diffuse_fresnel_weight's integral over wi) and, for the GGX lobe, sqrt(E(c) F(c)) of
-// its albedo E (ggx_albedo) and Schlick's F. The albedo alone draws too few GGX samples
-// at grazing angles, where a rough lobe's spread and lose some below the horizon, F too
-// many; between them the variance is within 3% of the best split's but near normal
-// incidence on rough lobes (scripts/lobe_choice_variance.py). Else (bpt's and vcm's
-// cosine-distributed sky samples) Schlick's F(c) for the GGX lobe and (1 - F_d(c)) base,
-// which measured best beside them (docs/performance.md, "A constant sky"). A lobe that
+// where it reflects most. A constant sky's next-event samples come from the BSDF too
+// (lights.glsl sky_light_sample), so the lobe choice sets the variance of both: the
+// diffuse lobe's directional albedo (1 - E_d(c)) base (diffuse_fresnel_weight's integral
+// over wi) and, for the GGX lobe, sqrt(E(c) F(c)) of its albedo E (ggx_albedo) and
+// Schlick's F. The albedo alone draws too few GGX samples at grazing angles, where a
+// rough lobe's spread and lose some below the horizon, F too many; between them the
+// variance is within 3% of the best split's but near normal incidence on rough lobes
+// (scripts/lobe_choice_variance.py; docs/performance.md, "A constant sky"). A lobe that
 // is absent stays at 0.
-#ifndef SKY_NEE_BY_BSDF
-#define SKY_NEE_BY_BSDF 0
-#endif
 void fresnel_lobe_weights(GpuMaterial m, Tint tint, float c, inout float a_d, inout float a_g) {
 #if HAS_IRIDESCENCE
     // The same estimates with the film's Fresnel term (glsl/lobes/iridescence.glsl).
@@ -512,15 +508,10 @@ void fresnel_lobe_weights(GpuMaterial m, Tint tint, float c, inout float a_d, in
     }
 #endif
     float f0 = m.mirror.w;
-#if SKY_NEE_BY_BSDF
     vec2 e = ggx_albedo_terms(c, m.glossy.w);
     vec3 f0g = glossy_colour(m, tint.rgb);
     if (a_g > 0.0) a_g = luminance(sqrt((f0g * e.x + e.y) * schlick(f0g, c)));
     if (f0 > 0.0) a_d *= 1.0 - (f0 * e.x + e.y);
-#else
-    if (a_g > 0.0) a_g = luminance(schlick(glossy_colour(m, tint.rgb), c));
-    if (f0 > 0.0) a_d *= 1.0 - schlick(f0, c);
-#endif
 }
 #endif
 
@@ -946,16 +937,6 @@ float bsdf_cos(Bsdf b, vec3 wi) { return abs(dot(b.n, wi)) * shading_correction(
 
 // |ng.w|: the cosine of solid-angle <-> area conversions at this vertex (MIS).
 float bsdf_cos_geometric(Bsdf b, vec3 w) { return abs(dot(b.ng, w)); }
-
-// Whether f is zero for every wi on the other side of the geometric surface from wo (an
-// opaque material without diffuse transmission): its light comes from b.ng's side only,
-// which next-event estimation towards a constant background uses (lights.glsl).
-bool bsdf_reflects_only(Bsdf b) {
-#if HAS_DIFFUSE_TRANSMISSION
-    if (b.dt_reflect < 1.0) return false;
-#endif
-    return b.ior < 0.0;
-}
 
 struct BsdfSample {
     vec3 wi;

@@ -56,13 +56,22 @@ uvec4 grid_point_at(uint j) { return bucket_points[j]; }
 #include "hash_grid.glsl"
 #endif
 
+// Next-event estimation of a constant sky: a direction drawn from the BSDF (its
+// non-delta lobes), the sky's integrand but for visibility (lights.glsl
+// sky_light_sample), as pt's connect_to_sky.
+LightSample connect_to_sky(SubpathState st, uint li, Bsdf b, inout PathSampler ps) {
+    BsdfSample bs = bsdf_sample(b, sample_3d(ps, DIM3_SKY(st.len)));
+    return sky_light_sample(li, bs.wi, bs.ok && !bs.specular ? bs.pdf : 0.0);
+}
+
 // Next-event estimation: one light sample, weighted against reaching the light by BSDF
 // sampling and by the light subpaths (eq. 44-45).
 vec3 connect_to_lights(SubpathState st, Surface s, Bsdf b, inout PathSampler ps) {
     float pick;
     uint li = nee_pick_light(sample_1d(ps, DIM1_PICK(st.len)), s.p, s.ng, pick);
     if (li == NO_LIGHT) return vec3(0.0);
-    LightSample ls = light_illuminate(li, s.p, b.ng, bsdf_reflects_only(b), sample_2d(ps, DIM2_LIGHT(st.len)));
+    LightSample ls = is_constant_background(light_at(li)) ? connect_to_sky(st, li, b, ps)
+                                                          : light_illuminate(li, s.p, sample_2d(ps, DIM2_LIGHT(st.len)));
     if (!ls.ok) return vec3(0.0);
     vec3 f;
     float cos_x;
@@ -177,7 +186,8 @@ void start_path(uint pixel, out SubpathState st, out PathSampler ps) {
     st.finite_light = true;
     st.from_material = NO_MATERIAL;
     st.from_ng = vec3(0.0);
-    st.from_reflects_only = false;
+    st.from_pdf_w = 0.0;
+    st.sky_first_hit = false;
     st.from_p = params.cam_pos.xyz;
     st.light = NO_LIGHT;
 #if HAS_DISPERSION
@@ -195,7 +205,9 @@ void add_background(inout SubpathState st, inout vec3 L) {
     uint bg = background_light();
     if (bg != NO_LIGHT && st.len >= min_path_length()) {
         float dpdf, epdf;
-        vec3 le = background_radiance(bg, st.d, st.from_ng, st.from_reflects_only, dpdf, epdf);
+        vec3 le = background_radiance(bg, st.d, dpdf, epdf);
+        // A constant sky's next-event samples are the BSDF's (connect_to_sky).
+        if (is_constant_background(light_at(bg))) dpdf = st.from_pdf_w;
         L += st.thr * le * mis_weight_hit(st, dpdf, epdf, nee_light_prob(bg, st.from_p, st.from_ng), light_pick_prob(bg),
                                             VERTEX_CONNECTION != 0);
     }

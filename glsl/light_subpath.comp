@@ -78,7 +78,8 @@ bool start_path(uint path, out SubpathState st, out uint rng) {
     st.specular = true;
     st.from_material = NO_MATERIAL;
     st.from_ng = vec3(0.0);
-    st.from_reflects_only = false;
+    st.from_pdf_w = 0.0;
+    st.sky_first_hit = false;
     st.from_p = e.pos;
     st.light = li;
     st.eta_scale = 1.0;
@@ -94,7 +95,7 @@ void store_vertex(uint slot, SubpathState st, Surface s) {
     LightVertex v;
     v.p = s.p; v.thr = st.thr; v.wo = -st.d; v.n = s.ng; v.ns = s.ns; v.tint = s.tint;
     v.material = s.material; v.len = st.len;
-    v.dvcm = st.dvcm; v.dvc = st.dvc; v.dvm = st.dvm;
+    v.dvcm = st.dvcm; v.dvc = st.dvc; v.dvm = st.dvm; v.sky_first_hit = st.sky_first_hit;
     lv_store(slot, v);
 }
 #endif
@@ -173,7 +174,7 @@ void main() {
 #endif
         Bsdf b = bsdf_init(s.material, s.ng, s.ns, -st.d, true, s.tint);
         if (!b.valid) continue;
-        if (st.len == 1u) mis_light_first_hit(st, s.p, s.ng, bsdf_reflects_only(b));
+        if (st.len == 1u) mis_light_first_hit(st, s.p, s.ng);
         mis_on_hit(st, h.t, abs(dot(s.ng, st.d)), st.len == 1u && !st.finite_light);
         if (!b.delta) {
 #if STORE_VERTICES

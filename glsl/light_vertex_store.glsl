@@ -54,7 +54,7 @@ layout(std430) writeonly buffer light_vertex_chunk_counts { uint lv_chunk_count[
 // A light vertex's layout (the same in the scratch slots the light kernel writes and in
 // the compacted store), vertex i:
 //   a[2i] = (position, dVCM)      a[2i+1] = (throughput, dVC)
-//   b[Bi] = (wo, dVM)             b[Bi+1] = (normal, material | length << 24)
+//   b[Bi] = (wo, dVM)             b[Bi+1] = (normal, lv_info: material | sky_first_hit << 23 | length << 24)
 //   with HAS_SHADING_NORMALS or HAS_METALLIC_ROUGHNESS_TEXTURES:
 //                                 b[Bi+2] = (shading normal, tint.metallic)
 //   with HAS_VERTEX_ATTRIBUTES:   b[Bi+LV_TINT] = (tint.rgb, tint.roughness)
@@ -93,11 +93,18 @@ struct LightVertex {
     uint material;
     uint len;        // segments from the light
     float dvcm, dvc, dvm;
+    bool sky_first_hit; // SubpathState.sky_first_hit (glsl/subpath.glsl)
 };
 
 // Scratch slots per light subpath: a light subpath stores at most max path length - 1
 // vertices.
 uint lv_slots() { return max_path_length() - 1u; }
+
+// A light vertex's material, sky_first_hit and length in one word (material indices are
+// below 2^23: src/scene/validate.rs, MAX_MATERIALS).
+#define LV_MATERIAL_MASK 0x7fffffu
+#define LV_SKY_FIRST_HIT 0x800000u
+uint lv_info(LightVertex v) { return v.material | (v.sky_first_hit ? LV_SKY_FIRST_HIT : 0u) | (v.len << 24); }
 
 #if LV_SCRATCH
 // Writes `v` to scratch slot `slot` (the light kernel).
@@ -105,7 +112,7 @@ void lv_store(uint slot, LightVertex v) {
     lv_scratch_a[2u * slot] = vec4(v.p, v.dvcm);
     lv_scratch_a[2u * slot + 1u] = vec4(v.thr, v.dvc);
     lv_scratch_b[LV_B_STRIDE * slot] = vec4(v.wo, v.dvm);
-    lv_scratch_b[LV_B_STRIDE * slot + 1u] = vec4(v.n, uintBitsToFloat(v.material | (v.len << 24)));
+    lv_scratch_b[LV_B_STRIDE * slot + 1u] = vec4(v.n, uintBitsToFloat(lv_info(v)));
 #if HAS_SHADING_NORMALS || HAS_METALLIC_ROUGHNESS_TEXTURES
     lv_scratch_b[LV_B_STRIDE * slot + 2u] = vec4(v.ns, v.tint.metallic);
 #endif
@@ -193,7 +200,8 @@ LightVertex lv_load(uint slot) {
     v.tint.channel = floatBitsToUint(lv_b_at(LV_B_STRIDE * slot + LV_CHANNEL).x);
 #endif
     uint info = floatBitsToUint(b1.w);
-    v.material = info & 0xffffffu;
+    v.material = info & LV_MATERIAL_MASK;
+    v.sky_first_hit = (info & LV_SKY_FIRST_HIT) != 0u;
     v.len = info >> 24;
     return v;
 }

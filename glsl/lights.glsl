@@ -199,32 +199,31 @@ bool is_constant_background(GpuLight l) {
 #endif
 }
 
-// Next-event estimation's directions towards a constant background from a point of
-// geometric normal n: |cos| / pi about n where the point only reflects (`reflects_only`, n
-// on the side it reflects on: bsdf_reflects_only), else |cos| / (2 pi) about n on either
-// side with probability 1/2 (transmitted light too), so that a diffuse surface's light
-// samples follow its integrand as its BSDF samples do (uniform sphere sampling wastes
-// them below the surface and near the horizon; two-sided sampling wastes half of an
-// opaque surface's); uniform on the sphere where there is no normal (n = 0: the camera).
-// The pdf takes |cos| on both sides: a one-sided point's light from behind is zero, so
-// its weight there does not matter. Light subpaths emit uniformly; the direct pdf of one
-// that starts there is this one at its first hit (mis_light_first_hit).
-float background_direct_pdf_w(vec3 wi, vec3 n, bool reflects_only) {
-    return n == vec3(0.0) ? INV_4PI : abs(dot(wi, n)) * (reflects_only ? INV_PI : 0.5 * INV_PI);
+// Next-event estimation's sample of a constant background (one without a map) is a
+// direction `wi` drawn from the BSDF at the receiving point, with that BSDF's solid-angle
+// pdf `pdf_w` (its non-delta lobes; glsl/pt.comp connect_to_sky, glsl/camera_subpath.comp
+// connect_to_sky): the background's radiance is the same everywhere, so the BSDF is the
+// integrand but for visibility. Its direct pdf is therefore the BSDF's at the vertex the
+// ray leaves (sky_nee_pdf_w, glsl/subpath.glsl), which light subpaths know only once the
+// camera side's direction at their first hit is (SubpathState.sky_first_hit).
+LightSample sky_light_sample(uint index, vec3 wi, float pdf_w) {
+    LightSample s;
+    s.wi = wi;
+    s.dist = 1e30;
+    s.radiance = light_at(index).radiance.rgb;
+    s.pdf_w = pdf_w;
+    float r_scene = params.scene_sphere.w;
+    s.emission_pdf_w = INV_4PI / (PI * r_scene * r_scene);
+    s.cos_light = 1.0;
+    s.light_point = vec3(0.0);
+    s.light_normal = vec3(0.0);
+    s.delta = false;
+    s.ok = pdf_w > 0.0 && max3(s.radiance) > 0.0;
+    return s;
 }
 
-vec3 sample_background_direction(vec2 u, vec3 n, bool reflects_only) {
-    if (n == vec3(0.0)) return sample_uniform_sphere(u);
-    if (reflects_only) return to_world(sample_cosine_hemisphere(u), n);
-    bool front = u.x < 0.5;
-    u.x = min(front ? 2.0 * u.x : 2.0 * u.x - 1.0, ONE_MINUS_EPSILON);
-    vec3 local = sample_cosine_hemisphere(u);
-    return to_world(local, front ? n : -n);
-}
-
-// A light sample for the point x of geometric normal n (0: none), `reflects_only` where x
-// only reflects (n then on the side it reflects on; background_direct_pdf_w).
-LightSample light_illuminate(uint index, vec3 x, vec3 n, bool reflects_only, vec2 u) {
+// A light sample for the point x; not for a constant background (sky_light_sample).
+LightSample light_illuminate(uint index, vec3 x, vec2 u) {
     GpuLight l = light_at(index);
     uint kind = light_kind(l);
     LightSample s;
@@ -290,21 +289,15 @@ LightSample light_illuminate(uint index, vec3 x, vec3 n, bool reflects_only, vec
 #endif
 #if HAS_BACKGROUND
     if (kind == LIGHT_BACKGROUND) {
-        s.dist = 1e30;
+        // A constant background's samples are sky_light_sample's.
+        if (is_constant_background(l)) return s;
 #if HAS_ENVIRONMENT_MAP
-        if (env_has_map(l)) {
-            bool ok;
-            s.radiance *= env_sample(l, u, s.wi, s.pdf_w, ok);
-            if (!ok) return s;
-            s.emission_pdf_w = s.pdf_w / (PI * r_scene * r_scene);
-        } else
+        s.dist = 1e30;
+        bool ok;
+        s.radiance *= env_sample(l, u, s.wi, s.pdf_w, ok);
+        if (!ok) return s;
+        s.emission_pdf_w = s.pdf_w / (PI * r_scene * r_scene);
 #endif
-        {
-            s.wi = sample_background_direction(u, n, reflects_only);
-            s.pdf_w = background_direct_pdf_w(s.wi, n, reflects_only);
-            if (!(s.pdf_w > 0.0)) return s;
-            s.emission_pdf_w = INV_4PI / (PI * r_scene * r_scene);
-        }
     }
 #endif
     s.ok = max3(s.radiance) > 0.0;
@@ -332,11 +325,10 @@ vec3 area_light_radiance(uint index, float u, float v, vec3 dir, vec3 x, vec3 y,
 #endif
 }
 
-// The background seen along `dir` (a ray direction that left the scene from a point of
-// geometric normal n, 0: none; `reflects_only` where that point only reflects), with its
-// direct (solid angle) and emission pdfs.
-vec3 background_radiance(uint index, vec3 dir, vec3 n, bool reflects_only, out float direct_pdf_w,
-                         out float emission_pdf_w) {
+// The background seen along `dir` (a ray direction that left the scene), with its direct
+// (solid angle) and emission pdfs. A constant background's direct pdf is the BSDF's at the
+// vertex the ray left (sky_light_sample), the caller's: 0 here.
+vec3 background_radiance(uint index, vec3 dir, out float direct_pdf_w, out float emission_pdf_w) {
     float r = params.scene_sphere.w;
     GpuLight l = light_at(index);
 #if HAS_ENVIRONMENT_MAP
@@ -346,7 +338,7 @@ vec3 background_radiance(uint index, vec3 dir, vec3 n, bool reflects_only, out f
         return le;
     }
 #endif
-    direct_pdf_w = background_direct_pdf_w(dir, n, reflects_only);
+    direct_pdf_w = 0.0;
     emission_pdf_w = INV_4PI / (PI * r * r);
     return l.radiance.rgb;
 }
@@ -354,9 +346,9 @@ vec3 background_radiance(uint index, vec3 dir, vec3 n, bool reflects_only, out f
 // ---- Emission: a ray leaving a light (light subpaths). Pdfs exclude the pick
 // probability. `direct_pdf` is the pdf of choosing the start point by direct sampling
 // (area measure for area lights, 1 for delta lights, solid angle for the background),
-// as SmallVCM's directPdfA; for area lights it is the area sampler's 1 / area, which a
-// light subpath's first hit replaces by the pdf from that point (mis_light_first_hit,
-// glsl/subpath.glsl).
+// as SmallVCM's directPdfA; for area lights it is the area sampler's 1 / area and for a
+// constant background the uniform 1 / (4 pi), which a light subpath's first hit replaces
+// by the pdf from that point (mis_light_first_hit, glsl/subpath.glsl).
 struct LightEmission {
     vec3 pos;
     vec3 dir;

@@ -65,6 +65,8 @@ float connection_eval(SubpathState st, vec3 p, Bsdf b, LightVertex v, out vec3 f
     float lpf, lpr;
     fl = bsdf_eval(lb, -dir, lpf, lpr);
     if (max3(fl) <= 0.0) return 0.0;
+    // The camera side's next-event pdf of the sky at a light vertex from it (dvcm_at).
+    float sky_pdf_w = lpr;
     cpf *= b.cont_prob; cpr *= cont_prob_from(b, dir);
     lpf *= lb.cont_prob; lpr *= cont_prob_from(lb, -dir);
     g = bsdf_cos(b, dir) * bsdf_cos(lb, -dir) / dist2;
@@ -72,7 +74,7 @@ float connection_eval(SubpathState st, vec3 p, Bsdf b, LightVertex v, out vec3 f
     float cos_l = bsdf_cos_geometric(lb, dir);
     float camera_pdf_a = cpf * cos_l / dist2;  // camera BSDF sampling the light vertex
     float light_pdf_a = lpf * cos_c / dist2;   // light BSDF sampling the camera vertex
-    float w_light = camera_pdf_a * (push.mis_vm + v.dvcm + v.dvc * lpr);
+    float w_light = camera_pdf_a * (push.mis_vm + dvcm_at(v.dvcm, v.sky_first_hit, sky_pdf_w) + v.dvc * lpr);
     float w_camera = light_pdf_a * (push.mis_vm + st.dvcm + st.dvc * cpr);
     return 1.0 / (w_light + 1.0 + w_camera);
 }
@@ -88,13 +90,15 @@ vec3 merge_eval(SubpathState st, Bsdf b, LightVertex v, out float w) {
 #if HAS_SHADING_NORMALS
     if (b.n != b.ng) f *= abs(dot(b.n, v.wo)) / abs(dot(b.ng, v.wo));
 #endif
+    // The camera vertex's next-event pdf of the sky at a light vertex from it (dvcm_at).
+    float sky_pdf_w = pf;
     pf *= b.cont_prob;
     // The reverse pdf is that of the light subpath continuing from the merged vertex
     // (which lies at the light vertex), so its continuation probability is the light
     // vertex's BSDF's, as in SmallVCM's RangeQuery (the two differ where a merge spans two
     // materials).
     pr *= bsdf_init(v.material, v.n, v.ns, v.wo, true, v.tint).cont_prob;
-    float w_light = v.dvcm * push.mis_vc + v.dvm * pf;
+    float w_light = dvcm_at(v.dvcm, v.sky_first_hit, sky_pdf_w) * push.mis_vc + v.dvm * pf;
     float w_camera = st.dvcm * push.mis_vc + st.dvm * pr;
     w = 1.0 / (w_light + 1.0 + w_camera);
     return f;
@@ -119,6 +123,8 @@ bool camera_connection_eval(SubpathState st, vec3 p, Bsdf b, bool weight_one, ou
     float pf, pr;
     f = bsdf_eval(b, to_cam, pf, pr);
     if (max3(f) <= 0.0) return true;
+    // The camera side's next-event pdf of the sky at a vertex from it (dvcm_at).
+    float sky_pdf_w = pr;
     pr *= cont_prob_from(b, to_cam);
     float cos_cam = dot(params.cam_forward.xyz, -to_cam);
     float plane = params.cam_pos.w;
@@ -129,7 +135,7 @@ bool camera_connection_eval(SubpathState st, vec3 p, Bsdf b, bool weight_one, ou
     float n_l = float(push.light_paths);
     w = 1.0;
     if (!weight_one) {
-        float w_light = (camera_pdf_a / n_l) * (push.mis_vm + st.dvcm + st.dvc * pr);
+        float w_light = (camera_pdf_a / n_l) * (push.mis_vm + dvcm_at(st.dvcm, st.sky_first_hit, sky_pdf_w) + st.dvc * pr);
         w = 1.0 / (w_light + 1.0);
     }
     return true;

@@ -8,18 +8,13 @@
 // rule (which the light subpaths of lt/bpt/vcm keep).
 // Absorbing media (glsl/medium.glsl) multiply the throughput of every traced segment and
 // the contribution of every light sample by their transmittance; no pdf has it.
-// A constant sky's next-event directions come from the BSDF (connect_to_sky), not from
-// lights.glsl's cosine about the normal that bpt and vcm draw (SKY_NEE_BY_BSDF below),
-// and pass specular surfaces as paths of their own (SKY_THROUGH_SPECULAR below).
+// A constant sky's next-event directions come from the BSDF (connect_to_sky), and pass
+// specular surfaces as paths of their own (SKY_THROUGH_SPECULAR below).
 // Variants (PtKernel, src/render/passes/camera_subpaths.rs): NEE=1 the estimator, NEE=0 pure BSDF
 // sampling (emitter hits only, weight 1), for tests; SOBOL: where the random numbers come
 // from (glsl/path_sampler.glsl; `--sampler`); AOV: the AOVs are summed too (glsl/aov.glsl).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
-
-// A constant sky's next-event samples come from the BSDF (connect_to_sky); the lobe
-// choice suited to them (glsl/bsdf.glsl fresnel_lobe_weights).
-#define SKY_NEE_BY_BSDF 1
 
 #if !defined(NEE) || !defined(SOBOL)
 #error "NEE and SOBOL must be defined (PtKernel, src/render/passes/camera_subpaths.rs)"
@@ -92,8 +87,7 @@ void add_background(inout PtPath path, inout vec3 L) {
     uint bg = background_light();
     if (bg != NO_LIGHT && path.len >= min_path_length()) {
         float dpdf, epdf;
-        // (An environment map's pdf has no normal.)
-        vec3 Le = background_radiance(bg, path.d, vec3(0.0), false, dpdf, epdf);
+        vec3 Le = background_radiance(bg, path.d, dpdf, epdf);
         float wgt = (NEE == 0 || path.last_specular) ? 1.0 : balance(path.last_pdf, nee_light_prob(bg, path.from_p, path.from_ng) * dpdf);
         // A constant sky's light samples are distributed as the BSDF samples and, with
         // SKY_THROUGH_SPECULAR, pass the delta vertices as they do (connect_to_sky): the
@@ -179,7 +173,7 @@ uint connect_to_lights(PtPath path, Surface s, Bsdf b, inout PathSampler ps, ino
 #if HAS_BACKGROUND
     if (is_constant_background(light_at(li))) return li;
 #endif
-    LightSample ls = light_illuminate(li, s.p, b.ng, bsdf_reflects_only(b), sample_2d(ps, DIM2_LIGHT(path.len)));
+    LightSample ls = light_illuminate(li, s.p, sample_2d(ps, DIM2_LIGHT(path.len)));
     if (!ls.ok) return NO_LIGHT;
     float pf, pr;
     vec3 f = bsdf_eval(b, ls.wi, pf, pr);

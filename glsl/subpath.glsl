@@ -27,12 +27,18 @@ struct SubpathState {
     // the camera and at a light), for the segment's transmittance (glsl/medium.glsl).
     uint from_material;
     vec3 from_ng;
-    bool from_reflects_only; // it only reflects (bsdf_reflects_only: the background's NEE pdf)
+    float from_pdf_w;  // the solid-angle pdf the segment's direction was sampled with there
+                       // (the BSDF's, without roulette; 0: specular, the camera, a light)
     // The vertex the current segment leaves (the camera, the light point, a surface point):
     // the direct pdf of an emitter hit depends on it (lights.glsl area_light_direct_pdf_a),
     // and with the light tree its pick too, on it and from_ng (nee_light_prob).
     vec3 from_p;
     uint light;        // light subpaths: the light they start on
+    // Light subpaths from a constant sky, at their first hit y1: dvcm leaves out
+    // next-event estimation's pdf of the sky's direction at y1, the BSDF's given the
+    // direction on the camera side (sky_nee_pdf_w), which each technique that completes
+    // the path there knows (dvcm_at) and the scatter from y1 puts in (take_sample).
+    bool sky_first_hit;
     float eta_scale;   // camera subpaths: undoes refraction's radiance scaling for the roulette
 #if HAS_DISPERSION
     uint channel;      // the colour channel the subpath carries, or NO_CHANNEL (glsl/lobes/dispersion.glsl)
@@ -48,23 +54,47 @@ void mis_light_start(inout SubpathState st, float emission_pdf, float direct_pdf
     st.dvm = st.dvc * push.mis_vc;
 }
 
+// Next-event estimation's solid-angle pdf of the direction `wi` towards a constant sky at
+// a vertex with BSDF `b` whose wo is the camera side's: the BSDF's own (its non-delta
+// lobes; lights.glsl sky_light_sample).
+float sky_nee_pdf_w(Bsdf b, vec3 wi) {
+    float pf, pr;
+    bsdf_eval(b, wi, pf, pr);
+    return pf;
+}
+
 // Light subpaths from an area light or a constant background: next-event estimation
 // samples the start point y0 (the direction st.d) with a pdf that depends on the receiving
-// point (solid-angle sampling, the background's cosine about the normal: lights.glsl), so
-// the direct pdf that mis_light_start took (light_emit's: the area sampler's 1 / area,
-// 1 / (4 pi)) is replaced at the first hit y1, once it is known (with mis_on_hit, before
-// anything uses dvcm). Other lights: nothing to do. With the light tree (LIGHT_TREE) the
-// pick of the direct pdf is also y1's (nee_light_prob at y1 and its geometric normal n1),
-// not the selection table's that started the subpath. `reflects_only`: y1 only reflects
-// (bsdf_reflects_only).
-void mis_light_first_hit(inout SubpathState st, vec3 y1, vec3 n1, bool reflects_only) {
+// point (solid-angle sampling: lights.glsl), so the direct pdf that mis_light_start took
+// (light_emit's: the area sampler's 1 / area) is replaced at the first hit y1, once it is
+// known (with mis_on_hit, before anything uses dvcm). A constant background's pdf there
+// also depends on the direction towards the camera side: light_emit's 1 / (4 pi) is taken
+// out and st.sky_first_hit set (dvcm_at). Other lights: nothing to do. With the light
+// tree (LIGHT_TREE) the pick of the direct pdf is also y1's (nee_light_prob at y1 and its
+// geometric normal n1), not the selection table's that started the subpath.
+void mis_light_first_hit(inout SubpathState st, vec3 y1, vec3 n1) {
 #if LIGHT_TREE
     st.dvcm *= nee_light_prob(st.light, y1, n1) / light_pick_prob(st.light);
 #endif
     GpuLight l = light_at(st.light);
-    if (is_constant_background(l)) st.dvcm *= background_direct_pdf_w(-st.d, n1, reflects_only) / INV_4PI;
+    if (is_constant_background(l)) {
+        st.dvcm /= INV_4PI;
+        st.sky_first_hit = true;
+    }
     if (light_kind(l) != LIGHT_AREA) return;
     st.dvcm *= area_light_direct_pdf_a(st.light, y1, st.from_p) * l.d.w;
+}
+
+// A light vertex's dvcm for a technique that completes the path with `sky_pdf_w`, the
+// pdf sky_nee_pdf_w of its direction towards the sky given the camera side's direction
+// (read where sky_first_hit; else unused).
+float dvcm_at(float dvcm, bool sky_first_hit, float sky_pdf_w) { return sky_first_hit ? dvcm * sky_pdf_w : dvcm; }
+
+// The light subpath leaves its first hit from a constant sky: the camera side's direction
+// is the new one, whose reverse pdf is `sky_pdf_w`.
+void leave_sky_first_hit(inout SubpathState st, float sky_pdf_w) {
+    st.dvcm = dvcm_at(st.dvcm, st.sky_first_hit, sky_pdf_w);
+    st.sky_first_hit = false;
 }
 
 // Camera subpath start along the primary direction `d` (eq. 31-33; docs/smallvcm.md 4.4.3).
@@ -109,12 +139,16 @@ void mis_on_scatter(inout SubpathState st, float pdf, float pdf_rev, float cos_w
 void mis_on_scatter_to(inout SubpathState st, Bsdf b, vec3 wi) {
     float cos_wi = bsdf_cos_geometric(b, wi);
     if (b.delta) {
+        leave_sky_first_hit(st, 0.0);
         mis_on_scatter(st, 0.0, 0.0, cos_wi, true);
+        st.from_pdf_w = 0.0;
         return;
     }
     float pf, pr;
     bsdf_eval(b, wi, pf, pr);
+    leave_sky_first_hit(st, pr);
     mis_on_scatter(st, pf * b.cont_prob, pr * cont_prob_from(b, wi), cos_wi, false);
+    st.from_pdf_w = pf;
 }
 
 // Takes the BSDF sample `bs` (ok) at a vertex as the subpath's next direction, after
@@ -128,13 +162,14 @@ void mis_on_scatter_to(inout SubpathState st, Bsdf b, vec3 wi) {
 bool take_sample(inout SubpathState st, Bsdf b, vec3 p, vec3 ng, BsdfSample bs, float q, float u_roulette) {
     if (u_roulette >= q) return false;
     float cont_rev = bs.specular ? 0.0 : cont_prob_from(b, bs.wi);  // specular: no pdfs
+    leave_sky_first_hit(st, bs.specular ? 0.0 : bs.pdf_rev);
     mis_on_scatter(st, bs.pdf * b.cont_prob, bs.pdf_rev * cont_rev, bs.cos_wi, bs.specular);
     st.thr *= bs.weight / q;
     st.o = offset_ray(p, ng, bs.wi, scene_radius());
     st.d = bs.wi;
     st.from_material = b.material;
     st.from_ng = ng;
-    st.from_reflects_only = bsdf_reflects_only(b);
+    st.from_pdf_w = bs.specular ? 0.0 : bs.pdf;
     st.from_p = p;
     return max3(st.thr) > 0.0;
 }

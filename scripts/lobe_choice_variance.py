@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Variance of pt's estimate of a glTF dielectric's light under a constant sky of radiance 1,
 seen from direction cosine mu_o, for a choice of the GGX lobe's selection probability: the
-figures behind glsl/bsdf.glsl's fresnel_lobe_weights (SKY_NEE_BY_BSDF).
+figures behind glsl/bsdf.glsl's fresnel_lobe_weights.
 
 The BSDF is vkvcm's (glsl/bsdf.glsl): GGX with Schlick's F of F0 0.04, height-correlated
 Smith G2, sampled by the normals visible from wo (pdf G1(wo) D(h) / (4 mu_o) over the

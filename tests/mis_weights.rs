@@ -341,6 +341,19 @@ fn layered_scene() -> Scene {
     s
 }
 
+/// `s` under a constant sky as well, with a mirror sphere: next-event estimation draws the
+/// sky's directions from the BSDF at the receiving point, so a light subpath from the sky
+/// has the direct pdf of its first hit only once the camera side's direction is known
+/// (glsl/subpath.glsl `dvcm_at`), here for every lobe of `s` and at a delta first hit.
+fn with_sky(mut s: Scene) -> Scene {
+    s.lights.push(Light::Background { radiance: Vec3::splat(0.5) });
+    let mirror = s.materials.len() as u32;
+    s.materials.push(Material { name: "mirror".into(), mirror: Vec3::splat(0.9), ior: -1.0, ..Default::default() });
+    s.spheres.push(vkvcm::scene::Sphere { center: Vec3::new(0.0, -0.6, 0.35), radius: 0.35, material: mirror });
+    s.name = format!("{} + sky + mirror", s.name);
+    s
+}
+
 fn print_summary(mode: Mode, s: &Summary) {
     let shares: Vec<String> = CLASSES
         .iter()
@@ -415,6 +428,8 @@ fn mis_weights_sum_to_one() {
         .chain(std::iter::once(rough_glass_scene()))
         .chain(std::iter::once(layered_scene()))
         .chain(std::iter::once(environment_scene(smooth_sky(16, 9), 40.0)))
+        .chain(std::iter::once(with_sky(rough_glass_scene())))
+        .chain(std::iter::once(with_sky(layered_scene())))
         .map(|s| (s, LightSelection::Power))
         .chain(std::iter::once((emitter_cloud_scene(), LightSelection::Tree)))
         .collect();

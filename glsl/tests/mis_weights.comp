@@ -59,15 +59,16 @@ vec3 dir_to(uint i, uint j) {
     return normalize(vp[j] - vp[i]);
 }
 
-// Next-event estimation's light sample for the fixed y_0 as seen from x = y_1: the
-// production light_illuminate, with its area branch repeated for a given point instead of
-// a sampled one (the pdf of the point by solid angle or by area, as light_illuminate
-// chooses at x) and the background's pdfs taken along the fixed direction (the pdfs of
-// the other lights do not depend on the sample). n: y_1's geometric normal; reflects_only:
-// y_1 only reflects.
-LightSample light_sample_fixed(uint li, vec3 x, vec3 n, bool reflects_only) {
-    LightSample s = light_illuminate(li, x, n, reflects_only, vec2(0.5));
+// Next-event estimation's light sample for the fixed y_0 as seen from x = y_1 (camera-side
+// BSDF b): the production light_illuminate, with its area branch repeated for a given
+// point instead of a sampled one (the pdf of the point by solid angle or by area, as
+// light_illuminate chooses at x), a map's pdfs taken along the fixed direction and a
+// constant background's sample the production sky_light_sample with b's pdf (the pdfs of
+// the other lights do not depend on the sample).
+LightSample light_sample_fixed(uint li, vec3 x, Bsdf b) {
     uint kind = light_kind(light_at(li));
+    if (is_constant_background(light_at(li))) return sky_light_sample(li, -dir0, sky_nee_pdf_w(b, -dir0));
+    LightSample s = light_illuminate(li, x, vec2(0.5));
     if (kind == LIGHT_AREA) {
         GpuLight l = light_at(li);
         vec3 d = vp[0] - x;
@@ -80,11 +81,10 @@ LightSample light_sample_fixed(uint li, vec3 x, vec3 n, bool reflects_only) {
         s.light_point = vp[0];
         s.ok = s.cos_light > EPS_COSINE_LIGHT && max3(s.radiance) > 0.0;
     } else if (kind == LIGHT_BACKGROUND) {
-        // The background's pdfs depend on the direction (a map's, and a constant one's
-        // direct pdf about y_1's normal).
+        // A map's pdfs depend on the direction.
         s.wi = -dir0;
         float dp, ep;
-        s.radiance = background_radiance(li, s.wi, n, reflects_only, dp, ep);
+        s.radiance = background_radiance(li, s.wi, dp, ep);
         s.pdf_w = dp;
         s.emission_pdf_w = ep;
         s.ok = dp > 0.0 && max3(s.radiance) > 0.0;
@@ -124,6 +124,7 @@ void main() {
         infinite0 = !e.finite;
         dir0 = e.dir;
         SubpathState st;
+        st.sky_first_hit = false;
         st.o = e.normal != vec3(0.0) ? offset_ray(e.pos, e.normal, e.dir, scene_radius()) : e.pos;
         st.d = e.dir;
         st.thr = e.energy / (e.emission_pdf_w * pick);
@@ -143,6 +144,7 @@ void main() {
         uint pixels = image_width() * image_height();
         uint pixel = min(uint(rnd(rng) * float(pixels)), pixels - 1u);
         SubpathState st;
+        st.sky_first_hit = false;
         st.o = params.cam_pos.xyz;
         st.from_p = params.cam_pos.xyz;
         st.d = camera_sample(pixel, rng);
@@ -177,13 +179,17 @@ void main() {
             if (j < k - s_gen && !scatter(st, b, s.p, s.ng, vec3(rnd2(rng), rnd(rng)), rnd(rng))) return;
         }
     }
-    // y_1 only reflects: a constant background's direct pdf there (lights.glsl).
-    bool reflects_only1 = k >= 2u && bsdf_reflects_only(bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false, vtint[1]));
     // Join.
     if (s_gen == 1u) {
         if (vdelta[1]) return;
         Bsdf b = bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false, vtint[1]);
-        LightSample ls = light_illuminate(li, vp[1], b.ng, reflects_only1, u_pos);
+        LightSample ls;
+        if (is_constant_background(light_at(li))) {
+            BsdfSample bs = bsdf_sample(b, vec3(u_pos, rnd(rng)));
+            ls = sky_light_sample(li, bs.wi, bs.ok && !bs.specular ? bs.pdf : 0.0);
+        } else {
+            ls = light_illuminate(li, vp[1], u_pos);
+        }
         if (!ls.ok) return;
         if (ls.dist >= 1e29) {
             infinite0 = true;
@@ -228,10 +234,10 @@ void main() {
         e.cos_light = dot(vn[0], d01);
         if (e.cos_light <= EPS_COSINE_LIGHT) return;
         e.emission_pdf_w = e.direct_pdf * e.cos_light * INV_PI;
-    } else if (kind == LIGHT_BACKGROUND) {
+    } else if (kind == LIGHT_BACKGROUND && !is_constant_background(light_at(li))) {
+        // A map's pdfs along the direction (a constant background's are light_emit's).
         float dp, ep;
-        // light_emit's direct pdf (no normal), which mis_light_first_hit replaces at y_1.
-        if (max3(background_radiance(li, -d01, vec3(0.0), false, dp, ep)) <= 0.0 || dp <= 0.0) return;
+        if (max3(background_radiance(li, -d01, dp, ep)) <= 0.0 || dp <= 0.0) return;
         e.direct_pdf = dp;
         e.emission_pdf_w = ep;
     }
@@ -243,6 +249,8 @@ void main() {
     SubpathState st;
     st.len = 0u;
     st.specular = true;
+    st.sky_first_hit = false;
+    st.from_pdf_w = 0.0;
     st.finite_light = !infinite0;
     mis_light_start(st, e.emission_pdf_w * pick, e.direct_pdf * pick, e.cos_light, e.delta, e.finite);
     st.from_p = vp[0];
@@ -251,13 +259,15 @@ void main() {
     for (uint i = 1u; i < k; ++i) {
         vec3 d = dir_to(i - 1u, i);
         st.len = i;
-        if (i == 1u) mis_light_first_hit(st, vp[1], vn[1], reflects_only1);
+        if (i == 1u) mis_light_first_hit(st, vp[1], vn[1]);
         mis_on_hit(st, i == 1u && infinite0 ? 0.0 : distance(vp[i - 1u], vp[i]), abs(dot(vn[i], d)),
                    i == 1u && infinite0);
         L[i] = st;
         if (i + 1u < k) mis_on_scatter_to(st, bsdf_init(vmat[i], vn[i], vns[i], -d, true, vtint[i]), dir_to(i, i + 1u));
     }
     st.specular = true;
+    st.sky_first_hit = false;
+    st.from_pdf_w = 0.0;
     mis_camera_start(st, dir_to(k, k - 1u));
     for (uint j = 1u; j <= k; ++j) {
         uint i = k - j;
@@ -279,7 +289,9 @@ void main() {
     if (kind == LIGHT_AREA || kind == LIGHT_BACKGROUND) {
         float dp, ep;
         // (Any point of the light: these scenes' lights are untextured, only the side matters.)
-        vec3 le = kind == LIGHT_AREA ? area_light_radiance(li, 0.0, 0.0, dir_to(1u, 0u), vp[1], vp[0], dp, ep) : background_radiance(li, dir_to(1u, 0u), vn[1], reflects_only1, dp, ep);
+        vec3 le = kind == LIGHT_AREA ? area_light_radiance(li, 0.0, 0.0, dir_to(1u, 0u), vp[1], vp[0], dp, ep) : background_radiance(li, dir_to(1u, 0u), dp, ep);
+        // A constant sky's direct pdf: the BSDF sample's at y_1 (camera_subpath.comp add_background).
+        if (is_constant_background(light_at(li))) dp = C[0].from_pdf_w;
         // Without connections only purely specular camera paths count an emitter hit.
         if (max3(le) > 0.0 && (use_vc || C[0].specular || k == 1u)) {
             w = mis_weight_hit(C[0], dp, ep, nee_pick, pick, use_vc);
@@ -290,10 +302,11 @@ void main() {
     if (use_vc && k >= 2u) {
         // s = 1: next-event estimation at y_1.
         if (!vdelta[1]) {
-            LightSample ls = light_sample_fixed(li, vp[1], vn[1], reflects_only1);
+            Bsdf b1 = bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false, vtint[1]);
+            LightSample ls = light_sample_fixed(li, vp[1], b1);
             vec3 f;
             float cos_x;
-            w = nee_eval(C[1], bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false, vtint[1]), ls, nee_pick, pick, f, cos_x);
+            w = nee_eval(C[1], b1, ls, nee_pick, pick, f, cos_x);
             if (!ls.ok || max3(f) <= 0.0) w = -2.0;  // cannot happen for a sampled path
             write_out(base, 9u, w);
             sum += w; n += 1u; bad += (w >= 0.0 && !isinf(w)) ? 0u : 1u;
@@ -304,6 +317,7 @@ void main() {
             LightVertex v;
             v.p = vp[s - 1u]; v.n = vn[s - 1u]; v.ns = vns[s - 1u]; v.tint = vtint[s - 1u]; v.wo = dir_to(s - 1u, s - 2u); v.material = vmat[s - 1u];
             v.len = s - 1u; v.dvcm = L[s - 1u].dvcm; v.dvc = L[s - 1u].dvc; v.dvm = L[s - 1u].dvm;
+            v.sky_first_hit = L[s - 1u].sky_first_hit;
             vec3 fc, fl;
             float g;
             w = connection_eval(C[s], vp[s], bsdf_init(vmat[s], vn[s], vns[s], dir_to(s, s + 1u), false, vtint[s]), v, fc, fl, g);
@@ -330,6 +344,7 @@ void main() {
             LightVertex v;
             v.p = vp[i]; v.n = vn[i]; v.ns = vns[i]; v.tint = vtint[i]; v.wo = dir_to(i, i - 1u); v.material = vmat[i];
             v.len = i; v.dvcm = L[i].dvcm; v.dvc = L[i].dvc; v.dvm = L[i].dvm;
+            v.sky_first_hit = L[i].sky_first_hit;
             vec3 f = merge_eval(C[i], bsdf_init(vmat[i], vn[i], vns[i], dir_to(i, i + 1u), false, vtint[i]), v, w);
             if (max3(f) <= 0.0) w = -2.0;
             write_out(base, 8u + MAXV + i, w);

@@ -7,10 +7,15 @@ use super::{Light, Scene};
 use anyhow::{bail, Result};
 use glam::Vec3;
 
+/// The most materials a scene may have: a light vertex packs its material index into 23
+/// bits beside its flags (glsl/light_vertex_store.glsl, `lv_info`).
+pub const MAX_MATERIALS: usize = 1 << 23;
+
 /// Refuses a scene that every estimator would render black or cannot render: no light
 /// source with non-zero power (emissive triangles, punctual lights, `VKVCM_background`, `VKVCM_environment`;
 /// emissive spheres do not count, they are not lights), or no geometry (no triangle and
-/// no sphere; the renderer needs a BVH). [`super::load_named_with`] applies it;
+/// no sphere; the renderer needs a BVH), or more than [`MAX_MATERIALS`] materials.
+/// [`super::load_named_with`] applies it;
 /// [`super::load_with`] does not, so tools and tests can still inspect such files.
 pub fn check_renderable(scene: &Scene) -> Result<()> {
     let powered = |l: &Light| match l {
@@ -24,6 +29,9 @@ pub fn check_renderable(scene: &Scene) -> Result<()> {
         let skipped = scene.report.degenerate_triangles;
         let note = if skipped > 0 { format!("; {skipped} degenerate triangle(s) were skipped") } else { String::new() };
         bail!("no geometry: the scene has no triangle and no sphere to render{note}");
+    }
+    if scene.materials.len() > MAX_MATERIALS {
+        bail!("too many materials: {} (at most {MAX_MATERIALS})", scene.materials.len());
     }
     if !scene.lights.iter().any(powered) {
         let why = if scene.lights.is_empty() {
