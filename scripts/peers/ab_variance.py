@@ -15,7 +15,9 @@ Sobol samples is no error estimate). Per pixel and channel, the variance of one 
 1 / (m^2 + 0.01) with m the mean of all renders of both sides (one weight for both, so
 the ratio compares the variances alone). An unbiased change keeps the image means equal:
 the mean ratio and its z (difference over the standard error from the pixels' variances)
-are printed too.
+are printed too, and a second z from the spread of the seeds' image means: the pixels'
+sample variances miss the rare large samples of a heavy-tailed estimator, whose image
+means then scatter beyond the first z's standard error (give it --seeds 6 or more).
 """
 
 import argparse
@@ -84,9 +86,13 @@ def main():
     (va, ia, sa), (vb, ib, sb) = res["a"], res["b"]
     diff = ib.mean() - ia.mean()
     se = np.sqrt((sa.sum() + sb.sum())) / ia.size
+    # The seeds' image means, each side's spread over its seeds (Welch).
+    ma = np.array([x[0].mean() for x in imgs["a"]])
+    mb = np.array([x[0].mean() for x in imgs["b"]])
+    se_seeds = np.sqrt(ma.var(ddof=1) / ma.size + mb.var(ddof=1) / mb.size) if ma.size > 1 else float("nan")
     print(f"B/A variance per sample: {np.mean(vb) / np.mean(va):.3f} (per seed "
           f"{' '.join(f'{b / a:.3f}' for a, b in zip(va, vb))}); image mean B/A {ib.mean() / ia.mean():.4f}, "
-          f"z {diff / se:.2f}")
+          f"z {diff / se:.2f} (pixels), {diff / se_seeds:.2f} (seeds)")
 
 
 if __name__ == "__main__":
