@@ -60,8 +60,7 @@ uvec4 grid_point_at(uint j) { return bucket_points[j]; }
 // non-delta lobes), the sky's integrand but for visibility (lights.glsl
 // sky_light_sample), as pt's connect_to_sky.
 LightSample connect_to_sky(SubpathState st, uint li, Bsdf b, inout PathSampler ps) {
-    BsdfSample bs = bsdf_sample(b, sample_3d(ps, DIM3_SKY(st.len)));
-    return sky_light_sample(li, bs.wi, bs.ok && !bs.specular ? bs.pdf : 0.0);
+    return sky_sample_from_bsdf(li, bsdf_sample(b, sample_3d(ps, DIM3_SKY(st.len))));
 }
 
 // Next-event estimation: one light sample, weighted against reaching the light by BSDF

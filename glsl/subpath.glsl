@@ -63,6 +63,13 @@ float sky_nee_pdf_w(Bsdf b, vec3 wi) {
     return pf;
 }
 
+// Next-event estimation's sample of constant sky `li` from the BSDF sample `bs`: its
+// direction with its pdf where bs is a non-delta direction, else none (lights.glsl
+// sky_light_sample).
+LightSample sky_sample_from_bsdf(uint li, BsdfSample bs) {
+    return sky_light_sample(li, bs.wi, bs.ok && !bs.specular ? bs.pdf : 0.0);
+}
+
 // Light subpaths from an area light or a constant background: next-event estimation
 // samples the start point y0 (the direction st.d) with a pdf that depends on the receiving
 // point (solid-angle sampling: lights.glsl), so the direct pdf that mis_light_start took

@@ -183,13 +183,8 @@ void main() {
     if (s_gen == 1u) {
         if (vdelta[1]) return;
         Bsdf b = bsdf_init(vmat[1], vn[1], vns[1], dir_to(1u, 2u), false, vtint[1]);
-        LightSample ls;
-        if (is_constant_background(light_at(li))) {
-            BsdfSample bs = bsdf_sample(b, vec3(u_pos, rnd(rng)));
-            ls = sky_light_sample(li, bs.wi, bs.ok && !bs.specular ? bs.pdf : 0.0);
-        } else {
-            ls = light_illuminate(li, vp[1], u_pos);
-        }
+        LightSample ls = is_constant_background(light_at(li)) ? sky_sample_from_bsdf(li, bsdf_sample(b, vec3(u_pos, rnd(rng))))
+                                                              : light_illuminate(li, vp[1], u_pos);
         if (!ls.ok) return;
         if (ls.dist >= 1e29) {
             infinite0 = true;

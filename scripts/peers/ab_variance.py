@@ -15,9 +15,10 @@ Sobol samples is no error estimate). Per pixel and channel, the variance of one 
 1 / (m^2 + 0.01) with m the mean of all renders of both sides (one weight for both, so
 the ratio compares the variances alone). An unbiased change keeps the image means equal:
 the mean ratio and its z (difference over the standard error from the pixels' variances)
-are printed too, and a second z from the spread of the seeds' image means: the pixels'
-sample variances miss the rare large samples of a heavy-tailed estimator, whose image
-means then scatter beyond the first z's standard error (give it --seeds 6 or more).
+are printed too, and a second z from the spread of the seeds' image means (give it
+--seeds 6 or more): the pixels' sample variances miss the rare large samples of a
+heavy-tailed estimator, whose image means then scatter beyond the first z's standard
+error; a few seeds of a skewed one can miss them too, so neither z proves a bias alone.
 """
 
 import argparse
